@@ -1,0 +1,201 @@
+#include "bus/process.hpp"
+
+#include "bus/channels.hpp"
+
+#include <rover_msgs/heartbeat_t.hpp>
+#include <rover_msgs/rover_clock_t.hpp>
+
+#include <csignal>
+#include <cstdlib>
+#include <iostream>
+#include <cmath>
+#include <sstream>
+
+namespace rover::bus {
+
+namespace {
+
+std::atomic<bool> g_signalled{false};
+
+void OnSignal(int) { g_signalled = true; }
+
+void InstallSignalHandlers() {
+  struct sigaction action {};
+  action.sa_handler = OnSignal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+std::string Usage(const std::string& name, const std::string& summary,
+                  const std::vector<OptionSpec>& options) {
+  std::ostringstream os;
+  os << "usage: " << name << " [options]\n\n" << summary << "\n\noptions:\n";
+  auto line = [&os](const std::string& flag, const std::string& value, const std::string& help) {
+    std::string left = "  " + flag + (value.empty() ? "" : " " + value);
+    if (left.size() < 26) left.resize(26, ' ');
+    os << left << " " << help << "\n";
+  };
+  line("--help", "", "print this help and exit");
+  line("--config", "FILE", "YAML config (see configs/rover.yaml)");
+  line("--lcm-url", "URL", std::string("LCM URL (default: $ROVER_LCM_URL, else ") +
+                               kDefaultLcmUrl + ")");
+  for (const auto& o : options) line(o.flag, o.value_name, o.help);
+  return os.str();
+}
+
+std::string ChooseUrl(int argc, char** argv) {
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::string(argv[i]) == "--lcm-url") return argv[i + 1];
+  }
+  if (const char* env = std::getenv("ROVER_LCM_URL"); env != nullptr && *env != '\0') return env;
+  return kDefaultLcmUrl;
+}
+
+// Parsed before the Bus is constructed so that --help works with no bus at all.
+std::map<std::string, std::string> ParseArgs(const std::string& name, const std::string& summary,
+                                             int argc, char** argv,
+                                             const std::vector<OptionSpec>& options) {
+  std::map<std::string, std::string> parsed;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      std::cout << Usage(name, summary, options);
+      std::exit(0);
+    }
+    const OptionSpec* spec = nullptr;
+    static const std::vector<OptionSpec> builtin = {{"--config", "FILE", ""},
+                                                    {"--lcm-url", "URL", ""}};
+    for (const auto& o : builtin)
+      if (o.flag == arg) spec = &o;
+    for (const auto& o : options)
+      if (o.flag == arg) spec = &o;
+    if (spec == nullptr) {
+      throw config::ConfigError(name + ": argument " + arg +
+                                ": unknown option (expected one of the options in --help)");
+    }
+    if (spec->value_name.empty()) {
+      parsed[arg] = "";
+      continue;
+    }
+    if (i + 1 >= argc) {
+      throw config::ConfigError(name + ": argument " + arg + ": missing value (expected " +
+                                spec->value_name + ")");
+    }
+    parsed[arg] = argv[++i];
+  }
+  return parsed;
+}
+
+}  // namespace
+
+const std::vector<std::string>& KnownConfigSections() {
+  static const std::vector<std::string> sections = {
+      "mobility", "sensors", "sim", "estimator", "hazards", "executor", "vo", "camera", "capture"};
+  return sections;
+}
+
+Process::Process(std::string name, std::string summary, int argc, char** argv,
+                 std::vector<OptionSpec> options, std::vector<std::string> config_sections)
+    : name_(std::move(name)),
+      options_(ParseArgs(name_, summary, argc, argv, options)),
+      bus_(ChooseUrl(argc, argv)) {
+  if (auto it = options_.find("--config"); it != options_.end()) {
+    config_path_ = it->second;
+    config_ = config::ConfigNode::LoadFile(config_path_);
+    std::vector<std::string> allowed = KnownConfigSections();
+    allowed.insert(allowed.end(), config_sections.begin(), config_sections.end());
+    config_.CheckKeys(allowed);
+  } else {
+    config_ = config::ConfigNode::FromString("{}", "(no config)");
+  }
+  InstallSignalHandlers();
+  bus_.Subscribe<rover_msgs::rover_clock_t>(
+      channels::kClock, [this](const rover_msgs::rover_clock_t& msg) { ObserveTime(msg.utime); });
+}
+
+std::optional<std::string> Process::option(const std::string& flag) const {
+  if (auto it = options_.find(flag); it != options_.end()) return it->second;
+  return std::nullopt;
+}
+
+double Process::wall_seconds() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+void Process::SetHealth(std::int8_t state, std::string detail) {
+  health_state_ = state;
+  health_detail_ = std::move(detail);
+}
+
+bool Process::stopping() const { return stop_requested_ || g_signalled; }
+
+void Process::PublishHeartbeat() {
+  rover_msgs::heartbeat_t hb{};
+  hb.utime = now_utime_;
+  hb.process = name_;
+  hb.seq = heartbeat_seq_++;
+  hb.state = health_state_;
+  hb.detail = health_detail_;
+  bus_.Publish(channels::kHeartbeat, hb);
+}
+
+void Process::Run(const std::function<void()>& on_tick, int tick_ms) {
+  using Clock = std::chrono::steady_clock;
+  auto next_heartbeat = Clock::now();
+  auto next_tick = Clock::now();
+  while (!stopping()) {
+    const auto now = Clock::now();
+    if (now >= next_heartbeat) {
+      PublishHeartbeat();
+      next_heartbeat = now + std::chrono::seconds(1);
+    }
+    if (on_tick && now >= next_tick) {
+      on_tick();
+      next_tick = now + std::chrono::milliseconds(tick_ms);
+    }
+    const auto wait = std::min(next_heartbeat, on_tick ? next_tick : next_heartbeat) - Clock::now();
+    const int wait_ms = static_cast<int>(
+        std::max<long>(0, std::chrono::duration_cast<std::chrono::milliseconds>(wait).count()));
+    bus_.Handle(std::min(wait_ms, 100));
+  }
+}
+
+int RunMain(const std::string& name, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const config::ConfigError& e) {
+    std::cerr << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << name << ": error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+std::vector<double> ParseNumberList(const std::string& text, std::size_t expected_count,
+                                    const std::string& what) {
+  std::vector<double> values;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      std::size_t used = 0;
+      const double v = std::stod(item, &used);
+      if (used != item.size() || !std::isfinite(v)) throw std::invalid_argument("bad");
+      values.push_back(v);
+    } catch (const std::exception&) {
+      throw config::ConfigError(what + ": \"" + text + "\": expected " +
+                                std::to_string(expected_count) +
+                                " finite numbers separated by commas");
+    }
+  }
+  if (values.size() != expected_count) {
+    throw config::ConfigError(what + ": \"" + text + "\": expected " +
+                              std::to_string(expected_count) +
+                              " finite numbers separated by commas");
+  }
+  return values;
+}
+
+}  // namespace rover::bus
