@@ -1,0 +1,234 @@
+// Stereo visual odometry, the MER algorithm (Cheng, Maimone and Matthies 2005), as a
+// library that knows nothing of LCM. Requirements VO-1..VO-12 of VO_ALGORITHM.md.
+//
+// One call per stereo pair:
+//   detect (VO-2) -> stereo match (VO-3) -> triangulate (VO-4, VO-5) for the new pair,
+//   track the previous pair's features through the motion prior (VO-6),
+//   weighted least squares inside RANSAC (VO-7), maximum likelihood (VO-8),
+//   sanity constraints (VO-9), degenerate geometry (VO-12), shadow (VO-11).
+// Any failure returns a status, a reason, counts and stage times; the caller keeps its
+// prior (VO-10). Every call (except kBadInput) makes the given pair the new "previous"
+// pair, so T_prev_curr always relates two consecutive calls.
+//
+// Frames: all 3-D quantities are in the stereo rig's reference frame (the rover frame for
+// CAHV/CAHVOR models, the left camera frame for a KITTI rig).
+#pragma once
+
+#include "config/yaml_config.hpp"
+#include "geometry/camera_model.hpp"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace rover::vo {
+
+// Numbers equal vo_update_t STATUS_* in lcmtypes/vo_update_t.lcm.
+enum class VoStatus {
+  kOk = 0,
+  kBaseline = 1,         // first pair (or after Reset): kept, no motion yet
+  kTooFewFeatures = 2,   // VO-10: too few corners / stereo matches in the previous pair
+  kTooFewMatches = 3,    // VO-10: too few features tracked into the new pair
+  kTooFewInliers = 4,    // VO-7: RANSAC consensus too small
+  kNoConvergence = 5,    // VO-8: ML did not converge within the iteration limit
+  kSanityFailed = 6,     // VO-9: a sanity constraint was broken
+  kMotionTooLarge = 7,   // VO-10: too little overlap; tracking re-initialised on this pair
+  kShadowAmbiguous = 8,  // VO-11: features fixed in the image compete with the scene
+  kDegenerate = 9,       // VO-12: inliers too clustered / motion poorly determined
+  kBadInput = 10,        // empty images, wrong type or size, missing camera models
+};
+
+const char* ToString(VoStatus status);
+
+// Every parameter of the VO. Pixel quantities are at the WORKING resolution (after
+// `working_scale`), so that one set of values serves 1024x1024 NAVCAM pairs at 1/2 scale
+// and 1226x370 KITTI pairs at full scale alike.
+struct VoOptions {
+  // ---- VO-1 input ----
+  // Working resolution: 1.0 (full), 0.5 or 0.25. Images are area-averaged and the camera
+  // models rescaled with CameraModel::Scaled.
+  double working_scale = 1.0;
+
+  // ---- VO-2 features ----
+  // Harris corner response: k, gradient aperture (Sobel) and averaging block (pixels).
+  double feature_harris_k = 0.04;
+  int feature_harris_block = 5;
+  // Grid cell (pixels); each cell keeps its strongest local maximum. Must be smaller than
+  // feature_min_distance_px (the paper's rule).
+  int feature_grid_cell_px = 8;
+  // Minimum distance between kept features. On Opportunity (sols 137, 141) too small a
+  // value let features cluster on one small planar patch and VO converged to wrong
+  // answers: 20 px keeps at most ~1 feature per 20x20 patch, so 300 features must span
+  // at least a third of a 512x512 or 1226x370 image.
+  double feature_min_distance_px = 20.0;
+  // The fixed number of features kept (strongest first).
+  int feature_count = 300;
+  // Response floor, on an image scaled to [0, 1]: below it a "corner" is sensor noise.
+  double feature_min_response = 1e-6;
+  // Features closer than this to the image border are not used (template must fit).
+  int feature_border_px = 12;
+
+  // ---- VO-3 stereo matching ----
+  // Correlation template side (odd, pixels).
+  int match_template_px = 11;
+  // Band-pass prefilter before correlation: Gaussian sigma (noise) minus a box mean of
+  // this side (illumination). Pseudo-normalized correlation is not mean-invariant, so
+  // the box must be on (>= 3); the Gaussian may be 0 (off).
+  double match_prefilter_sigma = 0.8;
+  int match_prefilter_box_px = 9;
+  // Rows searched above and below the epipolar line.
+  int stereo_epipolar_band_px = 1;
+  // Nearest range searched (metres): sets the disparity range from the rig.
+  double stereo_min_range_m = 2.0;
+  // Smallest disparity (pixels) kept: a point beyond this carries no range.
+  double stereo_min_disparity_px = 1.0;
+  // Pseudo-normalized correlation score needed to accept a match (1 = perfect).
+  double match_min_score = 0.75;
+  // Match location covariance = scale * (-Hessian of the biquadratic score surface)^-1,
+  // floored at min_sigma^2 per axis (VO-3, VO-5).
+  double match_covariance_scale = 0.01;
+  double match_min_sigma_px = 0.05;
+
+  // ---- VO-4 triangulation ----
+  // Largest gap between the two rays, in pixels of angle at the feature's range.
+  double triangulation_max_gap_px = 1.5;
+  // Farthest range kept (metres); 0 = no limit.
+  double triangulation_max_range_m = 0.0;
+
+  // ---- VO-6 tracking ----
+  // Search half-window = k * sigma of the predicted pixel (prior + point covariance),
+  // clamped to [min, max] pixels.
+  double track_window_sigmas = 3.0;
+  int track_min_radius_px = 3;
+  int track_max_radius_px = 64;
+  // Coarse-to-fine: pyramid levels (1 = none) and the largest radius searched directly
+  // at one level.
+  int track_pyramid_levels = 4;
+  int track_coarse_radius_px = 4;
+  // Score needed at the working resolution.
+  double track_min_score = 0.75;
+  // Stereo search margin around the disparity predicted from the known 3-D position.
+  double track_stereo_margin_px = 3.0;
+  // Chi-square gate (3 dof) on |Pc - prior(Pp)| against Sigma_c + R Sigma_p R^T + prior.
+  double track_max_chi2 = 16.27;
+  // Minimum tracked features for an estimate.
+  int min_tracked = 12;
+  // Minimum stereo-matched features in a pair for it to be used.
+  int min_features = 12;
+
+  // ---- VO-7 RANSAC ----
+  int ransac_iterations = 100;
+  int ransac_sample_size = 6;
+  // Reprojection gap (pixels, largest of left and right) under which a feature counts.
+  double ransac_inlier_px = 1.0;
+  std::uint64_t ransac_seed = 42;
+  int min_inliers = 10;
+
+  // ---- VO-8 maximum likelihood ----
+  int ml_max_iterations = 20;
+  // Converged when the step is below this (metres and radians).
+  double ml_tolerance = 1e-9;
+  // After convergence, drop inliers whose Mahalanobis residual exceeds this chi-square
+  // (3 dof) and re-run once; 0 = off.
+  double ml_outlier_chi2 = 16.27;
+
+  // ---- VO-9 sanity constraints (0 = off) ----
+  double sanity_max_translation_m = 0.0;
+  // Site-frame X and Y components: need StereoImages::R_site_ref.
+  double sanity_max_site_dx_m = 0.0;
+  double sanity_max_site_dy_m = 0.0;
+  double sanity_max_roll_deg = 0.0;
+  double sanity_max_pitch_deg = 0.0;
+  double sanity_max_yaw_deg = 0.0;
+  // Angle between the update and pure downslope (needs R_site_ref; skipped on slopes
+  // under 2 deg or updates under 1 cm).
+  double sanity_max_downslope_angle_deg = 0.0;
+
+  // ---- VO-10 motion too large ----
+  // Fraction of the previous features predicted (through the prior) inside the new image
+  // below which the step re-initialises. The paper planned >= 60 % overlap.
+  double motion_min_overlap = 0.6;
+  // Limits on the prior motion (0 = off). For NAVCAM geometry ~0.75 m and 18 deg.
+  double motion_max_translation_m = 0.0;
+  double motion_max_rotation_deg = 18.0;
+
+  // ---- VO-11 shadow ----
+  bool shadow_check = true;
+  // A tracked feature is "fixed" when it moved less than this (pixels) while the prior
+  // predicted more than shadow_min_predicted_px.
+  double shadow_fixed_px = 1.0;
+  double shadow_min_predicted_px = 5.0;
+
+  // ---- VO-12 degenerate geometry ----
+  // Refuse when sqrt(smallest eigenvalue) of the inliers' image scatter is below this
+  // fraction of the smaller image side (Mars lesson: clustered features).
+  double degenerate_min_spread = 0.05;
+  // Refuse when the ML covariance leaves the motion poorly determined (0 = off).
+  double degenerate_max_translation_sigma_m = 0.1;
+  double degenerate_max_rotation_sigma_deg = 1.0;
+};
+
+// Reads the node of the `vo:` section. Unknown keys and out-of-range values throw
+// config::ConfigError naming the key.
+VoOptions LoadVoOptions(const config::ConfigNode& node);
+// Throws std::invalid_argument naming the first inconsistent value.
+void ValidateVoOptions(const VoOptions& options);
+
+struct StereoImages {
+  cv::Mat left, right;  // CV_8UC1 or CV_16UC1, full size (the rig's size)
+  geometry::StereoRig rig;
+  std::int64_t utime = 0;
+  std::int64_t frame_id = 0;
+  // Optional attitude of the rig's reference frame in the site frame at capture (IMU);
+  // needed only by the site-frame sanity checks of VO-9.
+  std::optional<Eigen::Matrix3d> R_site_ref;
+};
+
+struct StageTimes {
+  double detect_ms = 0, stereo_ms = 0, track_ms = 0, ransac_ms = 0, ml_ms = 0, total_ms = 0;
+};
+
+struct VoResult {
+  VoStatus status = VoStatus::kBadInput;
+  std::string reason;
+  // Pose of the current reference frame in the previous one (the motion).
+  Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();
+  // Of the delta: x y z roll pitch yaw (roll, pitch, yaw of T_prev_curr's rotation,
+  // R = Rz(yaw) Ry(pitch) Rx(roll)).
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  int num_detected = 0;  // corners kept in the current left image
+  int num_matched = 0;   // of those, stereo-matched and triangulated
+  int num_tracked = 0;   // previous features found again in the current pair
+  int num_inliers = 0;   // used by the ML estimate
+  int iterations = 0;    // ML iterations
+  StageTimes times;
+};
+
+class VisualOdometry {
+ public:
+  // Throws std::invalid_argument on inconsistent options.
+  explicit VisualOdometry(VoOptions options);
+  ~VisualOdometry();
+  VisualOdometry(VisualOdometry&&) noexcept;
+  VisualOdometry& operator=(VisualOdometry&&) noexcept;
+
+  // First call (or after Reset/MotionTooLarge): returns kBaseline and keeps the frame.
+  // prior: the expected motion T_prev_curr and its covariance (x y z roll pitch yaw),
+  // from wheel odometry + IMU, or constant velocity.
+  VoResult Process(const StereoImages& images, const Eigen::Isometry3d& prior_T_prev_curr,
+                   const Eigen::Matrix<double, 6, 6>& prior_covariance);
+  void Reset();
+
+  const VoOptions& options() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace rover::vo
