@@ -1,0 +1,214 @@
+#include "launch/process_set.hpp"
+
+#include "config/yaml_config.hpp"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <stdexcept>
+#include <thread>
+
+namespace rover::launch {
+
+Deployment LoadDeployment(const std::string& path) {
+  const auto root = config::ConfigNode::LoadFile(path);
+  root.CheckKeys({"lcm_url", "processes", "description"});
+  Deployment d;
+  d.source = path;
+  root.Get("lcm_url", d.lcm_url);
+  const auto list = root["processes"];
+  if (!list.IsSequence() || list.size() == 0) {
+    list.Fail("expected a non-empty list of processes (name, args)");
+  }
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const auto item = list.at(i);
+    item.CheckKeys({"name", "program", "args"});
+    ProcessSpec spec;
+    spec.name = item.RequireString("name");
+    spec.program = spec.name;
+    item.Get("program", spec.program);
+    if (item.Has("args")) {
+      const auto args = item["args"];
+      if (!args.IsSequence()) args.Fail("expected a list of arguments");
+      for (std::size_t k = 0; k < args.size(); ++k) spec.args.push_back(args.at(k).AsString());
+    }
+    for (const auto& other : d.processes) {
+      if (other.name == spec.name) item.Fail("duplicate process name \"" + spec.name + "\"");
+    }
+    d.processes.push_back(spec);
+  }
+  return d;
+}
+
+std::string BinDir() {
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) throw std::runtime_error("cannot find this executable's directory");
+  return exe.parent_path().string();
+}
+
+std::string DescribeWaitStatus(int status) {
+  if (WIFEXITED(status)) return "exited with code " + std::to_string(WEXITSTATUS(status));
+  if (WIFSIGNALED(status)) {
+    return "killed by signal " + std::to_string(WTERMSIG(status)) + " (" +
+           strsignal(WTERMSIG(status)) + ")";
+  }
+  return "stopped";
+}
+
+ProcessSet::ProcessSet(std::string bin_dir, std::string log_dir, bool echo)
+    : bin_dir_(std::move(bin_dir)), log_dir_(std::move(log_dir)), echo_(echo) {}
+
+ProcessSet::~ProcessSet() { StopAll(1000); }
+
+void ProcessSet::Start(const ProcessSpec& spec, const std::vector<std::string>& env) {
+  const std::string program =
+      spec.program.find('/') == std::string::npos ? bin_dir_ + "/" + spec.program : spec.program;
+  if (access(program.c_str(), X_OK) != 0) {
+    throw std::runtime_error(spec.name + ": cannot execute " + program +
+                             " (expected a built process; run ./rover build)");
+  }
+  int fds[2];
+  if (pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error("pipe failed");
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid == 0) {
+    dup2(fds[1], STDOUT_FILENO);
+    dup2(fds[1], STDERR_FILENO);
+    setpgid(0, 0);
+    for (const auto& e : env) putenv(const_cast<char*>(e.c_str()));
+    std::vector<char*> argv;
+    argv.push_back(const_cast<char*>(program.c_str()));
+    for (const auto& a : spec.args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(program.c_str(), argv.data());
+    std::fprintf(stderr, "cannot exec %s: %s\n", program.c_str(), std::strerror(errno));
+    _exit(127);
+  }
+  close(fds[1]);
+  fcntl(fds[0], F_SETFL, O_NONBLOCK);
+  Child child;
+  child.name = spec.name;
+  child.pid = pid;
+  child.out_fd = fds[0];
+  child.running = true;
+  if (!log_dir_.empty()) {
+    child.log = std::fopen((log_dir_ + "/" + spec.name + ".log").c_str(), "w");
+  }
+  children_.push_back(std::move(child));
+}
+
+void ProcessSet::EmitLine(Child& child, const std::string& line) {
+  if (echo_) std::cout << "[" << child.name << "] " << line << "\n" << std::flush;
+  if (child.log != nullptr) {
+    std::fprintf(child.log, "%s\n", line.c_str());
+    std::fflush(child.log);
+  }
+}
+
+void ProcessSet::Forward(Child& child, bool flush_partial) {
+  if (child.out_fd < 0) return;
+  char buf[4096];
+  for (;;) {
+    const ssize_t n = read(child.out_fd, buf, sizeof(buf));
+    if (n > 0) {
+      child.partial.append(buf, static_cast<std::size_t>(n));
+      continue;
+    }
+    if (n == 0) {  // the child closed its output
+      close(child.out_fd);
+      child.out_fd = -1;
+      flush_partial = true;
+    }
+    break;
+  }
+  std::size_t pos;
+  while ((pos = child.partial.find('\n')) != std::string::npos) {
+    EmitLine(child, child.partial.substr(0, pos));
+    child.partial.erase(0, pos + 1);
+  }
+  if (flush_partial && !child.partial.empty()) {
+    EmitLine(child, child.partial);
+    child.partial.clear();
+  }
+}
+
+std::vector<std::pair<std::string, std::string>> ProcessSet::Poll(int timeout_ms) {
+  std::vector<pollfd> fds;
+  for (const auto& c : children_) {
+    if (c.out_fd >= 0) fds.push_back({c.out_fd, POLLIN, 0});
+  }
+  if (!fds.empty()) {
+    poll(fds.data(), fds.size(), timeout_ms);
+  } else if (timeout_ms > 0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(timeout_ms));
+  }
+  std::vector<std::pair<std::string, std::string>> exited;
+  for (auto& c : children_) {
+    Forward(c, false);
+    if (!c.running) continue;
+    int status = 0;
+    if (waitpid(c.pid, &status, WNOHANG) == c.pid) {
+      c.running = false;
+      Forward(c, true);
+      exited.emplace_back(c.name, DescribeWaitStatus(status));
+    }
+  }
+  return exited;
+}
+
+bool ProcessSet::Running(const std::string& name) const {
+  for (const auto& c : children_)
+    if (c.name == name) return c.running;
+  return false;
+}
+
+std::vector<std::string> ProcessSet::RunningNames() const {
+  std::vector<std::string> names;
+  for (const auto& c : children_)
+    if (c.running) names.push_back(c.name);
+  return names;
+}
+
+void ProcessSet::Signal(const std::string& name, int signal) {
+  for (auto& c : children_) {
+    if (c.name == name && c.running) kill(c.pid, signal);
+  }
+}
+
+void ProcessSet::StopAll(int grace_ms) {
+  for (auto& c : children_)
+    if (c.running) kill(c.pid, SIGTERM);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(grace_ms);
+  while (!RunningNames().empty() && std::chrono::steady_clock::now() < deadline) {
+    Poll(20);
+  }
+  for (auto& c : children_) {
+    if (c.running) {
+      EmitLine(c, "did not stop within " + std::to_string(grace_ms) + " ms; killing it");
+      kill(c.pid, SIGKILL);
+      int status = 0;
+      waitpid(c.pid, &status, 0);
+      c.running = false;
+    }
+    Forward(c, true);
+    if (c.out_fd >= 0) {
+      close(c.out_fd);
+      c.out_fd = -1;
+    }
+    if (c.log != nullptr) {
+      std::fclose(c.log);
+      c.log = nullptr;
+    }
+  }
+}
+
+}  // namespace rover::launch

@@ -1,0 +1,78 @@
+// Starting, watching and stopping a set of rover processes (the launcher and the
+// scenario runner share this; systemd does the same job on a rover computer).
+#pragma once
+
+#include <sys/types.h>
+
+#include <cstdio>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rover::launch {
+
+struct ProcessSpec {
+  std::string name;                // label in output, e.g. "state_estimator"
+  std::string program;             // executable; a bare name is looked up in the bin dir
+  std::vector<std::string> args;
+};
+
+struct Deployment {
+  std::string source;              // file it came from
+  std::string lcm_url;             // empty = the caller's default
+  std::vector<ProcessSpec> processes;
+};
+
+// Reads configs/deploy/*.yaml. Throws config::ConfigError naming the file and key.
+Deployment LoadDeployment(const std::string& path);
+
+// The directory holding this executable (build/bin): where process binaries live.
+std::string BinDir();
+
+class ProcessSet {
+ public:
+  // Output of each child goes, line by line, to stdout prefixed "[name] ", and/or to
+  // `log_dir`/name.log when `log_dir` is set.
+  ProcessSet(std::string bin_dir, std::string log_dir, bool echo);
+  ~ProcessSet();
+  ProcessSet(const ProcessSet&) = delete;
+  ProcessSet& operator=(const ProcessSet&) = delete;
+
+  // Starts a child with extra environment entries ("KEY=VALUE"). Throws on failure.
+  void Start(const ProcessSpec& spec, const std::vector<std::string>& env = {});
+
+  // Forwards children's output and reaps exits; waits at most `timeout_ms`.
+  // Returns the names of children that exited since the last call, with their status.
+  std::vector<std::pair<std::string, std::string>> Poll(int timeout_ms);
+
+  bool Running(const std::string& name) const;
+  // Sends `signal` to one child (a test kills a process to prove the abort).
+  void Signal(const std::string& name, int signal);
+  // SIGTERM to all, then SIGKILL after `grace_ms`; drains remaining output.
+  void StopAll(int grace_ms = 3000);
+  // Names of children still running.
+  std::vector<std::string> RunningNames() const;
+
+ private:
+  struct Child {
+    std::string name;
+    pid_t pid = -1;
+    int out_fd = -1;
+    std::string partial;
+    FILE* log = nullptr;
+    bool running = false;
+  };
+  void Forward(Child& child, bool flush_partial);
+  void EmitLine(Child& child, const std::string& line);
+
+  std::string bin_dir_;
+  std::string log_dir_;
+  bool echo_;
+  std::vector<Child> children_;
+};
+
+// "exited with code 3", "killed by signal 9".
+std::string DescribeWaitStatus(int status);
+
+}  // namespace rover::launch
