@@ -1,0 +1,94 @@
+#include "estimation/estimator_options.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace rover::estimation {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+void RequireRange(const char* name, double value, double lo, double hi) {
+  if (!std::isfinite(value) || value < lo || value > hi) {
+    std::ostringstream os;
+    os << "EstimatorOptions." << name << " = " << value << ": expected a finite value in [" << lo
+       << ", " << hi << "]";
+    throw std::invalid_argument(os.str());
+  }
+}
+
+}  // namespace
+
+void EstimatorOptions::Validate() const {
+  RequireRange("along_track_sigma_fraction", along_track_sigma_fraction, 0.0, 1.0);
+  RequireRange("cross_track_sigma_fraction", cross_track_sigma_fraction, 0.0, 1.0);
+  RequireRange("vertical_sigma_fraction", vertical_sigma_fraction, 0.0, 1.0);
+  RequireRange("gyro_drift_rad_per_s", gyro_drift_rad_per_s, 0.0, 1.0);
+  RequireRange("gyro_scale_sigma_fraction", gyro_scale_sigma_fraction, 0.0, 1.0);
+  RequireRange("attitude_sigma_rad", attitude_sigma_rad, 0.0, M_PI);
+  RequireRange("initial_position_sigma_m", initial_position_sigma_m, 0.0, 1e6);
+  RequireRange("initial_yaw_sigma_rad", initial_yaw_sigma_rad, 0.0, M_PI);
+  RequireRange("history_s", history_s, 1e-3, 1e7);
+  RequireRange("history_max_samples", history_max_samples, 2, 1e8);
+  RequireRange("vo_future_tolerance_s", vo_future_tolerance_s, 0.0, 3600.0);
+}
+
+EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
+                                      const std::vector<std::string>& extra_keys) {
+  EstimatorOptions o;
+  if (section.IsNull()) return o;
+  std::vector<std::string> keys = {"along_track_sigma_pct",
+                                   "cross_track_sigma_pct",
+                                   "vertical_sigma_pct",
+                                   "gyro_drift_deg_per_hour",
+                                   "gyro_scale_sigma_pct",
+                                   "attitude_sigma_deg",
+                                   "initial_position_sigma_m",
+                                   "initial_yaw_sigma_deg",
+                                   "history_s",
+                                   "history_max_samples",
+                                   "vo_heading",
+                                   "vo_future_tolerance_s",
+                                   "ignore_distance_while_turning_in_place"};
+  keys.insert(keys.end(), extra_keys.begin(), extra_keys.end());
+  section.CheckKeys(keys);
+
+  auto pct = [&](const char* key, double& fraction) {
+    double v = fraction * 100.0;
+    section.Get(key, v, 0.0, 100.0);
+    fraction = v / 100.0;
+  };
+  pct("along_track_sigma_pct", o.along_track_sigma_fraction);
+  pct("cross_track_sigma_pct", o.cross_track_sigma_fraction);
+  pct("vertical_sigma_pct", o.vertical_sigma_fraction);
+  pct("gyro_scale_sigma_pct", o.gyro_scale_sigma_fraction);
+
+  double drift_deg_h = o.gyro_drift_rad_per_s / kDeg * 3600.0;
+  section.Get("gyro_drift_deg_per_hour", drift_deg_h, 0.0, 3600.0);
+  o.gyro_drift_rad_per_s = drift_deg_h * kDeg / 3600.0;
+
+  double att_deg = o.attitude_sigma_rad / kDeg;
+  section.Get("attitude_sigma_deg", att_deg, 0.0, 180.0);
+  o.attitude_sigma_rad = att_deg * kDeg;
+
+  section.Get("initial_position_sigma_m", o.initial_position_sigma_m, 0.0, 1e6);
+  double yaw0_deg = o.initial_yaw_sigma_rad / kDeg;
+  section.Get("initial_yaw_sigma_deg", yaw0_deg, 0.0, 180.0);
+  o.initial_yaw_sigma_rad = yaw0_deg * kDeg;
+
+  section.Get("history_s", o.history_s, 1e-3, 1e7);
+  section.Get("history_max_samples", o.history_max_samples, 2, 100000000);
+
+  std::string mode = "fuse";
+  section.GetEnum("vo_heading", mode, {"fuse", "replace", "ignore"});
+  o.vo_heading = mode == "replace"  ? VoHeadingMode::kReplace
+                 : mode == "ignore" ? VoHeadingMode::kIgnore
+                                    : VoHeadingMode::kFuse;
+  section.Get("vo_future_tolerance_s", o.vo_future_tolerance_s, 0.0, 3600.0);
+  section.Get("ignore_distance_while_turning_in_place", o.ignore_distance_while_turning_in_place);
+  return o;
+}
+
+}  // namespace rover::estimation

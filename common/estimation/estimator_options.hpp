@@ -1,0 +1,72 @@
+// Options of the pose estimator (section `estimator:` of configs/rover.yaml).
+// See estimator_example.yaml for a commented sample.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "config/yaml_config.hpp"
+
+namespace rover::estimation {
+
+// What a VO update does to heading. MER's IMU drifted less than 3 deg/hour, so on Mars
+// VO "was typically used to update rover position only" (Maimone 2005, sec. 1); the
+// default fuses VO's yaw change with the gyro's, weighted by their variances, which
+// reduces to "position only" when the gyro is far better and to "replace" when VO is.
+enum class VoHeadingMode {
+  kFuse,     // variance-weighted mean of the VO and gyro yaw changes over [from, to]
+  kReplace,  // the VO yaw change replaces the gyro's over [from, to]
+  kIgnore,   // heading stays with the IMU; VO corrects position only
+};
+
+struct EstimatorOptions {
+  // Wheel-odometry error, 1-sigma as a fraction of the distance driven. Odometry errors are
+  // mostly systematic (slip on one soil, wheel radius), so sigma grows linearly with
+  // distance, not with its square root: 2 % of 10 m is 0.2 m whatever the step size.
+  double along_track_sigma_fraction = 0.02;
+  double cross_track_sigma_fraction = 0.02;
+  // Along the rover's up axis (elevation): the IMU knows pitch well, so smaller.
+  double vertical_sigma_fraction = 0.01;
+
+  // Gyro drift (a bias: heading sigma grows linearly with time). MER's LN-200: < 3 deg/h.
+  double gyro_drift_rad_per_s = 3.0 * 3.14159265358979323846 / 180.0 / 3600.0;
+  // Gyro scale-factor error: heading sigma grows by this fraction of each yaw change.
+  double gyro_scale_sigma_fraction = 0.001;
+  // Roll and pitch 1-sigma: the IMU levels itself on gravity, so this does not grow.
+  double attitude_sigma_rad = 0.2 * 3.14159265358979323846 / 180.0;
+  // Uncertainty at start and after Reset().
+  double initial_position_sigma_m = 0.0;
+  double initial_yaw_sigma_rad = 0.0;
+
+  // Pose history kept for VO updates, in rover time and in samples (both bound it).
+  // A VO update whose `from` is older than the history is refused.
+  double history_s = 600.0;
+  int history_max_samples = 50000;
+
+  VoHeadingMode vo_heading = VoHeadingMode::kFuse;
+  // A VO update whose `to` is at most this far after the latest IMU/odometry message is
+  // applied as if the rover stood still since then (captures happen with the rover
+  // stopped); further in the future it is refused (kToInFuture) and may be retried.
+  double vo_future_tolerance_s = 0.5;
+
+  // During a turn in place the body does not travel; some encoders still report a
+  // body distance. When true, that distance is not integrated into position.
+  bool ignore_distance_while_turning_in_place = true;
+
+  // Throws std::invalid_argument naming the field when a value is out of range.
+  void Validate() const;
+};
+
+// Reads the `estimator:` section. Keys (all optional; defaults above):
+//   along_track_sigma_pct, cross_track_sigma_pct, vertical_sigma_pct   (percent)
+//   gyro_drift_deg_per_hour, gyro_scale_sigma_pct, attitude_sigma_deg
+//   initial_position_sigma_m, initial_yaw_sigma_deg
+//   history_s, history_max_samples
+//   vo_heading: fuse | replace | ignore
+//   vo_future_tolerance_s, ignore_distance_while_turning_in_place
+// `extra_keys` are keys the caller (the process shell) reads itself from the same section;
+// any other key is rejected. Throws config::ConfigError naming file and key.
+EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
+                                      const std::vector<std::string>& extra_keys = {});
+
+}  // namespace rover::estimation

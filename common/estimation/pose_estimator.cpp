@@ -1,0 +1,441 @@
+#include "estimation/pose_estimator.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace rover::estimation {
+
+namespace {
+
+using geometry::RpyFromRotation;
+using geometry::WrapAngle;
+
+double YawOf(const Eigen::Matrix3d& R) { return RpyFromRotation(R).z(); }
+
+Eigen::Matrix3d Rz(double yaw) {
+  return Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+
+// Differences of covariances are symmetric but may be slightly indefinite after a VO
+// update lowered one end; project onto the PSD cone.
+Eigen::Matrix3d NearestPsd(const Eigen::Matrix3d& A) {
+  const Eigen::Matrix3d S = 0.5 * (A + A.transpose());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(S);
+  const Eigen::Vector3d ev = es.eigenvalues().cwiseMax(0.0);
+  return es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
+}
+
+std::string Seconds(int64_t us) {
+  std::ostringstream os;
+  os << static_cast<double>(us) * 1e-6 << " s";
+  return os.str();
+}
+
+}  // namespace
+
+const char* ToString(VoUpdateStatus status) {
+  switch (status) {
+    case VoUpdateStatus::kApplied: return "applied";
+    case VoUpdateStatus::kNoHistory: return "no_history";
+    case VoUpdateStatus::kFromTooOld: return "from_too_old";
+    case VoUpdateStatus::kFromInFuture: return "from_in_future";
+    case VoUpdateStatus::kToInFuture: return "to_in_future";
+    case VoUpdateStatus::kToNotAfterFrom: return "to_not_after_from";
+    case VoUpdateStatus::kNotFinite: return "not_finite";
+    case VoUpdateStatus::kBadRotation: return "bad_rotation";
+    case VoUpdateStatus::kBadCovariance: return "bad_covariance";
+  }
+  return "unknown";
+}
+
+PoseEstimator::PoseEstimator(const EstimatorOptions& options) : options_(options) {
+  options_.Validate();
+  P_pos_ = Eigen::Matrix3d::Identity() * options_.initial_position_sigma_m *
+           options_.initial_position_sigma_m;
+  yaw_sigma_ = options_.initial_yaw_sigma_rad;
+}
+
+bool PoseEstimator::AdvanceTime(int64_t utime) {
+  if (has_time_ && utime < utime_) {
+    ++inputs_rejected_;
+    return false;
+  }
+  utime_ = utime;
+  has_time_ = true;
+  return true;
+}
+
+InputResult PoseEstimator::OnImu(int64_t utime, const Eigen::Quaterniond& q_site_rover,
+                                 const Eigen::Vector3d& angular_rate) {
+  ImuSample s;
+  s.utime = utime;
+  s.q_site_rover = q_site_rover;
+  s.angular_rate = angular_rate;
+  return OnImu(s);
+}
+
+InputResult PoseEstimator::OnImu(const ImuSample& imu) {
+  const double qn = imu.q_site_rover.norm();
+  if (!imu.q_site_rover.coeffs().allFinite() || !imu.angular_rate.allFinite() || qn < 1e-9) {
+    ++inputs_rejected_;
+    return InputResult::kNotFinite;
+  }
+  if (!AdvanceTime(imu.utime)) return InputResult::kOutOfOrder;
+  const Eigen::Quaterniond q = imu.q_site_rover.normalized();
+  const double yaw_imu = YawOf(q.toRotationMatrix());
+
+  if (has_imu_) {
+    const double dt = static_cast<double>(imu.utime - last_imu_utime_) * 1e-6;
+    const double dyaw = WrapAngle(yaw_imu - YawOf(q_imu_.toRotationMatrix()));
+    yaw_sigma_ += options_.gyro_drift_rad_per_s * dt +
+                  options_.gyro_scale_sigma_fraction * std::abs(dyaw);
+  } else if (pending_reset_yaw_) {
+    yaw_offset_ = WrapAngle(*pending_reset_yaw_ - yaw_imu);
+    pending_reset_yaw_.reset();
+  }
+  has_imu_ = true;
+  last_imu_utime_ = imu.utime;
+  q_imu_ = q;
+  angular_rate_ = imu.angular_rate;
+  T_site_rover_.linear() = Rz(yaw_offset_) * q.toRotationMatrix();
+  Record();
+  return InputResult::kAccepted;
+}
+
+InputResult PoseEstimator::OnWheelOdometry(int64_t utime, double distance_m,
+                                           bool turning_in_place) {
+  WheelOdometrySample s;
+  s.utime = utime;
+  s.distance_m = distance_m;
+  s.turning_in_place = turning_in_place;
+  return OnWheelOdometry(s);
+}
+
+InputResult PoseEstimator::OnWheelOdometry(const WheelOdometrySample& odo) {
+  bool finite = std::isfinite(odo.distance_m) && std::isfinite(odo.curvature_per_m);
+  for (double w : odo.wheel_distance_m) finite = finite && std::isfinite(w);
+  if (!finite) {
+    ++inputs_rejected_;
+    return InputResult::kNotFinite;
+  }
+  if (!AdvanceTime(odo.utime)) return InputResult::kOutOfOrder;
+  wheel_distance_m_ = odo.wheel_distance_m;
+  const Eigen::Matrix3d R_now = T_site_rover_.linear();
+
+  if (!has_odometry_) {
+    has_odometry_ = true;
+    last_distance_m_ = odo.distance_m;
+    R_at_last_odometry_ = R_now;
+    Record();
+    return InputResult::kAccepted;
+  }
+  double delta = odo.distance_m - last_distance_m_;
+  last_distance_m_ = odo.distance_m;
+  if (odo.turning_in_place && options_.ignore_distance_while_turning_in_place) delta = 0.0;
+
+  if (delta != 0.0) {
+    // Midpoint rule: the mean of the forward axes at both ends follows an arc or a change
+    // of slope to second order.
+    Eigen::Vector3d forward = R_at_last_odometry_.col(0) + R_now.col(0);
+    if (forward.norm() < 1e-9) forward = R_now.col(0);
+    forward.normalize();
+    T_site_rover_.translation() += forward * delta;
+    odometer_m_ += std::abs(delta);
+    GrowPositionCovariance(forward, std::abs(delta));
+  }
+  R_at_last_odometry_ = R_now;
+  Record();
+  return InputResult::kAccepted;
+}
+
+void PoseEstimator::GrowPositionCovariance(const Eigen::Vector3d& forward, double distance) {
+  Eigen::Vector3d cross = Eigen::Vector3d::UnitZ().cross(forward);
+  if (cross.norm() < 1e-6) cross = T_site_rover_.linear().col(1);
+  cross.normalize();
+  const Eigen::Vector3d up = forward.cross(cross).normalized();
+
+  // Sigma along each axis grows by (fraction * distance), so that it stays proportional to
+  // the distance driven: P += ((s + g)^2 - s^2) e e^T with s the current sigma along e.
+  // A heading error of yaw_sigma adds yaw_sigma * distance across track.
+  const Eigen::Vector3d axes[3] = {forward, cross, up};
+  const double growth[3] = {options_.along_track_sigma_fraction * distance,
+                            (options_.cross_track_sigma_fraction + yaw_sigma_) * distance,
+                            options_.vertical_sigma_fraction * distance};
+  for (int i = 0; i < 3; ++i) {
+    const double s = std::sqrt(std::max(0.0, axes[i].dot(P_pos_ * axes[i])));
+    const double g = growth[i];
+    P_pos_ += (2.0 * s * g + g * g) * axes[i] * axes[i].transpose();
+  }
+}
+
+PoseEstimator::Sample PoseEstimator::Current() const {
+  Sample s;
+  s.utime = utime_;
+  s.p = T_site_rover_.translation();
+  s.q = Eigen::Quaterniond(T_site_rover_.linear()).normalized();
+  s.P_pos = P_pos_;
+  s.yaw_sigma = yaw_sigma_;
+  s.odometer = odometer_m_;
+  return s;
+}
+
+void PoseEstimator::SetCurrent(const Sample& s) {
+  T_site_rover_.translation() = s.p;
+  T_site_rover_.linear() = s.q.toRotationMatrix();
+  P_pos_ = s.P_pos;
+  yaw_sigma_ = s.yaw_sigma;
+  odometer_m_ = s.odometer;
+}
+
+void PoseEstimator::Record() {
+  const Sample s = Current();
+  if (!history_.empty() && history_.back().utime == s.utime) {
+    history_.back() = s;
+  } else {
+    history_.push_back(s);
+  }
+  while (history_.size() > static_cast<std::size_t>(options_.history_max_samples)) {
+    history_.pop_front();
+  }
+  // Keep one sample at or before the cut-off so that look-ups at the cut-off interpolate.
+  const int64_t cutoff = utime_ - static_cast<int64_t>(options_.history_s * 1e6);
+  while (history_.size() > 2 && history_[1].utime <= cutoff) history_.pop_front();
+}
+
+PoseEstimator::Sample PoseEstimator::Interpolate(int64_t utime) const {
+  if (utime >= history_.back().utime) {
+    Sample s = history_.back();
+    s.utime = utime;
+    return s;
+  }
+  const auto it = std::lower_bound(history_.begin(), history_.end(), utime,
+                                   [](const Sample& s, int64_t t) { return s.utime < t; });
+  if (it->utime == utime || it == history_.begin()) return *it;
+  const Sample& a = *(it - 1);
+  const Sample& b = *it;
+  const double f = static_cast<double>(utime - a.utime) / static_cast<double>(b.utime - a.utime);
+  Sample s;
+  s.utime = utime;
+  s.p = a.p + f * (b.p - a.p);
+  s.q = a.q.slerp(f, b.q).normalized();
+  s.P_pos = a.P_pos + f * (b.P_pos - a.P_pos);
+  s.yaw_sigma = a.yaw_sigma + f * (b.yaw_sigma - a.yaw_sigma);
+  s.odometer = a.odometer + f * (b.odometer - a.odometer);
+  return s;
+}
+
+std::optional<geometry::Pose> PoseEstimator::PoseAt(int64_t utime) const {
+  if (history_.empty() || utime < history_.front().utime || utime > history_.back().utime) {
+    return std::nullopt;
+  }
+  const Sample s = Interpolate(utime);
+  geometry::Pose T = geometry::Pose::Identity();
+  T.linear() = s.q.toRotationMatrix();
+  T.translation() = s.p;
+  return T;
+}
+
+VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
+  VoUpdateResult result;
+  auto refuse = [&](VoUpdateStatus status, const std::string& reason) {
+    result.status = status;
+    result.reason = reason;
+    return result;
+  };
+
+  const Eigen::Matrix3d R_vo = u.T_from_to.linear();
+  const Eigen::Vector3d t_vo = u.T_from_to.translation();
+  if (!R_vo.allFinite() || !t_vo.allFinite()) {
+    return refuse(VoUpdateStatus::kNotFinite, "VO delta holds NaN or inf");
+  }
+  if (!u.covariance.allFinite()) {
+    return refuse(VoUpdateStatus::kNotFinite, "VO covariance holds NaN or inf");
+  }
+  const double ortho_error = (R_vo.transpose() * R_vo - Eigen::Matrix3d::Identity()).norm();
+  if (ortho_error > 1e-6 || R_vo.determinant() < 0.0) {
+    std::ostringstream os;
+    os << "VO rotation is not a rotation (|R^T R - I| = " << ortho_error
+       << ", det = " << R_vo.determinant() << ")";
+    return refuse(VoUpdateStatus::kBadRotation, os.str());
+  }
+  const double cov_scale = 1.0 + u.covariance.cwiseAbs().maxCoeff();
+  if ((u.covariance.diagonal().array() < 0.0).any() ||
+      (u.covariance - u.covariance.transpose()).cwiseAbs().maxCoeff() > 1e-9 * cov_scale) {
+    return refuse(VoUpdateStatus::kBadCovariance,
+                  "VO covariance has a negative variance or is not symmetric");
+  }
+  if (u.to_utime <= u.from_utime) {
+    return refuse(VoUpdateStatus::kToNotAfterFrom,
+                  "to_utime " + std::to_string(u.to_utime) + " is not after from_utime " +
+                      std::to_string(u.from_utime));
+  }
+  if (history_.empty()) {
+    return refuse(VoUpdateStatus::kNoHistory, "no IMU or wheel odometry received yet");
+  }
+  const int64_t oldest = history_.front().utime;
+  const int64_t newest = history_.back().utime;
+  if (u.from_utime < oldest) {
+    return refuse(VoUpdateStatus::kFromTooOld,
+                  "from_utime " + std::to_string(u.from_utime) + " is " +
+                      Seconds(oldest - u.from_utime) +
+                      " older than the pose history (oldest " + std::to_string(oldest) + ")");
+  }
+  if (u.from_utime > newest) {
+    return refuse(VoUpdateStatus::kFromInFuture,
+                  "from_utime " + std::to_string(u.from_utime) + " is " +
+                      Seconds(u.from_utime - newest) + " after the latest input");
+  }
+  const int64_t tolerance_us = static_cast<int64_t>(options_.vo_future_tolerance_s * 1e6);
+  if (u.to_utime > newest + tolerance_us) {
+    return refuse(VoUpdateStatus::kToInFuture,
+                  "to_utime " + std::to_string(u.to_utime) + " is " +
+                      Seconds(u.to_utime - newest) +
+                      " after the latest input (tolerance " + Seconds(tolerance_us) + ")");
+  }
+
+  const Sample from = Interpolate(u.from_utime);
+  const Sample to_old = Interpolate(u.to_utime);  // held at the newest if to is later
+  const Sample now_old = Current();
+  const Eigen::Matrix3d R_from = from.q.toRotationMatrix();
+
+  // Heading at `to`: the VO yaw change and the gyro's, per vo_heading.
+  const double yaw_from = YawOf(R_from);
+  const double yaw_to_old = YawOf(to_old.q.toRotationMatrix());
+  const double dyaw_gyro = WrapAngle(yaw_to_old - yaw_from);
+  const double dyaw_vo = WrapAngle(YawOf(R_from * R_vo) - yaw_from);
+  const double var_vo = u.covariance(5, 5);
+  const double gyro_sigma = std::max(0.0, to_old.yaw_sigma - from.yaw_sigma);
+  const double var_gyro = gyro_sigma * gyro_sigma;
+  double dyaw = dyaw_gyro;
+  double yaw_sigma_to = to_old.yaw_sigma;
+  switch (options_.vo_heading) {
+    case VoHeadingMode::kReplace:
+      dyaw = dyaw_vo;
+      yaw_sigma_to = std::sqrt(from.yaw_sigma * from.yaw_sigma + var_vo);
+      break;
+    case VoHeadingMode::kFuse: {
+      const double sum = var_vo + var_gyro;
+      const double w_vo = sum > 0.0 ? var_gyro / sum : 0.5;
+      const double var_rel = sum > 0.0 ? var_vo * var_gyro / sum : 0.0;
+      dyaw = dyaw_gyro + w_vo * WrapAngle(dyaw_vo - dyaw_gyro);
+      yaw_sigma_to = std::sqrt(from.yaw_sigma * from.yaw_sigma + var_rel);
+      break;
+    }
+    case VoHeadingMode::kIgnore:
+      break;
+  }
+  const double dpsi = WrapAngle(yaw_from + dyaw - yaw_to_old);
+  const Eigen::Matrix3d Rz_dpsi = Rz(dpsi);
+
+  Sample to_new;
+  to_new.utime = u.to_utime;
+  to_new.p = from.p + R_from * t_vo;
+  to_new.q = Eigen::Quaterniond(Rz_dpsi * to_old.q.toRotationMatrix()).normalized();
+  // Position covariance: the VO translation covariance in the site frame, plus the heading
+  // uncertainty at `from` swinging the VO translation about the vertical.
+  const Eigen::Vector3d swing = Eigen::Vector3d::UnitZ().cross(R_from * t_vo);
+  to_new.P_pos = from.P_pos + R_from * u.covariance.topLeftCorner<3, 3>() * R_from.transpose() +
+                 swing * swing.transpose() * from.yaw_sigma * from.yaw_sigma;
+  to_new.P_pos = 0.5 * (to_new.P_pos + to_new.P_pos.transpose());
+  to_new.yaw_sigma = yaw_sigma_to;
+  to_new.odometer = from.odometer + t_vo.norm();
+
+  auto reapply = [&](const Sample& old) {
+    Sample s = old;
+    s.p = to_new.p + Rz_dpsi * (old.p - to_old.p);
+    s.q = Eigen::Quaterniond(Rz_dpsi * old.q.toRotationMatrix()).normalized();
+    s.P_pos = to_new.P_pos + NearestPsd(old.P_pos - to_old.P_pos);
+    s.yaw_sigma = to_new.yaw_sigma + std::max(0.0, old.yaw_sigma - to_old.yaw_sigma);
+    s.odometer = to_new.odometer + (old.odometer - to_old.odometer);
+    return s;
+  };
+
+  std::deque<Sample> rebuilt;
+  for (const Sample& s : history_) {
+    if (s.utime < u.from_utime) rebuilt.push_back(s);
+  }
+  rebuilt.push_back(from);
+  rebuilt.push_back(to_new);
+  for (const Sample& s : history_) {
+    if (s.utime > u.to_utime) rebuilt.push_back(reapply(s));
+  }
+  history_.swap(rebuilt);
+
+  if (u.to_utime > utime_) utime_ = u.to_utime;  // held pose: the rover was standing
+  SetCurrent(u.to_utime >= now_old.utime ? to_new : reapply(now_old));
+  R_at_last_odometry_ = Rz_dpsi * R_at_last_odometry_;
+  yaw_offset_ = WrapAngle(yaw_offset_ + dpsi);
+  source_ = PoseSource::kVo;
+  last_vo_to_frame_ = u.to_frame_id;
+  Record();
+
+  result.position_correction_m = T_site_rover_.translation() - now_old.p;
+  result.yaw_correction_rad = dpsi;
+  return result;
+}
+
+void PoseEstimator::Reset(const geometry::Pose& T_site_rover, int64_t utime) {
+  if (!T_site_rover.matrix().allFinite()) {
+    throw std::invalid_argument("PoseEstimator::Reset: pose holds NaN or inf");
+  }
+  T_site_rover_ = T_site_rover;
+  const double yaw = YawOf(T_site_rover.linear());
+  if (has_imu_) {
+    yaw_offset_ = WrapAngle(yaw - YawOf(q_imu_.toRotationMatrix()));
+  } else {
+    pending_reset_yaw_ = yaw;
+  }
+  P_pos_ = Eigen::Matrix3d::Identity() * options_.initial_position_sigma_m *
+           options_.initial_position_sigma_m;
+  yaw_sigma_ = options_.initial_yaw_sigma_rad;
+  R_at_last_odometry_ = T_site_rover.linear();
+  source_ = PoseSource::kWheelImu;
+  utime_ = utime;
+  has_time_ = true;
+  history_.clear();
+  Record();
+}
+
+void PoseEstimator::NewSite(std::optional<int32_t> site_index) {
+  const Eigen::Vector3d origin = T_site_rover_.translation();
+  const Eigen::Matrix3d P0 = Eigen::Matrix3d::Identity() * options_.initial_position_sigma_m *
+                             options_.initial_position_sigma_m;
+  // Past positions relative to the new origin are uncertain by the growth between them and
+  // now; that keeps a VO update spanning the new site meaningful.
+  for (Sample& s : history_) {
+    s.p -= origin;
+    s.P_pos = P0 + NearestPsd(P_pos_ - s.P_pos);
+  }
+  T_site_rover_.translation().setZero();
+  P_pos_ = P0;
+  site_index_ = site_index ? *site_index : site_index_ + 1;
+  if (!history_.empty()) {
+    history_.back().p.setZero();
+    history_.back().P_pos = P0;
+  }
+}
+
+geometry::Matrix6d PoseEstimator::covariance() const {
+  geometry::Matrix6d P = geometry::Matrix6d::Zero();
+  P.topLeftCorner<3, 3>() = P_pos_;
+  P(3, 3) = P(4, 4) = options_.attitude_sigma_rad * options_.attitude_sigma_rad;
+  P(5, 5) = yaw_sigma_ * yaw_sigma_;
+  return P;
+}
+
+PoseEstimate PoseEstimator::Estimate() const {
+  PoseEstimate e;
+  e.utime = utime_;
+  e.T_site_rover = T_site_rover_;
+  e.covariance = covariance();
+  e.source = source_;
+  e.site_index = site_index_;
+  e.odometer_m = odometer_m_;
+  e.last_vo_to_frame = last_vo_to_frame_;
+  return e;
+}
+
+}  // namespace rover::estimation

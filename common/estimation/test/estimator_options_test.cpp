@@ -1,0 +1,56 @@
+#include "estimation/estimator_options.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace rover::estimation;
+using rover::config::ConfigError;
+using rover::config::ConfigNode;
+
+TEST(EstimatorOptions, ExampleFileLoadsToTheDefaults) {
+  const ConfigNode root =
+      ConfigNode::LoadFile(std::string(ROVER_SOURCE_DIR) + "/common/estimation/estimator_example.yaml");
+  const EstimatorOptions o = LoadEstimatorOptions(root["estimator"]);
+  const EstimatorOptions d;
+  EXPECT_NEAR(o.along_track_sigma_fraction, d.along_track_sigma_fraction, 1e-15);
+  EXPECT_NEAR(o.cross_track_sigma_fraction, d.cross_track_sigma_fraction, 1e-15);
+  EXPECT_NEAR(o.vertical_sigma_fraction, d.vertical_sigma_fraction, 1e-15);
+  EXPECT_NEAR(o.gyro_drift_rad_per_s, d.gyro_drift_rad_per_s, 1e-18);
+  EXPECT_NEAR(o.gyro_scale_sigma_fraction, d.gyro_scale_sigma_fraction, 1e-15);
+  EXPECT_NEAR(o.attitude_sigma_rad, d.attitude_sigma_rad, 1e-15);
+  EXPECT_EQ(o.history_max_samples, d.history_max_samples);
+  EXPECT_EQ(o.vo_heading, VoHeadingMode::kFuse);
+  EXPECT_NO_THROW(o.Validate());
+}
+
+TEST(EstimatorOptions, ValuesAndUnitsAreConverted) {
+  const ConfigNode root = ConfigNode::FromString(
+      "estimator:\n  along_track_sigma_pct: 5\n  gyro_drift_deg_per_hour: 36\n"
+      "  vo_heading: replace\n  history_s: 30\n  publish_hz: 8\n",
+      "test.yaml");
+  const EstimatorOptions o = LoadEstimatorOptions(root["estimator"], {"publish_hz"});
+  EXPECT_NEAR(o.along_track_sigma_fraction, 0.05, 1e-15);
+  EXPECT_NEAR(o.gyro_drift_rad_per_s, 36.0 * M_PI / 180.0 / 3600.0, 1e-15);
+  EXPECT_EQ(o.vo_heading, VoHeadingMode::kReplace);
+  EXPECT_NEAR(o.history_s, 30.0, 1e-15);
+}
+
+TEST(EstimatorOptions, ErrorsNameFileAndKey) {
+  auto message = [](const std::string& text) {
+    try {
+      LoadEstimatorOptions(ConfigNode::FromString(text, "rover.yaml")["estimator"]);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string typo = message("estimator:\n  along_track_sigma: 2\n");
+  EXPECT_NE(typo.find("rover.yaml"), std::string::npos) << typo;
+  EXPECT_NE(typo.find("estimator.along_track_sigma"), std::string::npos) << typo;
+  EXPECT_NE(typo.find("unknown key"), std::string::npos) << typo;
+  const std::string mode = message("estimator:\n  vo_heading: sometimes\n");
+  EXPECT_NE(mode.find("estimator.vo_heading"), std::string::npos) << mode;
+  const std::string range = message("estimator:\n  cross_track_sigma_pct: -1\n");
+  EXPECT_NE(range.find("estimator.cross_track_sigma_pct"), std::string::npos) << range;
+}
