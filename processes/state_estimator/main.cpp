@@ -1,0 +1,139 @@
+// state_estimator: attitude from the IMU, position from wheel odometry along that attitude,
+// VO updates replacing the wheel motion between two captures (common/estimation).
+// Publishes POSE on a rover-time schedule driven by the input messages, so that a replay
+// of the same messages gives the same poses.
+#include "bus/channels.hpp"
+#include "bus/convert.hpp"
+#include "bus/process.hpp"
+#include "estimation/pose_estimator.hpp"
+
+#include <rover_msgs/imu_t.hpp>
+#include <rover_msgs/new_site_t.hpp>
+#include <rover_msgs/pose_t.hpp>
+#include <rover_msgs/vo_update_t.hpp>
+#include <rover_msgs/wheel_odometry_t.hpp>
+
+#include <cmath>
+#include <deque>
+#include <iostream>
+
+using namespace rover;
+
+int main(int argc, char** argv) {
+  return bus::RunMain("state_estimator", [&]() -> int {
+    bus::Process proc("state_estimator",
+                      "Pose from IMU attitude and wheel odometry, corrected by VO updates.\n"
+                      "Reads IMU, WHEEL_ODOMETRY, VO_UPDATE, NEW_SITE; writes POSE.\n"
+                      "Config: the `estimator:` section (see configs/rover.yaml).",
+                      argc, argv,
+                      {{"--start", "X,Y,Z,YAW_DEG", "initial pose in the site frame (default 0,0,0,0)"}});
+    const auto section = proc.config()["estimator"];
+    const auto options = estimation::LoadEstimatorOptions(section, {"publish_hz"});
+    double publish_hz = 10.0;
+    section.Get("publish_hz", publish_hz, 8.0, 1000.0);
+    geometry::Pose start = geometry::Pose::Identity();
+    if (auto s = proc.option("--start")) {
+      const auto v = bus::ParseNumberList(*s, 4, "state_estimator: argument --start");
+      start = geometry::PoseFromXyzRpy(v[0], v[1], v[2], 0, 0, v[3] * M_PI / 180.0);
+    }
+
+    estimation::PoseEstimator estimator(options);
+    bool started = false;
+    const std::int64_t period_us = static_cast<std::int64_t>(1e6 / publish_hz);
+    std::int64_t next_publish = 0;
+    std::deque<estimation::VoUpdate> waiting_vo;  // updates whose `to` is not yet reached
+    std::int64_t rejected_vo = 0;
+
+    auto ensure_started = [&](std::int64_t utime) {
+      if (!started) {
+        estimator.Reset(start, utime);
+        started = true;
+        next_publish = utime;
+      }
+    };
+    auto publish = [&]() {
+      const auto est = estimator.Estimate();
+      rover_msgs::pose_t msg{};
+      msg.utime = est.utime;
+      bus::PoseToArrays(est.T_site_rover, msg.position, msg.orientation);
+      bus::CovarianceToArray(est.covariance, msg.covariance);
+      msg.source = static_cast<std::int8_t>(est.source);
+      msg.site_index = est.site_index;
+      msg.odometer_m = est.odometer_m;
+      msg.last_vo_to_frame = est.last_vo_to_frame;
+      proc.bus().Publish(channels::kPose, msg);
+    };
+    auto try_vo = [&]() {
+      while (!waiting_vo.empty()) {
+        const auto result = estimator.ApplyVoUpdate(waiting_vo.front());
+        if (result.status == estimation::VoUpdateStatus::kToInFuture) return;  // retry later
+        if (!result.applied()) {
+          ++rejected_vo;
+          std::cerr << "state_estimator: VO update " << waiting_vo.front().from_frame_id << "->"
+                    << waiting_vo.front().to_frame_id << " refused: " << result.reason << "\n";
+        }
+        waiting_vo.pop_front();
+        publish();  // the executor waits for the pose that includes the update
+      }
+    };
+    auto after_input = [&](std::int64_t utime) {
+      proc.ObserveTime(utime);
+      try_vo();
+      if (utime >= next_publish) {
+        publish();
+        next_publish = utime - (utime - next_publish) % period_us + period_us;
+      }
+    };
+
+    proc.bus().Subscribe<rover_msgs::imu_t>(
+        channels::kImu,
+        [&](const rover_msgs::imu_t& m) {
+          ensure_started(m.utime);
+          estimator.OnImu(m.utime, bus::QuaternionFromArray(m.orientation),
+                          Eigen::Vector3d(m.angular_rate[0], m.angular_rate[1], m.angular_rate[2]));
+          after_input(m.utime);
+        },
+        1000);
+    proc.bus().Subscribe<rover_msgs::wheel_odometry_t>(
+        channels::kWheelOdometry,
+        [&](const rover_msgs::wheel_odometry_t& m) {
+          ensure_started(m.utime);
+          estimation::WheelOdometrySample s;
+          s.utime = m.utime;
+          s.distance_m = m.distance_m;
+          s.wheel_distance_m = m.wheel_distance_m;
+          s.curvature_per_m = m.curvature_per_m;
+          s.turning_in_place = m.turning_in_place != 0;
+          estimator.OnWheelOdometry(s);
+          after_input(m.utime);
+        },
+        1000);
+    proc.bus().Subscribe<rover_msgs::vo_update_t>(
+        channels::kVoUpdate,
+        [&](const rover_msgs::vo_update_t& m) {
+          if (m.status != rover_msgs::vo_update_t::STATUS_OK || !started) return;  // prior stands
+          estimation::VoUpdate u;
+          u.from_utime = m.from_utime;
+          u.to_utime = m.to_utime;
+          u.from_frame_id = m.from_frame_id;
+          u.to_frame_id = m.to_frame_id;
+          u.T_from_to.linear() = bus::QuaternionFromArray(m.delta_orientation).toRotationMatrix();
+          u.T_from_to.translation() =
+              Eigen::Vector3d(m.delta_position[0], m.delta_position[1], m.delta_position[2]);
+          u.covariance = bus::CovarianceFromArray(m.covariance);
+          waiting_vo.push_back(u);
+          try_vo();
+        },
+        100);
+    proc.bus().Subscribe<rover_msgs::new_site_t>(channels::kNewSite,
+                                                 [&](const rover_msgs::new_site_t& m) {
+                                                   if (!started) return;
+                                                   estimator.NewSite(m.site_index);
+                                                   publish();
+                                                 });
+    proc.Run([&] {
+      proc.SetHealth(0, rejected_vo ? std::to_string(rejected_vo) + " VO updates refused" : "");
+    });
+    return 0;
+  });
+}

@@ -1,0 +1,225 @@
+// ./rover scenario SCENARIO.yaml --out DIR
+//
+// Runs one scenario on a fresh bus (the `rover` script puts it in a private network
+// namespace): starts the deployment's processes with the scenario's world and start pose,
+// records every channel with the real lcm-logger to DIR/log.lcm, submits the sequence,
+// follows it to the end, stops everything, and writes DIR/summary.json from the log.
+#include "bus/bus.hpp"
+#include "bus/channels.hpp"
+#include "bus/process.hpp"
+#include "config/yaml_config.hpp"
+#include "launch/process_set.hpp"
+#include "scenario/scenario.hpp"
+#include "terrain/world.hpp"
+
+#include <rover_msgs/heartbeat_t.hpp>
+#include <rover_msgs/sequence_status_t.hpp>
+#include <rover_msgs/sequence_submit_t.hpp>
+#include <rover_msgs/step_report_t.hpp>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <filesystem>
+#include <iomanip>
+#include <optional>
+#include <fstream>
+#include <iostream>
+#include <set>
+#include <sstream>
+#include <thread>
+
+namespace fs = std::filesystem;
+using rover::config::ConfigError;
+
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+void OnSignal(int) { g_stop = 1; }
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path + ": cannot open file (expected a readable file)");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string Num(double v) {
+  std::ostringstream os;
+  os.precision(10);
+  os << v;
+  return os.str();
+}
+
+// Two buses on LCM 1.3.1 must differ by port: each run picks its own from its pid.
+std::string PrivateUrl() {
+  const int port = 20000 + static_cast<int>(getpid() % 20000);
+  return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=8388608";
+}
+
+double FootprintDim(const rover::config::ConfigNode& rover_config, const char* key, double dflt) {
+  double v = dflt;
+  const auto hazards = rover_config["hazards"];
+  if (hazards.Has("footprint")) hazards["footprint"].Get(key, v, 0.01, 20.0);
+  return v;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return rover::bus::RunMain("scenario_runner", [&]() -> int {
+    std::string scenario_path, out_dir, url;
+    bool quiet = false;
+    for (int i = 1; i < argc; ++i) {
+      const std::string arg = argv[i];
+      if (arg == "--help" || arg == "-h") {
+        std::cout << "usage: scenario_runner SCENARIO.yaml --out DIR [--lcm-url URL] [--quiet]\n\n"
+                     "Runs a scenario (configs/scenarios/) on a fresh bus, records DIR/log.lcm\n"
+                     "with lcm-logger and writes DIR/summary.json.\n";
+        return 0;
+      } else if (arg == "--out" && i + 1 < argc) {
+        out_dir = argv[++i];
+      } else if (arg == "--lcm-url" && i + 1 < argc) {
+        url = argv[++i];
+      } else if (arg == "--quiet") {
+        quiet = true;
+      } else if (scenario_path.empty() && arg.rfind("--", 0) != 0) {
+        scenario_path = arg;
+      } else {
+        throw ConfigError("scenario_runner: argument " + arg +
+                          ": unexpected (expected SCENARIO.yaml --out DIR)");
+      }
+    }
+    if (scenario_path.empty()) throw ConfigError("scenario_runner: missing SCENARIO.yaml");
+    if (out_dir.empty()) throw ConfigError("scenario_runner: missing --out DIR");
+    const auto spec = rover::tools::LoadScenario(scenario_path);
+    const auto deployment = rover::launch::LoadDeployment(spec.deployment);
+    const std::string sequence_text = ReadFile(spec.sequence);
+    const auto rover_config = rover::config::ConfigNode::LoadFile(spec.rover_config);
+    // The start elevation comes from the same world the simulator builds.
+    const rover::terrain::World world(
+        rover::terrain::LoadWorldOptions(rover::config::ConfigNode::LoadFile(spec.world)));
+    const double start_z = -world.Elevation(spec.start_x, spec.start_y);
+    if (url.empty()) url = PrivateUrl();
+
+    fs::create_directories(out_dir);
+    const std::string log_path = out_dir + "/log.lcm";
+    fs::remove(log_path);
+    std::signal(SIGINT, OnSignal);
+    std::signal(SIGTERM, OnSignal);
+    const auto wall_start = std::chrono::steady_clock::now();
+    auto wall = [&] {
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    };
+
+    rover::bus::Bus bus(url);
+    std::set<std::string> alive;
+    std::optional<rover_msgs::sequence_status_t> final_status;
+    int steps_seen = 0;
+    std::string last_line;
+    bus.Subscribe<rover_msgs::heartbeat_t>(rover::channels::kHeartbeat,
+                                           [&](const rover_msgs::heartbeat_t& hb) {
+                                             alive.insert(hb.process);
+                                           });
+    bus.Subscribe<rover_msgs::step_report_t>(rover::channels::kStepReport,
+                                             [&](const rover_msgs::step_report_t&) {
+                                               ++steps_seen;
+                                             });
+    bus.Subscribe<rover_msgs::sequence_status_t>(
+        rover::channels::kSequenceStatus, [&](const rover_msgs::sequence_status_t& st) {
+          if (st.submission_id != 1) return;
+          if (!quiet && st.detail != last_line) {
+            std::cout << "[t=" << std::fixed << std::setprecision(1) << st.elapsed_s << " s] "
+                      << st.detail << "\n" << std::flush;
+            last_line = st.detail;
+          }
+          if (st.state == rover_msgs::sequence_status_t::STATE_COMPLETED ||
+              st.state == rover_msgs::sequence_status_t::STATE_ABORTED ||
+              st.state == rover_msgs::sequence_status_t::STATE_REJECTED) {
+            if (!final_status) final_status = st;
+          }
+        });
+
+    rover::launch::ProcessSet set(rover::launch::BinDir(), out_dir, false);
+    const std::vector<std::string> env = {"ROVER_LCM_URL=" + url};
+    set.Start({"lcm-logger", "/usr/bin/lcm-logger", {"--lcm-url=" + url, "-q", "-f", log_path}}, env);
+    for (auto p : deployment.processes) {
+      if (p.name == "rover_sim") {
+        p.args.insert(p.args.end(),
+                      {"--world", spec.world, "--start",
+                       Num(spec.start_x) + "," + Num(spec.start_y) + "," + Num(spec.start_yaw_deg),
+                       "--rate", Num(spec.sim_rate)});
+      } else if (p.name == "state_estimator") {
+        p.args.insert(p.args.end(), {"--start", Num(spec.start_x) + "," + Num(spec.start_y) + "," +
+                                                    Num(start_z) + "," + Num(spec.start_yaw_deg)});
+      }
+      set.Start(p, env);
+    }
+    std::cout << "scenario " << spec.name << ": " << deployment.processes.size()
+              << " processes on " << url << "; output in " << out_dir << "/\n" << std::flush;
+
+    rover::tools::ScenarioSummary partial;
+    auto note = [&](const std::string& e) {
+      partial.process_events.push_back(e);
+      std::cout << e << "\n" << std::flush;
+    };
+    // Wait until every process has said it is alive.
+    bool ready = false;
+    while (!ready && !g_stop && wall() < 30) {
+      bus.Handle(50);
+      for (const auto& [name, how] : set.Poll(0)) note(name + " " + how + " at start");
+      ready = true;
+      for (const auto& p : deployment.processes) ready = ready && alive.count(p.name) > 0;
+    }
+    if (!ready) note("not every process sent a heartbeat within 30 s");
+
+    rover_msgs::sequence_submit_t submit{};
+    submit.submission_id = 1;
+    submit.name = spec.sequence;
+    submit.text = sequence_text;
+    bus.Publish(rover::channels::kSequenceSubmit, submit);
+
+    bool killed = false;
+    std::optional<double> done_at;
+    while (!g_stop && wall() < spec.timeout_s) {
+      bus.Handle(20);
+      for (const auto& [name, how] : set.Poll(0)) {
+        if (killed && name == spec.kill_process) continue;
+        note(name + " " + how + " unexpectedly");
+      }
+      if (!spec.kill_process.empty() && !killed && steps_seen >= spec.kill_after_steps &&
+          steps_seen > 0) {
+        note("injected fault: killing " + spec.kill_process + " after " +
+             std::to_string(steps_seen) + " steps");
+        set.Signal(spec.kill_process, SIGKILL);
+        killed = true;
+      }
+      if (final_status && !done_at) done_at = wall();
+      // Let the last messages (stop, final pose, truth) reach the log.
+      if (done_at && wall() - *done_at > 1.0) break;
+    }
+    if (!final_status) note("no final status within " + Num(spec.timeout_s) + " s");
+    set.StopAll();
+
+    auto summary = rover::tools::SummarizeLog(log_path, FootprintDim(rover_config, "length_m", 1.6),
+                                              FootprintDim(rover_config, "width_m", 1.2));
+    summary.scenario = spec.name;
+    summary.wall_time_s = wall();
+    summary.process_events = partial.process_events;
+    std::ofstream(out_dir + "/summary.json") << rover::tools::SummaryJson(summary);
+    std::cout << "\n" << rover::tools::SummaryText(summary);
+    if (!spec.expect_outcome.empty()) {
+      const bool match = summary.outcome == spec.expect_outcome &&
+                         (spec.expect_abort_reason.empty() ||
+                          summary.abort_reason == spec.expect_abort_reason);
+      std::cout << "  expected: " << spec.expect_outcome
+                << (spec.expect_abort_reason.empty() ? "" : " (" + spec.expect_abort_reason + ")")
+                << (match ? " - as expected\n" : " - NOT as expected\n");
+    }
+    std::cout << "  wrote " << out_dir << "/summary.json and " << log_path << "\n";
+    return summary.outcome == "incomplete" ? 1 : 0;
+  });
+}
