@@ -91,7 +91,8 @@ std::map<std::string, std::string> ParseArgs(const std::string& name, const std:
 
 const std::vector<std::string>& KnownConfigSections() {
   static const std::vector<std::string> sections = {
-      "mobility", "sensors", "sim", "estimator", "hazards", "executor", "vo", "camera", "capture"};
+      "mobility", "sensors",  "sim",    "estimator",       "hazards",
+      "executor", "vo",       "camera", "visual_odometry", "capture"};
   return sections;
 }
 
