@@ -94,7 +94,7 @@ std::vector<hazards::KeepOutZone> ZonesFromMsg(const rover_msgs::keepout_zones_t
   std::vector<hazards::KeepOutZone> zones;
   for (const auto& z : msg.zones) {
     if (z.shape == rover_msgs::keepout_zone_t::SHAPE_CIRCLE) {
-      zones.push_back(hazards::KeepOutZone::Circle(z.name, {z.center[0], z.center[1]}, z.radius_m));
+      zones.push_back(hazards::KeepOutZone::Circle(z.name, z.center[0], z.center[1], z.radius_m));
     } else {
       std::vector<Eigen::Vector2d> vertices;
       for (int i = 0; i < z.num_vertices; ++i) vertices.emplace_back(z.vertices_x[i], z.vertices_y[i]);
@@ -117,8 +117,7 @@ const char* StateName(int state) {
 
 }  // namespace
 
-ScenarioSummary SummarizeLog(const std::string& log_path, double footprint_length_m,
-                             double footprint_width_m) {
+ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footprint& footprint) {
   lcm::LogFile log(log_path, "r");
   if (!log.good()) throw std::runtime_error(log_path + ": cannot read the LCM log");
 
@@ -235,7 +234,6 @@ ScenarioSummary SummarizeLog(const std::string& log_path, double footprint_lengt
   }
 
   // Truth clearance: the closest the true footprint came to any zone in force.
-  const hazards::Footprint footprint{footprint_length_m, footprint_width_m};
   std::size_t set_index = 0;
   for (const auto& t : truth) {
     while (set_index + 1 < zone_sets.size() && zone_sets[set_index + 1].first <= t.utime) {

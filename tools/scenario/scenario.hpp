@@ -2,6 +2,8 @@
 // "Scenario catalogue"), run on a fresh private bus and summarised from its log.
 #pragma once
 
+#include "hazards/keepout.hpp"
+
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -69,10 +71,9 @@ struct ScenarioSummary {
   std::vector<std::string> process_events;
 };
 
-// Reads an LCM log of a run and computes the summary. The footprint (length x width, m)
-// is used for the truth clearance to keep-out zones.
-ScenarioSummary SummarizeLog(const std::string& log_path, double footprint_length_m,
-                             double footprint_width_m);
+// Reads an LCM log of a run and computes the summary. The footprint is used for the
+// truth clearance to keep-out zones.
+ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footprint& footprint);
 
 std::string SummaryJson(const ScenarioSummary& summary);
 std::string SummaryText(const ScenarioSummary& summary);

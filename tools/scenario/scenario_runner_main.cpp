@@ -10,6 +10,7 @@
 #include "config/yaml_config.hpp"
 #include "launch/process_set.hpp"
 #include "scenario/scenario.hpp"
+#include "hazards/hazard_assessor.hpp"
 #include "terrain/world.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
@@ -60,12 +61,6 @@ std::string PrivateUrl() {
   return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=8388608";
 }
 
-double FootprintDim(const rover::config::ConfigNode& rover_config, const char* key, double dflt) {
-  double v = dflt;
-  const auto hazards = rover_config["hazards"];
-  if (hazards.Has("footprint")) hazards["footprint"].Get(key, v, 0.01, 20.0);
-  return v;
-}
 
 }  // namespace
 
@@ -99,9 +94,9 @@ int main(int argc, char** argv) {
     const auto deployment = rover::launch::LoadDeployment(spec.deployment);
     const std::string sequence_text = ReadFile(spec.sequence);
     const auto rover_config = rover::config::ConfigNode::LoadFile(spec.rover_config);
+    const auto footprint = rover::hazards::LoadHazardOptions(rover_config["hazards"]).footprint;
     // The start elevation comes from the same world the simulator builds.
-    const rover::terrain::World world(
-        rover::terrain::LoadWorldOptions(rover::config::ConfigNode::LoadFile(spec.world)));
+    const rover::terrain::World world(rover::terrain::WorldOptions::LoadFile(spec.world));
     const double start_z = -world.Elevation(spec.start_x, spec.start_y);
     if (url.empty()) url = PrivateUrl();
 
@@ -204,8 +199,7 @@ int main(int argc, char** argv) {
     if (!final_status) note("no final status within " + Num(spec.timeout_s) + " s");
     set.StopAll();
 
-    auto summary = rover::tools::SummarizeLog(log_path, FootprintDim(rover_config, "length_m", 1.6),
-                                              FootprintDim(rover_config, "width_m", 1.2));
+    auto summary = rover::tools::SummarizeLog(log_path, footprint);
     summary.scenario = spec.name;
     summary.wall_time_s = wall();
     summary.process_events = partial.process_events;
