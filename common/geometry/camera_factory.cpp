@@ -1,5 +1,6 @@
 // CameraModelFromParams: the inverse of CameraModel::Params() for every model type.
 #include "geometry/cahv_camera.hpp"
+#include "geometry/cahvore_camera.hpp"
 #include "geometry/camera_model.hpp"
 #include "geometry/pinhole_camera.hpp"
 
@@ -53,8 +54,14 @@ std::unique_ptr<CameraModel> CameraModelFromParams(const std::string& type, int 
                                           Vec3(params, 6), Vec3(params, 9), Vec3(params, 12),
                                           Vec3(params, 15));
   }
+  if (type == "cahvore") {
+    if (n != 22) WrongCount(type, "22 parameters (C A H V O R E linearity)", n);
+    return std::make_unique<CahvoreCamera>(width, height, Vec3(params, 0), Vec3(params, 3),
+                                           Vec3(params, 6), Vec3(params, 9), Vec3(params, 12),
+                                           Vec3(params, 15), Vec3(params, 18), params[21]);
+  }
   throw std::invalid_argument("CameraModelFromParams: unknown type \"" + type +
-                              "\" (expected pinhole, cahv or cahvor)");
+                              "\" (expected pinhole, cahv, cahvor or cahvore)");
 }
 
 }  // namespace rover::geometry

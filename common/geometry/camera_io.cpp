@@ -1,6 +1,7 @@
 #include "geometry/camera_io.hpp"
 
 #include "geometry/cahv_camera.hpp"
+#include "geometry/cahvore_camera.hpp"
 #include "geometry/pinhole_camera.hpp"
 #include "geometry/pose.hpp"
 
@@ -60,8 +61,10 @@ Eigen::Matrix3d BodyFromOptical() {
 std::unique_ptr<CameraModel> LoadCameraModel(const config::ConfigNode& node) {
   if (!node.IsMap()) node.Fail("expected a camera mapping (type, width, height, ...)");
   std::string type;
-  if (!node.Has("type")) node.Fail("missing key \"type\" (expected one of: pinhole, cahv, cahvor)");
-  node.GetEnum("type", type, {"pinhole", "cahv", "cahvor"});
+  if (!node.Has("type")) {
+    node.Fail("missing key \"type\" (expected one of: pinhole, cahv, cahvor, cahvore)");
+  }
+  node.GetEnum("type", type, {"pinhole", "cahv", "cahvor", "cahvore"});
   const int width = RequireSize(node, "width");
   const int height = RequireSize(node, "height");
   try {
@@ -88,6 +91,14 @@ std::unique_ptr<CameraModel> LoadCameraModel(const config::ConfigNode& node) {
       return std::make_unique<CahvCamera>(width, height, RequireVector3(node, "C"),
                                           RequireVector3(node, "A"), RequireVector3(node, "H"),
                                           RequireVector3(node, "V"));
+    }
+    if (type == "cahvore") {
+      node.CheckKeys({"type", "width", "height", "C", "A", "H", "V", "O", "R", "E", "linearity"});
+      return std::make_unique<CahvoreCamera>(
+          width, height, RequireVector3(node, "C"), RequireVector3(node, "A"),
+          RequireVector3(node, "H"), RequireVector3(node, "V"), RequireVector3(node, "O"),
+          RequireVector3(node, "R"), RequireVector3(node, "E"),
+          node.RequireDouble("linearity", -1.0, 1.0));
     }
     node.CheckKeys({"type", "width", "height", "C", "A", "H", "V", "O", "R"});
     return std::make_unique<CahvorCamera>(

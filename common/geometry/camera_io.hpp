@@ -1,7 +1,7 @@
 // Camera models and stereo rigs from YAML (configs/cameras/*.yaml).
 //
 // A camera node:
-//   type: pinhole | cahv | cahvor
+//   type: pinhole | cahv | cahvor | cahvore
 //   width: 1024            # pixels
 //   height: 1024
 //   # pinhole:
@@ -21,7 +21,8 @@
 //   # default orientation: optical frame = reference frame
 //   # cahv / cahvor:
 //   C: [..]  A: [..]  H: [..]  V: [..]     # as in the label, used as given
-//   O: [..]  R: [r0, r1, r2]               # cahvor only
+//   O: [..]  R: [r0, r1, r2]               # cahvor and cahvore
+//   E: [e0, e1, e2]  linearity: L           # cahvore only; L = 1, 0 or P for T = 1, 2, 3
 //
 // A stereo rig node has exactly the keys `left` and `right`, each a camera node in one
 // shared reference frame.
