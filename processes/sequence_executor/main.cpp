@@ -1,0 +1,283 @@
+// sequence_executor: runs operator sequences step by step (common/sequence). This shell
+// translates messages into SequenceExecutor inputs and its outputs into messages.
+#include "bus/channels.hpp"
+#include "bus/convert.hpp"
+#include "bus/process.hpp"
+#include "sequence/executor.hpp"
+
+#include <rover_msgs/capture_request_t.hpp>
+#include <rover_msgs/hazard_query_t.hpp>
+#include <rover_msgs/hazard_reply_t.hpp>
+#include <rover_msgs/hazard_status_t.hpp>
+#include <rover_msgs/heartbeat_t.hpp>
+#include <rover_msgs/keepout_zones_t.hpp>
+#include <rover_msgs/mobility_command_t.hpp>
+#include <rover_msgs/mobility_status_t.hpp>
+#include <rover_msgs/new_site_t.hpp>
+#include <rover_msgs/pose_t.hpp>
+#include <rover_msgs/sequence_control_t.hpp>
+#include <rover_msgs/sequence_status_t.hpp>
+#include <rover_msgs/sequence_submit_t.hpp>
+#include <rover_msgs/step_report_t.hpp>
+#include <rover_msgs/stereo_frame_t.hpp>
+#include <rover_msgs/vo_update_t.hpp>
+
+#include <chrono>
+#include <iostream>
+#include <type_traits>
+
+using namespace rover;
+namespace seq = rover::sequence;
+
+namespace {
+
+// Publishes one executor output as its message.
+class OutputPublisher {
+ public:
+  explicit OutputPublisher(bus::Process& proc) : proc_(proc) {}
+
+  void operator()(const seq::MobilityCommand& c) {
+    rover_msgs::mobility_command_t m{};
+    m.utime = c.utime;
+    m.command_id = c.command_id;
+    m.type = static_cast<std::int8_t>(c.type);
+    m.distance_m = c.distance_m;
+    m.curvature_per_m = c.curvature_per_m;
+    m.turn_rad = c.turn_rad;
+    m.speed_mps = c.speed_mps;
+    m.turn_rate_rps = c.turn_rate_rps;
+    proc_.bus().Publish(channels::kMobilityCommand, m);
+  }
+  void operator()(const seq::CaptureRequest& c) {
+    rover_msgs::capture_request_t m{};
+    m.utime = c.utime;
+    m.frame_id = c.frame_id;
+    m.purpose = c.purpose;
+    proc_.bus().Publish(channels::kCaptureRequest, m);
+  }
+  void operator()(const seq::HazardQuery& q) {
+    rover_msgs::hazard_query_t m{};
+    m.utime = q.utime;
+    m.query_id = q.query_id;
+    m.num_poses = static_cast<std::int32_t>(q.samples.size());
+    for (const auto& s : q.samples) {
+      m.x.push_back(s.x);
+      m.y.push_back(s.y);
+      m.yaw.push_back(s.yaw);
+    }
+    proc_.bus().Publish(channels::kHazardQuery, m);
+  }
+  void operator()(const seq::KeepOutZoneSet& set) {
+    rover_msgs::keepout_zones_t m{};
+    m.utime = set.utime;
+    for (const auto& z : set.zones) {
+      rover_msgs::keepout_zone_t zone{};
+      zone.name = z.name;
+      zone.shape = z.shape == seq::KeepOutZone::Shape::kCircle
+                       ? rover_msgs::keepout_zone_t::SHAPE_CIRCLE
+                       : rover_msgs::keepout_zone_t::SHAPE_POLYGON;
+      zone.center[0] = z.center.x();
+      zone.center[1] = z.center.y();
+      zone.radius_m = z.radius_m;
+      zone.num_vertices = static_cast<std::int32_t>(z.vertices.size());
+      for (const auto& v : z.vertices) {
+        zone.vertices_x.push_back(v.x());
+        zone.vertices_y.push_back(v.y());
+      }
+      m.zones.push_back(zone);
+    }
+    m.num_zones = static_cast<std::int32_t>(m.zones.size());
+    proc_.bus().Publish(channels::kKeepOutZones, m);
+  }
+  void operator()(const seq::NewSiteRequest& r) {
+    rover_msgs::new_site_t m{};
+    m.utime = r.utime;
+    m.site_index = r.new_site_index;
+    proc_.bus().Publish(channels::kNewSite, m);
+  }
+  void operator()(const seq::SequenceStatus& s) {
+    rover_msgs::sequence_status_t m{};
+    m.utime = s.utime;
+    m.submission_id = s.submission_id;
+    m.sequence_name = s.sequence_name;
+    m.state = static_cast<std::int8_t>(s.state);
+    m.num_commands = s.num_commands;
+    m.command_index = s.command_index;
+    m.command_line = s.command_line;
+    m.command_text = s.command_text;
+    m.step_index = s.step_index;
+    m.abort_reason = s.abort_reason;
+    m.detail = s.detail;
+    for (int i = 0; i < 6; ++i) m.pose[i] = s.pose[i];
+    m.distance_m = s.distance_m;
+    m.elapsed_s = s.elapsed_s;
+    m.vo_failures = s.vo_failures;
+    proc_.bus().Publish(channels::kSequenceStatus, m);
+    if (s.state == seq::SequenceState::kAborted || s.state == seq::SequenceState::kRejected ||
+        s.state == seq::SequenceState::kCompleted) {
+      if (s.submission_id != last_final_) {
+        std::cout << "sequence " << s.sequence_name << ": " << seq::ToString(s.state)
+                  << (s.abort_reason.empty() ? "" : " (" + s.abort_reason + ")") << ": " << s.detail
+                  << "\n" << std::flush;
+        last_final_ = s.submission_id;
+      }
+    }
+  }
+  void operator()(const seq::StepReport& r) {
+    rover_msgs::step_report_t m{};
+    m.utime = r.utime;
+    m.submission_id = r.submission_id;
+    m.command_index = r.command_index;
+    m.step_index = r.step_index;
+    m.mobility_command_id = r.mobility_command_id;
+    m.commanded_distance_m = r.commanded_distance_m;
+    m.commanded_turn_rad = r.commanded_turn_rad;
+    m.estimated_distance_m = r.estimated_distance_m;
+    m.estimated_turn_rad = r.estimated_turn_rad;
+    m.slip_pct = r.slip_pct;
+    m.vo_status = static_cast<std::int8_t>(r.vo_status);
+    for (int i = 0; i < 6; ++i) {
+      m.pose_before[i] = r.pose_before[i];
+      m.pose_after[i] = r.pose_after[i];
+    }
+    m.utime_before = r.utime_before;
+    m.utime_after = r.utime_after;
+    proc_.bus().Publish(channels::kStepReport, m);
+  }
+
+ private:
+  bus::Process& proc_;
+  std::int64_t last_final_ = -1;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return bus::RunMain("sequence_executor", [&]() -> int {
+    bus::Process proc("sequence_executor",
+                      "Runs operator sequences step by step: checks the whole file, commands\n"
+                      "mobility, asks for captures and VO, checks hazards, progress and limits,\n"
+                      "and aborts when one fails.\n"
+                      "Reads SEQUENCE_SUBMIT, SEQUENCE_CONTROL, POSE, MOBILITY_STATUS, VO_UPDATE,\n"
+                      "HAZARD_STATUS, HAZARD_REPLY, STEREO_FRAME, HEARTBEAT; writes MOBILITY_COMMAND,\n"
+                      "CAPTURE_REQUEST, HAZARD_QUERY, KEEPOUT_ZONES, NEW_SITE, SEQUENCE_STATUS, STEP_REPORT.\n"
+                      "Config: the `executor:` section (see configs/rover.yaml).",
+                      argc, argv);
+    const auto options = seq::LoadExecutorOptions(proc.config());
+    // Ids must never repeat across restarts of this process.
+    const auto first_id = std::chrono::duration_cast<std::chrono::milliseconds>(
+                              std::chrono::system_clock::now().time_since_epoch())
+                              .count();
+    seq::SequenceExecutor executor(options, first_id);
+    OutputPublisher publisher(proc);
+    auto flush = [&] {
+      for (const auto& out : executor.TakeOutputs()) std::visit(publisher, out);
+    };
+
+    proc.bus().Subscribe<rover_msgs::sequence_submit_t>(
+        channels::kSequenceSubmit, [&](const rover_msgs::sequence_submit_t& m) {
+          std::cout << "received sequence " << m.name << " (" << m.text.size() << " bytes)\n"
+                    << std::flush;
+          executor.SubmitText(m.text, m.submission_id, m.name);
+          flush();
+        });
+    proc.bus().Subscribe<rover_msgs::sequence_control_t>(
+        channels::kSequenceControl, [&](const rover_msgs::sequence_control_t& m) {
+          switch (m.action) {
+            case rover_msgs::sequence_control_t::ACTION_ABORT: executor.Abort(m.reason); break;
+            case rover_msgs::sequence_control_t::ACTION_PAUSE: executor.Pause(); break;
+            case rover_msgs::sequence_control_t::ACTION_RESUME: executor.Resume(); break;
+            default:
+              std::cerr << "sequence_executor: SEQUENCE_CONTROL: unknown action "
+                        << static_cast<int>(m.action) << " (expected 0 abort, 1 pause, 2 resume)\n";
+          }
+          flush();
+        });
+    proc.bus().Subscribe<rover_msgs::pose_t>(channels::kPose, [&](const rover_msgs::pose_t& m) {
+      proc.ObserveTime(m.utime);
+      seq::PoseEstimate p;
+      p.utime = m.utime;
+      p.position = Eigen::Vector3d(m.position[0], m.position[1], m.position[2]);
+      p.orientation = bus::QuaternionFromArray(m.orientation);
+      p.covariance = bus::CovarianceFromArray(m.covariance);
+      p.source = m.source;
+      p.site_index = m.site_index;
+      p.odometer_m = m.odometer_m;
+      p.last_vo_to_frame = m.last_vo_to_frame;
+      executor.OnPose(p);
+      flush();
+    }, 100);
+    proc.bus().Subscribe<rover_msgs::mobility_status_t>(
+        channels::kMobilityStatus, [&](const rover_msgs::mobility_status_t& m) {
+          seq::MobilityStatus s;
+          s.utime = m.utime;
+          s.command_id = m.command_id;
+          s.state = static_cast<seq::MobilityState>(m.state);
+          s.wheel_distance_m = m.wheel_distance_m;
+          s.wheel_turn_rad = m.wheel_turn_rad;
+          s.detail = m.detail;
+          executor.OnMobilityStatus(s);
+          flush();
+        }, 100);
+    proc.bus().Subscribe<rover_msgs::vo_update_t>(channels::kVoUpdate, [&](const rover_msgs::vo_update_t& m) {
+      seq::VoUpdate u;
+      u.utime = m.utime;
+      u.from_frame_id = m.from_frame_id;
+      u.to_frame_id = m.to_frame_id;
+      u.status = m.status;
+      u.reason = m.reason;
+      executor.OnVoUpdate(u);
+      flush();
+    });
+    proc.bus().Subscribe<rover_msgs::hazard_status_t>(
+        channels::kHazardStatus, [&](const rover_msgs::hazard_status_t& m) {
+          seq::HazardStatus h;
+          h.utime = m.utime;
+          h.state = static_cast<seq::HazardState>(m.state);
+          h.keepout_violated = m.keepout_violated;
+          h.zone_name = m.zone_name;
+          h.min_clearance_m = m.min_clearance_m;
+          h.tilt_violated = m.tilt_violated;
+          h.roll_rad = m.roll_rad;
+          h.pitch_rad = m.pitch_rad;
+          h.detail = m.detail;
+          executor.OnHazardStatus(h);
+          flush();
+        });
+    proc.bus().Subscribe<rover_msgs::hazard_reply_t>(
+        channels::kHazardReply, [&](const rover_msgs::hazard_reply_t& m) {
+          seq::HazardReply r;
+          r.utime = m.utime;
+          r.query_id = m.query_id;
+          r.verdict = static_cast<seq::HazardVerdict>(m.verdict);
+          r.zone_name = m.zone_name;
+          r.min_clearance_m = m.min_clearance_m;
+          r.detail = m.detail;
+          executor.OnHazardReply(r);
+          flush();
+        });
+    proc.bus().Subscribe<rover_msgs::stereo_frame_t>(
+        channels::kStereoFrame, [&](const rover_msgs::stereo_frame_t& m) {
+          executor.OnStereoFrame(m.frame_id);
+          flush();
+        }, 2);
+    proc.bus().Subscribe<rover_msgs::heartbeat_t>(channels::kHeartbeat,
+                                                  [&](const rover_msgs::heartbeat_t& m) {
+                                                    executor.OnHeartbeat(m.process, proc.wall_seconds());
+                                                    flush();
+                                                  }, 100);
+    proc.Run(
+        [&] {
+          executor.Tick(proc.now(), proc.wall_seconds());
+          flush();
+          proc.SetHealth(0, seq::ToString(executor.state()));
+        },
+        25);
+    // Stopping the executor while it drives stops the rover: commanding nothing is safe.
+    if (executor.Active()) {
+      executor.Abort("sequence_executor shutting down");
+      flush();
+    }
+    return 0;
+  });
+}
