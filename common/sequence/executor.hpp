@@ -1,0 +1,389 @@
+// The sequence executor: runs a checked Sequence step by step (OPERATIONS.md, "Semantics of
+// a drive with VO on"). It knows nothing of LCM. The process shell feeds it the messages it
+// reads (On*), the operator's requests (Submit, Abort, Pause, Resume) and the clocks (Tick),
+// and publishes what TakeOutputs() returns. Every input struct mirrors its lcmtypes message.
+//
+// Time: rover time (utime, us) comes from the messages and Tick, and drives the time limits.
+// Wall-clock seconds (Tick, OnHeartbeat) only guard against silent peers: heartbeats and
+// the waits for hazard replies, VO updates, poses and mobility.
+#pragma once
+
+#include "config/yaml_config.hpp"
+#include "geometry/pose.hpp"
+#include "sequence/parser.hpp"
+#include "sequence/sequence.hpp"
+#include "sequence/stepping.hpp"
+
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+namespace rover::sequence {
+
+// ---------------------------------------------------------------------------------------
+// Options (YAML section `executor:`, sample in common/sequence/executor_example.yaml).
+struct ExecutorOptions {
+  // Heartbeats. A name "a|b" is satisfied by either process (rover_sim or a real driver).
+  std::vector<std::string> required_processes = {"rover_sim|mobility_driver", "state_estimator",
+                                                 "hazard_monitor"};
+  // Needed while VO is on (and for `images`) when vo_processes_required; otherwise a silent
+  // VO process counts as a VO failure and the sequence's VO policy decides.
+  std::vector<std::string> vo_processes = {"camera_capture", "visual_odometry"};
+  bool vo_processes_required = true;
+  double heartbeat_timeout_s = 3.0;  // wall: older than this = silent
+  double start_wait_s = 5.0;         // wall: a submission waits this long for heartbeats and a
+                                     // first pose, then is rejected with process_lost
+
+  // Wall-clock waits that guard against a silent peer.
+  double hazard_reply_wait_s = 5.0;   // predictive query; no answer = abort hazard_unknown
+  double hazard_status_wait_s = 5.0;  // fresh hazard status after a step; none = hazard_unknown
+  double vo_wait_s = 30.0;            // VO answer; none = a VO failure (`vo ... wait` overrides)
+  double pose_wait_s = 3.0;           // pose including the VO update; then the latest is used
+  double mobility_wait_s = 300.0;     // mobility DONE; none = abort timeout
+  double capture_wait_s = 2.0;        // science frame seen (OnStereoFrame); none = go on
+  double site_wait_s = 5.0;           // pose in the new site; none = abort timeout
+
+  // Rover-time guard on one step: expected duration * factor + margin, then abort timeout.
+  double mobility_timeout_factor = 3.0;
+  double mobility_timeout_margin_s = 30.0;
+
+  // Motion.
+  double speed_mps = 0.04;            // sent with every arc (MER: ~4 cm/s)
+  double turn_rate_rps = 0.05;        // sent with every turn
+  double default_step_m = 0.60;       // step length before any `vo` line
+  double default_max_turn_deg = 18.0; // max turn per step before any `vo` line
+  double goto_turn_threshold_deg = 10.0;  // goto turns in place above this bearing error
+  // A goto with no distance limit gets factor * straight-line distance + margin.
+  double goto_default_distance_factor = 1.5;
+  double goto_default_distance_margin_m = 2.0;
+
+  // Checks.
+  bool predictive_hazard_check = true;  // ask before every step (hazard_query_t)
+  bool reactive_hazard_abort = true;    // abort on a violation reported during a step
+  double path_sample_spacing_m = 0.05;  // swept-path samples in a hazard query
+  double path_sample_turn_deg = 2.0;
+  double slip_min_step_m = 0.05;        // shorter steps are not slip-checked (noise)
+  double status_period_s = 1.0;         // wall: periodic status
+};
+
+ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root);  // reads root["executor"]
+ExecutorOptions LoadExecutorOptionsFile(const std::string& path);
+// Throws std::invalid_argument naming the bad value.
+void ValidateExecutorOptions(const ExecutorOptions& options);
+
+// ---------------------------------------------------------------------------------------
+// Inputs (mirror lcmtypes).
+struct PoseEstimate {  // pose_t
+  int64_t utime = 0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // q_site_rover
+  geometry::Matrix6d covariance = geometry::Matrix6d::Zero();
+  int source = 0;
+  int site_index = 0;
+  double odometer_m = 0.0;
+  int64_t last_vo_to_frame = -1;
+};
+
+enum class MobilityState : int8_t { kIdle = 0, kMoving = 1, kDone = 2, kStopped = 3, kFault = 4 };
+struct MobilityStatus {  // mobility_status_t
+  int64_t utime = 0;
+  int64_t command_id = -1;
+  MobilityState state = MobilityState::kIdle;
+  double wheel_distance_m = 0.0;
+  double wheel_turn_rad = 0.0;
+  std::string detail;
+};
+
+struct VoUpdate {  // vo_update_t (the delta itself reaches the executor through the pose)
+  int64_t utime = 0;
+  int64_t from_frame_id = -1;
+  int64_t to_frame_id = -1;
+  int status = 0;  // vo_update_t STATUS_*: 0 OK, 1 BASELINE, others are failures
+  std::string reason;
+  static constexpr int kStatusOk = 0, kStatusBaseline = 1;
+};
+
+enum class HazardState : int8_t { kSafe = 0, kViolation = 1, kUnknown = 2 };
+struct HazardStatus {  // hazard_status_t
+  int64_t utime = 0;
+  HazardState state = HazardState::kUnknown;
+  bool keepout_violated = false;
+  std::string zone_name;
+  double min_clearance_m = 0.0;
+  bool tilt_violated = false;
+  double roll_rad = 0.0;
+  double pitch_rad = 0.0;
+  std::string detail;
+};
+
+enum class HazardVerdict : int8_t { kSafe = 0, kUnsafe = 1, kUnknown = 2 };
+struct HazardReply {  // hazard_reply_t
+  int64_t utime = 0;
+  int64_t query_id = -1;
+  HazardVerdict verdict = HazardVerdict::kUnknown;
+  std::string zone_name;
+  double min_clearance_m = 0.0;
+  std::string detail;
+};
+
+// ---------------------------------------------------------------------------------------
+// Outputs (mirror lcmtypes). TakeOutputs() returns them in the order they were made.
+struct MobilityCommand {  // mobility_command_t
+  enum class Type : int8_t { kArc = 0, kTurn = 1, kStop = 2 };
+  int64_t utime = 0;
+  int64_t command_id = 0;
+  Type type = Type::kStop;
+  double distance_m = 0.0;
+  double curvature_per_m = 0.0;
+  double turn_rad = 0.0;
+  double speed_mps = 0.0;
+  double turn_rate_rps = 0.0;
+};
+struct CaptureRequest {  // capture_request_t
+  int64_t utime = 0;
+  int64_t frame_id = 0;
+  std::string purpose;  // "vo_baseline", "vo", "science"
+};
+struct HazardQuery {  // hazard_query_t
+  int64_t utime = 0;
+  int64_t query_id = 0;
+  std::vector<PlanePose> samples;  // site x, y, yaw of the swept path
+};
+struct KeepOutZoneSet {  // keepout_zones_t: the whole set in force, replacing the previous
+  int64_t utime = 0;
+  std::vector<KeepOutZone> zones;
+};
+struct NewSiteRequest {  // no message yet: the shell tells the state estimator
+  int64_t utime = 0;
+  int new_site_index = 0;
+};
+enum class SequenceState : int8_t {
+  kIdle = 0, kRunning = 1, kPaused = 2, kCompleted = 3, kAborted = 4, kRejected = 5
+};
+struct SequenceStatus {  // sequence_status_t
+  int64_t utime = 0;
+  int64_t submission_id = -1;
+  std::string sequence_name;
+  SequenceState state = SequenceState::kIdle;
+  int num_commands = 0;
+  int command_index = -1;
+  int command_line = 0;
+  std::string command_text;
+  int step_index = 0;
+  std::string abort_reason;  // "" or one of the codes below
+  std::string detail;
+  double pose[6] = {0, 0, 0, 0, 0, 0};  // x y z roll pitch yaw
+  double distance_m = 0.0;
+  double elapsed_s = 0.0;
+  int vo_failures = 0;
+};
+struct StepReport {  // step_report_t
+  int64_t utime = 0;
+  int64_t submission_id = 0;
+  int command_index = 0;
+  int step_index = 0;
+  int64_t mobility_command_id = 0;
+  double commanded_distance_m = 0.0;
+  double commanded_turn_rad = 0.0;
+  double estimated_distance_m = 0.0;
+  double estimated_turn_rad = 0.0;
+  double slip_pct = 0.0;
+  int vo_status = -1;  // vo_update_t STATUS_*, -1 = VO off / no answer
+  double pose_before[6] = {0, 0, 0, 0, 0, 0};
+  double pose_after[6] = {0, 0, 0, 0, 0, 0};
+  int64_t utime_before = 0;
+  int64_t utime_after = 0;
+};
+
+using ExecutorOutput = std::variant<MobilityCommand, CaptureRequest, HazardQuery, KeepOutZoneSet,
+                                    NewSiteRequest, SequenceStatus, StepReport>;
+
+// Abort reason codes (sequence_status_t.abort_reason).
+namespace abort_reason {
+inline constexpr const char* kKeepout = "keepout";
+inline constexpr const char* kProgress = "progress";
+inline constexpr const char* kTilt = "tilt";
+inline constexpr const char* kVoFailures = "vo_failures";
+inline constexpr const char* kTimeLimit = "time_limit";
+inline constexpr const char* kDistanceLimit = "distance_limit";
+inline constexpr const char* kGotoTimeLimit = "goto_time_limit";
+inline constexpr const char* kGotoDistanceLimit = "goto_distance_limit";
+inline constexpr const char* kProcessLost = "process_lost";
+inline constexpr const char* kHazardUnknown = "hazard_unknown";
+inline constexpr const char* kOperator = "operator";
+inline constexpr const char* kMobilityFault = "mobility_fault";
+inline constexpr const char* kTimeout = "timeout";
+inline constexpr const char* kInvalidSequence = "invalid_sequence";  // rejections only
+inline constexpr const char* kBusy = "busy";                         // rejections only
+}  // namespace abort_reason
+
+const char* ToString(SequenceState state);
+
+// ---------------------------------------------------------------------------------------
+class SequenceExecutor {
+ public:
+  // Ids of mobility commands, frames and hazard queries count up from `first_id`; a shell
+  // that restarts should pass something new (e.g. wall time in ms) so ids never repeat.
+  explicit SequenceExecutor(ExecutorOptions options = {}, int64_t first_id = 1);
+
+  // Operator. A submission while another sequence is active is rejected (reason busy).
+  void Submit(Sequence sequence, int64_t submission_id, const std::string& name);
+  // Checks the text first; a check failure is rejected with the first error line as detail.
+  void SubmitText(std::string_view text, int64_t submission_id, const std::string& name,
+                  const LanguageLimits& limits = {});
+  void Abort(const std::string& detail);  // reason "operator"; always commands STOP
+  void Pause();   // takes effect between steps: the current step finishes first
+  void Resume();
+
+  // Bus inputs.
+  void OnPose(const PoseEstimate& pose);
+  void OnMobilityStatus(const MobilityStatus& status);
+  void OnVoUpdate(const VoUpdate& update);
+  void OnHazardStatus(const HazardStatus& status);
+  void OnHazardReply(const HazardReply& reply);
+  void OnStereoFrame(int64_t frame_id);  // optional: confirms a science capture
+  void OnHeartbeat(const std::string& process, double wall_s);
+
+  // Clocks: call often (e.g. 20 Hz). Drives every wall-clock wait and the periodic status.
+  void Tick(int64_t rover_utime, double wall_s);
+
+  // Everything to publish since the last call, in order.
+  std::vector<ExecutorOutput> TakeOutputs();
+
+  SequenceState state() const { return state_; }
+  SequenceStatus CurrentStatus() const;
+  bool Active() const;  // running, paused, or waiting to start
+
+ private:
+  enum class Phase {
+    kIdle,           // nothing to do
+    kWaitStart,      // heartbeats and a first pose before the first command
+    kReady,          // between steps / commands
+    kBaseline,       // VO baseline pair: wait for its VO answer
+    kQuery,          // predictive hazard query: wait for the reply
+    kMoving,         // wait for mobility DONE
+    kWaitVo,         // wait for the VO update of the step's frame
+    kWaitPose,       // wait for the pose that includes it
+    kWaitHazard,     // wait for a hazard status after that pose
+    kImages,         // wait for a science frame
+    kSite,           // wait for the pose in the new site
+    kFinished,
+  };
+
+  void Advance();
+  void DispatchNext();
+  void StartCommand();
+  void ApplySetting(const Command& command);
+  bool NextStepOfCommand();  // false: the command is done
+  void BeginStep(const PlannedStep& step);
+  void CommandStep();
+  void AfterMotion();
+  void FinishStep();
+  void StartCapture(const std::string& purpose);
+  void EnterPhase(Phase phase);
+  void Poll();
+  void SetWall(double wall_s);
+  double PhaseAge() const { return now_wall_ - phase_start_wall_; }
+
+  void Finish(SequenceState state, const std::string& reason, const std::string& detail);
+  void AbortWith(const std::string& reason, const std::string& detail);
+  void Reject(int64_t submission_id, const std::string& name, const std::string& reason,
+              const std::string& detail);
+  void EmitStatus();
+  void EmitStop();
+  void CountVoFailure(const std::string& why);
+
+  std::vector<std::string> SilentProcesses(bool include_vo) const;
+  bool ProcessFresh(const std::string& entry) const;
+  bool VoRequired() const;
+  bool VoActive() const { return vo_enabled_; }
+  PlanePose CurrentPlanePose() const;
+  geometry::Pose CurrentPose() const;
+  int64_t NewId() { return next_id_++; }
+
+  ExecutorOptions options_;
+  int64_t next_id_;
+  std::vector<ExecutorOutput> outputs_;
+
+  // Clocks.
+  int64_t now_utime_ = 0;
+  double now_wall_ = 0.0;
+  double phase_start_wall_ = 0.0;
+  double last_status_wall_ = -1e300;
+  bool wall_known_ = false;
+  bool progressed_ = false;
+  bool in_advance_ = false;
+
+  // Inputs seen.
+  std::optional<PoseEstimate> pose_;
+  uint64_t pose_count_ = 0;
+  std::optional<HazardStatus> hazard_;
+  uint64_t hazard_count_ = 0;
+  std::map<std::string, double> heartbeats_;
+
+  // The sequence.
+  Sequence sequence_;
+  int64_t submission_id_ = -1;
+  SequenceState state_ = SequenceState::kIdle;
+  Phase phase_ = Phase::kIdle;
+  bool pause_requested_ = false;
+  std::string abort_reason_;
+  std::string detail_;
+  int command_index_ = -1;
+  int step_index_ = 0;
+  int64_t start_utime_ = 0;
+  double distance_m_ = 0.0;
+  bool sequence_uses_vo_ = false;
+
+  // Settings in force.
+  bool vo_enabled_ = false;
+  double step_m_;
+  double max_turn_rad_;
+  std::optional<int> vo_max_failures_;
+  VoFailureAction vo_past_max_ = VoFailureAction::kContinue;
+  double vo_wait_s_;
+  int vo_policy_failures_ = 0;
+  int vo_failures_total_ = 0;
+  SlipSetting slip_;
+  int no_progress_count_ = 0;
+  TiltSetting tilt_;
+  LimitSetting limits_;
+  std::vector<KeepOutZone> zones_;
+  bool vo_frame_valid_ = false;  // the last VO frame was taken where the rover stands
+
+  // The command in progress.
+  bool command_active_ = false;
+  std::vector<PlannedStep> steps_;  // drive, arc, turn, turnto
+  std::size_t next_step_ = 0;
+  bool is_goto_ = false;
+  Goto goto_;
+  int64_t goto_start_utime_ = 0;
+  double goto_start_distance_ = 0.0;
+  double goto_distance_limit_ = 0.0;
+  bool baseline_done_ = false;
+
+  // The step in progress.
+  PlannedStep step_;
+  int64_t query_id_ = -1;
+  std::optional<HazardReply> hazard_reply_;
+  int64_t mobility_id_ = -1;
+  int64_t mobility_deadline_utime_ = 0;
+  std::optional<MobilityStatus> mobility_done_;
+  uint64_t done_pose_count_ = 0;
+  int64_t frame_id_ = -1;
+  std::optional<VoUpdate> vo_update_;
+  bool step_vo_failed_ = false;
+  std::string step_note_;
+  uint64_t hazard_mark_ = 0;
+  PoseEstimate pose_before_;
+  int wait_site_index_ = 0;
+  bool science_frame_seen_ = false;
+};
+
+}  // namespace rover::sequence

@@ -1,0 +1,134 @@
+#include "sequence/stepping.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace rover::sequence {
+
+namespace {
+
+int StepsFor(double amount, double max_per_step) {
+  // The tolerance keeps 1.2 m at 0.6 m steps to two steps despite rounding.
+  return std::max(1, static_cast<int>(std::ceil(std::abs(amount) / max_per_step - 1e-9)));
+}
+
+// Rover-frame chord of an arc step from the origin, heading 0.
+Eigen::Vector2d Chord(double s, double k) {
+  if (std::abs(k * s) < 1e-9) return {s, 0.5 * k * s * s};
+  return {std::sin(k * s) / k, (1.0 - std::cos(k * s)) / k};
+}
+
+}  // namespace
+
+std::vector<PlannedStep> SplitArc(double distance_m, double curvature_per_m, double step_m,
+                                  double max_turn_rad) {
+  if (!(step_m > 0.0) || !(max_turn_rad > 0.0) || !std::isfinite(distance_m) ||
+      !std::isfinite(curvature_per_m)) {
+    throw std::invalid_argument("SplitArc: step_m " + std::to_string(step_m) + " and max_turn_rad " +
+                                std::to_string(max_turn_rad) + " must be > 0, distance finite");
+  }
+  if (distance_m == 0.0) return {};
+  const int n = std::max(StepsFor(distance_m, step_m),
+                         StepsFor(distance_m * curvature_per_m, max_turn_rad));
+  PlannedStep s;
+  s.kind = PlannedStep::Kind::kArc;
+  s.distance_m = distance_m / n;
+  s.curvature_per_m = curvature_per_m;
+  return std::vector<PlannedStep>(n, s);
+}
+
+std::vector<PlannedStep> SplitTurn(double turn_rad, double max_turn_rad) {
+  if (!(max_turn_rad > 0.0) || !std::isfinite(turn_rad)) {
+    throw std::invalid_argument("SplitTurn: max_turn_rad " + std::to_string(max_turn_rad) +
+                                " must be > 0, turn finite");
+  }
+  if (turn_rad == 0.0) return {};
+  const int n = StepsFor(turn_rad, max_turn_rad);
+  PlannedStep s;
+  s.kind = PlannedStep::Kind::kTurn;
+  s.turn_rad = turn_rad / n;
+  return std::vector<PlannedStep>(n, s);
+}
+
+double ShortestTurn(double yaw, double heading) { return geometry::WrapAngle(heading - yaw); }
+
+PlanePose EndOfStep(const PlanePose& start, const PlannedStep& step) {
+  PlanePose end = start;
+  if (step.kind == PlannedStep::Kind::kTurn) {
+    end.yaw = geometry::WrapAngle(start.yaw + step.turn_rad);
+    return end;
+  }
+  const Eigen::Vector2d c = Chord(step.distance_m, step.curvature_per_m);
+  const double cy = std::cos(start.yaw), sy = std::sin(start.yaw);
+  // Rover X forward, Y right; site X north, Y east; yaw clockwise from north.
+  end.x = start.x + cy * c.x() - sy * c.y();
+  end.y = start.y + sy * c.x() + cy * c.y();
+  end.yaw = geometry::WrapAngle(start.yaw + step.HeadingChange());
+  return end;
+}
+
+std::vector<PlanePose> SampleStepPath(const PlanePose& start, const PlannedStep& step,
+                                      double spacing_m, double spacing_rad) {
+  if (!(spacing_m > 0.0) || !(spacing_rad > 0.0)) {
+    throw std::invalid_argument("SampleStepPath: spacings must be > 0, got " +
+                                std::to_string(spacing_m) + " m and " +
+                                std::to_string(spacing_rad) + " rad");
+  }
+  int n = std::max(StepsFor(step.HeadingChange(), spacing_rad),
+                   step.kind == PlannedStep::Kind::kArc ? StepsFor(step.distance_m, spacing_m) : 1);
+  n = std::min(n, 10000);
+  std::vector<PlanePose> out;
+  out.reserve(n + 1);
+  for (int i = 0; i <= n; ++i) {
+    PlannedStep part = step;
+    const double f = static_cast<double>(i) / n;
+    part.distance_m *= f;
+    part.turn_rad *= f;
+    out.push_back(EndOfStep(start, part));
+  }
+  return out;
+}
+
+GotoDecision SteerToward(const PlanePose& pose, const Eigen::Vector2d& target, double tolerance_m,
+                         double step_m, double max_turn_rad, double turn_threshold_rad) {
+  GotoDecision d;
+  const Eigen::Vector2d to_goal = target - Eigen::Vector2d(pose.x, pose.y);
+  d.remaining_m = to_goal.norm();
+  if (d.remaining_m <= tolerance_m) {
+    d.arrived = true;
+    return d;
+  }
+  d.bearing_error_rad = ShortestTurn(pose.yaw, std::atan2(to_goal.y(), to_goal.x()));
+  if (std::abs(d.bearing_error_rad) > turn_threshold_rad) {
+    d.step.kind = PlannedStep::Kind::kTurn;
+    d.step.turn_rad = std::clamp(d.bearing_error_rad, -max_turn_rad, max_turn_rad);
+  } else {
+    d.step.kind = PlannedStep::Kind::kArc;
+    d.step.distance_m = std::min(step_m, d.remaining_m);
+  }
+  return d;
+}
+
+StepMotion MeasureStep(const geometry::Pose& T_site_before, const geometry::Pose& T_site_after,
+                       const PlannedStep& step) {
+  StepMotion m;
+  const double yaw_before = geometry::RpyFromRotation(T_site_before.linear()).z();
+  const double yaw_after = geometry::RpyFromRotation(T_site_after.linear()).z();
+  m.estimated_turn_rad = geometry::WrapAngle(yaw_after - yaw_before);
+  if (step.kind == PlannedStep::Kind::kTurn) {
+    m.progress_fraction = step.turn_rad != 0.0 ? m.estimated_turn_rad / step.turn_rad : 1.0;
+  } else {
+    const Eigen::Vector3d d_rover =
+        T_site_before.linear().transpose() * (T_site_after.translation() - T_site_before.translation());
+    const Eigen::Vector2d c = Chord(step.distance_m, step.curvature_per_m);
+    const double c2 = c.squaredNorm();
+    m.estimated_distance_m = c2 > 0.0 ? d_rover.head<2>().dot(c) / c2 * step.distance_m : 0.0;
+    m.progress_fraction = step.distance_m != 0.0 ? m.estimated_distance_m / step.distance_m : 1.0;
+  }
+  m.slip_pct = 100.0 * (1.0 - m.progress_fraction);
+  return m;
+}
+
+}  // namespace rover::sequence

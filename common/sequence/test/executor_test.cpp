@@ -1,0 +1,720 @@
+// The executor against a fake world: a kinematic rover that moves as commanded (with a slip
+// factor and a heading drift the test controls), an estimator that integrates the commanded
+// motion and takes VO corrections, and VO, hazard and heartbeat sources that the test can
+// silence or make fail. No bus.
+#include "sequence/executor.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <deque>
+#include <functional>
+#include <numbers>
+#include <set>
+
+using namespace rover::sequence;
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+class FakeWorld {
+ public:
+  // Knobs.
+  double slip = 0.0;                 // fraction of commanded distance lost
+  double drift_rad_per_m = 0.0;      // truth heading drift while driving
+  double roll_rad = 0.0;             // terrain roll seen by IMU and estimator
+  double rover_radius_m = 0.5;       // footprint for keep-out checks
+  enum class Vo { kOk, kFail, kSilent } vo = Vo::kOk;
+  bool mobility_answers = true;
+  bool mobility_faults = false;
+  bool hazard_replies = true;
+  bool hazard_unknown = false;
+  bool hazard_monitor_knows_zones = true;  // status uses the zones it was sent
+  std::set<std::string> alive = {"rover_sim", "state_estimator", "hazard_monitor", "camera_capture",
+                                 "visual_odometry"};
+
+  // Truth and estimate (plane).
+  PlanePose truth, estimate;
+  int site_index = 0;
+  int64_t last_vo_frame = -1;
+  std::vector<KeepOutZone> zones;
+
+  // Everything the executor said, in order.
+  std::vector<ExecutorOutput> outputs;
+  std::vector<MobilityCommand> motions;  // arcs and turns
+  std::vector<MobilityCommand> stops;
+  std::vector<CaptureRequest> captures;
+  std::vector<HazardQuery> queries;
+  std::vector<StepReport> steps;
+  std::vector<SequenceStatus> statuses;
+  std::vector<NewSiteRequest> sites;
+  std::vector<KeepOutZoneSet> zone_sets;
+
+  int64_t utime = 1'000'000;
+  double wall = 100.0;
+
+  // Called after each iteration; return false to stop early.
+  std::function<void(SequenceExecutor&, int)> on_iteration;
+
+  explicit FakeWorld(SequenceExecutor& ex) : ex_(ex) {}
+
+  PoseEstimate Pose() const {
+    PoseEstimate p;
+    p.utime = utime;
+    p.position = Eigen::Vector3d(estimate.x, estimate.y, 0);
+    p.orientation = Eigen::Quaterniond(rover::geometry::RotationFromRpy(roll_rad, 0, estimate.yaw));
+    p.site_index = site_index;
+    p.last_vo_to_frame = last_vo_frame;
+    return p;
+  }
+
+  bool InZone(double x, double y) const {
+    for (const auto& z : zones) {
+      if (z.shape == KeepOutZone::Shape::kCircle &&
+          std::hypot(x - z.center.x(), y - z.center.y()) < z.radius_m + rover_radius_m) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  HazardStatus Status() const {
+    HazardStatus h;
+    h.utime = utime;
+    h.state = hazard_unknown ? HazardState::kUnknown : HazardState::kSafe;
+    h.roll_rad = roll_rad;
+    if (hazard_monitor_knows_zones && InZone(estimate.x, estimate.y)) {
+      h.state = HazardState::kViolation;
+      h.keepout_violated = true;
+      h.zone_name = zones.front().name;
+    }
+    return h;
+  }
+
+  // Runs until the sequence is finished (or max_iterations of 0.1 s).
+  void Run(int max_iterations = 20000) {
+    for (int i = 0; i < max_iterations; ++i) {
+      utime += 100'000;
+      wall += 0.1;
+      // Deliver what the world produced last iteration.
+      std::deque<std::function<void()>> now;
+      now.swap(pending_);
+      for (auto& f : now) f();
+      for (const auto& name : alive) ex_.OnHeartbeat(name, wall);
+      if (alive.count("state_estimator")) ex_.OnPose(Pose());
+      if (alive.count("hazard_monitor")) ex_.OnHazardStatus(Status());
+      ex_.Tick(utime, wall);
+      Handle(ex_.TakeOutputs());
+      if (on_iteration) on_iteration(ex_, i);
+      Handle(ex_.TakeOutputs());
+      const SequenceState s = ex_.state();
+      if (s == SequenceState::kCompleted || s == SequenceState::kAborted || s == SequenceState::kRejected) {
+        return;
+      }
+    }
+  }
+
+  SequenceStatus Final() const { return statuses.back(); }
+
+ private:
+  void Handle(std::vector<ExecutorOutput> out) {
+    for (auto& o : out) {
+      outputs.push_back(o);
+      std::visit([this](auto& v) { Handle(v); }, o);
+    }
+  }
+
+  void Handle(const MobilityCommand& c) {
+    if (c.type == MobilityCommand::Type::kStop) {
+      stops.push_back(c);
+      return;
+    }
+    motions.push_back(c);
+    if (!alive.count("rover_sim") || !mobility_answers) return;
+    if (mobility_faults) {
+      pending_.push_back([this, c] {
+        ex_.OnMobilityStatus({utime, c.command_id, MobilityState::kFault, 0, 0, "motor current"});
+      });
+      return;
+    }
+    PlannedStep commanded;
+    double duration = 0;
+    if (c.type == MobilityCommand::Type::kTurn) {
+      commanded = {PlannedStep::Kind::kTurn, 0, 0, c.turn_rad};
+      duration = std::abs(c.turn_rad) / c.turn_rate_rps;
+    } else {
+      commanded = {PlannedStep::Kind::kArc, c.distance_m, c.curvature_per_m, 0};
+      duration = std::abs(c.distance_m) / c.speed_mps;
+    }
+    PlannedStep actual = commanded;
+    actual.distance_m *= (1.0 - slip);
+    truth = EndOfStep(truth, actual);
+    truth.yaw += drift_rad_per_m * std::abs(actual.distance_m);
+    estimate = EndOfStep(estimate, commanded);  // wheel odometry: sees no slip
+    utime += static_cast<int64_t>(duration * 1e6);
+    pending_.push_back([this, c] {
+      ex_.OnMobilityStatus({utime, c.command_id, MobilityState::kDone, c.distance_m, c.turn_rad, ""});
+    });
+  }
+
+  void Handle(const CaptureRequest& c) {
+    captures.push_back(c);
+    if (!alive.count("camera_capture")) return;
+    pending_.push_back([this, c] { ex_.OnStereoFrame(c.frame_id); });
+    if (c.purpose == "science" || vo == Vo::kSilent || !alive.count("visual_odometry")) return;
+    VoUpdate u;
+    u.utime = utime;
+    u.to_frame_id = c.frame_id;
+    if (c.purpose == "vo_baseline") {
+      u.status = VoUpdate::kStatusBaseline;
+    } else if (vo == Vo::kFail) {
+      u.status = 4;
+      u.reason = "too few inliers";
+    } else {
+      u.status = VoUpdate::kStatusOk;
+    }
+    const bool ok = u.status == VoUpdate::kStatusOk;
+    pending_.push_back([this, u, ok] {
+      ex_.OnVoUpdate(u);
+      if (ok) {
+        // The estimator applies the update: VO measured the true motion.
+        estimate = truth;
+        last_vo_frame = u.to_frame_id;
+      }
+    });
+  }
+
+  void Handle(const HazardQuery& q) {
+    queries.push_back(q);
+    if (!alive.count("hazard_monitor") || !hazard_replies) return;
+    HazardReply r;
+    r.query_id = q.query_id;
+    r.verdict = HazardVerdict::kSafe;
+    for (const auto& s : q.samples) {
+      if (InZone(s.x, s.y)) {
+        r.verdict = HazardVerdict::kUnsafe;
+        r.zone_name = zones.front().name;
+      }
+    }
+    pending_.push_back([this, r] { ex_.OnHazardReply(r); });
+  }
+
+  void Handle(const KeepOutZoneSet& z) {
+    zone_sets.push_back(z);
+    zones = z.zones;
+  }
+  void Handle(const NewSiteRequest& s) {
+    sites.push_back(s);
+    site_index = s.new_site_index;
+    truth.x = truth.y = estimate.x = estimate.y = 0.0;
+  }
+  void Handle(const SequenceStatus& s) { statuses.push_back(s); }
+  void Handle(const StepReport& r) { steps.push_back(r); }
+
+  SequenceExecutor& ex_;
+  std::deque<std::function<void()>> pending_;
+};
+
+ExecutorOptions FastOptions() {
+  ExecutorOptions o;
+  o.vo_wait_s = 2.0;
+  o.hazard_reply_wait_s = 1.0;
+  o.hazard_status_wait_s = 1.0;
+  o.pose_wait_s = 1.0;
+  o.start_wait_s = 1.0;
+  o.heartbeat_timeout_s = 1.0;
+  return o;
+}
+
+void SubmitText(SequenceExecutor& ex, const std::string& text, int64_t id = 7) {
+  ex.SubmitText(text, id, "test.seq");
+}
+
+int IndexOf(const std::vector<ExecutorOutput>& out, std::function<bool(const ExecutorOutput&)> pred) {
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if (pred(out[i])) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+}  // namespace
+
+TEST(SequenceExecutor, MultiCommandSequenceCompletesWithTheExpectedSteps) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  SubmitText(ex, "vo on step 60 cm maxturn 18 deg failures 3 then abort\n"
+                 "slip limit 40 % noprogress 10 % over 2 steps\n"
+                 "limit time 3600 s distance 30 m\n"
+                 "drive 2.34 m\n"
+                 "turn -20.4 deg\n"
+                 "turnto 90 deg\n"
+                 "arc radius 3 m distance 1.5 m\n"
+                 "goto 6 m 1.5 m within 0.3 m time 600 s distance 10 m\n"
+                 "images\n");
+  w.Run();
+  const SequenceStatus last = w.Final();
+  ASSERT_EQ(last.state, SequenceState::kCompleted) << last.abort_reason << ": " << last.detail;
+  EXPECT_TRUE(w.stops.empty());
+
+  // drive: 4 x 58.5 cm; turn: 2 x -10.2 deg; turnto 90 from -20.4: 7 x 15.77 deg;
+  // arc: 3 x 0.5 m (28.6 deg total, under 18 deg per step).
+  ASSERT_GE(w.motions.size(), 16u);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(w.motions[i].type, MobilityCommand::Type::kArc);
+    EXPECT_NEAR(w.motions[i].distance_m, 0.585, 1e-12);
+    EXPECT_DOUBLE_EQ(w.motions[i].curvature_per_m, 0.0);
+  }
+  for (int i = 4; i < 6; ++i) {
+    EXPECT_EQ(w.motions[i].type, MobilityCommand::Type::kTurn);
+    EXPECT_NEAR(w.motions[i].turn_rad, -10.2 * kDeg, 1e-12);
+  }
+  for (int i = 6; i < 13; ++i) {
+    EXPECT_EQ(w.motions[i].type, MobilityCommand::Type::kTurn);
+    EXPECT_NEAR(w.motions[i].turn_rad, 110.4 / 7 * kDeg, 1e-9);
+  }
+  for (int i = 13; i < 16; ++i) {
+    EXPECT_NEAR(w.motions[i].distance_m, 0.5, 1e-12);
+    EXPECT_NEAR(w.motions[i].curvature_per_m, 1.0 / 3.0, 1e-12);
+  }
+  // Goto: ends inside the disc in truth.
+  EXPECT_LT(std::hypot(w.truth.x - 6.0, w.truth.y - 1.5), 0.3);
+  EXPECT_GT(w.motions.size(), 16u);
+
+  // One step report per motion; one hazard query per motion; one baseline, then a VO pair
+  // after every step, then the science pair.
+  EXPECT_EQ(w.steps.size(), w.motions.size());
+  EXPECT_EQ(w.queries.size(), w.motions.size());
+  ASSERT_EQ(w.captures.size(), w.motions.size() + 2);
+  EXPECT_EQ(w.captures.front().purpose, "vo_baseline");
+  EXPECT_EQ(w.captures.back().purpose, "science");
+  for (std::size_t i = 1; i + 1 < w.captures.size(); ++i) EXPECT_EQ(w.captures[i].purpose, "vo");
+  for (const auto& s : w.steps) {
+    EXPECT_EQ(s.vo_status, VoUpdate::kStatusOk);
+    if (s.commanded_distance_m != 0.0) {
+      EXPECT_NEAR(s.slip_pct, 0.0, 1e-6);
+    }
+  }
+  // Order for the first step: baseline, query, arc, VO pair.
+  const auto& out = w.outputs;
+  const int baseline = IndexOf(out, [](const ExecutorOutput& o) {
+    auto* c = std::get_if<CaptureRequest>(&o);
+    return c && c->purpose == "vo_baseline";
+  });
+  const int query = IndexOf(out, [](const ExecutorOutput& o) { return std::holds_alternative<HazardQuery>(o); });
+  const int arc = IndexOf(out, [](const ExecutorOutput& o) { return std::holds_alternative<MobilityCommand>(o); });
+  const int vo = IndexOf(out, [](const ExecutorOutput& o) {
+    auto* c = std::get_if<CaptureRequest>(&o);
+    return c && c->purpose == "vo";
+  });
+  EXPECT_LT(baseline, query);
+  EXPECT_LT(query, arc);
+  EXPECT_LT(arc, vo);
+  // Ids never repeat across commands, frames and queries.
+  std::set<int64_t> ids;
+  for (const auto& m : w.motions) EXPECT_TRUE(ids.insert(m.command_id).second);
+  for (const auto& c : w.captures) EXPECT_TRUE(ids.insert(c.frame_id).second);
+  for (const auto& q : w.queries) EXPECT_TRUE(ids.insert(q.query_id).second);
+  EXPECT_EQ(last.num_commands, 9);
+  EXPECT_GT(last.distance_m, 5.0);
+  EXPECT_EQ(last.vo_failures, 0);
+}
+
+TEST(SequenceExecutor, SlipOverTheLimitAbortsWithProgress) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.slip = 0.45;
+  SubmitText(ex, "vo on step 60 cm\nslip limit 40 %\ndrive 3 m\n");
+  w.Run();
+  const SequenceStatus last = w.Final();
+  ASSERT_EQ(last.state, SequenceState::kAborted);
+  EXPECT_EQ(last.abort_reason, "progress");
+  EXPECT_EQ(last.command_index, 2);
+  EXPECT_EQ(last.command_line, 3);
+  EXPECT_EQ(last.command_text, "drive 3 m");
+  EXPECT_EQ(last.step_index, 1);
+  EXPECT_NEAR(last.pose[0], 0.6 * 0.55, 1e-9);  // the VO-corrected pose
+  ASSERT_EQ(w.motions.size(), 1u);
+  ASSERT_EQ(w.stops.size(), 1u);
+  ASSERT_EQ(w.steps.size(), 1u);
+  EXPECT_NEAR(w.steps[0].slip_pct, 45.0, 1e-6);
+  EXPECT_NE(last.detail.find("slip 45.0 % > limit 40.0 %"), std::string::npos) << last.detail;
+}
+
+TEST(SequenceExecutor, SlipUnderTheLimitCompletes) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.slip = 0.35;
+  SubmitText(ex, "vo on step 60 cm\nslip limit 40 %\ndrive 3 m\n");
+  w.Run();
+  EXPECT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+  EXPECT_EQ(w.motions.size(), 5u);
+  EXPECT_NEAR(w.truth.x, 3.0 * 0.65, 1e-9);
+}
+
+TEST(SequenceExecutor, NoProgressForNStepsAborts) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.slip = 0.95;  // under the 100 % limit, but almost no progress
+  SubmitText(ex, "vo on\nslip limit 100 % noprogress 10 % over 3 steps\ndrive 5 m\n");
+  w.Run();
+  EXPECT_EQ(w.Final().abort_reason, "progress");
+  EXPECT_EQ(w.motions.size(), 3u);
+}
+
+TEST(SequenceExecutor, PredictiveKeepOutStopsBeforeTheStepIsCommanded) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  SubmitText(ex, "keepout rock circle 3 m 0 m radius 0.5 m\ndrive 6 m\n");
+  w.Run();
+  const SequenceStatus last = w.Final();
+  ASSERT_EQ(last.state, SequenceState::kAborted);
+  EXPECT_EQ(last.abort_reason, "keepout");
+  EXPECT_EQ(last.step_index, 3);
+  // Zone + footprint start at x = 2.0; steps of 0.6 m: the 4th would end at 2.4, so only
+  // three are commanded and the rover stays clear.
+  EXPECT_EQ(w.motions.size(), 3u);
+  EXPECT_EQ(w.queries.size(), 4u);
+  EXPECT_NEAR(w.truth.x, 1.8, 1e-9);
+  EXPECT_FALSE(w.InZone(w.truth.x, w.truth.y));
+  ASSERT_EQ(w.zone_sets.size(), 1u);
+  EXPECT_EQ(w.zone_sets[0].zones[0].name, "rock");
+  EXPECT_EQ(w.stops.size(), 1u);
+  EXPECT_NE(last.detail.find("rock"), std::string::npos);
+}
+
+TEST(SequenceExecutor, HazardStatusViolationAfterAStepAbortsKeepout) {
+  ExecutorOptions o = FastOptions();
+  o.predictive_hazard_check = false;  // only the status check is left to catch it
+  o.reactive_hazard_abort = false;
+  SequenceExecutor ex(o);
+  FakeWorld w(ex);
+  SubmitText(ex, "keepout rock circle 3 m 0 m radius 0.5 m\ndrive 6 m\n");
+  w.Run();
+  EXPECT_EQ(w.Final().abort_reason, "keepout");
+  EXPECT_EQ(w.motions.size(), 4u);  // the step that entered the zone is the last
+  EXPECT_TRUE(w.queries.empty());
+}
+
+TEST(SequenceExecutor, UnknownHazardStateOrSilentMonitorAborts) {
+  {
+    SequenceExecutor ex(FastOptions());
+    FakeWorld w(ex);
+    SubmitText(ex, "drive 2 m\n");
+    w.on_iteration = [&](SequenceExecutor&, int i) { if (i == 5) w.hazard_unknown = true; };
+    w.Run();
+    EXPECT_EQ(w.Final().abort_reason, "hazard_unknown");
+  }
+  {
+    SequenceExecutor ex(FastOptions());
+    FakeWorld w(ex);
+    w.hazard_replies = false;  // heartbeats go on, but no answer to the query
+    SubmitText(ex, "drive 2 m\n");
+    w.Run();
+    EXPECT_EQ(w.Final().abort_reason, "hazard_unknown");
+    EXPECT_TRUE(w.motions.empty());
+    EXPECT_NE(w.Final().detail.find("no hazard reply"), std::string::npos);
+  }
+}
+
+TEST(SequenceExecutor, TiltOverTheSequenceLimitAborts) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.roll_rad = 22 * kDeg;
+  SubmitText(ex, "tilt roll 20 deg pitch 25 deg\ndrive 2 m\n");
+  w.Run();
+  EXPECT_EQ(w.Final().abort_reason, "tilt");
+  EXPECT_EQ(w.motions.size(), 1u);  // reactive: the status during the step stops it
+}
+
+TEST(SequenceExecutor, SilentHeartbeatDuringADriveAbortsProcessLost) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  SubmitText(ex, "drive 5 m\n");
+  w.on_iteration = [&](SequenceExecutor&, int) {
+    if (w.motions.size() == 2) w.alive.erase("state_estimator");
+  };
+  w.Run();
+  const SequenceStatus last = w.Final();
+  EXPECT_EQ(last.abort_reason, "process_lost");
+  EXPECT_NE(last.detail.find("state_estimator"), std::string::npos) << last.detail;
+  EXPECT_EQ(w.motions.size(), 2u);
+  EXPECT_EQ(w.stops.size(), 1u);
+}
+
+TEST(SequenceExecutor, NoSequenceStartsWhileAProcessIsSilent) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.alive.erase("hazard_monitor");
+  SubmitText(ex, "drive 5 m\n");
+  w.Run();
+  const SequenceStatus last = w.Final();
+  EXPECT_EQ(last.state, SequenceState::kRejected);
+  EXPECT_EQ(last.abort_reason, "process_lost");
+  EXPECT_NE(last.detail.find("hazard_monitor"), std::string::npos);
+  EXPECT_TRUE(w.motions.empty());
+  // VO processes are needed only by a sequence that turns VO on.
+  SequenceExecutor ex2(FastOptions());
+  FakeWorld w2(ex2);
+  w2.alive.erase("visual_odometry");
+  SubmitText(ex2, "drive 1 m\n");
+  w2.Run();
+  EXPECT_EQ(w2.Final().state, SequenceState::kCompleted);
+  SequenceExecutor ex3(FastOptions());
+  FakeWorld w3(ex3);
+  w3.alive.erase("visual_odometry");
+  SubmitText(ex3, "vo on\ndrive 1 m\n");
+  w3.Run();
+  EXPECT_EQ(w3.Final().abort_reason, "process_lost");
+  EXPECT_NE(w3.Final().detail.find("visual_odometry"), std::string::npos);
+}
+
+TEST(SequenceExecutor, MobilityDriverAlternativesSatisfyTheRequirement) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.alive.erase("rover_sim");
+  w.alive.insert("mobility_driver");
+  SubmitText(ex, "site\n");
+  w.Run();
+  EXPECT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+}
+
+TEST(SequenceExecutor, VoFailuresPastTheLimitAbort) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.vo = FakeWorld::Vo::kFail;
+  SubmitText(ex, "vo on step 50 cm failures 2 then abort\ndrive 3 m\n");
+  w.Run();
+  const SequenceStatus last = w.Final();
+  EXPECT_EQ(last.abort_reason, "vo_failures");
+  EXPECT_EQ(last.vo_failures, 3);
+  EXPECT_EQ(w.motions.size(), 3u);
+  EXPECT_EQ(w.steps.back().vo_status, 4);
+}
+
+TEST(SequenceExecutor, VoFailuresPastTheLimitCanContinueOnWheelOdometry) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.vo = FakeWorld::Vo::kFail;
+  SubmitText(ex, "vo on step 50 cm failures 1 then continue\ndrive 3 m\n");
+  w.Run();
+  EXPECT_EQ(w.Final().state, SequenceState::kCompleted);
+  EXPECT_EQ(w.motions.size(), 6u);
+  // Baseline + a pair after steps 1 and 2; then VO is off and no more pairs are taken.
+  EXPECT_EQ(w.captures.size(), 3u);
+  EXPECT_EQ(w.Final().vo_failures, 2);
+}
+
+TEST(SequenceExecutor, SilentVoCountsFailuresAfterTheWait) {
+  ExecutorOptions o = FastOptions();
+  o.vo_processes_required = false;
+  SequenceExecutor ex(o);
+  FakeWorld w(ex);
+  w.vo = FakeWorld::Vo::kSilent;  // heartbeats, but never an answer
+  SubmitText(ex, "vo on step 50 cm failures 5 then abort wait 1 s\ndrive 1 m\n");
+  const double wall0 = w.wall;
+  w.Run();
+  EXPECT_EQ(w.Final().state, SequenceState::kCompleted);
+  EXPECT_EQ(w.Final().vo_failures, 3);  // the baseline and two steps
+  EXPECT_GT(w.wall - wall0, 3.0);        // each waited its 1 s
+  // With no VO process at all, nothing is waited for.
+  SequenceExecutor ex2(o);
+  FakeWorld w2(ex2);
+  w2.alive.erase("visual_odometry");
+  SubmitText(ex2, "vo on step 50 cm failures 1 then abort\ndrive 2 m\n");
+  w2.Run();
+  EXPECT_EQ(w2.Final().abort_reason, "vo_failures");
+}
+
+TEST(SequenceExecutor, GotoReachesItsDiscDespiteHeadingDrift) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.drift_rad_per_m = 4 * kDeg;  // the rover pulls right; VO sees it and goto re-steers
+  SubmitText(ex, "vo on\ngoto 5 m -4 m within 0.2 m\n");
+  w.Run();
+  ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+  EXPECT_LT(std::hypot(w.truth.x - 5.0, w.truth.y + 4.0), 0.2);
+  EXPECT_LT(w.Final().distance_m, 1.5 * std::hypot(5.0, 4.0));
+  // Without VO the estimate drifts away from truth, yet the goto ends inside the disc in
+  // the estimate.
+  SequenceExecutor ex2(FastOptions());
+  FakeWorld w2(ex2);
+  w2.drift_rad_per_m = 4 * kDeg;
+  SubmitText(ex2, "goto 5 m -4 m within 0.2 m\n");
+  w2.Run();
+  ASSERT_EQ(w2.Final().state, SequenceState::kCompleted);
+  EXPECT_LT(std::hypot(w2.estimate.x - 5.0, w2.estimate.y + 4.0), 0.2);
+  EXPECT_GT(std::hypot(w2.truth.x - 5.0, w2.truth.y + 4.0), 0.2);
+}
+
+TEST(SequenceExecutor, GotoLimitsAbort) {
+  {
+    SequenceExecutor ex(FastOptions());
+    FakeWorld w(ex);
+    SubmitText(ex, "goto 5 m 0 m within 0.2 m distance 2 m\n");
+    w.Run();
+    EXPECT_EQ(w.Final().abort_reason, "goto_distance_limit");
+    EXPECT_NEAR(w.truth.x, 2.4, 1e-9);  // the step that passed 2 m
+  }
+  {
+    SequenceExecutor ex(FastOptions());
+    FakeWorld w(ex);
+    SubmitText(ex, "goto 5 m 0 m within 0.2 m time 40 s\n");  // 15 s per 0.6 m step
+    w.Run();
+    EXPECT_EQ(w.Final().abort_reason, "goto_time_limit");
+    EXPECT_EQ(w.motions.size(), 3u);
+  }
+  {
+    SequenceExecutor ex(FastOptions());
+    FakeWorld w(ex);
+    w.slip = 1.2;  // slides back and never gets there; the default limit (1.5 d + 2 m) stops it
+    SubmitText(ex, "vo on\ngoto 2 m 0 m within 0.2 m\n");
+    w.Run();
+    EXPECT_EQ(w.Final().abort_reason, "goto_distance_limit");
+    EXPECT_NE(w.Final().detail.find("limit 5.00 m"), std::string::npos) << w.Final().detail;
+  }
+}
+
+TEST(SequenceExecutor, TotalLimitsAbort) {
+  {
+    SequenceExecutor ex(FastOptions());
+    FakeWorld w(ex);
+    SubmitText(ex, "limit distance 1 m\ndrive 3 m\n");
+    w.Run();
+    EXPECT_EQ(w.Final().abort_reason, "distance_limit");
+    EXPECT_EQ(w.motions.size(), 2u);
+  }
+  {
+    SequenceExecutor ex(FastOptions());
+    FakeWorld w(ex);
+    SubmitText(ex, "limit time 20 s\ndrive 3 m\n");
+    w.Run();
+    EXPECT_EQ(w.Final().abort_reason, "time_limit");
+    EXPECT_EQ(w.motions.size(), 2u);
+  }
+}
+
+TEST(SequenceExecutor, OperatorAbortStopsAndSkipsTheRest) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  SubmitText(ex, "drive 3 m\nturn 90 deg\n");
+  w.on_iteration = [&](SequenceExecutor& e, int) {
+    if (w.motions.size() == 2 && e.Active()) e.Abort("rock ahead");
+  };
+  w.Run();
+  const SequenceStatus last = w.Final();
+  EXPECT_EQ(last.state, SequenceState::kAborted);
+  EXPECT_EQ(last.abort_reason, "operator");
+  EXPECT_NE(last.detail.find("rock ahead"), std::string::npos);
+  EXPECT_EQ(w.motions.size(), 2u);
+  EXPECT_EQ(w.stops.size(), 1u);
+  // The stop comes after the last motion.
+  EXPECT_GT(w.stops[0].command_id, w.motions.back().command_id);
+}
+
+TEST(SequenceExecutor, PauseHoldsBetweenStepsAndResumeFinishes) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  SubmitText(ex, "drive 3 m\n");
+  std::size_t motions_at_pause = 0;
+  int paused_iterations = 0;
+  w.on_iteration = [&](SequenceExecutor& e, int) {
+    if (w.motions.size() == 2 && motions_at_pause == 0) {
+      e.Pause();
+      motions_at_pause = 2;
+    }
+    if (e.state() == SequenceState::kPaused && ++paused_iterations == 30) e.Resume();
+  };
+  w.Run();
+  EXPECT_EQ(w.Final().state, SequenceState::kCompleted);
+  EXPECT_EQ(paused_iterations, 30);
+  EXPECT_EQ(w.motions.size(), 5u);
+  bool saw_paused = false;
+  for (const auto& s : w.statuses) saw_paused |= s.state == SequenceState::kPaused && s.step_index == 2;
+  EXPECT_TRUE(saw_paused);
+}
+
+TEST(SequenceExecutor, MobilityFaultAndSilenceAbort) {
+  {
+    SequenceExecutor ex(FastOptions());
+    FakeWorld w(ex);
+    w.mobility_faults = true;
+    SubmitText(ex, "drive 1 m\n");
+    w.Run();
+    EXPECT_EQ(w.Final().abort_reason, "mobility_fault");
+    EXPECT_NE(w.Final().detail.find("motor current"), std::string::npos);
+  }
+  {
+    ExecutorOptions o = FastOptions();
+    o.mobility_wait_s = 5.0;
+    SequenceExecutor ex(o);
+    FakeWorld w(ex);
+    w.mobility_answers = false;  // heartbeats but no DONE
+    SubmitText(ex, "drive 1 m\n");
+    w.Run();
+    EXPECT_EQ(w.Final().abort_reason, "timeout");
+  }
+}
+
+TEST(SequenceExecutor, SiteAndZonesAndRejections) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  SubmitText(ex, "keepout a circle 10 m 10 m radius 1 m\ndrive 1 m\nsite\ndrive 1 m\n");
+  w.Run();
+  ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+  ASSERT_EQ(w.sites.size(), 1u);
+  EXPECT_EQ(w.sites[0].new_site_index, 1);
+  ASSERT_EQ(w.zone_sets.size(), 2u);
+  EXPECT_TRUE(w.zone_sets[1].zones.empty());  // zones of the old site are cleared
+  EXPECT_NEAR(w.estimate.x, 1.0, 1e-9);        // 1 m from the new site's origin
+
+  // A check failure is rejected with the file:line:col line; nothing is commanded.
+  SequenceExecutor ex2(FastOptions());
+  FakeWorld w2(ex2);
+  SubmitText(ex2, "drive 1 m\ndrive 3 deg\n", 42);
+  const SequenceStatus rej = std::get<SequenceStatus>(ex2.TakeOutputs().back());
+  EXPECT_EQ(rej.state, SequenceState::kRejected);
+  EXPECT_EQ(rej.submission_id, 42);
+  EXPECT_EQ(rej.abort_reason, "invalid_sequence");
+  EXPECT_EQ(rej.detail.rfind("test.seq:2:9: wrong unit 'deg'", 0), 0u) << rej.detail;
+
+  // A submission while one runs is rejected; the running one carries on.
+  SequenceExecutor ex3(FastOptions());
+  FakeWorld w3(ex3);
+  SubmitText(ex3, "drive 2 m\n", 1);
+  bool submitted = false;
+  w3.on_iteration = [&](SequenceExecutor& e, int) {
+    if (!submitted && w3.motions.size() == 1) {
+      submitted = true;
+      e.SubmitText("drive 1 m\n", 2, "other.seq");
+    }
+  };
+  w3.Run();
+  EXPECT_EQ(w3.Final().state, SequenceState::kCompleted);
+  EXPECT_EQ(w3.Final().submission_id, 1);
+  bool busy = false;
+  for (const auto& s : w3.statuses) busy |= s.submission_id == 2 && s.abort_reason == "busy";
+  EXPECT_TRUE(busy);
+}
+
+TEST(ExecutorOptions, LoadsTheExampleAndRejectsBadValues) {
+  const std::string path = std::string(ROVER_SOURCE_DIR) + "/common/sequence/executor_example.yaml";
+  const ExecutorOptions o = LoadExecutorOptionsFile(path);
+  EXPECT_DOUBLE_EQ(o.heartbeat_timeout_s, 3.0);
+  ASSERT_EQ(o.required_processes.size(), 3u);
+  EXPECT_EQ(o.required_processes[0], "rover_sim|mobility_driver");
+  using rover::config::ConfigError;
+  using rover::config::ConfigNode;
+  EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  vo_wiat_s: 3\n", "x.yaml")), ConfigError);
+  try {
+    LoadExecutorOptions(ConfigNode::FromString("executor:\n  vo_wait_s: -1\n", "x.yaml"));
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("executor.vo_wait_s"), std::string::npos) << e.what();
+  }
+  const ExecutorOptions d = LoadExecutorOptions(ConfigNode::FromString("other: 1\n", "x.yaml"));
+  EXPECT_DOUBLE_EQ(d.vo_wait_s, ExecutorOptions{}.vo_wait_s);
+  ExecutorOptions bad;
+  bad.speed_mps = 0.0;
+  EXPECT_THROW(SequenceExecutor{bad}, std::invalid_argument);
+}

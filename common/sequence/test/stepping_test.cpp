@@ -1,0 +1,106 @@
+#include "sequence/stepping.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+using namespace rover::sequence;
+using rover::geometry::PoseFromXyzRpy;
+
+namespace {
+constexpr double kDeg = std::numbers::pi / 180.0;
+}
+
+TEST(Stepping, DrivesSplitIntoEqualStepsNoLongerThanTheStepLength) {
+  auto steps = SplitArc(2.34, 0.0, 0.60, 18 * kDeg);
+  ASSERT_EQ(steps.size(), 4u);
+  for (const auto& s : steps) EXPECT_NEAR(s.distance_m, 0.585, 1e-12);
+  EXPECT_EQ(SplitArc(1.2, 0.0, 0.6, 18 * kDeg).size(), 2u);  // exact multiple: no extra step
+  auto back = SplitArc(-1.0, 0.0, 0.35, 18 * kDeg);
+  ASSERT_EQ(back.size(), 3u);
+  EXPECT_NEAR(back[0].distance_m, -1.0 / 3.0, 1e-12);
+  EXPECT_TRUE(SplitArc(0.0, 0.0, 0.6, 1.0).empty());
+  EXPECT_THROW(SplitArc(1.0, 0.0, 0.0, 1.0), std::invalid_argument);
+}
+
+TEST(Stepping, ArcStepsAlsoRespectTheMaxTurnPerStep) {
+  // 1.5 m on a 1 m radius turns 85.9 deg: 5 steps of 18 deg or less, not 3 of 0.5 m.
+  auto steps = SplitArc(1.5, 1.0, 0.6, 18 * kDeg);
+  ASSERT_EQ(steps.size(), 5u);
+  for (const auto& s : steps) EXPECT_LE(std::abs(s.HeadingChange()), 18 * kDeg + 1e-12);
+  auto turns = SplitTurn(-40 * kDeg, 18 * kDeg);
+  ASSERT_EQ(turns.size(), 3u);
+  EXPECT_NEAR(turns[0].turn_rad, -40.0 / 3.0 * kDeg, 1e-12);
+}
+
+TEST(Stepping, TurnToTakesTheShortestWay) {
+  EXPECT_NEAR(ShortestTurn(170 * kDeg, -170 * kDeg), 20 * kDeg, 1e-12);
+  EXPECT_NEAR(ShortestTurn(-20.4 * kDeg, 90 * kDeg), 110.4 * kDeg, 1e-12);
+  EXPECT_NEAR(ShortestTurn(0, -100 * kDeg), -100 * kDeg, 1e-12);
+}
+
+TEST(Stepping, EndOfStepFollowsTheFrameConventions) {
+  // Facing east (yaw +90 deg), 2 m forward goes +Y (east).
+  PlanePose p = EndOfStep({1, 1, 90 * kDeg}, {PlannedStep::Kind::kArc, 2.0, 0.0, 0.0});
+  EXPECT_NEAR(p.x, 1.0, 1e-12);
+  EXPECT_NEAR(p.y, 3.0, 1e-12);
+  // A quarter circle to the right (radius 2) from north ends 2 m north, 2 m east, facing east.
+  p = EndOfStep({0, 0, 0}, {PlannedStep::Kind::kArc, std::numbers::pi, 0.5, 0.0});
+  EXPECT_NEAR(p.x, 2.0, 1e-12);
+  EXPECT_NEAR(p.y, 2.0, 1e-12);
+  EXPECT_NEAR(p.yaw, 90 * kDeg, 1e-12);
+  // Negative radius curves left.
+  p = EndOfStep({0, 0, 0}, {PlannedStep::Kind::kArc, std::numbers::pi, -0.5, 0.0});
+  EXPECT_NEAR(p.y, -2.0, 1e-12);
+}
+
+TEST(Stepping, SampledPathCoversTheSweptPathAtTheSpacing) {
+  const PlannedStep step{PlannedStep::Kind::kArc, 0.6, 0.0, 0.0};
+  auto s = SampleStepPath({0, 0, 0}, step, 0.05, 2 * kDeg);
+  ASSERT_EQ(s.size(), 13u);
+  EXPECT_NEAR(s.front().x, 0.0, 1e-12);
+  EXPECT_NEAR(s.back().x, 0.6, 1e-12);
+  for (std::size_t i = 1; i < s.size(); ++i) EXPECT_LE(std::hypot(s[i].x - s[i - 1].x, s[i].y - s[i - 1].y), 0.05 + 1e-12);
+  auto t = SampleStepPath({3, 4, 0}, {PlannedStep::Kind::kTurn, 0, 0, 10 * kDeg}, 0.05, 2 * kDeg);
+  ASSERT_EQ(t.size(), 6u);
+  EXPECT_NEAR(t.back().yaw, 10 * kDeg, 1e-12);
+  EXPECT_NEAR(t.back().x, 3.0, 1e-12);
+}
+
+TEST(Stepping, MeasureStepGivesSlipAndIgnoresSlopeGeometry) {
+  const PlannedStep step{PlannedStep::Kind::kArc, 0.6, 0.0, 0.0};
+  // Flat, heading east, moved 0.33 m of 0.6 m: 45 % slip.
+  auto m = MeasureStep(PoseFromXyzRpy(0, 0, 0, 0, 0, 90 * kDeg), PoseFromXyzRpy(0, 0.33, 0, 0, 0, 90 * kDeg), step);
+  EXPECT_NEAR(m.estimated_distance_m, 0.33, 1e-12);
+  EXPECT_NEAR(m.slip_pct, 45.0, 1e-9);
+  // Up a 25 deg slope (nose up, Z down): the full 0.6 m along the ground is no slip, although
+  // the horizontal motion is only 0.544 m.
+  const double pitch = 25 * kDeg;
+  m = MeasureStep(PoseFromXyzRpy(0, 0, 0, 0, pitch, 0),
+                  PoseFromXyzRpy(0.6 * std::cos(pitch), 0, -0.6 * std::sin(pitch), 0, pitch, 0), step);
+  EXPECT_NEAR(m.slip_pct, 0.0, 1e-9);
+  // Sliding back: past 100 %.
+  m = MeasureStep(PoseFromXyzRpy(0, 0, 0, 0, 0, 0), PoseFromXyzRpy(-0.1, 0, 0, 0, 0, 0), step);
+  EXPECT_NEAR(m.slip_pct, 100.0 * (1 + 0.1 / 0.6), 1e-9);
+  // An arc measured along its chord.
+  const PlannedStep arc{PlannedStep::Kind::kArc, 0.5, 1.0 / 3.0, 0.0};
+  const PlanePose end = EndOfStep({0, 0, 0}, arc);
+  m = MeasureStep(PoseFromXyzRpy(0, 0, 0, 0, 0, 0), PoseFromXyzRpy(end.x, end.y, 0, 0, 0, end.yaw), arc);
+  EXPECT_NEAR(m.estimated_distance_m, 0.5, 1e-9);
+  EXPECT_NEAR(m.estimated_turn_rad, 0.5 / 3.0, 1e-9);
+}
+
+TEST(Stepping, SteerTowardTurnsThenDrivesAndStopsInsideTheDisc) {
+  const Eigen::Vector2d goal(0, 5);  // due east
+  auto d = SteerToward({0, 0, 0}, goal, 0.3, 0.6, 18 * kDeg, 10 * kDeg);
+  ASSERT_FALSE(d.arrived);
+  EXPECT_EQ(d.step.kind, PlannedStep::Kind::kTurn);
+  EXPECT_NEAR(d.step.turn_rad, 18 * kDeg, 1e-12);
+  d = SteerToward({0, 0, 85 * kDeg}, goal, 0.3, 0.6, 18 * kDeg, 10 * kDeg);
+  EXPECT_EQ(d.step.kind, PlannedStep::Kind::kArc);
+  EXPECT_NEAR(d.step.distance_m, 0.6, 1e-12);
+  d = SteerToward({0, 4.6, 90 * kDeg}, goal, 0.3, 0.6, 18 * kDeg, 10 * kDeg);
+  EXPECT_NEAR(d.step.distance_m, 0.4, 1e-9);  // min(step, remaining)
+  EXPECT_TRUE(SteerToward({0.1, 4.8, 0}, goal, 0.3, 0.6, 18 * kDeg, 10 * kDeg).arrived);
+}
