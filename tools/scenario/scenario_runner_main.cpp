@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
     const auto deployment = rover::launch::LoadDeployment(spec.deployment);
     const std::string sequence_text = ReadFile(spec.sequence);
     const auto rover_config = rover::config::ConfigNode::LoadFile(spec.rover_config);
-    const auto footprint = rover::hazards::LoadHazardOptions(rover_config["hazards"]).footprint;
+    const auto footprint = rover::hazards::LoadHazardOptions(rover_config["hazards"], {"publish_hz"}).footprint;
     // The start elevation comes from the same world the simulator builds.
     const rover::terrain::World world(rover::terrain::WorldOptions::LoadFile(spec.world));
     const double start_z = -world.Elevation(spec.start_x, spec.start_y);
