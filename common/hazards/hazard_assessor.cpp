@@ -59,6 +59,20 @@ double HorizontalSigma(const geometry::Matrix6d& covariance) {
   return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
 }
 
+PoseSnapshot SnapshotFromPose(int64_t utime, const geometry::Pose& T_site_rover,
+                              const geometry::Matrix6d& covariance) {
+  const Eigen::Vector3d rpy = geometry::RpyFromRotation(T_site_rover.linear());
+  PoseSnapshot s;
+  s.utime = utime;
+  s.x = T_site_rover.translation().x();
+  s.y = T_site_rover.translation().y();
+  s.roll = rpy.x();
+  s.pitch = rpy.y();
+  s.yaw = rpy.z();
+  s.position_sigma_m = HorizontalSigma(covariance);
+  return s;
+}
+
 const char* ToString(HazardState state) {
   switch (state) {
     case HazardState::kSafe: return "SAFE";

@@ -69,6 +69,11 @@ struct PoseSnapshot {
   double position_sigma_m = 0.0;  // e.g. HorizontalSigma(covariance)
 };
 
+// A snapshot from a full pose estimate: x, y and roll, pitch, yaw of T_site_rover, and
+// HorizontalSigma of its covariance.
+PoseSnapshot SnapshotFromPose(int64_t utime, const geometry::Pose& T_site_rover,
+                              const geometry::Matrix6d& covariance);
+
 // Mirrors hazard_status_t.STATE_*.
 enum class HazardState { kSafe = 0, kViolation = 1, kUnknown = 2 };
 const char* ToString(HazardState state);

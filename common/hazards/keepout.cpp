@@ -321,7 +321,7 @@ const char* ToString(Verdict verdict) {
 
 SweptCheck CheckSweptPath(const std::vector<KeepOutZone>& zones, const Footprint& footprint,
                           const std::vector<Pose2>& path, double position_sigma_m,
-                          double sigma_multiplier) {
+                          double sigma_multiplier, double max_corner_step_m) {
   SweptCheck check;
   auto unknown = [&](const std::string& why) {
     check.verdict = Verdict::kUnknown;
@@ -335,6 +335,9 @@ SweptCheck CheckSweptPath(const std::vector<KeepOutZone>& zones, const Footprint
   if (!std::isfinite(sigma_multiplier) || sigma_multiplier < 0.0) {
     return unknown("sigma multiplier " + Num(sigma_multiplier) + " is not a finite value >= 0");
   }
+  if (!std::isfinite(max_corner_step_m) || max_corner_step_m <= 0.0) {
+    return unknown("max corner step " + Num(max_corner_step_m) + " m is not a finite value > 0");
+  }
   for (std::size_t i = 0; i < path.size(); ++i) {
     if (!std::isfinite(path[i].x) || !std::isfinite(path[i].y) || !std::isfinite(path[i].yaw)) {
       return unknown("path pose " + std::to_string(i) + " is not finite");
@@ -345,17 +348,35 @@ SweptCheck CheckSweptPath(const std::vector<KeepOutZone>& zones, const Footprint
     return check;
   }
   const double uncertainty = sigma_multiplier * position_sigma_m;
-  for (std::size_t i = 0; i < path.size(); ++i) {
+  // The farthest footprint point from the rover origin sets how far a turn sweeps.
+  const double reach = std::hypot(std::abs(footprint.center_forward_m) + 0.5 * footprint.length_m,
+                                  0.5 * footprint.width_m);
+  auto visit = [&](const Pose2& p, std::size_t segment) {
     for (const KeepOutZone& z : zones) {
-      const double c = Clearance(z, footprint, path[i]) - uncertainty;
+      const double c = Clearance(z, footprint, p) - uncertainty;
       if (c < check.min_clearance_m) {
         check.min_clearance_m = c;
         check.zone_name = z.name;
-        check.worst_pose_index = i;
+        check.worst_pose_index = segment;
+        check.worst_pose = p;
       }
     }
+  };
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    visit(path[i], i);
+    if (i + 1 == path.size()) break;
+    const Pose2& a = path[i];
+    const Pose2& b = path[i + 1];
+    const double dyaw = geometry::WrapAngle(b.yaw - a.yaw);
+    const double corner_move = std::hypot(b.x - a.x, b.y - a.y) + std::abs(dyaw) * reach;
+    const int n = static_cast<int>(std::ceil(corner_move / max_corner_step_m));
+    for (int k = 1; k < n; ++k) {
+      const double f = static_cast<double>(k) / n;
+      visit({a.x + f * (b.x - a.x), a.y + f * (b.y - a.y), geometry::WrapAngle(a.yaw + f * dyaw)},
+            i);
+    }
   }
-  const Pose2& w = path[check.worst_pose_index];
+  const Pose2& w = check.worst_pose;
   std::ostringstream os;
   os << (check.min_clearance_m < 0.0 ? "enters " : "clears ") << Quoted(check.zone_name)
      << ": clearance " << check.min_clearance_m << " m (" << check.min_clearance_m + uncertainty

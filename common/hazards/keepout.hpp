@@ -86,19 +86,22 @@ struct SweptCheck {
   bool safe() const { return verdict == Verdict::kSafe; }
   std::string zone_name;  // the zone of the smallest clearance (the entered one if unsafe)
   double min_clearance_m = std::numeric_limits<double>::infinity();  // less k * sigma
+  // Where the smallest clearance occurs: the path segment starting at input pose
+  // worst_pose_index, at pose worst_pose (an input pose or one interpolated after it).
   std::size_t worst_pose_index = 0;
+  Pose2 worst_pose;
   std::string detail;
 };
 
-// Checks each pose of a sampled path against every zone: clearance less
-// sigma_multiplier * position_sigma_m. Unsafe when any is < 0. The poses must be close
-// enough that the footprint between two samples cannot skip a zone's edge (SampleStepPath
-// spacing); between samples the footprint moves at most max_spacing_m plus
-// max_angle_step_rad times its corner radius. Unknown (never safe) for an empty path, a
-// non-finite pose or sigma, or a negative sigma. With no zones the path is safe.
+// Checks a sampled path against every zone: clearance less
+// sigma_multiplier * position_sigma_m. Unsafe when any is < 0. So that coarse samples
+// cannot step over a small rock, poses are interpolated between consecutive inputs (x, y
+// linearly, yaw the short way) until no footprint corner moves more than max_corner_step_m
+// between checks. Unknown (never safe) for an empty path, a non-finite pose or sigma, or a
+// negative sigma. With no zones the path is safe.
 SweptCheck CheckSweptPath(const std::vector<KeepOutZone>& zones, const Footprint& footprint,
                           const std::vector<Pose2>& path, double position_sigma_m,
-                          double sigma_multiplier);
+                          double sigma_multiplier, double max_corner_step_m = 0.02);
 
 // Poses along one planned step, start and end included: first a turn in place by turn_rad
 // (+ = clockwise from above), then an arc of signed length distance_m (negative = backward)

@@ -215,3 +215,17 @@ TEST(HazardOptions, ErrorsNameFileAndKey) {
   const std::string tilt = message("hazards:\n  roll_limit_deg: 120\n");
   EXPECT_NE(tilt.find("hazards.roll_limit_deg"), std::string::npos) << tilt;
 }
+
+TEST(HazardAssessor, SnapshotFromAFullPose) {
+  rover::geometry::Matrix6d P = rover::geometry::Matrix6d::Identity() * 0.01;
+  P(1, 1) = 0.09;
+  const PoseSnapshot s =
+      SnapshotFromPose(42, rover::geometry::PoseFromXyzRpy(1, 2, 3, 0.1, -0.2, 0.3), P);
+  EXPECT_EQ(s.utime, 42);
+  EXPECT_NEAR(s.x, 1.0, 1e-12);
+  EXPECT_NEAR(s.y, 2.0, 1e-12);
+  EXPECT_NEAR(s.roll, 0.1, 1e-12);
+  EXPECT_NEAR(s.pitch, -0.2, 1e-12);
+  EXPECT_NEAR(s.yaw, 0.3, 1e-12);
+  EXPECT_NEAR(s.position_sigma_m, 0.3, 1e-12);
+}

@@ -253,3 +253,19 @@ TEST(StepPath, StraightArcTurnAndBackward) {
   EXPECT_THROW(SampleStepPath({0, 0, 0}, 1.0, 0.0, 0.0, 0.0, 0.1), std::invalid_argument);
   EXPECT_THROW(SampleStepPath({0, 0, 0}, NAN, 0.0, 0.0, 0.1, 0.1), std::invalid_argument);
 }
+
+TEST(SweptPath, CoarseSamplesCannotStepOverASmallRock) {
+  // Only the two ends of a 6 m drive: both are clear of a 10 cm rock in the middle.
+  const Footprint f = Box();
+  const std::vector<KeepOutZone> zones = {KeepOutZone::Circle("pebble", 3, 0, 0.1)};
+  const std::vector<Pose2> ends = {{0, 0, 0}, {6, 0, 0}};
+  EXPECT_GT(Clearance(zones[0], f, ends[0]), 0.0);
+  EXPECT_GT(Clearance(zones[0], f, ends[1]), 0.0);
+  const SweptCheck check = CheckSweptPath(zones, f, ends, 0.0, 3.0);
+  EXPECT_EQ(check.verdict, Verdict::kUnsafe);
+  EXPECT_EQ(check.worst_pose_index, 0u);
+  // Deepest overlap: the rock under the rover's middle, 0.5 m from either side, plus r.
+  EXPECT_NEAR(check.min_clearance_m, -0.6, 1e-9);
+  EXPECT_GE(check.worst_pose.x, 2.5 - 1e-9);
+  EXPECT_LE(check.worst_pose.x, 3.5 + 1e-9);
+}
