@@ -421,6 +421,22 @@ double World::Elevation(double x, double y) const { return Bilinear(surface_, x,
 
 double World::GroundElevation(double x, double y) const { return Bilinear(ground_, x, y); }
 
+double World::ElevationDetailed(double x, double y) const {
+  double bump = 0.0;
+  const double cx = std::clamp(x, x0_, x_max()), cy = std::clamp(y, y0_, y_max());
+  const int bi = std::min(bx_ - 1, static_cast<int>((cx - x0_) / bucket_size_));
+  const int bj = std::min(by_ - 1, static_cast<int>((cy - y0_) / bucket_size_));
+  const std::size_t b = static_cast<std::size_t>(bi) * by_ + bj;
+  for (int n = bucket_start_[b]; n < bucket_start_[b + 1]; ++n) {
+    const Rock& r = rocks_[bucket_rocks_[n]];
+    const double R = 0.5 * r.diameter_m;
+    const double dx = cx - r.position.x(), dy = cy - r.position.y();
+    const double u = (dx * dx + dy * dy) / (R * R);
+    if (u < 1.0) bump = std::max(bump, r.height_m * std::sqrt(1.0 - u));
+  }
+  return GroundElevation(x, y) + bump;
+}
+
 Eigen::Vector2d World::Gradient(double x, double y) const {
   const double h = res_;
   return {(Elevation(x + h, y) - Elevation(x - h, y)) / (2 * h),
@@ -431,6 +447,11 @@ Eigen::Vector3d World::NormalUp(double x, double y) const {
   const Eigen::Vector2d g = Gradient(x, y);
   // Up normal is (-gx, -gy, 1) in (north, east, up); site Z is down.
   return Eigen::Vector3d(-g.x(), -g.y(), -1.0).normalized();
+}
+
+Eigen::Vector3d World::SunDirection() const {
+  const double az = options_.sun.azimuth_deg * kDeg, el = options_.sun.elevation_deg * kDeg;
+  return {std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), -std::sin(el)};
 }
 
 double World::SlopeAngle(double x, double y) const {

@@ -182,6 +182,10 @@ class World {
   double Elevation(double x, double y) const;
   // Elevation of the ground without rocks.
   double GroundElevation(double x, double y) const;
+  // Ground (bilinear) plus the exact half-ellipsoid rock shapes instead of their
+  // grid-sampled version: for rendering rocks smaller than a few grid cells. Equals
+  // Elevation() at grid nodes. Slower (visits the rocks near the point).
+  double ElevationDetailed(double x, double y) const;
   // d(elevation)/dx, d(elevation)/dy of the surface (central differences over one cell).
   Eigen::Vector2d Gradient(double x, double y) const;
   // Upward unit surface normal in site coordinates (x north, y east, z down: so z < 0).
@@ -213,6 +217,8 @@ class World {
   const std::vector<float>& ground_grid() const { return ground_; }
   const std::vector<std::uint8_t>& soil_grid() const { return soil_; }
   const SunOptions& sun() const { return options_.sun; }
+  // Unit vector toward the sun in the site frame (z < 0 when the sun is up).
+  Eigen::Vector3d SunDirection() const;
   const WorldOptions& options() const { return options_; }
 
  private:

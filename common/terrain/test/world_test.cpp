@@ -85,6 +85,10 @@ TEST(World, PlacedRockIsAHalfEllipsoidBumpOfItsHeight) {
   EXPECT_NEAR(w.Elevation(3.0, 2.0) - w.GroundElevation(3.0, 2.0), 0.45, 1e-6);
   EXPECT_NEAR(w.Elevation(3.0, 2.25), 0.45 * std::sqrt(0.75), 2e-3);
   EXPECT_NEAR(w.Elevation(3.0, 2.6), 0.0, 1e-9);
+  // The detailed surface has the exact shape between grid nodes.
+  EXPECT_NEAR(w.ElevationDetailed(3.013, 2.27), 0.45 * std::sqrt(1.0 - (0.013 * 0.013 + 0.27 * 0.27) / 0.25),
+              1e-6);
+  EXPECT_NEAR(w.ElevationDetailed(3.05, 2.1), w.Elevation(3.05, 2.1), 1e-6);
   ASSERT_NE(w.FindRock("Wopmay"), nullptr);
   EXPECT_TRUE(w.FindRock("Wopmay")->keepout);
   std::vector<int> near;
@@ -137,6 +141,13 @@ WorldOptions RockyWorld(std::uint64_t seed) {
 
 TEST(World, SameSeedSameWorldDifferentSeedDifferentRocks) {
   const World a(RockyWorld(7)), b(RockyWorld(7)), c(RockyWorld(8));
+  // Detailed and grid surfaces agree at every node (rocks included).
+  for (int i = 0; i < a.nx(); i += 7) {
+    for (int j = 0; j < a.ny(); j += 3) {
+      const double x = a.x_min() + i * a.resolution(), y = a.y_min() + j * a.resolution();
+      ASSERT_NEAR(a.ElevationDetailed(x, y), a.Elevation(x, y), 1e-5) << x << " " << y;
+    }
+  }
   EXPECT_EQ(a.elevation_grid(), b.elevation_grid());
   ASSERT_EQ(a.rocks().size(), b.rocks().size());
   for (std::size_t i = 0; i < a.rocks().size(); ++i) {
@@ -244,6 +255,11 @@ TEST(WorldOptions, ErrorsNameFileAndKey) {
   EXPECT_EQ(o.seed, 99u);
   EXPECT_EQ(o.map_size_m, Eigen::Vector2d(10, 12));
   EXPECT_DOUBLE_EQ(o.sun.elevation_deg, 12.0);
+  WorldOptions small = o;
+  small.map_size_m = {2.0, 2.0};
+  const Eigen::Vector3d sun = World(small).SunDirection();
+  EXPECT_NEAR(sun.z(), -std::sin(12.0 * kDeg), 1e-12);  // up is -Z
+  EXPECT_NEAR(std::atan2(sun.y(), sun.x()) / kDeg, 250.0 - 360.0, 1e-9);
   EXPECT_EQ(o.default_soil, Soil::kSand);
   ASSERT_EQ(o.soil_patches.size(), 1u);
   EXPECT_DOUBLE_EQ(o.start.yaw_deg, 90.0);
