@@ -1,5 +1,7 @@
 #include "sequence/executor.hpp"
 
+#include "hazards/keepout.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -675,9 +677,15 @@ void SequenceExecutor::BeginStep(const PlannedStep& step) {
   if (options_.predictive_hazard_check) {
     // Predictive keep-out: a step whose swept footprint would enter a zone is never commanded.
     query_id_ = NewId();
-    outputs_.push_back(HazardQuery{now_utime_, query_id_,
-                                   SampleStepPath(CurrentPlanePose(), step_, options_.path_sample_spacing_m,
-                                                  options_.path_sample_turn_deg * kDeg)});
+    const PlanePose p = CurrentPlanePose();
+    const bool turn = step_.kind == PlannedStep::Kind::kTurn;
+    const std::vector<hazards::Pose2> path = hazards::SampleStepPath(
+        {p.x, p.y, p.yaw}, turn ? 0.0 : step_.distance_m, turn ? 0.0 : step_.curvature_per_m,
+        turn ? step_.turn_rad : 0.0, options_.path_sample_spacing_m, options_.path_sample_turn_deg * kDeg);
+    HazardQuery q{now_utime_, query_id_, {}};
+    q.samples.reserve(path.size());
+    for (const auto& s : path) q.samples.push_back({s.x, s.y, s.yaw});
+    outputs_.push_back(std::move(q));
     EnterPhase(Phase::kQuery);
   } else {
     CommandStep();

@@ -69,28 +69,6 @@ PlanePose EndOfStep(const PlanePose& start, const PlannedStep& step) {
   return end;
 }
 
-std::vector<PlanePose> SampleStepPath(const PlanePose& start, const PlannedStep& step,
-                                      double spacing_m, double spacing_rad) {
-  if (!(spacing_m > 0.0) || !(spacing_rad > 0.0)) {
-    throw std::invalid_argument("SampleStepPath: spacings must be > 0, got " +
-                                std::to_string(spacing_m) + " m and " +
-                                std::to_string(spacing_rad) + " rad");
-  }
-  int n = std::max(StepsFor(step.HeadingChange(), spacing_rad),
-                   step.kind == PlannedStep::Kind::kArc ? StepsFor(step.distance_m, spacing_m) : 1);
-  n = std::min(n, 10000);
-  std::vector<PlanePose> out;
-  out.reserve(n + 1);
-  for (int i = 0; i <= n; ++i) {
-    PlannedStep part = step;
-    const double f = static_cast<double>(i) / n;
-    part.distance_m *= f;
-    part.turn_rad *= f;
-    out.push_back(EndOfStep(start, part));
-  }
-  return out;
-}
-
 GotoDecision SteerToward(const PlanePose& pose, const Eigen::Vector2d& target, double tolerance_m,
                          double step_m, double max_turn_rad, double turn_threshold_rad) {
   GotoDecision d;

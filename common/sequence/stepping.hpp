@@ -37,11 +37,6 @@ struct PlanePose {
 };
 // Where a step ends from `start`, on flat ground.
 PlanePose EndOfStep(const PlanePose& start, const PlannedStep& step);
-// Samples the swept path of a step from `start`: both ends included, at most `spacing_m`
-// of travel and `spacing_rad` of heading between samples.
-std::vector<PlanePose> SampleStepPath(const PlanePose& start, const PlannedStep& step,
-                                      double spacing_m, double spacing_rad);
-
 // Goto steering from the current pose, re-planned at every step (OPERATIONS.md step 5).
 struct GotoDecision {
   bool arrived = false;        // inside the tolerance disc: the goto is done

@@ -381,6 +381,14 @@ TEST(SequenceExecutor, PredictiveKeepOutStopsBeforeTheStepIsCommanded) {
   EXPECT_EQ(w.zone_sets[0].zones[0].name, "rock");
   EXPECT_EQ(w.stops.size(), 1u);
   EXPECT_NE(last.detail.find("rock"), std::string::npos);
+  // The query samples the step's swept path from the current pose, ends included.
+  const auto& q = w.queries[0].samples;
+  ASSERT_GE(q.size(), 13u);
+  EXPECT_NEAR(q.front().x, 0.0, 1e-12);
+  EXPECT_NEAR(q.back().x, 0.6, 1e-12);
+  for (std::size_t i = 1; i < q.size(); ++i) EXPECT_LE(std::hypot(q[i].x - q[i - 1].x, q[i].y - q[i - 1].y), 0.05 + 1e-9);
+  EXPECT_NEAR(w.queries[3].samples.front().x, 1.8, 1e-9);
+  EXPECT_NEAR(w.queries[3].samples.back().x, 2.4, 1e-9);
 }
 
 TEST(SequenceExecutor, HazardStatusViolationAfterAStepAbortsKeepout) {

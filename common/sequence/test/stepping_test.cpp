@@ -55,19 +55,6 @@ TEST(Stepping, EndOfStepFollowsTheFrameConventions) {
   EXPECT_NEAR(p.y, -2.0, 1e-12);
 }
 
-TEST(Stepping, SampledPathCoversTheSweptPathAtTheSpacing) {
-  const PlannedStep step{PlannedStep::Kind::kArc, 0.6, 0.0, 0.0};
-  auto s = SampleStepPath({0, 0, 0}, step, 0.05, 2 * kDeg);
-  ASSERT_EQ(s.size(), 13u);
-  EXPECT_NEAR(s.front().x, 0.0, 1e-12);
-  EXPECT_NEAR(s.back().x, 0.6, 1e-12);
-  for (std::size_t i = 1; i < s.size(); ++i) EXPECT_LE(std::hypot(s[i].x - s[i - 1].x, s[i].y - s[i - 1].y), 0.05 + 1e-12);
-  auto t = SampleStepPath({3, 4, 0}, {PlannedStep::Kind::kTurn, 0, 0, 10 * kDeg}, 0.05, 2 * kDeg);
-  ASSERT_EQ(t.size(), 6u);
-  EXPECT_NEAR(t.back().yaw, 10 * kDeg, 1e-12);
-  EXPECT_NEAR(t.back().x, 3.0, 1e-12);
-}
-
 TEST(Stepping, MeasureStepGivesSlipAndIgnoresSlopeGeometry) {
   const PlannedStep step{PlannedStep::Kind::kArc, 0.6, 0.0, 0.0};
   // Flat, heading east, moved 0.33 m of 0.6 m: 45 % slip.
