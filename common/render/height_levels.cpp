@@ -1,0 +1,304 @@
+#include "render/height_levels.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace rover::render::internal {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Step past a cell wall so that the next cell is a different one; far below 1 mm.
+constexpr double kNudge = 1e-9;
+}  // namespace
+
+void Box2::Add(double x, double y) {
+  if (empty()) {
+    x_min = x_max = x;
+    y_min = y_max = y;
+    return;
+  }
+  x_min = std::min(x_min, x);
+  x_max = std::max(x_max, x);
+  y_min = std::min(y_min, y);
+  y_max = std::max(y_max, y);
+}
+
+void Box2::Add(const Box2& b) {
+  if (b.empty()) return;
+  Add(b.x_min, b.y_min);
+  Add(b.x_max, b.y_max);
+}
+
+void HeightGrid::Build(const Ground& ground, const Box2& box, double cell_m) {
+  h_ = cell_m;
+  // Nodes sit on a site-wide lattice of multiples of h, so that the same ground is
+  // sampled at the same points from frame to frame and the surface does not swim.
+  x0_ = std::floor(box.x_min / h_) * h_;
+  y0_ = std::floor(box.y_min / h_) * h_;
+  nx_ = std::max(2, static_cast<int>(std::ceil((box.x_max - x0_) / h_)) + 1);
+  ny_ = std::max(2, static_cast<int>(std::ceil((box.y_max - y0_) / h_)) + 1);
+  box_ = Box2{x0_, x0_ + (nx_ - 1) * h_, y0_, y0_ + (ny_ - 1) * h_};
+  z_.resize(static_cast<std::size_t>(nx_) * ny_);
+  for (int j = 0; j < ny_; ++j) {
+    const double y = y0_ + j * h_;
+    float* row = &z_[static_cast<std::size_t>(j) * nx_];
+    for (int i = 0; i < nx_; ++i) row[i] = static_cast<float>(ground.Elevation(x0_ + i * h_, y));
+  }
+  BuildMips();
+}
+
+void HeightGrid::Adopt(const Ground::GridView& view) {
+  h_ = view.h;
+  x0_ = view.x0;
+  y0_ = view.y0;
+  nx_ = view.nx;
+  ny_ = view.ny;
+  box_ = Box2{x0_, x0_ + (nx_ - 1) * h_, y0_, y0_ + (ny_ - 1) * h_};
+  z_.resize(static_cast<std::size_t>(nx_) * ny_);
+  for (int i = 0; i < nx_; ++i) {
+    const float* col = view.data + static_cast<std::size_t>(i) * ny_;
+    for (int j = 0; j < ny_; ++j) z_[static_cast<std::size_t>(j) * nx_ + i] = col[j];
+  }
+  BuildMips();
+}
+
+void HeightGrid::BuildMips() {
+  // Max-mip: level 0 holds each cell's highest corner, each next level the highest of
+  // (up to) four children.
+  mips_.clear();
+  cx_.clear();
+  cy_.clear();
+  int cx = nx_ - 1, cy = ny_ - 1;
+  std::vector<float> m0(static_cast<std::size_t>(cx) * cy);
+  for (int j = 0; j < cy; ++j) {
+    for (int i = 0; i < cx; ++i) {
+      m0[static_cast<std::size_t>(j) * cx + i] =
+          std::max(std::max(Z(i, j), Z(i + 1, j)), std::max(Z(i, j + 1), Z(i + 1, j + 1)));
+    }
+  }
+  mips_.push_back(std::move(m0));
+  cx_.push_back(cx);
+  cy_.push_back(cy);
+  while (cx > 1 || cy > 1) {
+    const int ncx = (cx + 1) / 2, ncy = (cy + 1) / 2;
+    const std::vector<float>& prev = mips_.back();
+    std::vector<float> next(static_cast<std::size_t>(ncx) * ncy);
+    for (int j = 0; j < ncy; ++j) {
+      for (int i = 0; i < ncx; ++i) {
+        float m = -std::numeric_limits<float>::infinity();
+        for (int dj = 0; dj < 2; ++dj) {
+          for (int di = 0; di < 2; ++di) {
+            const int ci = 2 * i + di, cj = 2 * j + dj;
+            if (ci < cx && cj < cy) m = std::max(m, prev[static_cast<std::size_t>(cj) * cx + ci]);
+          }
+        }
+        next[static_cast<std::size_t>(j) * ncx + i] = m;
+      }
+    }
+    mips_.push_back(std::move(next));
+    cx = ncx;
+    cy = ncy;
+    cx_.push_back(cx);
+    cy_.push_back(cy);
+  }
+  global_max_ = mips_.back()[0];
+}
+
+bool HeightGrid::Contains(double x, double y) const {
+  return x >= box_.x_min && x <= box_.x_max && y >= box_.y_min && y <= box_.y_max;
+}
+
+double HeightGrid::HitInCell(int i, int j, double gu, double gv, double du, double dv,
+                             double oe, double de, double t, double t_exit) const {
+  const double a0 = gu + du * t - i, b0 = gv + dv * t - j, e0 = oe + de * t;
+  const double z00 = Z(i, j), z10 = Z(i + 1, j), z01 = Z(i, j + 1), z11 = Z(i + 1, j + 1);
+  const double B = z10 - z00, C = z01 - z00, D = z00 - z10 - z01 + z11;
+  // Ray height minus the bilinear patch along the ray is quadratic in s = t' - t.
+  const double c0 = e0 - (z00 + B * a0 + C * b0 + D * a0 * b0);
+  if (c0 <= 0) return t;
+  const double c1 = de - (B * du + C * dv + D * (a0 * dv + b0 * du));
+  const double c2 = -D * du * dv;
+  const double S = t_exit - t;
+  double s = kInf;
+  if (std::abs(c2) * S <= 1e-12 * (std::abs(c1) + 1e-300)) {
+    if (c1 < 0) s = -c0 / c1;
+  } else {
+    const double disc = c1 * c1 - 4 * c2 * c0;
+    if (disc >= 0) {
+      const double q = -0.5 * (c1 + std::copysign(std::sqrt(disc), c1));
+      const double r1 = q / c2, r2 = (q != 0) ? c0 / q : kInf;
+      if (r1 >= 0) s = std::min(s, r1);
+      if (r2 >= 0) s = std::min(s, r2);
+    }
+  }
+  if (s <= S) return t + s;
+  return -1;
+}
+
+double HeightGrid::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
+                             double t1) const {
+  if (z_.empty()) return -1;
+  // Clip to the grid's rectangle.
+  for (int k = 0; k < 2; ++k) {
+    const double lo = k == 0 ? box_.x_min : box_.y_min;
+    const double hi = k == 0 ? box_.x_max : box_.y_max;
+    if (d[k] == 0) {
+      if (o[k] < lo || o[k] > hi) return -1;
+      continue;
+    }
+    double ta = (lo - o[k]) / d[k], tb = (hi - o[k]) / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  if (t0 > t1) return -1;
+  const double oe = -o.z(), de = -d.z();
+  // A ray that is above every node and not descending cannot hit.
+  if (de >= 0 && oe + de * t0 > global_max_) return -1;
+  if (de < 0) {
+    // Nothing can be hit before the ray comes down to the highest node.
+    const double t_top = (global_max_ - oe) / de;
+    t0 = std::max(t0, t_top);
+    if (t0 > t1) return -1;
+  }
+  const double gu = (o.x() - x0_) / h_, gv = (o.y() - y0_) / h_;
+  const double du = d.x() / h_, dv = d.y() / h_;
+  const int top = static_cast<int>(mips_.size()) - 1;
+  int m = std::min(top, 6);
+  double t = t0;
+  while (t <= t1) {
+    const double u = gu + du * t, v = gv + dv * t;
+    const double s = static_cast<double>(1 << m);
+    int I = static_cast<int>(std::floor(u / s));
+    int J = static_cast<int>(std::floor(v / s));
+    I = std::clamp(I, 0, cx_[m] - 1);
+    J = std::clamp(J, 0, cy_[m] - 1);
+    double t_exit = t1;
+    if (du > 0) t_exit = std::min(t_exit, ((I + 1) * s - gu) / du);
+    if (du < 0) t_exit = std::min(t_exit, (I * s - gu) / du);
+    if (dv > 0) t_exit = std::min(t_exit, ((J + 1) * s - gv) / dv);
+    if (dv < 0) t_exit = std::min(t_exit, (J * s - gv) / dv);
+    t_exit = std::max(t_exit, t);
+    const float cell_max = mips_[m][static_cast<std::size_t>(J) * cx_[m] + I];
+    const double e_min = de < 0 ? oe + de * t_exit : oe + de * t;
+    if (e_min > cell_max) {
+      t = t_exit + kNudge;
+      if (m < top) ++m;
+      continue;
+    }
+    if (m > 0) {
+      --m;
+      continue;
+    }
+    const double hit = HitInCell(I, J, gu, gv, du, dv, oe, de, t, t_exit);
+    if (hit >= 0) return hit;
+    t = t_exit + kNudge;
+  }
+  return -1;
+}
+
+double HeightGrid::ElevationAt(double x, double y) const {
+  const double u = std::clamp((x - x0_) / h_, 0.0, nx_ - 1.000001);
+  const double v = std::clamp((y - y0_) / h_, 0.0, ny_ - 1.000001);
+  const int i = static_cast<int>(u), j = static_cast<int>(v);
+  const double a = u - i, b = v - j;
+  return (1 - b) * ((1 - a) * Z(i, j) + a * Z(i + 1, j)) +
+         b * ((1 - a) * Z(i, j + 1) + a * Z(i + 1, j + 1));
+}
+
+Eigen::Vector3d HeightGrid::NormalUpAt(double x, double y) const {
+  const double u = std::clamp((x - x0_) / h_, 0.0, nx_ - 1.000001);
+  const double v = std::clamp((y - y0_) / h_, 0.0, ny_ - 1.000001);
+  const int i = static_cast<int>(u), j = static_cast<int>(v);
+  const double a = u - i, b = v - j;
+  double gx = 0, gy = 0;
+  for (int dj = 0; dj < 2; ++dj) {
+    for (int di = 0; di < 2; ++di) {
+      const int ni = i + di, nj = j + dj;
+      const double w = (di ? a : 1 - a) * (dj ? b : 1 - b);
+      const int il = std::max(ni - 1, 0), ih = std::min(ni + 1, nx_ - 1);
+      const int jl = std::max(nj - 1, 0), jh = std::min(nj + 1, ny_ - 1);
+      gx += w * (Z(ih, nj) - Z(il, nj)) / ((ih - il) * h_);
+      gy += w * (Z(ni, jh) - Z(ni, jl)) / ((jh - jl) * h_);
+    }
+  }
+  // Up is -Z in the site frame.
+  return Eigen::Vector3d(-gx, -gy, -1.0).normalized();
+}
+
+void HeightLevels::Build(const Ground& ground, const Eigen::Vector2d& centre,
+                         double near_range_m, const std::vector<Box2>& boxes,
+                         const std::vector<double>& cells) {
+  centre_ = centre;
+  near_range_ = near_range_m;
+  grids_.assign(boxes.size(), HeightGrid());
+  global_max_ = -kInf;
+  for (std::size_t L = 0; L < boxes.size(); ++L) {
+    grids_[L].Build(ground, boxes[L], cells[L]);
+    global_max_ = std::max(global_max_, grids_[L].max_elevation());
+  }
+}
+
+void HeightLevels::Adopt(const Ground::GridView& view) {
+  grids_.assign(1, HeightGrid());
+  grids_[0].Adopt(view);
+  near_range_ = std::numeric_limits<double>::max();
+  global_max_ = grids_[0].max_elevation();
+}
+
+std::size_t HeightLevels::nodes() const {
+  std::size_t n = 0;
+  for (const HeightGrid& g : grids_) n += g.nodes();
+  return n;
+}
+
+int HeightLevels::LevelAt(double x, double y) const {
+  const double rho = std::hypot(x - centre_.x(), y - centre_.y());
+  if (rho <= near_range_) return 0;
+  const int L = static_cast<int>(std::ceil(std::log2(rho / near_range_)));
+  return std::clamp(L, 0, levels() - 1);
+}
+
+double HeightLevels::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
+                               double t1, int* level_out) const {
+  if (grids_.empty() || t0 > t1) return -1;
+  if (d.z() <= 0 && -o.z() + (-d.z()) * t0 > global_max_) return -1;
+  // Split the ray where it crosses the level circles; each piece lies in one level.
+  double cuts[64];
+  int n = 0;
+  cuts[n++] = t0;
+  const double px = o.x() - centre_.x(), py = o.y() - centre_.y();
+  const double a = d.x() * d.x() + d.y() * d.y();
+  if (a > 1e-18) {
+    const double b = 2 * (px * d.x() + py * d.y());
+    for (int L = 0; L + 1 < levels() && n < 62; ++L) {
+      const double R = near_range_ * std::ldexp(1.0, L);
+      const double c = px * px + py * py - R * R;
+      const double disc = b * b - 4 * a * c;
+      if (disc <= 0) continue;
+      const double sq = std::sqrt(disc);
+      for (double r : {(-b - sq) / (2 * a), (-b + sq) / (2 * a)}) {
+        if (r > t0 && r < t1) cuts[n++] = r;
+      }
+    }
+  }
+  std::sort(cuts + 1, cuts + n);
+  cuts[n++] = t1;
+  for (int k = 0; k + 1 < n; ++k) {
+    const double ta = cuts[k], tb = cuts[k + 1];
+    if (tb <= ta) continue;
+    const double tm = 0.5 * (ta + tb);
+    const int L = LevelAt(o.x() + tm * d.x(), o.y() + tm * d.y());
+    const double hit = grids_[L].Intersect(o, d, ta, tb);
+    if (hit >= 0) {
+      if (level_out) *level_out = L;
+      return hit;
+    }
+    // Going up above everything: nothing further can be hit.
+    if (d.z() <= 0 && -o.z() + (-d.z()) * tb > global_max_) return -1;
+  }
+  return -1;
+}
+
+}  // namespace rover::render::internal

@@ -1,0 +1,97 @@
+// Internal to the renderer: the ground sampled into nested height grids, and exact
+// ray intersection with them.
+//
+// Level L covers horizontal distances (R_{L-1}, R_L] from a centre (the stereo rig),
+// R_L = near_range * 2^L, with cells that double too, so a cell spans about the same
+// number of pixels at every distance. Each level is a bilinear height field; a ray is
+// split where it crosses the circles R_L and each piece is traced in its own level.
+// Tracing is coarse to fine over a max-mip (each coarse cell holds the highest node
+// under it: a bilinear patch never rises above its corners, so the bound is exact),
+// then the hit inside the final cell is the smallest root of a quadratic, so the hit
+// lies on the bilinear surface to rounding error, far below 1 mm.
+#pragma once
+
+#include "render/ground.hpp"
+
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace rover::render::internal {
+
+// An axis-aligned rectangle in the site XY plane.
+struct Box2 {
+  double x_min = 0, x_max = -1, y_min = 0, y_max = -1;
+  bool empty() const { return x_max < x_min || y_max < y_min; }
+  void Add(double x, double y);
+  void Add(const Box2& b);
+};
+
+class HeightGrid {
+ public:
+  // Samples `ground` at nodes x0 + i h, y0 + j h covering `box`.
+  void Build(const Ground& ground, const Box2& box, double cell_m);
+  // Takes a ground's own grid as it is (no resampling).
+  void Adopt(const Ground::GridView& view);
+
+  // First hit of o + t d (site frame, Z down, |d| = 1) for t in [t0, t1]; returns t or
+  // a negative value for none.
+  double Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
+                   double t1) const;
+
+  // Elevation (up) and smooth up-normal at a point: the normal interpolates node
+  // gradients so that shading shows no cell pattern.
+  double ElevationAt(double x, double y) const;
+  Eigen::Vector3d NormalUpAt(double x, double y) const;  // in site axes, Z down
+
+  double cell() const { return h_; }
+  double max_elevation() const { return global_max_; }
+  bool Contains(double x, double y) const;
+  const Box2& box() const { return box_; }
+  std::size_t nodes() const { return z_.size(); }
+
+ private:
+  void BuildMips();
+  float Z(int i, int j) const { return z_[static_cast<std::size_t>(j) * nx_ + i]; }
+  double HitInCell(int i, int j, double gu, double gv, double du, double dv, double oe,
+                   double de, double t, double t_exit) const;
+
+  double x0_ = 0, y0_ = 0, h_ = 1;
+  int nx_ = 0, ny_ = 0;
+  Box2 box_;
+  std::vector<float> z_;  // elevation up, row-major (j rows of i)
+  // mips_[m] has cells of 2^m base cells; size cx_[m] x cy_[m].
+  std::vector<std::vector<float>> mips_;
+  std::vector<int> cx_, cy_;
+  double global_max_ = 0;
+};
+
+class HeightLevels {
+ public:
+  // Builds the levels around `centre` (site XY). `boxes[L]` is the region level L must
+  // cover (already limited to its radius); cell sizes are cells[L].
+  void Build(const Ground& ground, const Eigen::Vector2d& centre, double near_range_m,
+             const std::vector<Box2>& boxes, const std::vector<double>& cells);
+
+  // First hit along o + t d, t in [t0, t1]. Returns t, or a negative value.
+  // `level_out` gets the level of the hit.
+  double Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
+                   double t1, int* level_out = nullptr) const;
+
+  // One level: the ground's own grid.
+  void Adopt(const Ground::GridView& view);
+
+  const HeightGrid& level(int L) const { return grids_[L]; }
+  int levels() const { return static_cast<int>(grids_.size()); }
+  int LevelAt(double x, double y) const;
+  double max_elevation() const { return global_max_; }
+  std::size_t nodes() const;
+
+ private:
+  Eigen::Vector2d centre_{0, 0};
+  double near_range_ = 4;
+  std::vector<HeightGrid> grids_;
+  double global_max_ = 0;
+};
+
+}  // namespace rover::render::internal

@@ -1,0 +1,33 @@
+// The simulator's world as the renderer's ground: the world's own height grid (ground and
+// rocks) is traced directly, and its albedo texture is sampled at every hit.
+#pragma once
+
+#include "render/ground.hpp"
+#include "terrain/world.hpp"
+
+namespace rover::render {
+
+class WorldGround : public Ground {
+ public:
+  explicit WorldGround(const terrain::World& world) : world_(world) {}
+  double Elevation(double x, double y) const override { return world_.Elevation(x, y); }
+  double Albedo(double x, double y) const override { return world_.Albedo(x, y); }
+  bool NativeGrid(GridView* view) const override {
+    view->x0 = world_.x_min();
+    view->y0 = world_.y_min();
+    view->h = world_.resolution();
+    view->nx = world_.nx();
+    view->ny = world_.ny();
+    view->data = world_.elevation_grid().data();
+    return true;
+  }
+
+ private:
+  const terrain::World& world_;
+};
+
+inline Sun SunOf(const terrain::World& world) {
+  return Sun{world.sun().azimuth_deg, world.sun().elevation_deg};
+}
+
+}  // namespace rover::render
