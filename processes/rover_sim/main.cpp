@@ -8,6 +8,7 @@
 #include "mobility/rover_simulator.hpp"
 #include "terrain/world.hpp"
 
+#include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/imu_t.hpp>
 #include <rover_msgs/mobility_command_t.hpp>
 #include <rover_msgs/mobility_status_t.hpp>
@@ -18,6 +19,8 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <set>
+#include <sstream>
 #include <thread>
 
 using namespace rover;
@@ -68,7 +71,8 @@ int main(int argc, char** argv) {
                       argc, argv,
                       {{"--world", "FILE", "world YAML (configs/worlds/)"},
                        {"--start", "X,Y,YAW_DEG", "start pose (default: the world's start)"},
-                       {"--rate", "R", "rover seconds per wall second (overrides sim.rate)"}});
+                       {"--rate", "R", "rover seconds per wall second (overrides sim.rate)"},
+                       {"--hold-for", "NAMES", "comma-separated processes whose heartbeats must be heard before the clock starts"}});
     SimOptions options = LoadSimOptions(proc.config()["sim"]);
     if (auto r = proc.option("--rate")) {
       options.rate = bus::ParseNumberList(*r, 1, "rover_sim: argument --rate")[0];
@@ -128,6 +132,27 @@ int main(int argc, char** argv) {
             proc.bus().Publish(channels::kMobilityStatus, st);
           }
         });
+
+    // Hold the clock until the listed processes are up, so that they see every message
+    // from the first one (a replay of the log then reproduces their outputs exactly).
+    std::set<std::string> waiting;
+    if (auto names = proc.option("--hold-for")) {
+      std::stringstream ss(*names);
+      for (std::string n; std::getline(ss, n, ',');)
+        if (!n.empty()) waiting.insert(n);
+    }
+    proc.bus().Subscribe<rover_msgs::heartbeat_t>(channels::kHeartbeat,
+                                                  [&](const rover_msgs::heartbeat_t& hb) { waiting.erase(hb.process); });
+    const auto hold_start = std::chrono::steady_clock::now();
+    while (!waiting.empty() && !proc.stopping()) {
+      proc.PublishHeartbeat();
+      proc.bus().Handle(200);
+      if (std::chrono::steady_clock::now() - hold_start > std::chrono::seconds(30)) {
+        std::string list;
+        for (const auto& n : waiting) list += " " + n;
+        throw std::runtime_error("--hold-for: no heartbeat within 30 s from:" + list);
+      }
+    }
 
     const auto period = [](double hz) { return static_cast<std::int64_t>(1e6 / hz); };
     std::int64_t next_truth = sim->utime(), next_clock = sim->utime(), next_status = sim->utime();

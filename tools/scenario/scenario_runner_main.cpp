@@ -62,6 +62,18 @@ std::string PrivateUrl() {
 }
 
 
+// Sets `flag value` in an argument list, replacing the deployment's own value.
+void SetOption(std::vector<std::string>& args, const std::string& flag, const std::string& value) {
+  for (std::size_t i = 0; i + 1 < args.size(); ++i) {
+    if (args[i] == flag) {
+      args[i + 1] = value;
+      return;
+    }
+  }
+  args.push_back(flag);
+  args.push_back(value);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -141,18 +153,27 @@ int main(int argc, char** argv) {
     rover::launch::ProcessSet set(rover::launch::BinDir(), out_dir, false);
     const std::vector<std::string> env = {"ROVER_LCM_URL=" + url};
     set.Start({"lcm-logger", "/usr/bin/lcm-logger", {"--lcm-url=" + url, "-q", "-f", log_path}}, env);
+    std::string others;  // the simulator holds its clock until these are up
+    for (const auto& p : deployment.processes)
+      if (p.name != "rover_sim") others += (others.empty() ? "" : ",") + p.name;
+    std::ofstream commands(out_dir + "/commands.txt");
     for (auto p : deployment.processes) {
       if (p.name == "rover_sim") {
-        p.args.insert(p.args.end(),
-                      {"--world", spec.world, "--start",
-                       Num(spec.start_x) + "," + Num(spec.start_y) + "," + Num(spec.start_yaw_deg),
-                       "--rate", Num(spec.sim_rate)});
+        SetOption(p.args, "--world", spec.world);
+        SetOption(p.args, "--start",
+                  Num(spec.start_x) + "," + Num(spec.start_y) + "," + Num(spec.start_yaw_deg));
+        SetOption(p.args, "--rate", Num(spec.sim_rate));
+        SetOption(p.args, "--hold-for", others);
       } else if (p.name == "state_estimator") {
-        p.args.insert(p.args.end(), {"--start", Num(spec.start_x) + "," + Num(spec.start_y) + "," +
-                                                    Num(start_z) + "," + Num(spec.start_yaw_deg)});
+        SetOption(p.args, "--start", Num(spec.start_x) + "," + Num(spec.start_y) + "," +
+                                         Num(start_z) + "," + Num(spec.start_yaw_deg));
       }
       set.Start(p, env);
+      commands << p.name;
+      for (const auto& a : p.args) commands << " " << a;
+      commands << "\n";
     }
+    commands.close();
     std::cout << "scenario " << spec.name << ": " << deployment.processes.size()
               << " processes on " << url << "; output in " << out_dir << "/\n" << std::flush;
 
