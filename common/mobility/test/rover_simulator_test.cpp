@@ -216,6 +216,30 @@ TEST(RoverSimulator, ImuYawDriftsAboutThreeDegreesPerHour) {
   EXPECT_NEAR(sim.Imu().angular_rate_rps.z(), 3.0 * kDeg / 3600.0, 0.002);
 }
 
+TEST(RoverSimulator, ImuRatesFollowTheTurnAndOdometryFlagsIt) {
+  const World world(Plane(Soil::kBedrock, 0.0, 0.0));
+  MobilityOptions o = Quiet();
+  o.imu.rate_noise_deg_s = 0.0;
+  RoverSimulator sim(world, o, 0.0, 0.0, 0.0);
+  MotionCommand turn = MotionCommand::Turn(1, -30.0 * kDeg);
+  turn.turn_rate_rps = 2.0 * kDeg;
+  sim.Command(turn);
+  const StepOutput& out = sim.Step(3.0);
+  ASSERT_FALSE(out.imu.empty());
+  // Counter-clockwise at 2 deg/s through the wheels, 2 % lost to turn slip.
+  EXPECT_NEAR(out.imu.back().angular_rate_rps.z() / kDeg, -2.0 * 0.98, 0.01);
+  ASSERT_FALSE(out.odometry.empty());
+  EXPECT_TRUE(out.odometry.back().turning_in_place);
+  sim.RunUntilIdle();
+  EXPECT_FALSE(sim.Odometry().turning_in_place);
+  sim.Command(MotionCommand::Arc(2, 0.5, -0.5));
+  EXPECT_DOUBLE_EQ(sim.Step(1.0).odometry.back().curvature_per_m, -0.5);
+  const RoverTruth t = sim.Truth();
+  EXPECT_TRUE(t.T_site_rover().translation().isApprox(t.position));
+  EXPECT_NEAR(geometry::RpyFromRotation(t.T_site_rover().linear()).z(), t.rpy.z(), 1e-9);
+  EXPECT_EQ(t.command_id, 2);
+}
+
 TEST(RoverSimulator, EncodersReportAtEightHertzOrMore) {
   const World world(Plane(Soil::kPackedSoil, 0.0, 0.0));
   RoverSimulator sim(world, MobilityOptions(), 0.0, 0.0, 0.0, 1'000'000);
