@@ -12,6 +12,7 @@
 #include <rover_msgs/imu_t.hpp>
 #include <rover_msgs/mobility_command_t.hpp>
 #include <rover_msgs/mobility_status_t.hpp>
+#include <rover_msgs/pose_t.hpp>
 #include <rover_msgs/rover_clock_t.hpp>
 #include <rover_msgs/sim_truth_t.hpp>
 #include <rover_msgs/wheel_odometry_t.hpp>
@@ -34,11 +35,20 @@ struct SimOptions {
   double clock_hz = 50.0;    // ROVER_CLOCK
   double status_hz = 4.0;    // periodic MOBILITY_STATUS (changes are sent at once)
   std::int64_t start_utime = 1000000;
+  // Lockstep with the estimator: the clock runs at most max_lead_s of rover time ahead of
+  // the latest POSE, waiting up to lead_wait_s of wall time for it. Faster than real time,
+  // a lagging consumer would otherwise see its inputs age by (lag x rate) and trip the
+  // staleness checks; a dead one is still caught, by heartbeats and by those checks.
+  double max_lead_s = 0.5;
+  double lead_wait_s = 0.5;
 };
 
 SimOptions LoadSimOptions(const config::ConfigNode& section) {
   SimOptions o;
-  section.CheckKeys({"rate", "step_s", "truth_hz", "clock_hz", "status_hz", "start_utime"});
+  section.CheckKeys({"rate", "step_s", "truth_hz", "clock_hz", "status_hz", "start_utime",
+                     "max_lead_s", "lead_wait_s"});
+  section.Get("max_lead_s", o.max_lead_s, 0.0, 3600.0);
+  section.Get("lead_wait_s", o.lead_wait_s, 0.0, 60.0);
   section.Get("rate", o.rate, 0.1, 10000.0);
   section.Get("step_s", o.step_s, 0.001, 0.1);
   section.Get("truth_hz", o.truth_hz, 1.0, 1000.0);
@@ -160,8 +170,21 @@ int main(int argc, char** argv) {
     const std::int64_t rover_start = sim->utime();
     double next_heartbeat_wall = 0;
 
+    std::int64_t last_pose_utime = sim->utime();
+    proc.bus().Subscribe<rover_msgs::pose_t>(channels::kPose, [&](const rover_msgs::pose_t& m) {
+      last_pose_utime = std::max(last_pose_utime, m.utime);
+    }, 1000);
+
     while (!proc.stopping()) {
       while (proc.bus().Handle(0)) {
+      }
+      if (options.max_lead_s > 0 && sim->utime() - last_pose_utime > options.max_lead_s * 1e6) {
+        const auto wait_start = std::chrono::steady_clock::now();
+        while (sim->utime() - last_pose_utime > options.max_lead_s * 1e6 && !proc.stopping() &&
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count() <
+                   options.lead_wait_s) {
+          proc.bus().Handle(2);
+        }
       }
       const auto& out = sim->Step(options.step_s);
       const std::int64_t now = sim->utime();

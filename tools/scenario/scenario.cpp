@@ -6,11 +6,13 @@
 #include "geometry/pose.hpp"
 #include "hazards/keepout.hpp"
 #include "scenario/json_writer.hpp"
+#include "sequence/parser.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/keepout_zones_t.hpp>
 #include <rover_msgs/pose_t.hpp>
 #include <rover_msgs/sequence_status_t.hpp>
+#include <rover_msgs/sequence_submit_t.hpp>
 #include <rover_msgs/sim_truth_t.hpp>
 #include <rover_msgs/step_report_t.hpp>
 
@@ -144,10 +146,20 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
     } else if (ch == channels::kKeepOutZones) {
       rover_msgs::keepout_zones_t m;
       if (m.decode(ev->data, 0, ev->datalen) >= 0) zone_sets.emplace_back(m.utime, ZonesFromMsg(m));
+    } else if (ch == channels::kSequenceSubmit) {
+      // The commands, with their lines, come from the submitted text itself.
+      rover_msgs::sequence_submit_t m;
+      if (m.decode(ev->data, 0, ev->datalen) < 0) continue;
+      const auto parsed = sequence::ParseSequence(m.text, m.name);
+      if (parsed.ok()) {
+        for (std::size_t i = 0; i < parsed.sequence.commands.size(); ++i) {
+          command_text[static_cast<int>(i)] = {parsed.sequence.commands[i].line,
+                                               parsed.sequence.commands[i].text};
+        }
+      }
     } else if (ch == channels::kSequenceStatus) {
       rover_msgs::sequence_status_t m;
       if (m.decode(ev->data, 0, ev->datalen) < 0) continue;
-      if (m.command_index >= 0) command_text[m.command_index] = {m.command_line, m.command_text};
       num_commands = std::max(num_commands, static_cast<int>(m.num_commands));
       if (m.state == rover_msgs::sequence_status_t::STATE_COMPLETED ||
           m.state == rover_msgs::sequence_status_t::STATE_ABORTED ||

@@ -1,0 +1,374 @@
+#include "vo_eval/vo_evaluation.hpp"
+
+#include "geometry/pose.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+
+namespace rover::vo_eval {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+Eigen::Matrix<double, 6, 6> PriorCovariance(double sigma_m, double sigma_deg) {
+  Eigen::Matrix<double, 6, 1> d;
+  const double r = sigma_deg * kDeg;
+  d << sigma_m * sigma_m, sigma_m * sigma_m, sigma_m * sigma_m, r * r, r * r, r * r;
+  return d.asDiagonal();
+}
+
+std::string CsvQuoted(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"') out += '"';
+    out += c == '\n' ? ' ' : c;
+  }
+  return out + "\"";
+}
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+          out += buf;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.6g", v);
+  return buf;
+}
+
+std::string StageJson(const StageStats& s) {
+  std::ostringstream o;
+  o << "{\"whole\": " << JsonNumber(s.whole) << ", \"detect\": " << JsonNumber(s.detect)
+    << ", \"stereo\": " << JsonNumber(s.stereo) << ", \"track\": " << JsonNumber(s.track)
+    << ", \"ransac\": " << JsonNumber(s.ransac) << ", \"ml\": " << JsonNumber(s.ml)
+    << ", \"total\": " << JsonNumber(s.total) << "}";
+  return o.str();
+}
+
+}  // namespace
+
+vo::VoOptions LoadVoConfig(const std::string& path) {
+  const config::ConfigNode root = config::ConfigNode::LoadFile(path);
+  if (!root.Has("vo")) root.Fail("expected a `vo:` section");
+  return vo::LoadVoOptions(root["vo"]);
+}
+
+std::string DefaultVoConfigPath() {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> candidates = {fs::path(ROVER_SOURCE_DIR) / "configs" / "vo.yaml"};
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) candidates.push_back(exe.parent_path().parent_path().parent_path() / "configs" / "vo.yaml");
+  for (const fs::path& p : candidates) {
+    if (fs::is_regular_file(p, ec)) return p.string();
+  }
+  return "";
+}
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+void StageStatistics(const std::vector<FrameRecord>& frames, StageStats* median, StageStats* mean) {
+  std::vector<double> v[7];
+  for (const FrameRecord& f : frames) {
+    const vo::StageTimes& t = f.result.times;
+    const double x[7] = {f.wall_ms, t.detect_ms, t.stereo_ms, t.track_ms, t.ransac_ms, t.ml_ms, t.total_ms};
+    for (int i = 0; i < 7; ++i) v[i].push_back(x[i]);
+  }
+  double med[7], avg[7];
+  for (int i = 0; i < 7; ++i) {
+    med[i] = Median(v[i]);
+    avg[i] = 0.0;
+    for (double x : v[i]) avg[i] += x;
+    if (!v[i].empty()) avg[i] /= static_cast<double>(v[i].size());
+  }
+  *median = {med[0], med[1], med[2], med[3], med[4], med[5], med[6]};
+  *mean = {avg[0], avg[1], avg[2], avg[3], avg[4], avg[5], avg[6]};
+}
+
+EvalInput KittiInput(const KittiSequence& sequence, int max_frames) {
+  EvalInput in;
+  in.name = sequence.dir;
+  in.num_frames = max_frames > 0 ? std::min(max_frames, sequence.size()) : sequence.size();
+  in.rig = KittiRig(sequence);
+  in.times_s.assign(sequence.times_s.begin(), sequence.times_s.begin() + in.num_frames);
+  if (sequence.has_truth()) {
+    in.truth.assign(sequence.truth.begin(), sequence.truth.begin() + in.num_frames);
+  }
+  in.load = [&sequence](int k, cv::Mat* left, cv::Mat* right) {
+    StereoFrameImages images = LoadStereoFrame(sequence, k);
+    *left = images.left;
+    *right = images.right;
+  };
+  return in;
+}
+
+EvalInput SyntheticInput(const SyntheticTerrainSequence& sequence, int num_frames) {
+  if (num_frames < 2) {
+    throw std::invalid_argument("SyntheticInput: need at least 2 frames, got " +
+                                std::to_string(num_frames));
+  }
+  EvalInput in;
+  const SyntheticTerrainOptions& o = sequence.options();
+  in.name = "synthetic terrain " + std::to_string(o.width) + "x" + std::to_string(o.height) +
+            " seed " + std::to_string(o.seed);
+  in.num_frames = num_frames;
+  in.rig = sequence.rig();
+  for (int k = 0; k < num_frames; ++k) {
+    in.times_s.push_back(0.1 * k);
+    in.truth.push_back(sequence.TruthPose(k));
+  }
+  in.truth_is_exact = true;
+  in.view.down = sequence.DownInWorld();
+  in.view.forward = sequence.ForwardInWorld();
+  in.load = [&sequence](int k, cv::Mat* left, cv::Mat* right) { sequence.Render(k, left, right); };
+  return in;
+}
+
+EvalReport RunEvaluation(const EvalInput& input, const EvalOptions& options, std::ostream* progress) {
+  if (input.num_frames < 2) {
+    throw std::invalid_argument("RunEvaluation: " + input.name + ": need at least 2 frames, got " +
+                                std::to_string(input.num_frames));
+  }
+  vo::VisualOdometry odometry(options.vo);
+  EvalReport report;
+  report.has_truth = static_cast<int>(input.truth.size()) == input.num_frames;
+
+  Eigen::Isometry3d velocity = Eigen::Isometry3d::Identity();  // last motion, prev->curr
+  bool have_velocity = false;
+  std::vector<double> nees_values;
+  std::vector<Eigen::Matrix<double, 6, 1>> normalised;
+
+  for (int k = 0; k < input.num_frames; ++k) {
+    vo::StereoImages images;
+    input.load(k, &images.left, &images.right);
+    images.rig = input.rig;
+    images.frame_id = k;
+    images.utime = static_cast<std::int64_t>(std::llround(input.times_s[static_cast<std::size_t>(k)] * 1e6));
+
+    const Eigen::Matrix<double, 6, 6> prior_cov =
+        have_velocity ? PriorCovariance(options.prior_sigma_m, options.prior_sigma_deg)
+                      : PriorCovariance(options.initial_prior_sigma_m, options.initial_prior_sigma_deg);
+    const auto t0 = std::chrono::steady_clock::now();
+    vo::VoResult result = odometry.Process(images, velocity, prior_cov);
+    const auto t1 = std::chrono::steady_clock::now();
+
+    FrameRecord rec;
+    rec.frame = k;
+    rec.wall_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+    rec.accepted = result.status == vo::VoStatus::kOk;
+    // VO-10: a failed step keeps the prior (here the constant-velocity motion).
+    rec.motion = rec.accepted ? result.T_prev_curr : velocity;
+    if (k > 0) {
+      ++report.pairs;
+      if (rec.accepted) {
+        ++report.converged;
+        velocity = result.T_prev_curr;
+        have_velocity = true;
+        if (report.has_truth) {
+          const Eigen::Isometry3d truth_motion =
+              input.truth[static_cast<std::size_t>(k - 1)].inverse() * input.truth[static_cast<std::size_t>(k)];
+          const Eigen::Matrix<double, 6, 1> e = MotionError(truth_motion, result.T_prev_curr);
+          rec.nees = Nees(e, result.covariance);
+          if (rec.nees >= 0.0) {
+            nees_values.push_back(rec.nees);
+            normalised.push_back(e.cwiseQuotient(result.covariance.diagonal().cwiseSqrt()));
+          }
+        }
+      }
+    } else {
+      rec.motion = Eigen::Isometry3d::Identity();
+    }
+    rec.result = std::move(result);
+    if (progress) {
+      char line[256];
+      std::snprintf(line, sizeof(line), "frame %4d  %-18s inliers %4d/%4d  %7.2f ms  %s\n", k,
+                    vo::ToString(rec.result.status), rec.result.num_inliers, rec.result.num_tracked,
+                    rec.wall_ms, rec.result.reason.c_str());
+      *progress << line << std::flush;
+    }
+    report.frames.push_back(std::move(rec));
+  }
+
+  PoseList motions;
+  for (const FrameRecord& f : report.frames) motions.push_back(f.motion);
+  report.estimate =
+      ComposeMotions(motions, report.has_truth ? input.truth.front() : Eigen::Isometry3d::Identity());
+  report.convergence_rate =
+      report.pairs > 0 ? static_cast<double>(report.converged) / report.pairs : 0.0;
+  if (report.has_truth) {
+    report.accuracy = EvaluateTrajectory(input.truth, report.estimate, report.segments);
+    report.nees = SummariseNees(nees_values, normalised);
+  }
+  StageStatistics(report.frames, &report.median_ms, &report.mean_ms);
+  return report;
+}
+
+void WriteEvaluation(const std::string& out_dir, const EvalInput& input, const EvalReport& report,
+                     const EvalOptions& options) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (!fs::is_directory(out_dir)) {
+    throw std::runtime_error(out_dir + ": cannot create the output directory" +
+                             (ec ? ": " + ec.message() : std::string()));
+  }
+  const std::string poses_path = (fs::path(out_dir) / "poses.txt").string();
+  WriteKittiPoses(poses_path, report.estimate);
+
+  const std::string csv_path = (fs::path(out_dir) / "frames.csv").string();
+  {
+    std::ofstream csv(csv_path);
+    if (!csv) throw std::runtime_error(csv_path + ": cannot write");
+    csv << "frame,time_s,status,reason,accepted,num_detected,num_matched,num_tracked,num_inliers,"
+           "iterations,detect_ms,stereo_ms,track_ms,ransac_ms,ml_ms,total_ms,wall_ms,"
+           "x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,nees\n";
+    for (const FrameRecord& f : report.frames) {
+      const vo::VoResult& r = f.result;
+      const geometry::Vector6d m = geometry::XyzRpyFromPose(f.motion);
+      char buf[512];
+      std::snprintf(buf, sizeof(buf),
+                    "%d,%.6f,%s,%s,%d,%d,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,"
+                    "%.6f,%.6f,%.6f,%.5f,%.5f,%.5f,",
+                    f.frame, input.times_s[static_cast<std::size_t>(f.frame)], vo::ToString(r.status),
+                    CsvQuoted(r.reason).c_str(), f.accepted ? 1 : 0, r.num_detected, r.num_matched,
+                    r.num_tracked, r.num_inliers, r.iterations, r.times.detect_ms, r.times.stereo_ms,
+                    r.times.track_ms, r.times.ransac_ms, r.times.ml_ms, r.times.total_ms, f.wall_ms,
+                    m(0), m(1), m(2), m(3) / kDeg, m(4) / kDeg, m(5) / kDeg);
+      csv << buf;
+      if (f.nees >= 0.0) csv << JsonNumber(f.nees);
+      csv << "\n";
+    }
+    if (!csv) throw std::runtime_error(csv_path + ": write failed");
+  }
+
+  const std::string json_path = (fs::path(out_dir) / "metrics.json").string();
+  {
+    std::map<std::string, int> status_counts;
+    for (std::size_t i = 1; i < report.frames.size(); ++i) {
+      ++status_counts[vo::ToString(report.frames[i].result.status)];
+    }
+    std::ostringstream j;
+    j << "{\n";
+    j << "  \"dataset\": " << JsonString(input.name) << ",\n";
+    j << "  \"frames\": " << report.frames.size() << ",\n";
+    j << "  \"working_scale\": " << JsonNumber(options.vo.working_scale) << ",\n";
+    j << "  \"prior\": {\"kind\": \"constant velocity\", \"sigma_m\": " << JsonNumber(options.prior_sigma_m)
+      << ", \"sigma_deg\": " << JsonNumber(options.prior_sigma_deg) << "},\n";
+    j << "  \"convergence\": {\"pairs\": " << report.pairs << ", \"converged\": " << report.converged
+      << ", \"rate\": " << JsonNumber(report.convergence_rate) << ", \"status_counts\": {";
+    bool first = true;
+    for (const auto& [name, count] : status_counts) {
+      j << (first ? "" : ", ") << JsonString(name) << ": " << count;
+      first = false;
+    }
+    j << "}},\n";
+    if (report.has_truth) {
+      const TrajectoryAccuracy& a = report.accuracy;
+      j << "  \"accuracy\": {\n";
+      j << "    \"definition\": \"KITTI devkit segment errors, every frame a start\",\n";
+      j << "    \"segment_lengths_m\": [";
+      for (std::size_t i = 0; i < report.segments.lengths_m.size(); ++i) {
+        j << (i ? ", " : "") << JsonNumber(report.segments.lengths_m[i]);
+      }
+      j << "],\n";
+      j << "    \"segments\": " << a.num_segments << ",\n";
+      j << "    \"trans_error_percent\": " << JsonNumber(a.num_segments ? a.trans_error_percent : NAN) << ",\n";
+      j << "    \"rot_error_deg_per_m\": " << JsonNumber(a.num_segments ? a.rot_error_deg_per_m : NAN) << ",\n";
+      j << "    \"per_length\": [";
+      for (std::size_t i = 0; i < a.lengths_m.size(); ++i) {
+        j << (i ? ", " : "") << "{\"length_m\": " << JsonNumber(a.lengths_m[i])
+          << ", \"segments\": " << a.segments_per_length[i]
+          << ", \"trans_error_percent\": " << JsonNumber(a.trans_error_percent_per_length[i])
+          << ", \"rot_error_deg_per_m\": " << JsonNumber(a.rot_error_deg_per_m_per_length[i]) << "}";
+      }
+      j << "],\n";
+      j << "    \"path_length_m\": " << JsonNumber(a.path_length_m) << ",\n";
+      j << "    \"final_position_error_m\": " << JsonNumber(a.final_position_error_m) << ",\n";
+      j << "    \"final_position_error_percent\": " << JsonNumber(a.final_position_error_percent) << "\n";
+      j << "  },\n";
+      const NeesSummary& n = report.nees;
+      j << "  \"nees\": {\n";
+      j << "    \"truth\": "
+        << JsonString(input.truth_is_exact ? "exact (synthetic)"
+                                           : "poses.txt: itself uncertain by centimetres, so NEES "
+                                             "here is an upper bound")
+        << ",\n";
+      j << "    \"definition\": \"e' inv(cov) e per accepted pair, e = xyz and rpy of T_prev_curr minus truth\",\n";
+      j << "    \"count\": " << n.count << ",\n";
+      j << "    \"expected_mean\": 6,\n";
+      j << "    \"mean\": " << JsonNumber(n.count ? n.mean : NAN) << ",\n";
+      j << "    \"median\": " << JsonNumber(n.count ? n.median : NAN) << ",\n";
+      j << "    \"max\": " << JsonNumber(n.count ? n.max : NAN) << ",\n";
+      j << "    \"false_positive_chi2\": " << JsonNumber(kChi2Dof6ThreeSigma) << ",\n";
+      j << "    \"false_positives\": " << n.false_positives << ",\n";
+      j << "    \"within_1sigma\": {\"expected\": 0.683";
+      const char* names[6] = {"x", "y", "z", "roll", "pitch", "yaw"};
+      for (int i = 0; i < 6; ++i) j << ", \"" << names[i] << "\": " << JsonNumber(n.within_1sigma(i));
+      j << "}\n  },\n";
+    } else {
+      j << "  \"accuracy\": null,\n  \"nees\": null,\n";
+    }
+    j << "  \"timing_ms\": {\n";
+    j << "    \"measured\": \"around the VO call only (image decoding excluded); stages from VoResult.times\",\n";
+    j << "    \"calls\": " << report.frames.size() << ",\n";
+    j << "    \"median\": " << StageJson(report.median_ms) << ",\n";
+    j << "    \"mean\": " << StageJson(report.mean_ms) << "\n";
+    j << "  }\n}\n";
+    std::ofstream out(json_path);
+    if (!out) throw std::runtime_error(json_path + ": cannot write");
+    out << j.str();
+    if (!out) throw std::runtime_error(json_path + ": write failed");
+  }
+
+  const std::string png_path = (fs::path(out_dir) / "trajectory.png").string();
+  TopViewOptions view = input.view;
+  if (view.title.empty()) {
+    char title[128];
+    if (report.has_truth && report.accuracy.num_segments > 0) {
+      std::snprintf(title, sizeof(title), "trans %.2f %%  rot %.4f deg/m  converged %d/%d",
+                    report.accuracy.trans_error_percent, report.accuracy.rot_error_deg_per_m,
+                    report.converged, report.pairs);
+    } else {
+      std::snprintf(title, sizeof(title), "converged %d/%d", report.converged, report.pairs);
+    }
+    view.title = title;
+  }
+  const cv::Mat plot = DrawTopView(report.has_truth ? input.truth : PoseList{}, report.estimate, view);
+  if (!cv::imwrite(png_path, plot)) throw std::runtime_error(png_path + ": cannot write");
+}
+
+}  // namespace rover::vo_eval

@@ -1,0 +1,95 @@
+// Runs the VO pair by pair over a stereo sequence and judges it (VO_ALGORITHM.md, "How it
+// is judged"): accuracy against truth, convergence, stage times, and the honesty of the
+// reported covariance (VO-13).
+#pragma once
+
+#include "vo/visual_odometry.hpp"
+#include "vo_eval/kitti_sequence.hpp"
+#include "vo_eval/synthetic_terrain.hpp"
+#include "vo_eval/trajectory_metrics.hpp"
+#include "vo_eval/trajectory_plot.hpp"
+
+#include <functional>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace rover::vo_eval {
+
+// A sequence to evaluate, from a KITTI directory or the synthetic terrain.
+struct EvalInput {
+  std::string name;
+  int num_frames = 0;
+  geometry::StereoRig rig;
+  std::vector<double> times_s;
+  PoseList truth;                 // empty: no accuracy section
+  bool truth_is_exact = false;    // synthetic truth; KITTI's is itself uncertain by cm
+  TopViewOptions view;
+  // Loads (or renders) frame k. Not timed.
+  std::function<void(int, cv::Mat*, cv::Mat*)> load;
+};
+
+// `max_frames` > 0 keeps only the first frames.
+EvalInput KittiInput(const KittiSequence& sequence, int max_frames = 0);
+// The sequence must outlive the input (the loader renders from it).
+EvalInput SyntheticInput(const SyntheticTerrainSequence& sequence, int num_frames);
+
+struct EvalOptions {
+  vo::VoOptions vo;
+  // With no wheel odometry the prior is the previous motion (constant velocity), with a
+  // wide one-sigma: a car's or a rover's speed changes little between frames, but we must
+  // not let a good prior hide a VO that needs it.
+  double prior_sigma_m = 0.3;
+  double prior_sigma_deg = 3.0;
+  // The first pair has no previous motion: the prior is "no motion", wider still.
+  double initial_prior_sigma_m = 1.0;
+  double initial_prior_sigma_deg = 10.0;
+};
+
+struct FrameRecord {
+  int frame = 0;
+  vo::VoResult result;
+  double wall_ms = 0.0;            // around the VO call only
+  bool accepted = false;           // status kOk: the VO motion enters the trajectory
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();  // used in the trajectory
+  double nees = -1.0;              // accepted frames with truth and a valid covariance
+};
+
+struct StageStats {
+  double whole = 0, detect = 0, stereo = 0, track = 0, ransac = 0, ml = 0, total = 0;
+};
+
+struct EvalReport {
+  std::vector<FrameRecord> frames;
+  PoseList estimate;               // KITTI-style, starting at truth[0] (or identity)
+  int pairs = 0;                   // frames after the first
+  int converged = 0;               // pairs with status kOk
+  double convergence_rate = 0.0;
+  bool has_truth = false;
+  TrajectoryAccuracy accuracy;
+  SegmentOptions segments;
+  NeesSummary nees;
+  StageStats median_ms;            // over every VO call
+  StageStats mean_ms;
+};
+
+// `progress` (optional) gets one line per frame.
+EvalReport RunEvaluation(const EvalInput& input, const EvalOptions& options,
+                         std::ostream* progress = nullptr);
+
+// Writes DIR/poses.txt, frames.csv, metrics.json and trajectory.png (DIR is created).
+// Throws std::runtime_error naming the file that cannot be written.
+void WriteEvaluation(const std::string& out_dir, const EvalInput& input,
+                     const EvalReport& report, const EvalOptions& options);
+
+// Median and mean of each stage over the records.
+void StageStatistics(const std::vector<FrameRecord>& frames, StageStats* median, StageStats* mean);
+
+double Median(std::vector<double> values);
+
+// The `vo:` section of a VO config file. Throws config::ConfigError naming the file/key.
+vo::VoOptions LoadVoConfig(const std::string& path);
+// configs/vo.yaml of the source tree this program was built from, or "" if it is absent.
+std::string DefaultVoConfigPath();
+
+}  // namespace rover::vo_eval
