@@ -121,7 +121,7 @@ MobilityOptions MobilityOptions::Load(const ConfigNode& root) {
 
   if (m.Has("slip")) {
     const ConfigNode s = m["slip"];
-    s.CheckKeys({"soils", "noise_time_s", "dragged_wheel"});
+    s.CheckKeys({"soils", "noise_time_s", "rock_climb_slip", "dragged_wheel"});
     if (s.Has("soils")) {
       const ConfigNode soils = s["soils"];
       soils.CheckKeys({"bedrock", "packed_soil", "sand"});
@@ -131,6 +131,7 @@ MobilityOptions MobilityOptions::Load(const ConfigNode& root) {
       }
     }
     s.Get("noise_time_s", o.slip.noise_time_s, 0.01, 1e4);
+    s.Get("rock_climb_slip", o.slip.rock_climb_slip, 0.0, 2.0);
     if (s.Has("dragged_wheel")) {
       const ConfigNode d = s["dragged_wheel"];
       d.CheckKeys({"wheel", "encoder", "extra_slip", "yaw_per_m"});

@@ -78,6 +78,10 @@ struct DraggedWheel {
 struct SlipOptions {
   std::array<SoilSlip, terrain::kNumSoils> soils;  // indexed by terrain::Soil
   double noise_time_s = 5.0;  // correlation time of the slip noise
+  // Extra slip of a wheel rolling over a rock, per unit of the rock face's grade along the
+  // heading (capped at grade 3), averaged over the wheels like the soil slip. A climbing
+  // wheel rolls a longer path and fights the others: the MER rock course reached 85 %.
+  double rock_climb_slip = 0.4;
   DraggedWheel dragged;
   SlipOptions();  // MER-like defaults per soil (see mobility_options.cpp)
   const SoilSlip& For(terrain::Soil s) const { return soils[static_cast<int>(s)]; }

@@ -231,7 +231,8 @@ MobilityStatus RoverSimulator::RunUntilIdle(double max_s, double dt_s) {
 double RoverSimulator::LongitudinalSlip(double pitch_travel_deg) const {
   double s = 0.0;
   for (int i = 0; i < kNumWheels; ++i) {
-    s += Interpolate(options_.slip.For(wheel_soil_[i]).slip_vs_pitch, pitch_travel_deg);
+    s += Interpolate(options_.slip.For(wheel_soil_[i]).slip_vs_pitch, pitch_travel_deg) +
+         options_.slip.rock_climb_slip * std::min(wheel_rock_grade_[i], 3.0);
   }
   return s / kNumWheels;
 }
@@ -392,6 +393,12 @@ bool RoverSimulator::FollowTerrain() {
     on_map = on_map && world_.Contains(wx, wy);
     const double h = world_.Elevation(wx, wy);
     wheel_soil_[i] = world_.SoilAt(wx, wy);
+    // Rock face grade under the wheel along the heading (rock height = surface - ground).
+    const double hs = world_.resolution();
+    const double fx = hs * cy, fy = hs * sy;
+    const double ahead = world_.Elevation(wx + fx, wy + fy) - world_.GroundElevation(wx + fx, wy + fy);
+    const double behind = world_.Elevation(wx - fx, wy - fy) - world_.GroundElevation(wx - fx, wy - fy);
+    wheel_rock_grade_[i] = std::abs(ahead - behind) / (2.0 * hs);
     const Eigen::Vector3d row(1.0, cy * d.x() + sy * d.y(), -sy * d.x() + cy * d.y());
     A += row * row.transpose();
     rhs += row * h;

@@ -151,6 +151,7 @@ class RoverSimulator {
   Eigen::Matrix3d R_ = Eigen::Matrix3d::Identity();
   double plane_slope_fwd_ = 0, plane_slope_right_ = 0;  // d elevation / d(fwd, right)
   std::array<terrain::Soil, kNumWheels> wheel_soil_{};
+  std::array<double, kNumWheels> wheel_rock_grade_{};  // |d rock height / d forward|
   double odometer_ = 0;
   double slip_ = 0, lateral_slip_ = 0;
   Eigen::Vector3d body_rate_ = Eigen::Vector3d::Zero();
