@@ -45,8 +45,9 @@ struct EstimatorOptions {
 
   VoHeadingMode vo_heading = VoHeadingMode::kFuse;
   // A VO update whose `to` is at most this far after the latest IMU/odometry message is
-  // applied as if the rover stood still since then (captures happen with the rover
-  // stopped); further in the future it is refused (kToInFuture) and may be retried.
+  // applied at the latest message, as if the rover stood still since then (captures happen
+  // with the rover stopped); further in the future it is refused (kToInFuture) and the
+  // caller may retry it after more input. 0 = always wait for input past `to`.
   double vo_future_tolerance_s = 0.5;
 
   // During a turn in place the body does not travel; some encoders still report a

@@ -283,12 +283,13 @@ VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
                       Seconds(oldest - u.from_utime) +
                       " older than the pose history (oldest " + std::to_string(oldest) + ")");
   }
-  if (u.from_utime > newest) {
+  const int64_t tolerance_us = static_cast<int64_t>(options_.vo_future_tolerance_s * 1e6);
+  if (u.from_utime > newest + tolerance_us) {
     return refuse(VoUpdateStatus::kFromInFuture,
                   "from_utime " + std::to_string(u.from_utime) + " is " +
-                      Seconds(u.from_utime - newest) + " after the latest input");
+                      Seconds(u.from_utime - newest) + " after the latest input (tolerance " +
+                      Seconds(tolerance_us) + ")");
   }
-  const int64_t tolerance_us = static_cast<int64_t>(options_.vo_future_tolerance_s * 1e6);
   if (u.to_utime > newest + tolerance_us) {
     return refuse(VoUpdateStatus::kToInFuture,
                   "to_utime " + std::to_string(u.to_utime) + " is " +
@@ -296,8 +297,13 @@ VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
                       " after the latest input (tolerance " + Seconds(tolerance_us) + ")");
   }
 
-  const Sample from = Interpolate(u.from_utime);
-  const Sample to_old = Interpolate(u.to_utime);  // held at the newest if to is later
+  // A `to` just after the latest input is taken at the latest input (the rover stands still
+  // for a capture). The clock does not jump ahead, so inputs stamped before `to` that are
+  // still on their way are accepted, and the history stays ordered.
+  const int64_t from_utime = std::min(u.from_utime, newest);
+  const int64_t to_utime = std::min(u.to_utime, newest);
+  const Sample from = Interpolate(from_utime);
+  const Sample to_old = Interpolate(to_utime);
   const Sample now_old = Current();
   const Eigen::Matrix3d R_from = from.q.toRotationMatrix();
 
@@ -331,7 +337,7 @@ VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
   const Eigen::Matrix3d Rz_dpsi = Rz(dpsi);
 
   Sample to_new;
-  to_new.utime = u.to_utime;
+  to_new.utime = to_utime;
   to_new.p = from.p + R_from * t_vo;
   to_new.q = Eigen::Quaterniond(Rz_dpsi * to_old.q.toRotationMatrix()).normalized();
   // Position covariance: the VO translation covariance in the site frame, plus the heading
@@ -355,17 +361,20 @@ VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
 
   std::deque<Sample> rebuilt;
   for (const Sample& s : history_) {
-    if (s.utime < u.from_utime) rebuilt.push_back(s);
+    if (s.utime < from_utime) rebuilt.push_back(s);
   }
   rebuilt.push_back(from);
-  rebuilt.push_back(to_new);
+  if (to_utime > from_utime) {
+    rebuilt.push_back(to_new);
+  } else {
+    rebuilt.back() = to_new;  // both captures after the latest input: one instant in history
+  }
   for (const Sample& s : history_) {
-    if (s.utime > u.to_utime) rebuilt.push_back(reapply(s));
+    if (s.utime > to_utime) rebuilt.push_back(reapply(s));
   }
   history_.swap(rebuilt);
 
-  if (u.to_utime > utime_) utime_ = u.to_utime;  // held pose: the rover was standing
-  SetCurrent(u.to_utime >= now_old.utime ? to_new : reapply(now_old));
+  SetCurrent(to_utime >= now_old.utime ? to_new : reapply(now_old));
   R_at_last_odometry_ = Rz_dpsi * R_at_last_odometry_;
   yaw_offset_ = WrapAngle(yaw_offset_ + dpsi);
   source_ = PoseSource::kVo;
