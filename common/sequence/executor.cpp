@@ -198,6 +198,7 @@ void SequenceExecutor::Submit(Sequence sequence, int64_t submission_id, const st
   command_index_ = -1;
   step_index_ = 0;
   distance_m_ = 0.0;
+  started_ = false;
   pause_requested_ = false;
   command_active_ = false;
   // Settings start from the defaults for every sequence.
@@ -397,6 +398,7 @@ void SequenceExecutor::Poll() {
       const auto silent = SilentProcesses(options_.vo_processes_required && sequence_uses_vo_);
       if (silent.empty() && pose_) {
         start_utime_ = now_utime_;
+        started_ = true;
         detail_ = "started";
         EnterPhase(Phase::kReady);
         EmitStatus();
@@ -423,7 +425,9 @@ void SequenceExecutor::Poll() {
 
     case Phase::kBaseline:
       if (vo_update_) {
-        if (vo_update_->status != VoUpdate::kStatusOk && vo_update_->status != VoUpdate::kStatusBaseline) {
+        // Whatever VO made of the baseline pair against an older frame, the pair is the
+        // reference for the next step; only an unusable pair is a failure.
+        if (vo_update_->status == VoUpdate::kStatusBadInput) {
           CountVoFailure("baseline frame: " + vo_update_->reason);
         }
         EnterPhase(Phase::kReady);
@@ -560,7 +564,7 @@ void SequenceExecutor::StartCommand() {
     steps_ = SplitArc(a->distance_m, 1.0 / a->radius_m, step_m_, max_turn_rad_);
   } else if (const auto* t = std::get_if<Turn>(&c.action)) {
     steps_ = SplitTurn(t->angle_rad, max_turn_rad_);
-  } else if (const auto* h = std::get_if<TurnTo>(&c.action)) {
+  } else if (const auto* h = std::get_if<TurnTo>(&c.action); h && PoseFinite()) {
     const double turn = ShortestTurn(CurrentPlanePose().yaw, h->heading_rad);
     if (std::abs(turn) > 1e-4) steps_ = SplitTurn(turn, max_turn_rad_);
   } else if (const auto* g = std::get_if<Goto>(&c.action)) {
@@ -639,7 +643,18 @@ void SequenceExecutor::ApplySetting(const Command& c) {
   EnterPhase(Phase::kReady);
 }
 
+bool SequenceExecutor::PoseFinite() const {
+  if (!pose_) return false;
+  const PlanePose p = CurrentPlanePose();
+  return pose_->position.allFinite() && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.yaw);
+}
+
 bool SequenceExecutor::NextStepOfCommand() {
+  if (!PoseFinite()) {
+    // No safe step can be planned or checked from a broken estimate.
+    AbortWith(abort_reason::kHazardUnknown, "the pose estimate is not finite; nothing commanded");
+    return true;
+  }
   PlannedStep step;
   if (is_goto_) {
     const GotoDecision d = SteerToward(CurrentPlanePose(), goto_.target, goto_.tolerance_m, step_m_,
@@ -679,9 +694,15 @@ void SequenceExecutor::BeginStep(const PlannedStep& step) {
     query_id_ = NewId();
     const PlanePose p = CurrentPlanePose();
     const bool turn = step_.kind == PlannedStep::Kind::kTurn;
-    const std::vector<hazards::Pose2> path = hazards::SampleStepPath(
-        {p.x, p.y, p.yaw}, turn ? 0.0 : step_.distance_m, turn ? 0.0 : step_.curvature_per_m,
-        turn ? step_.turn_rad : 0.0, options_.path_sample_spacing_m, options_.path_sample_turn_deg * kDeg);
+    std::vector<hazards::Pose2> path;
+    try {
+      path = hazards::SampleStepPath({p.x, p.y, p.yaw}, turn ? 0.0 : step_.distance_m,
+                                     turn ? 0.0 : step_.curvature_per_m, turn ? step_.turn_rad : 0.0,
+                                     options_.path_sample_spacing_m, options_.path_sample_turn_deg * kDeg);
+    } catch (const std::invalid_argument& e) {
+      AbortWith(abort_reason::kHazardUnknown, std::string("cannot sample the step's path: ") + e.what());
+      return;
+    }
     HazardQuery q{now_utime_, query_id_, {}};
     q.samples.reserve(path.size());
     for (const auto& s : path) q.samples.push_back({s.x, s.y, s.yaw});
@@ -889,6 +910,7 @@ void SequenceExecutor::Reject(int64_t submission_id, const std::string& name, co
   }
   sequence_ = Sequence{name, {}};
   submission_id_ = submission_id;
+  started_ = false;
   command_index_ = -1;
   step_index_ = 0;
   distance_m_ = 0.0;
@@ -921,9 +943,7 @@ SequenceStatus SequenceExecutor::CurrentStatus() const {
   s.detail = detail_;
   if (pose_) XyzRpy(*pose_, s.pose);
   s.distance_m = distance_m_;
-  s.elapsed_s = (state_ == SequenceState::kIdle || phase_ == Phase::kWaitStart || start_utime_ == 0)
-                    ? 0.0
-                    : (now_utime_ - start_utime_) * 1e-6;
+  s.elapsed_s = started_ ? (now_utime_ - start_utime_) * 1e-6 : 0.0;
   s.vo_failures = vo_failures_total_;
   return s;
 }
@@ -968,7 +988,5 @@ PlanePose SequenceExecutor::CurrentPlanePose() const {
   const Eigen::Vector3d rpy = geometry::RpyFromRotation(pose_->orientation.normalized().toRotationMatrix());
   return {pose_->position.x(), pose_->position.y(), rpy.z()};
 }
-
-geometry::Pose SequenceExecutor::CurrentPose() const { return pose_ ? ToPose(*pose_) : geometry::Pose::Identity(); }
 
 }  // namespace rover::sequence

@@ -106,7 +106,7 @@ struct VoUpdate {  // vo_update_t (the delta itself reaches the executor through
   int64_t to_frame_id = -1;
   int status = 0;  // vo_update_t STATUS_*: 0 OK, 1 BASELINE, others are failures
   std::string reason;
-  static constexpr int kStatusOk = 0, kStatusBaseline = 1;
+  static constexpr int kStatusOk = 0, kStatusBaseline = 1, kStatusBadInput = 10;
 };
 
 enum class HazardState : int8_t { kSafe = 0, kViolation = 1, kUnknown = 2 };
@@ -304,7 +304,7 @@ class SequenceExecutor {
   bool VoRequired() const;
   bool VoActive() const { return vo_enabled_; }
   PlanePose CurrentPlanePose() const;
-  geometry::Pose CurrentPose() const;
+  bool PoseFinite() const;
   int64_t NewId() { return next_id_++; }
 
   ExecutorOptions options_;
@@ -339,6 +339,7 @@ class SequenceExecutor {
   int step_index_ = 0;
   int64_t start_utime_ = 0;
   double distance_m_ = 0.0;
+  bool started_ = false;
   bool sequence_uses_vo_ = false;
 
   // Settings in force.

@@ -8,6 +8,9 @@
 
 #include <cmath>
 #include <deque>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <functional>
 #include <numbers>
 #include <set>
@@ -31,6 +34,7 @@ class FakeWorld {
   bool hazard_replies = true;
   bool hazard_unknown = false;
   bool hazard_monitor_knows_zones = true;  // status uses the zones it was sent
+  bool nan_pose = false;                   // a broken estimator
   std::set<std::string> alive = {"rover_sim", "state_estimator", "hazard_monitor", "camera_capture",
                                  "visual_odometry"};
 
@@ -66,6 +70,7 @@ class FakeWorld {
     p.orientation = Eigen::Quaterniond(rover::geometry::RotationFromRpy(roll_rad, 0, estimate.yaw));
     p.site_index = site_index;
     p.last_vo_to_frame = last_vo_frame;
+    if (nan_pose) p.position.x() = std::nan("");
     return p;
   }
 
@@ -725,4 +730,39 @@ TEST(ExecutorOptions, LoadsTheExampleAndRejectsBadValues) {
   ExecutorOptions bad;
   bad.speed_mps = 0.0;
   EXPECT_THROW(SequenceExecutor{bad}, std::invalid_argument);
+}
+
+TEST(SequenceExecutor, BrokenPoseEstimateStopsWithoutThrowing) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  SubmitText(ex, "drive 2 m\ngoto 3 m 3 m within 0.5 m\n");
+  w.on_iteration = [&](SequenceExecutor&, int) { if (w.motions.size() == 2) w.nan_pose = true; };
+  ASSERT_NO_THROW(w.Run());
+  EXPECT_EQ(w.Final().state, SequenceState::kAborted);
+  EXPECT_EQ(w.Final().abort_reason, "hazard_unknown");
+  EXPECT_EQ(w.stops.size(), 1u);
+}
+
+TEST(SequenceExecutor, EverySampleSequenceRunsToAnEndInTheFakeWorld) {
+  const std::filesystem::path dir = std::filesystem::path(ROVER_SOURCE_DIR) / "configs" / "sequences";
+  int files = 0;
+  for (const char* name : {"approach_outcrop.seq", "demo_drive.seq", "keepout_rock.seq",
+                           "rock_course_vo.seq", "slope_climb.seq"}) {
+    const std::filesystem::directory_entry entry(dir / name);
+    ++files;
+    std::ifstream in(entry.path());
+    std::stringstream text;
+    text << in.rdbuf();
+    SequenceExecutor ex(FastOptions());
+    FakeWorld w(ex);
+    ex.SubmitText(text.str(), files, entry.path().filename().string());
+    w.Run();
+    const SequenceStatus last = w.Final();
+    // Flat, slip-free, everything answering: only a keep-out zone may stop a sample.
+    EXPECT_TRUE(last.state == SequenceState::kCompleted ||
+                (last.state == SequenceState::kAborted && last.abort_reason == "keepout"))
+        << entry.path() << ": " << ToString(last.state) << " " << last.abort_reason << ": " << last.detail;
+    EXPECT_FALSE(w.steps.empty()) << entry.path();
+  }
+  EXPECT_EQ(files, 5);
 }
