@@ -34,8 +34,7 @@ double FractalStd(double min_wl, double max_wl, double hurst) {
   for (double lambda = max_wl; lambda >= min_wl * 0.999; lambda *= 0.5, amp *= step) {
     sum_sq += amp * amp;
   }
-  // Std of a single value-noise octave with quintic fade, measured: about 0.32.
-  return 0.32 * std::sqrt(std::max(sum_sq, 1e-12));
+  return kValueNoiseStd * std::sqrt(std::max(sum_sq, 1e-12));
 }
 
 // Rounded max(d, 0) over a width b (quadratic blend), so ramps have no kink.
@@ -490,10 +489,11 @@ const Rock* World::FindRock(const std::string& name) const {
   return nullptr;
 }
 
-double World::Albedo(double x, double y) const {
+double World::Albedo(double x, double y, double footprint_m) const {
   const auto& a = options_.albedo;
   const std::uint64_t seed = SubSeed(options_.seed, kTagAlbedo);
-  const double mottling = 1.0 + a.large_scale_contrast * ValueNoise(x / 5.0, y / 5.0, seed ^ 0xABCDull) / 0.32;
+  const double mottling = 1.0 + a.large_scale_contrast * ValueNoise(x / 5.0, y / 5.0, seed ^ 0xABCDull) /
+                                     kValueNoiseStd;
 
   // Rock surfaces: the rock's own shade plus fine texture.
   if (x >= x0_ && y >= y0_ && x <= x_max() && y <= y_max()) {
@@ -505,7 +505,7 @@ double World::Albedo(double x, double y) const {
       const double R = 0.5 * r.diameter_m;
       const double dx = x - r.position.x(), dy = y - r.position.y();
       if (dx * dx + dy * dy < R * R) {
-        const double t = FractalNoise(x, y, 0.01, 0.16, kAlbedoHurst,
+        const double t = FractalNoise(x, y, std::max(0.01, 2.0 * footprint_m), 0.16, kAlbedoHurst,
                                       SubSeed(options_.seed, kTagRockAlbedo)) *
                          rock_texture_norm_;
         return std::clamp(r.albedo * (1.0 + a.rock_contrast * t), 0.02, 0.95);
@@ -517,7 +517,8 @@ double World::Albedo(double x, double y) const {
   double texture = 0.0;
   if (s.contrast > 0.0) {
     texture = s.contrast *
-              FractalNoise(x, y, s.min_wavelength_m, s.max_wavelength_m, kAlbedoHurst, seed) *
+              FractalNoise(x, y, std::max(s.min_wavelength_m, 2.0 * footprint_m), s.max_wavelength_m,
+                           kAlbedoHurst, seed) *
               soil_texture_norm_[static_cast<int>(soil)];
   }
   return std::clamp(s.mean * (1.0 + texture) * mottling, 0.02, 0.95);

@@ -195,7 +195,10 @@ class World {
   Soil SoilAt(double x, double y) const;
   // Surface albedo in (0, 1): soil texture from centimetres to metres, rock surfaces,
   // metre-scale mottling. Continuous in x, y (not tied to the grid); deterministic.
-  double Albedo(double x, double y) const;
+  // footprint_m: the size of the ground patch a pixel sees. Texture octaves shorter than
+  // twice it are left out (their mean is zero), which filters them instead of aliasing
+  // them, and makes distant pixels cheaper. 0 = every octave.
+  double Albedo(double x, double y, double footprint_m = 0.0) const;
 
   const std::vector<Rock>& rocks() const { return rocks_; }
   // Indices into rocks() of the rocks whose disc comes within `radius_m` of (x, y).

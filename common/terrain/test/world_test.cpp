@@ -44,6 +44,21 @@ TEST(World, PlanarSlopeMeasuredByNormalEqualsConfiguredSlope) {
               5 * std::tan(23 * kDeg), 1e-4);
 }
 
+TEST(World, RoughnessHasTheConfiguredRmsHeight) {
+  WorldOptions o = SmallWorld();
+  o.roughness.amplitude_m = 0.03;
+  o.roughness.min_wavelength_m = 0.2;
+  o.roughness.max_wavelength_m = 2.0;
+  const World w(o);
+  double sum = 0.0, sum_sq = 0.0;
+  for (float e : w.ground_grid()) {
+    sum += e;
+    sum_sq += static_cast<double>(e) * e;
+  }
+  const double n = static_cast<double>(w.ground_grid().size());
+  EXPECT_NEAR(std::sqrt(sum_sq / n - (sum / n) * (sum / n)), 0.03, 0.003);
+}
+
 TEST(World, RampIsFlatBelowSlopedInsideFlatAbove) {
   WorldOptions o = SmallWorld();
   SlopeOptions ramp = Slope(25.0, 0.0);
@@ -207,6 +222,19 @@ TEST(World, OutcropHasStrongTextureFineSandAlmostNone) {
     EXPECT_GT(rock, 5.0 * sand) << "step " << step;
     EXPECT_GT(rock, 0.005) << "step " << step;  // texture survives at centimetre scale
   }
+  // Sand texture: relative std close to its configured contrast (plus the mottling).
+  double sum = 0.0, sum_sq = 0.0;
+  for (int i = 0; i < 4000; ++i) {
+    const double a = w.Albedo(-9.5 + std::fmod(0.0731 * i, 19.0), 0.5 + std::fmod(0.0377 * i * 3, 9.0));
+    sum += a;
+    sum_sq += a * a;
+  }
+  const double mean = sum / 4000, rel_std = std::sqrt(sum_sq / 4000 - mean * mean) / mean;
+  const double expected = std::hypot(o.albedo.sand.contrast, o.albedo.large_scale_contrast);
+  EXPECT_NEAR(rel_std, expected, 0.3 * expected);
+  EXPECT_NEAR(mean, o.albedo.sand.mean, 0.01);
+  // A pixel footprint larger than the texture filters it away.
+  EXPECT_NEAR(w.Albedo(-5, -5, 10.0), w.Albedo(-5.001, -5.002, 10.0), 1e-3);
   for (int i = 0; i < 100; ++i) {
     const double a = w.Albedo(-9 + 0.17 * i, -9 + 0.19 * i);
     EXPECT_GT(a, 0.0);
