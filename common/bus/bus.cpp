@@ -1,5 +1,6 @@
 #include "bus/bus.hpp"
 
+#include <cerrno>
 #include <iostream>
 
 namespace rover::bus {
@@ -19,6 +20,8 @@ bool Bus::Handle(int timeout_ms) {
     pending_error_ = nullptr;
     std::rethrow_exception(error);
   }
+  // A signal (SIGTERM from systemd or the launcher) interrupts the wait: not an error.
+  if (status < 0 && errno == EINTR) return false;
   if (status < 0) throw std::runtime_error("LCM handle failed on " + url_);
   return status > 0;
 }
