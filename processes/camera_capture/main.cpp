@@ -1,0 +1,220 @@
+// camera_capture: takes a stereo pair on request (or at a fixed rate) and publishes a
+// STEREO_FRAME with both images, both camera models, a frame id and the pose estimate at
+// capture. Sources:
+//   sim      render the world at the TRUE pose (SIM_TRUTH); nothing else comes from truth
+//   dataset  a KITTI-layout directory (image_0/, image_1/, calib.txt), played in order
+// A hardware source implements ImageSource (see README, "Camera hardware").
+#include "bus/channels.hpp"
+#include "bus/convert.hpp"
+#include "bus/process.hpp"
+#include "geometry/camera_io.hpp"
+#include "geometry/kitti_calib.hpp"
+#include "render/render_options.hpp"
+#include "render/stereo_renderer.hpp"
+#include "terrain/world.hpp"
+
+#include <rover_msgs/capture_request_t.hpp>
+#include <rover_msgs/pose_t.hpp>
+#include <rover_msgs/sim_truth_t.hpp>
+#include <rover_msgs/stereo_frame_t.hpp>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <deque>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+
+using namespace rover;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CapturedPair {
+  cv::Mat left, right;
+  geometry::StereoRig rig;
+  std::int64_t utime = 0;
+};
+
+// A source of stereo pairs. `truth` is given only to the simulator source.
+class ImageSource {
+ public:
+  virtual ~ImageSource() = default;
+  // Whether a pair can be taken for a request stamped `request_utime` now.
+  virtual bool Ready(std::int64_t request_utime) const = 0;
+  virtual CapturedPair Capture(std::int64_t frame_id) = 0;
+  virtual void OnTruth(const rover_msgs::sim_truth_t&) {}
+};
+
+class SimulatedCameras : public ImageSource {
+ public:
+  SimulatedCameras(const std::string& world_path, geometry::StereoRig rig,
+                   render::RenderOptions options)
+      : world_(terrain::WorldOptions::LoadFile(world_path)),
+        rig_(std::move(rig)),
+        renderer_(std::move(options)) {}
+  bool Ready(std::int64_t request_utime) const override {
+    return truth_ && truth_->utime >= request_utime;
+  }
+  void OnTruth(const rover_msgs::sim_truth_t& t) override { truth_ = t; }
+  CapturedPair Capture(std::int64_t frame_id) override {
+    geometry::Pose T = geometry::Pose::Identity();
+    T.linear() = bus::QuaternionFromArray(truth_->orientation).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(truth_->position[0], truth_->position[1], truth_->position[2]);
+    auto images = renderer_.RenderPair(world_, rig_, T, frame_id);
+    return {images.left, images.right, images.rig, truth_->utime};
+  }
+
+ private:
+  terrain::World world_;
+  geometry::StereoRig rig_;
+  render::StereoRenderer renderer_;
+  std::optional<rover_msgs::sim_truth_t> truth_;
+};
+
+class DatasetCameras : public ImageSource {
+ public:
+  explicit DatasetCameras(const std::string& dir) : dir_(dir) {
+    for (int i = 0;; ++i) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "%06d.png", i);
+      if (!fs::exists(dir_ + "/image_0/" + name)) break;
+      names_.push_back(name);
+    }
+    if (names_.empty()) {
+      throw config::ConfigError(dir_ + "/image_0: no images (expected 000000.png, 000001.png, ...)");
+    }
+    const cv::Mat first = cv::imread(dir_ + "/image_0/" + names_[0], cv::IMREAD_UNCHANGED);
+    if (first.empty()) throw config::ConfigError(dir_ + "/image_0/" + names_[0] + ": cannot read the image");
+    rig_ = geometry::LoadKittiCalib(dir_ + "/calib.txt", first.cols, first.rows);
+  }
+  bool Ready(std::int64_t) const override { return true; }
+  CapturedPair Capture(std::int64_t) override {
+    const std::string& name = names_[next_ % names_.size()];
+    ++next_;
+    CapturedPair pair;
+    pair.left = cv::imread(dir_ + "/image_0/" + name, cv::IMREAD_UNCHANGED);
+    pair.right = cv::imread(dir_ + "/image_1/" + name, cv::IMREAD_UNCHANGED);
+    if (pair.left.empty() || pair.right.empty()) {
+      throw std::runtime_error(dir_ + ": cannot read pair " + name);
+    }
+    pair.rig = rig_;
+    return pair;
+  }
+
+ private:
+  std::string dir_;
+  std::vector<std::string> names_;
+  std::size_t next_ = 0;
+  geometry::StereoRig rig_;
+};
+
+rover_msgs::image_t EncodeImage(const cv::Mat& img, bool png) {
+  rover_msgs::image_t out{};
+  out.width = img.cols;
+  out.height = img.rows;
+  if (png) {
+    out.encoding = rover_msgs::image_t::ENCODING_PNG;
+    // Level 1: most of PNG's gain at a fraction of its time.
+    cv::imencode(".png", img, out.data, {cv::IMWRITE_PNG_COMPRESSION, 1});
+  } else {
+    out.encoding = img.depth() == CV_16U ? rover_msgs::image_t::ENCODING_GRAY16
+                                         : rover_msgs::image_t::ENCODING_GRAY8;
+    const cv::Mat c = img.isContinuous() ? img : img.clone();
+    out.data.assign(c.data, c.data + c.total() * c.elemSize());
+  }
+  out.size = static_cast<std::int32_t>(out.data.size());
+  return out;
+}
+
+rover_msgs::camera_model_t EncodeModel(const geometry::CameraModel& m) {
+  rover_msgs::camera_model_t out{};
+  out.type = m.type();
+  out.width = m.width();
+  out.height = m.height();
+  out.params = m.Params();
+  out.num_params = static_cast<std::int32_t>(out.params.size());
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return bus::RunMain("camera_capture", [&]() -> int {
+    bus::Process proc("camera_capture",
+                      "Stereo pairs on request. Reads CAPTURE_REQUEST, POSE (and SIM_TRUTH for the\n"
+                      "sim source); writes STEREO_FRAME. Config: the `capture:` section.",
+                      argc, argv,
+                      {{"--world", "FILE", "world YAML (sim source)"},
+                       {"--dataset", "DIR", "KITTI-layout directory (dataset source)"}});
+    const auto section = proc.config()["capture"];
+    section.CheckKeys({"source", "rig", "encoding", "rate_hz", "render"});
+    std::string source = "sim", rig_path = "configs/cameras/navcam_pinhole.yaml", encoding = "png";
+    double rate_hz = 0.0;
+    section.GetEnum("source", source, {"sim", "dataset"});
+    section.Get("rig", rig_path);
+    section.GetEnum("encoding", encoding, {"png", "raw"});
+    section.Get("rate_hz", rate_hz, 0.0, 100.0);
+    if (proc.option("--dataset")) source = "dataset";
+
+    std::unique_ptr<ImageSource> cameras;
+    if (source == "sim") {
+      const auto world = proc.option("--world");
+      if (!world) throw config::ConfigError("camera_capture: missing argument --world FILE (expected the world the simulator drives on)");
+      cameras = std::make_unique<SimulatedCameras>(*world, geometry::LoadStereoRigFile(rig_path),
+                                                   render::LoadRenderOptions(section["render"]));
+    } else {
+      const auto dir = proc.option("--dataset");
+      if (!dir) throw config::ConfigError("camera_capture: missing argument --dataset DIR (expected a KITTI-layout directory)");
+      cameras = std::make_unique<DatasetCameras>(*dir);
+    }
+    const bool png = encoding == "png";
+
+    std::optional<rover_msgs::pose_t> pose;
+    std::deque<rover_msgs::capture_request_t> pending;
+    std::int64_t next_auto_id = 1, next_auto_utime = 0;
+    proc.bus().Subscribe<rover_msgs::pose_t>(channels::kPose, [&](const rover_msgs::pose_t& m) { pose = m; }, 100);
+    proc.bus().Subscribe<rover_msgs::sim_truth_t>(channels::kSimTruth, [&](const rover_msgs::sim_truth_t& m) {
+      proc.ObserveTime(m.utime);
+      cameras->OnTruth(m);
+    }, 100);
+    proc.bus().Subscribe<rover_msgs::capture_request_t>(
+        channels::kCaptureRequest, [&](const rover_msgs::capture_request_t& m) { pending.push_back(m); });
+
+    auto capture = [&](const rover_msgs::capture_request_t& request) {
+      const auto pair = cameras->Capture(request.frame_id);
+      rover_msgs::stereo_frame_t frame{};
+      frame.utime = pair.utime != 0 ? pair.utime : proc.now();
+      frame.frame_id = request.frame_id;
+      frame.purpose = request.purpose;
+      frame.left = EncodeImage(pair.left, png);
+      frame.right = EncodeImage(pair.right, png);
+      frame.left_model = EncodeModel(*pair.rig.left);
+      frame.right_model = EncodeModel(*pair.rig.right);
+      if (pose) {
+        frame.pose_at_capture = *pose;
+      } else {
+        frame.pose_at_capture.orientation[0] = 1.0;
+      }
+      proc.bus().Publish(channels::kStereoFrame, frame);
+    };
+
+    proc.Run(
+        [&] {
+          while (!pending.empty() && cameras->Ready(pending.front().utime)) {
+            capture(pending.front());
+            pending.pop_front();
+          }
+          if (rate_hz > 0 && proc.now() >= next_auto_utime && cameras->Ready(proc.now())) {
+            rover_msgs::capture_request_t r{};
+            r.utime = proc.now();
+            r.frame_id = next_auto_id++;
+            r.purpose = "periodic";
+            capture(r);
+            next_auto_utime = proc.now() + static_cast<std::int64_t>(1e6 / rate_hz);
+          }
+        },
+        5);
+    return 0;
+  });
+}
