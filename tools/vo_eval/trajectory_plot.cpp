@@ -86,16 +86,17 @@ cv::Mat DrawTopView(const PoseList& truth, const PoseList& estimate,
                 0.5, text, 1, cv::LINE_AA);
   }
 
-  auto polyline = [&](const std::vector<Eigen::Vector2d>& pts, const cv::Scalar& colour) {
+  auto polyline = [&](const std::vector<Eigen::Vector2d>& pts, const cv::Scalar& colour, int width) {
     std::vector<cv::Point> cv_pts;
     for (const auto& p : pts) {
       if (p.allFinite()) cv_pts.push_back(px(p));
     }
-    if (cv_pts.size() >= 2) cv::polylines(img, cv_pts, false, colour, 2, cv::LINE_AA);
+    if (cv_pts.size() >= 2) cv::polylines(img, cv_pts, false, colour, width, cv::LINE_AA);
     if (!cv_pts.empty()) cv::circle(img, cv_pts.front(), 5, colour, 2, cv::LINE_AA);
   };
-  polyline(pt, truth_colour);
-  polyline(pe, est_colour);
+  // The truth is drawn wider, underneath, so that it stays visible where the two agree.
+  polyline(pt, truth_colour, 5);
+  polyline(pe, est_colour, 2);
 
   // Legend, top left inside the plot.
   const int lx = margin_left + 12, ly = margin_top + 20;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -65,9 +66,15 @@ std::string JsonNumber(double v) {
   return buf;
 }
 
+double ThreadCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+}
+
 std::string StageJson(const StageStats& s) {
   std::ostringstream o;
-  o << "{\"whole\": " << JsonNumber(s.whole) << ", \"detect\": " << JsonNumber(s.detect)
+  o << "{\"whole\": " << JsonNumber(s.whole) << ", \"whole_cpu\": " << JsonNumber(s.cpu) << ", \"detect\": " << JsonNumber(s.detect)
     << ", \"stereo\": " << JsonNumber(s.stereo) << ", \"track\": " << JsonNumber(s.track)
     << ", \"ransac\": " << JsonNumber(s.ransac) << ", \"ml\": " << JsonNumber(s.ml)
     << ", \"total\": " << JsonNumber(s.total) << "}";
@@ -102,21 +109,21 @@ double Median(std::vector<double> values) {
 }
 
 void StageStatistics(const std::vector<FrameRecord>& frames, StageStats* median, StageStats* mean) {
-  std::vector<double> v[7];
+  std::vector<double> v[8];
   for (const FrameRecord& f : frames) {
     const vo::StageTimes& t = f.result.times;
-    const double x[7] = {f.wall_ms, t.detect_ms, t.stereo_ms, t.track_ms, t.ransac_ms, t.ml_ms, t.total_ms};
-    for (int i = 0; i < 7; ++i) v[i].push_back(x[i]);
+    const double x[8] = {f.wall_ms, t.detect_ms, t.stereo_ms, t.track_ms, t.ransac_ms, t.ml_ms, t.total_ms, f.cpu_ms};
+    for (int i = 0; i < 8; ++i) v[i].push_back(x[i]);
   }
-  double med[7], avg[7];
-  for (int i = 0; i < 7; ++i) {
+  double med[8], avg[8];
+  for (int i = 0; i < 8; ++i) {
     med[i] = Median(v[i]);
     avg[i] = 0.0;
     for (double x : v[i]) avg[i] += x;
     if (!v[i].empty()) avg[i] /= static_cast<double>(v[i].size());
   }
-  *median = {med[0], med[1], med[2], med[3], med[4], med[5], med[6]};
-  *mean = {avg[0], avg[1], avg[2], avg[3], avg[4], avg[5], avg[6]};
+  *median = {med[0], med[1], med[2], med[3], med[4], med[5], med[6], med[7]};
+  *mean = {avg[0], avg[1], avg[2], avg[3], avg[4], avg[5], avg[6], avg[7]};
 }
 
 EvalInput KittiInput(const KittiSequence& sequence, int max_frames) {
@@ -182,13 +189,16 @@ EvalReport RunEvaluation(const EvalInput& input, const EvalOptions& options, std
     const Eigen::Matrix<double, 6, 6> prior_cov =
         have_velocity ? PriorCovariance(options.prior_sigma_m, options.prior_sigma_deg)
                       : PriorCovariance(options.initial_prior_sigma_m, options.initial_prior_sigma_deg);
+    const double cpu0 = ThreadCpuMs();
     const auto t0 = std::chrono::steady_clock::now();
     vo::VoResult result = odometry.Process(images, velocity, prior_cov);
     const auto t1 = std::chrono::steady_clock::now();
+    const double cpu1 = ThreadCpuMs();
 
     FrameRecord rec;
     rec.frame = k;
     rec.wall_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+    rec.cpu_ms = cpu1 - cpu0;
     rec.accepted = result.status == vo::VoStatus::kOk;
     // VO-10: a failed step keeps the prior (here the constant-velocity motion).
     rec.motion = rec.accepted ? result.T_prev_curr : velocity;
@@ -254,21 +264,39 @@ void WriteEvaluation(const std::string& out_dir, const EvalInput& input, const E
     std::ofstream csv(csv_path);
     if (!csv) throw std::runtime_error(csv_path + ": cannot write");
     csv << "frame,time_s,status,reason,accepted,num_detected,num_matched,num_tracked,num_inliers,"
-           "iterations,detect_ms,stereo_ms,track_ms,ransac_ms,ml_ms,total_ms,wall_ms,"
-           "x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,nees\n";
+           "iterations,detect_ms,stereo_ms,track_ms,ransac_ms,ml_ms,total_ms,wall_ms,cpu_ms,"
+           "x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,"
+           "sigma_x_m,sigma_y_m,sigma_z_m,sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg,"
+           "err_x_m,err_y_m,err_z_m,err_roll_deg,err_pitch_deg,err_yaw_deg,nees\n";
     for (const FrameRecord& f : report.frames) {
       const vo::VoResult& r = f.result;
       const geometry::Vector6d m = geometry::XyzRpyFromPose(f.motion);
       char buf[512];
       std::snprintf(buf, sizeof(buf),
-                    "%d,%.6f,%s,%s,%d,%d,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,"
+                    "%d,%.6f,%s,%s,%d,%d,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,"
                     "%.6f,%.6f,%.6f,%.5f,%.5f,%.5f,",
                     f.frame, input.times_s[static_cast<std::size_t>(f.frame)], vo::ToString(r.status),
                     CsvQuoted(r.reason).c_str(), f.accepted ? 1 : 0, r.num_detected, r.num_matched,
                     r.num_tracked, r.num_inliers, r.iterations, r.times.detect_ms, r.times.stereo_ms,
-                    r.times.track_ms, r.times.ransac_ms, r.times.ml_ms, r.times.total_ms, f.wall_ms,
+                    r.times.track_ms, r.times.ransac_ms, r.times.ml_ms, r.times.total_ms, f.wall_ms, f.cpu_ms,
                     m(0), m(1), m(2), m(3) / kDeg, m(4) / kDeg, m(5) / kDeg);
       csv << buf;
+      // The VO's own one-sigma (accepted frames), and the error against truth.
+      for (int i = 0; i < 6; ++i) {
+        const double unit = i < 3 ? 1.0 : 1.0 / kDeg;
+        if (f.accepted) csv << JsonNumber(std::sqrt(std::max(0.0, r.covariance(i, i))) * unit);
+        csv << ",";
+      }
+      const bool truth = f.frame > 0 && static_cast<int>(input.truth.size()) > f.frame;
+      Eigen::Matrix<double, 6, 1> e = Eigen::Matrix<double, 6, 1>::Zero();
+      if (truth) {
+        const auto k = static_cast<std::size_t>(f.frame);
+        e = MotionError(input.truth[k - 1].inverse() * input.truth[k], f.motion);
+      }
+      for (int i = 0; i < 6; ++i) {
+        if (truth) csv << JsonNumber(e(i) * (i < 3 ? 1.0 : 1.0 / kDeg));
+        csv << ",";
+      }
       if (f.nees >= 0.0) csv << JsonNumber(f.nees);
       csv << "\n";
     }
@@ -343,7 +371,7 @@ void WriteEvaluation(const std::string& out_dir, const EvalInput& input, const E
       j << "  \"accuracy\": null,\n  \"nees\": null,\n";
     }
     j << "  \"timing_ms\": {\n";
-    j << "    \"measured\": \"around the VO call only (image decoding excluded); stages from VoResult.times\",\n";
+    j << "    \"measured\": \"around the VO call only (image decoding excluded); stages from VoResult.times (wall clock); whole_cpu is this thread's CPU time over the call, which a busy machine does not inflate\",\n";
     j << "    \"calls\": " << report.frames.size() << ",\n";
     j << "    \"median\": " << StageJson(report.median_ms) << ",\n";
     j << "    \"mean\": " << StageJson(report.mean_ms) << "\n";

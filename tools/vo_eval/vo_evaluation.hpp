@@ -50,6 +50,9 @@ struct FrameRecord {
   int frame = 0;
   vo::VoResult result;
   double wall_ms = 0.0;            // around the VO call only
+  // This thread's CPU time over the same call: on a shared machine the wall clock also
+  // counts the time other processes held the core, the CPU time does not.
+  double cpu_ms = 0.0;
   bool accepted = false;           // status kOk: the VO motion enters the trajectory
   Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();  // used in the trajectory
   double nees = -1.0;              // accepted frames with truth and a valid covariance
@@ -57,6 +60,7 @@ struct FrameRecord {
 
 struct StageStats {
   double whole = 0, detect = 0, stereo = 0, track = 0, ransac = 0, ml = 0, total = 0;
+  double cpu = 0;  // thread CPU time of the whole call
 };
 
 struct EvalReport {
