@@ -233,6 +233,9 @@ class SequenceExecutor {
   explicit SequenceExecutor(ExecutorOptions options = {}, int64_t first_id = 1);
 
   // Operator. A submission while another sequence is active is rejected (reason busy).
+  // A submitted sequence is RUNNING with command_index -1 until every required process has
+  // a fresh heartbeat and a first pose has arrived; if that takes longer than start_wait_s
+  // it is REJECTED with process_lost, naming the silent processes, and nothing moves.
   void Submit(Sequence sequence, int64_t submission_id, const std::string& name);
   // Checks the text first; a check failure is rejected with the first error line as detail.
   void SubmitText(std::string_view text, int64_t submission_id, const std::string& name,

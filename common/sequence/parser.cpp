@@ -123,7 +123,10 @@ class LineParser {
       : tokens_(std::move(tokens)), end_col_(end_col), limits_(limits) {}
 
   bool AtEnd() const { return pos_ >= tokens_.size(); }
-  const Token& Peek() const { return tokens_[pos_]; }
+  const Token& Peek() const {
+    static const Token kEnd{};
+    return AtEnd() ? kEnd : tokens_[pos_];
+  }
   int NextCol() const { return AtEnd() ? end_col_ : Peek().col; }
   bool PeekIs(std::string_view word) const { return !AtEnd() && Peek().text == word; }
 
@@ -541,7 +544,7 @@ class SequenceParser {
   LimitSetting ParseLimit(LineParser& p) {
     LimitSetting l;
     do {
-      const int opt_col = p.Peek().col;
+      const int opt_col = p.NextCol();
       int col = 0;
       if (p.Choice({"time", "distance"}, "limit") == 0) {
         if (l.time_s) p.Fail(opt_col, "'time' given twice", "time and distance at most once each");
