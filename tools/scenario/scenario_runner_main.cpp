@@ -164,6 +164,8 @@ int main(int argc, char** argv) {
                   Num(spec.start_x) + "," + Num(spec.start_y) + "," + Num(spec.start_yaw_deg));
         SetOption(p.args, "--rate", Num(spec.sim_rate));
         SetOption(p.args, "--hold-for", others);
+      } else if (p.name == "camera_capture") {
+        SetOption(p.args, "--world", spec.world);
       } else if (p.name == "state_estimator") {
         SetOption(p.args, "--start", Num(spec.start_x) + "," + Num(spec.start_y) + "," +
                                          Num(start_z) + "," + Num(spec.start_yaw_deg));
