@@ -1,0 +1,355 @@
+#include "vo/correlation.hpp"
+
+#include <Eigen/LU>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace rover::vo {
+
+void BandPass(const cv::Mat& image, double sigma, int box_px, cv::Mat* out, cv::Mat* scratch) {
+  CV_Assert(image.type() == CV_32FC1);
+  if (sigma > 0) {
+    const int k = 2 * static_cast<int>(std::ceil(2.5 * sigma)) + 1;
+    cv::GaussianBlur(image, *out, cv::Size(k, k), sigma, sigma, cv::BORDER_REFLECT);
+  } else {
+    image.copyTo(*out);
+  }
+  if (box_px < 3) return;
+  // Box mean, vertical running sum then horizontal shifted adds, replicated borders
+  // (OpenCV's float box filter took ~2 ms here on one core; this a fraction of that).
+  const int h = box_px / 2, W = image.cols, H = image.rows;
+  scratch->create(1, W + 2 * h, CV_32F);
+  thread_local std::vector<float> column, row_sum;
+  column.assign(W, 0.0f);
+  row_sum.resize(W);
+  auto row_at = [&](int y) { return image.ptr<float>(std::clamp(y, 0, H - 1)); };
+  for (int y = -h; y <= h; ++y) {
+    const float* r = row_at(y);
+    for (int x = 0; x < W; ++x) column[x] += r[x];
+  }
+  const float inv = 1.0f / float(box_px * box_px);
+  float* padded = scratch->ptr<float>(0);
+  for (int y = 0; y < H; ++y) {
+    if (y > 0) {
+      const float* add = row_at(y + h);
+      const float* sub = row_at(y - h - 1);
+      float* __restrict col = column.data();
+      for (int x = 0; x < W; ++x) col[x] += add[x] - sub[x];
+    }
+    for (int x = 0; x < h; ++x) padded[x] = column[0];
+    std::copy(column.begin(), column.end(), padded + h);
+    for (int x = 0; x < h; ++x) padded[W + h + x] = column[W - 1];
+    // Horizontal: n shifted adds, each a contiguous (vectorised) pass; a running sum
+    // would serialise on its own latency.
+    float* __restrict o = out->ptr<float>(y);
+    float* __restrict acc = row_sum.data();
+    std::copy(padded, padded + W, acc);
+    for (int j = 1; j < box_px; ++j) {
+      const float* __restrict p = padded + j;
+      for (int x = 0; x < W; ++x) acc[x] += p[x];
+    }
+    for (int x = 0; x < W; ++x) o[x] -= acc[x] * inv;
+  }
+}
+
+cv::Mat BandPass(const cv::Mat& image, double sigma, int box_px) {
+  cv::Mat out, scratch;
+  BandPass(image, sigma, box_px, &out, &scratch);
+  return out;
+}
+
+bool Template::Extract(const cv::Mat& band, int x, int y, int side) {
+  if (!TemplateFits(x, y, side, band.cols, band.rows)) return false;
+  n = side;
+  pixels.resize(static_cast<std::size_t>(n) * n);
+  const int h = n / 2;
+  double ss = 0;
+  for (int r = 0; r < n; ++r) {
+    const float* src = band.ptr<float>(y - h + r) + (x - h);
+    float* dst = pixels.data() + r * n;
+    for (int c = 0; c < n; ++c) {
+      dst[c] = src[c];
+      ss += static_cast<double>(src[c]) * src[c];
+    }
+  }
+  sum_sq = ss;
+  return true;
+}
+
+bool Template::ExtractSubpixel(const cv::Mat& band, double x, double y, int side) {
+  const int h = side / 2;
+  if (x - h < 0 || y - h < 0 || x + h + 1 >= band.cols || y + h + 1 >= band.rows) return false;
+  n = side;
+  pixels.resize(static_cast<std::size_t>(n) * n);
+  const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
+  const float fx = static_cast<float>(x - ix), fy = static_cast<float>(y - iy);
+  const float w00 = (1 - fx) * (1 - fy), w01 = fx * (1 - fy), w10 = (1 - fx) * fy, w11 = fx * fy;
+  double ss = 0;
+  for (int r = 0; r < n; ++r) {
+    const float* a = band.ptr<float>(iy - h + r) + (ix - h);
+    const float* b = band.ptr<float>(iy - h + r + 1) + (ix - h);
+    float* dst = pixels.data() + r * n;
+    for (int c = 0; c < n; ++c) {
+      dst[c] = w00 * a[c] + w01 * a[c + 1] + w10 * b[c] + w11 * b[c + 1];
+      ss += static_cast<double>(dst[c]) * dst[c];
+    }
+  }
+  sum_sq = ss;
+  return true;
+}
+
+// Compiled for AVX2+FMA as well as the baseline; the loader picks the best the CPU has.
+__attribute__((target_clones("avx2,fma", "default")))
+void ScoreRow(const Template& t, const cv::Mat& band, int y, int x0, int count, float* out) {
+  const int n = t.n, h = n / 2;
+  const int span = count + n - 1;
+  thread_local std::vector<float> column_sq;
+  column_sq.assign(span, 0.0f);
+  if (count <= 8) {
+    // Few positions (refinement, fine pyramid levels): one dot product each, summed in
+    // registers; the position-inner form below would stall on its stores.
+    for (int k = 0; k < count; ++k) {
+      float sum = 0;
+      for (int r = 0; r < n; ++r) {
+        const float* b = band.ptr<float>(y - h + r) + (x0 - h + k);
+        const float* tr = t.pixels.data() + r * n;
+        for (int c = 0; c < n; ++c) sum += tr[c] * b[c];
+      }
+      out[k] = sum;
+    }
+    for (int r = 0; r < n; ++r) {
+      const float* row = band.ptr<float>(y - h + r) + (x0 - h);
+      float* __restrict cs = column_sq.data();
+      for (int j = 0; j < span; ++j) cs[j] += row[j] * row[j];
+    }
+  } else {
+    std::fill(out, out + count, 0.0f);
+    for (int r = 0; r < n; ++r) {
+      const float* row = band.ptr<float>(y - h + r) + (x0 - h);
+      const float* tr = t.pixels.data() + r * n;
+      for (int c = 0; c < n; ++c) {
+        const float a = tr[c];
+        const float* __restrict b = row + c;
+        float* __restrict acc = out;
+        for (int k = 0; k < count; ++k) acc[k] += a * b[k];
+      }
+      float* __restrict cs = column_sq.data();
+      for (int j = 0; j < span; ++j) cs[j] += row[j] * row[j];
+    }
+  }
+  // sum(b^2) over the window: slide n column sums along the row (double, no drift).
+  double window = 0;
+  for (int j = 0; j < n - 1; ++j) window += column_sq[j];
+  const double ta = t.sum_sq;
+  for (int k = 0; k < count; ++k) {
+    window += column_sq[k + n - 1];
+    const double den = ta + window;
+    out[k] = den > 1e-20 ? static_cast<float>(2.0 * out[k] / den) : 0.0f;
+    window -= column_sq[k];
+  }
+}
+
+float ScoreAt(const Template& t, const cv::Mat& band, int x, int y) {
+  float s;
+  ScoreRow(t, band, y, x, 1, &s);
+  return s;
+}
+
+bool FitBiquadraticPeak(const float s[3][3], double covariance_scale, double min_sigma,
+                        Eigen::Vector2d* offset, Eigen::Matrix2d* covariance) {
+  // Least squares on the 3x3 grid, with orthogonal basis 1, x, y, x^2-2/3, xy, y^2-2/3.
+  double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  double col_outer = 0, col_mid = 0, row_outer = 0, row_mid = 0;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      const double v = s[r][c];
+      const int dx = c - 1, dy = r - 1;
+      sx += dx * v;
+      sy += dy * v;
+      sxy += dx * dy * v;
+      (dx == 0 ? col_mid : col_outer) += v;
+      (dy == 0 ? row_mid : row_outer) += v;
+    }
+  }
+  (void)sxx;
+  (void)syy;
+  const double b = sx / 6.0, c = sy / 6.0;
+  const double d = (col_outer - 2.0 * col_mid) / 6.0;
+  const double f = (row_outer - 2.0 * row_mid) / 6.0;
+  const double e = sxy / 4.0;
+  Eigen::Matrix2d H;
+  H << 2 * d, e, e, 2 * f;
+  // A peak needs a negative definite Hessian.
+  if (!(H(0, 0) < 0 && H.determinant() > 0)) return false;
+  const Eigen::Vector2d g(b, c);
+  const Eigen::Matrix2d Hinv = H.inverse();
+  const Eigen::Vector2d o = -Hinv * g;
+  if (!(std::abs(o.x()) <= 1.0 && std::abs(o.y()) <= 1.0)) return false;
+  *offset = o;
+  Eigen::Matrix2d cov = -covariance_scale * Hinv;
+  const double floor = min_sigma * min_sigma;
+  // Floor each axis without breaking positive definiteness: add to the diagonal.
+  for (int i = 0; i < 2; ++i) {
+    if (cov(i, i) < floor) cov(i, i) = floor;
+  }
+  if (cov.determinant() <= 0) cov = Eigen::Vector2d(cov(0, 0), cov(1, 1)).asDiagonal();
+  *covariance = cov;
+  return true;
+}
+
+bool Correlator::SearchWindow(const Template& t, const cv::Mat& band,
+                              int x_begin, int x_end, int y_begin, int y_end, int* best_x,
+                              int* best_y, float* best_score) {
+  const int h = t.n / 2;
+  x_begin = std::max(x_begin, h);
+  y_begin = std::max(y_begin, h);
+  x_end = std::min(x_end, band.cols - 1 - h);
+  y_end = std::min(y_end, band.rows - 1 - h);
+  if (x_end < x_begin || y_end < y_begin) return false;
+  const int count = x_end - x_begin + 1;
+  row_.resize(count);
+  float best = -std::numeric_limits<float>::infinity();
+  for (int y = y_begin; y <= y_end; ++y) {
+    ScoreRow(t, band, y, x_begin, count, row_.data());
+    for (int k = 0; k < count; ++k) {
+      if (row_[k] > best) {
+        best = row_[k];
+        *best_x = x_begin + k;
+        *best_y = y;
+      }
+    }
+  }
+  *best_score = best;
+  return true;
+}
+
+bool Correlator::SearchSegment(const Template& t, const cv::Mat& band,
+                               const Eigen::Vector2d& a, const Eigen::Vector2d& b, int band_px,
+                               int* best_x, int* best_y, float* best_score) {
+  const Eigen::Vector2d d = b - a;
+  float best = -std::numeric_limits<float>::infinity();
+  bool found = false;
+  int bx = 0, by = 0;
+  float bs = 0;
+  if (std::abs(d.x()) >= std::abs(d.y())) {
+    // Mostly horizontal (the usual side-by-side rig): each row holds one run of x.
+    const int xa = static_cast<int>(std::floor(std::min(a.x(), b.x())));
+    const int xb = static_cast<int>(std::ceil(std::max(a.x(), b.x())));
+    const double slope = std::abs(d.x()) > 1e-9 ? d.y() / d.x() : 0.0;
+    auto line_y = [&](int x) { return static_cast<int>(std::lround(a.y() + slope * (x - a.x()))); };
+    const int ya = std::min(line_y(xa), line_y(xb)) - band_px;
+    const int yb = std::max(line_y(xa), line_y(xb)) + band_px;
+    if (std::abs(slope) < 1e-6) {
+      if (SearchWindow(t, band, xa, xb, ya, yb, &bx, &by, &bs)) {
+        *best_x = bx;
+        *best_y = by;
+        *best_score = bs;
+        return true;
+      }
+      return false;
+    }
+    for (int y = ya; y <= yb; ++y) {
+      // x run where |line_y(x) - y| <= band_px.
+      int lo = std::numeric_limits<int>::max(), hi = std::numeric_limits<int>::min();
+      for (int x = xa; x <= xb; ++x) {
+        if (std::abs(line_y(x) - y) <= band_px) {
+          lo = std::min(lo, x);
+          hi = std::max(hi, x);
+        }
+      }
+      if (lo > hi) continue;
+      if (SearchWindow(t, band, lo, hi, y, y, &bx, &by, &bs) && bs > best) {
+        best = bs;
+        *best_x = bx;
+        *best_y = by;
+        found = true;
+      }
+    }
+  } else {
+    // Steep line (one camera above the other): a short run of x on each row.
+    const int ya = static_cast<int>(std::floor(std::min(a.y(), b.y())));
+    const int yb = static_cast<int>(std::ceil(std::max(a.y(), b.y())));
+    const double slope = d.x() / d.y();
+    for (int y = ya; y <= yb; ++y) {
+      const int xc = static_cast<int>(std::lround(a.x() + slope * (y - a.y())));
+      if (SearchWindow(t, band, xc - band_px, xc + band_px, y, y, &bx, &by, &bs) &&
+          bs > best) {
+        best = bs;
+        *best_x = bx;
+        *best_y = by;
+        found = true;
+      }
+    }
+  }
+  if (found) *best_score = best;
+  return found;
+}
+
+void Correlator::Iterate(const Template& t, const cv::Mat& band, int iterations,
+                         double covariance_scale, double min_sigma, MatchResult* m) {
+  // The biquadratic's bias (peak locking towards whole pixels) vanishes when the peak is
+  // centred, so resample the image around the estimate and fit again.
+  const int h = t.n / 2;
+  for (int it = 0; it < iterations; ++it) {
+    const Eigen::Vector2d p = m->position;
+    if (p.x() - h - 2 < 0 || p.y() - h - 2 < 0 || p.x() + h + 3 >= band.cols ||
+        p.y() + h + 3 >= band.rows) {
+      return;
+    }
+    cv::getRectSubPix(band, cv::Size(t.n + 2, t.n + 2), cv::Point2f(float(p.x()), float(p.y())),
+                      patch_, CV_32F);
+    float s[3][3];
+    for (int r = 0; r < 3; ++r) ScoreRow(t, patch_, h + r, h, 3, s[r]);
+    Eigen::Vector2d delta;
+    Eigen::Matrix2d cov;
+    if (!FitBiquadraticPeak(s, covariance_scale, min_sigma, &delta, &cov)) return;
+    if (delta.norm() > 0.5) return;
+    m->position = p + delta;
+    m->covariance = cov;
+    m->score = std::max(m->score, s[1][1]);
+    if (delta.norm() < 0.01) return;
+  }
+}
+
+MatchResult Correlator::Refine(const Template& t, const cv::Mat& band, int x, int y,
+                               double covariance_scale, double min_sigma) {
+  MatchResult m;
+  // Hill-climb a few steps if the centre is not the 3x3 maximum (the search may have
+  // been coarser, or clipped at its edge).
+  float s[3][3];
+  for (int step = 0; step < 4; ++step) {
+    if (!TemplateFits(x - 1, y - 1, t.n, band.cols, band.rows) ||
+        !TemplateFits(x + 1, y + 1, t.n, band.cols, band.rows)) {
+      return m;
+    }
+    const int x0 = x - 1;
+    for (int r = 0; r < 3; ++r) ScoreRow(t, band, y - 1 + r, x0, 3, s[r]);
+    int br = 1, bc = 1;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        if (s[r][c] > s[br][bc]) {
+          br = r;
+          bc = c;
+        }
+      }
+    }
+    if (br == 1 && bc == 1) {
+      Eigen::Vector2d offset;
+      if (!FitBiquadraticPeak(s, covariance_scale, min_sigma, &offset, &m.covariance)) return m;
+      m.ok = true;
+      m.position = Eigen::Vector2d(x, y) + offset;
+      m.score = s[1][1];
+      m.best_x = x;
+      m.best_y = y;
+      return m;
+    }
+    x += bc - 1;
+    y += br - 1;
+  }
+  return m;
+}
+
+}  // namespace rover::vo

@@ -1,0 +1,202 @@
+#include "vo/motion_estimation.hpp"
+
+#include "geometry/pose.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+
+namespace rover::vo {
+
+namespace {
+
+double Weight(const Correspondence& c) {
+  // eq. (14): the volume of the two error ellipsoids.
+  const double d = c.Sigma_prev.determinant() + c.Sigma_curr.determinant();
+  return d > 0 ? 1.0 / d : 0.0;
+}
+
+// dR/d(roll), dR/d(pitch), dR/d(yaw) for R = Rz(yaw) Ry(pitch) Rx(roll).
+void RotationDerivatives(const Eigen::Vector3d& rpy, Eigen::Matrix3d* R, Eigen::Matrix3d dR[3]) {
+  const Eigen::Matrix3d Rx = Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Matrix3d Ry = Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d Rz = Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  *R = Rz * Ry * Rx;
+  dR[0] = Rz * Ry * Rx * geometry::Skew(Eigen::Vector3d::UnitX());
+  dR[1] = Rz * Ry * geometry::Skew(Eigen::Vector3d::UnitY()) * Rx;
+  dR[2] = geometry::Skew(Eigen::Vector3d::UnitZ()) * Rz * Ry * Rx;
+}
+
+}  // namespace
+
+Eigen::Isometry3d WeightedLeastSquaresMotion(const std::vector<Correspondence>& c,
+                                             const std::vector<int>& indices) {
+  const int n = indices.empty() ? static_cast<int>(c.size()) : static_cast<int>(indices.size());
+  auto at = [&](int k) -> const Correspondence& { return indices.empty() ? c[k] : c[indices[k]]; };
+  double wsum = 0;
+  Eigen::Vector3d mp = Eigen::Vector3d::Zero(), mc = Eigen::Vector3d::Zero();
+  for (int k = 0; k < n; ++k) {
+    const double w = Weight(at(k));
+    wsum += w;
+    mp += w * at(k).P_prev;
+    mc += w * at(k).P_curr;
+  }
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  if (!(wsum > 0)) return T;
+  mp /= wsum;
+  mc /= wsum;
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (int k = 0; k < n; ++k) {
+    H += Weight(at(k)) * (at(k).P_prev - mp) * (at(k).P_curr - mc).transpose();
+  }
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d& U = svd.matrixU();
+  const Eigen::Matrix3d& V = svd.matrixV();
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (V * U.transpose()).determinant() < 0 ? -1.0 : 1.0;
+  const Eigen::Matrix3d R = V * D * U.transpose();
+  T.linear() = R;
+  T.translation() = mc - R * mp;
+  return T;
+}
+
+double ReprojectionGap(const Correspondence& c, const geometry::StereoRig& rig,
+                       const Eigen::Isometry3d& T_curr_prev) {
+  const Eigen::Vector3d P = T_curr_prev * c.P_prev;
+  Eigen::Vector2d pl, pr;
+  if (!rig.left->Project(P, &pl) || !rig.right->Project(P, &pr)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  return std::max((pl - c.left).norm(), (pr - c.right).norm());
+}
+
+RansacOutcome RansacMotion(const std::vector<Correspondence>& c, const geometry::StereoRig& rig,
+                           const RansacOptions& options, const std::vector<int>& subset) {
+  std::vector<int> pool = subset;
+  if (pool.empty()) {
+    pool.resize(c.size());
+    std::iota(pool.begin(), pool.end(), 0);
+  }
+  RansacOutcome best;
+  const int n = static_cast<int>(pool.size());
+  const int s = std::max(3, options.sample_size);
+  if (n < s) return best;
+  std::mt19937_64 rng(options.seed);
+  std::vector<int> sample(s);
+  std::vector<int> inliers;
+  inliers.reserve(n);
+  double best_error = std::numeric_limits<double>::infinity();
+  auto score = [&](const Eigen::Isometry3d& T, std::vector<int>* in, double* err) {
+    in->clear();
+    *err = 0;
+    for (int k : pool) {
+      const double g = ReprojectionGap(c[k], rig, T);
+      if (g < options.inlier_px) {
+        in->push_back(k);
+        *err += g;
+      }
+    }
+  };
+  for (int it = 0; it < options.iterations; ++it) {
+    // Partial Fisher-Yates: s distinct indices into pool.
+    for (int k = 0; k < s; ++k) {
+      std::uniform_int_distribution<int> pick(k, n - 1);
+      const int j = pick(rng);
+      std::swap(pool[k], pool[j]);
+      sample[k] = pool[k];
+    }
+    const Eigen::Isometry3d T = WeightedLeastSquaresMotion(c, sample);
+    double err;
+    score(T, &inliers, &err);
+    if (inliers.size() > best.inliers.size() ||
+        (inliers.size() == best.inliers.size() && err < best_error)) {
+      best.inliers = inliers;
+      best.T_curr_prev = T;
+      best_error = err;
+    }
+  }
+  if (best.inliers.size() >= static_cast<std::size_t>(s)) {
+    const Eigen::Isometry3d T = WeightedLeastSquaresMotion(c, best.inliers);
+    double err;
+    score(T, &inliers, &err);
+    if (inliers.size() >= best.inliers.size()) {
+      best.inliers = inliers;
+      best.T_curr_prev = T;
+    }
+  }
+  std::sort(best.inliers.begin(), best.inliers.end());
+  return best;
+}
+
+double MahalanobisSquared(const Correspondence& c, const Eigen::Isometry3d& T_prev_curr) {
+  const Eigen::Matrix3d Rcp = T_prev_curr.linear().transpose();
+  const Eigen::Vector3d r = c.P_curr - Rcp * (c.P_prev - T_prev_curr.translation());
+  const Eigen::Matrix3d S = c.Sigma_curr + Rcp * c.Sigma_prev * Rcp.transpose();
+  return r.dot(S.ldlt().solve(r));
+}
+
+MlOutcome MaximumLikelihoodMotion(const std::vector<Correspondence>& c,
+                                  const std::vector<int>& indices,
+                                  const Eigen::Isometry3d& initial_T_prev_curr,
+                                  int max_iterations, double tolerance) {
+  MlOutcome out;
+  Eigen::Vector3d t = initial_T_prev_curr.translation();
+  Eigen::Vector3d rpy = geometry::RpyFromRotation(initial_T_prev_curr.linear());
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  Matrix6d H = Matrix6d::Zero();
+  Eigen::Matrix3d R, dR[3];
+  auto linearise = [&](Matrix6d* Hout, Vector6d* gout, double* cost) {
+    RotationDerivatives(rpy, &R, dR);
+    const Eigen::Matrix3d Rcp = R.transpose();
+    Hout->setZero();
+    gout->setZero();
+    *cost = 0;
+    for (int k : indices) {
+      const Correspondence& x = c[k];
+      const Eigen::Vector3d d = x.P_prev - t;
+      const Eigen::Vector3d r = x.P_curr - Rcp * d;  // eq. (17)
+      const Eigen::Matrix3d W = (x.Sigma_curr + Rcp * x.Sigma_prev * R).inverse();
+      Eigen::Matrix<double, 3, 6> J;
+      J.leftCols<3>() = Rcp;
+      for (int i = 0; i < 3; ++i) J.col(3 + i) = -dR[i].transpose() * d;
+      const Eigen::Matrix<double, 6, 3> JtW = J.transpose() * W;
+      *Hout += JtW * J;
+      *gout += JtW * r;
+      *cost += r.dot(W * r);
+    }
+  };
+  Vector6d g;
+  double cost = 0;
+  for (int it = 0; it < max_iterations; ++it) {
+    linearise(&H, &g, &cost);
+    const Vector6d delta = -H.ldlt().solve(g);
+    if (!delta.allFinite()) break;
+    t += delta.head<3>();
+    rpy += delta.tail<3>();
+    out.iterations = it + 1;
+    if (delta.cwiseAbs().maxCoeff() < tolerance) {
+      out.converged = true;
+      break;
+    }
+  }
+  linearise(&H, &g, &cost);
+  out.cost = cost;
+  out.T_prev_curr = geometry::PoseFromXyzRpy(t.x(), t.y(), t.z(), rpy[0], rpy[1], rpy[2]);
+  Eigen::FullPivLU<Matrix6d> lu(H);
+  if (lu.isInvertible()) {
+    out.covariance = lu.inverse();
+    out.covariance = 0.5 * (out.covariance + out.covariance.transpose()).eval();
+  } else {
+    out.converged = false;
+  }
+  return out;
+}
+
+}  // namespace rover::vo

@@ -1,0 +1,622 @@
+#include "vo/visual_odometry.hpp"
+
+#include "geometry/pose.hpp"
+#include "vo/correlation.hpp"
+#include "vo/features.hpp"
+#include "vo/motion_estimation.hpp"
+#include "vo/triangulation.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace rover::vo {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+double Ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+constexpr double kDeg = M_PI / 180.0;
+
+struct Feature {
+  Eigen::Vector2d left;  // working-resolution pixel (integer for a fresh corner)
+  Eigen::Vector3d P;
+  Eigen::Matrix3d Sigma;
+};
+
+// One stereo pair at the working resolution.
+struct Pair {
+  geometry::StereoRig rig;
+  std::vector<cv::Mat> left_band;  // band-passed pyramid, level 0 = working resolution
+  cv::Mat right_band;
+  // Reused buffers (a Pair is recycled every other frame, so nothing is reallocated).
+  cv::Mat left, right, scratch, response;
+  std::vector<cv::Mat> left_levels;
+  std::vector<Feature> features;
+  int width = 0, height = 0;
+  double pixel_angle = 1e-3;  // radians per pixel near the left image centre
+  double far_range = 1e6;     // range at stereo_min_disparity_px
+};
+
+void ToFloat(const cv::Mat& image, double scale_to_working, cv::Mat* out, cv::Mat* scratch) {
+  const double unit = image.depth() == CV_16U ? 1.0 / 65535.0 : 1.0 / 255.0;
+  if (scale_to_working == 1.0) {
+    image.convertTo(*out, CV_32F, unit);
+    return;
+  }
+  image.convertTo(*scratch, CV_32F, unit);
+  const cv::Size size(static_cast<int>(std::lround(image.cols * scale_to_working)),
+                      static_cast<int>(std::lround(image.rows * scale_to_working)));
+  cv::resize(*scratch, *out, size, 0, 0, cv::INTER_AREA);
+}
+
+// Pixel coordinate at pyramid level l (area halving keeps pixel centres as centres).
+inline double ToLevel(double x, int l) { return (x + 0.5) / double(1 << l) - 0.5; }
+
+std::string Format(const char* fmt, double a, double b = 0) {
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), fmt, a, b);
+  return buf;
+}
+
+}  // namespace
+
+struct VisualOdometry::State {
+  VoOptions o;
+  std::unique_ptr<Pair> prev;
+  std::unique_ptr<Pair> spare;  // the pair before prev, recycled for its buffers
+  Correlator correlator;
+  Template tmpl;
+  std::uint64_t calls = 0;
+
+  std::string CheckInput(const StereoImages& im) const;
+  std::unique_ptr<Pair> Prepare(const StereoImages& im, VoResult* res, Clock::time_point* t);
+  void StereoMatchFresh(Pair* pair, const std::vector<Corner>& corners);
+  bool MatchRight(const Pair& pair, const Eigen::Vector3d& C1, const Eigen::Vector3d& r1,
+                  double range_near, double range_far, double margin_px,
+                  Eigen::Vector2d* right, Eigen::Matrix2d* Sigma_right);
+  TriangulationLimits Limits(const Pair& pair) const {
+    TriangulationLimits l;
+    l.max_gap_rad = o.triangulation_max_gap_px * pair.pixel_angle;
+    l.min_parallax_rad = o.stereo_min_disparity_px * pair.pixel_angle;
+    l.max_range_m = o.triangulation_max_range_m;
+    return l;
+  }
+};
+
+std::string VisualOdometry::State::CheckInput(const StereoImages& im) const {
+  if (!im.rig.left || !im.rig.right) return "stereo rig has no camera model";
+  if (im.left.empty() || im.right.empty()) return "empty image";
+  for (const cv::Mat* m : {&im.left, &im.right}) {
+    if (m->type() != CV_8UC1 && m->type() != CV_16UC1) {
+      return "image type " + std::to_string(m->type()) + " (expected CV_8UC1 or CV_16UC1)";
+    }
+  }
+  if (im.left.size() != im.right.size()) return "left and right images differ in size";
+  if (im.left.cols != im.rig.left->width() || im.left.rows != im.rig.left->height() ||
+      im.right.cols != im.rig.right->width() || im.right.rows != im.rig.right->height()) {
+    std::ostringstream os;
+    os << "image size " << im.left.cols << "x" << im.left.rows << " does not match camera "
+       << im.rig.left->width() << "x" << im.rig.left->height();
+    return os.str();
+  }
+  const int min_side = static_cast<int>(std::min(im.left.cols, im.left.rows) * o.working_scale);
+  if (min_side < 2 * o.feature_border_px + 8) return "image too small for the working scale";
+  return "";
+}
+
+std::unique_ptr<Pair> VisualOdometry::State::Prepare(const StereoImages& im, VoResult* res,
+                                                     Clock::time_point* t) {
+  std::unique_ptr<Pair> pair = spare ? std::move(spare) : std::make_unique<Pair>();
+  pair->features.clear();
+  if (o.working_scale == 1.0) {
+    pair->rig = im.rig;
+  } else {
+    pair->rig.left = im.rig.left->Scaled(o.working_scale);
+    pair->rig.right = im.rig.right->Scaled(o.working_scale);
+  }
+  ToFloat(im.left, o.working_scale, &pair->left, &pair->scratch);
+  ToFloat(im.right, o.working_scale, &pair->right, &pair->scratch);
+  const cv::Mat& left = pair->left;
+  const cv::Mat& right = pair->right;
+  pair->width = left.cols;
+  pair->height = left.rows;
+  {
+    Eigen::Vector3d c, d0, d1;
+    const Eigen::Vector2d centre(0.5 * (left.cols - 1), 0.5 * (left.rows - 1));
+    pair->rig.left->BackProject(centre, &c, &d0);
+    pair->rig.left->BackProject(centre + Eigen::Vector2d(1, 0), &c, &d1);
+    pair->pixel_angle = std::max(1e-9, std::acos(std::clamp(d0.dot(d1), -1.0, 1.0)));
+    const double baseline = pair->rig.Baseline();
+    pair->far_range = o.stereo_min_disparity_px > 0
+                          ? baseline / (o.stereo_min_disparity_px * pair->pixel_angle)
+                          : 1e6 * baseline;
+  }
+  // Pyramid of the left image, band-passed level by level (VO-3 prefilter), for
+  // coarse-to-fine tracking (VO-6).
+  const int n = o.match_template_px;
+  pair->left_band.resize(o.track_pyramid_levels);
+  pair->left_levels.resize(o.track_pyramid_levels);
+  int levels = 0;
+  for (int l = 0; l < o.track_pyramid_levels; ++l) {
+    const cv::Mat& level = l == 0 ? left : pair->left_levels[l];
+    if (l > 0) {
+      const cv::Mat& finer = l == 1 ? left : pair->left_levels[l - 1];
+      if (finer.cols / 2 < n + 4 || finer.rows / 2 < n + 4) break;
+      cv::resize(finer, pair->left_levels[l], cv::Size(finer.cols / 2, finer.rows / 2), 0, 0,
+                 cv::INTER_AREA);
+    }
+    BandPass(level, o.match_prefilter_sigma, o.match_prefilter_box_px, &pair->left_band[l],
+             &pair->scratch);
+    ++levels;
+  }
+  pair->left_band.resize(levels);
+  BandPass(right, o.match_prefilter_sigma, o.match_prefilter_box_px, &pair->right_band,
+           &pair->scratch);
+
+  CornerOptions co;
+  co.harris_k = o.feature_harris_k;
+  co.harris_block = o.feature_harris_block;
+  co.grid_cell_px = o.feature_grid_cell_px;
+  co.min_distance_px = o.feature_min_distance_px;
+  co.count = o.feature_count;
+  co.min_response = o.feature_min_response;
+  co.border_px = o.feature_border_px;
+  const std::vector<Corner> corners = DetectCorners(left, co, &pair->response);
+  res->num_detected = static_cast<int>(corners.size());
+  const auto t_detect = Clock::now();
+  res->times.detect_ms = Ms(*t, t_detect);
+  *t = t_detect;
+
+  StereoMatchFresh(pair.get(), corners);
+  res->num_matched = static_cast<int>(pair->features.size());
+  const auto t_stereo = Clock::now();
+  res->times.stereo_ms = Ms(*t, t_stereo);
+  *t = t_stereo;
+  return pair;
+}
+
+bool VisualOdometry::State::MatchRight(const Pair& pair, const Eigen::Vector3d& C1,
+                                       const Eigen::Vector3d& r1, double range_near,
+                                       double range_far, double margin_px,
+                                       Eigen::Vector2d* right, Eigen::Matrix2d* Sigma_right) {
+  // VO-3: the epipolar segment is the projection of the left ray between the two ranges.
+  Eigen::Vector2d a, b;
+  if (!pair.rig.right->Project(C1 + r1 * range_far, &a)) return false;
+  if (!pair.rig.right->Project(C1 + r1 * range_near, &b)) return false;
+  if (margin_px > 0) {
+    Eigen::Vector2d dir = b - a;
+    if (dir.norm() < 1e-6) {
+      Eigen::Vector2d far_end;
+      if (!pair.rig.right->Project(C1 + r1 * pair.far_range, &far_end)) return false;
+      dir = b - far_end;
+      if (dir.norm() < 1e-6) dir = Eigen::Vector2d(-1, 0);
+    }
+    dir.normalize();
+    a -= margin_px * dir;
+    b += margin_px * dir;
+  }
+  // The line itself is searched; the refinement then climbs to the 2-D peak, which must
+  // stay within the band above and below the line (a few pixels, VO-3).
+  int bx = 0, by = 0;
+  float score = 0;
+  if (!correlator.SearchSegment(tmpl, pair.right_band, a, b, 0, &bx, &by, &score)) {
+    return false;
+  }
+  MatchResult m = Correlator::Refine(tmpl, pair.right_band, bx, by, o.match_covariance_scale,
+                                     o.match_min_sigma_px);
+  if (!m.ok || m.score < o.match_min_score) return false;
+  correlator.Iterate(tmpl, pair.right_band, o.match_subpixel_iterations,
+                     o.match_covariance_scale, o.match_min_sigma_px, &m);
+  const Eigen::Vector2d line = (b - a).norm() > 1e-9 ? (b - a).normalized() : Eigen::Vector2d(1, 0);
+  const Eigen::Vector2d off = m.position - a;
+  if (std::abs(off.x() * line.y() - off.y() * line.x()) > o.stereo_epipolar_band_px + 0.5) {
+    return false;
+  }
+  *right = m.position;
+  *Sigma_right = m.covariance;
+  return true;
+}
+
+void VisualOdometry::State::StereoMatchFresh(Pair* pair, const std::vector<Corner>& corners) {
+  const TriangulationLimits limits = Limits(*pair);
+  pair->features.reserve(corners.size());
+  for (const Corner& c : corners) {
+    if (!tmpl.Extract(pair->left_band[0], c.x, c.y, o.match_template_px)) continue;
+    // The left location's covariance comes from the template's own correlation peak
+    // (its sharpness), fitted the same way as the right match (VO-3, VO-5).
+    const MatchResult self = Correlator::Refine(tmpl, pair->left_band[0], c.x, c.y, o.match_covariance_scale,
+                                                o.match_min_sigma_px);
+    if (!self.ok) continue;
+    const Eigen::Vector2d left(c.x, c.y);
+    Eigen::Vector3d C1, r1;
+    pair->rig.left->BackProject(left, &C1, &r1);
+    Eigen::Vector2d right;
+    Eigen::Matrix2d Sigma_right;
+    if (!MatchRight(*pair, C1, r1, o.stereo_min_range_m, pair->far_range, 0.0, &right,
+                    &Sigma_right)) {
+      continue;
+    }
+    StereoPoint sp;
+    if (!TriangulateStereo(pair->rig, left, self.covariance, right, Sigma_right, limits, &sp)) {
+      continue;
+    }
+    pair->features.push_back({left, sp.P, sp.Sigma});
+  }
+}
+
+VisualOdometry::VisualOdometry(VoOptions options) : state_(std::make_unique<State>()) {
+  ValidateVoOptions(options);
+  state_->o = options;
+}
+VisualOdometry::~VisualOdometry() = default;
+VisualOdometry::VisualOdometry(VisualOdometry&&) noexcept = default;
+VisualOdometry& VisualOdometry::operator=(VisualOdometry&&) noexcept = default;
+
+void VisualOdometry::Reset() {
+  state_->prev.reset();
+  state_->spare.reset();
+  state_->calls = 0;
+}
+
+const VoOptions& VisualOdometry::options() const { return state_->o; }
+
+VoResult VisualOdometry::Process(const StereoImages& images,
+                                 const Eigen::Isometry3d& prior_T_prev_curr,
+                                 const Eigen::Matrix<double, 6, 6>& prior_covariance) {
+  State& s = *state_;
+  const VoOptions& o = s.o;
+  VoResult res;
+  const auto t_start = Clock::now();
+  auto t = t_start;
+  auto finish = [&](VoStatus status, std::string reason) {
+    res.status = status;
+    res.reason = std::move(reason);
+    res.times.total_ms = Ms(t_start, Clock::now());
+    return res;
+  };
+
+  if (std::string bad = s.CheckInput(images); !bad.empty()) {
+    return finish(VoStatus::kBadInput, bad);
+  }
+  if (!prior_T_prev_curr.matrix().allFinite() || !prior_covariance.allFinite()) {
+    return finish(VoStatus::kBadInput, "prior motion or covariance is not finite");
+  }
+  ++s.calls;
+
+  std::unique_ptr<Pair> cur = s.Prepare(images, &res, &t);
+  std::unique_ptr<Pair> prev = std::move(s.prev);
+  s.prev = std::move(cur);  // every outcome below makes this pair the previous one
+  const Pair& c = *s.prev;
+  struct Recycle {  // hands the old pair's buffers to the next call, on every return path
+    State& s;
+    std::unique_ptr<Pair>& p;
+    ~Recycle() { if (p) s.spare = std::move(p); }
+  } recycle{s, prev};
+
+  if (!prev) return finish(VoStatus::kBaseline, "first pair: features kept for the next");
+  if (static_cast<int>(prev->features.size()) < o.min_features) {
+    return finish(VoStatus::kTooFewFeatures,
+                  Format("previous pair has %.0f stereo features (need %.0f)",
+                         prev->features.size(), o.min_features));
+  }
+
+  // ---- VO-10: motion too large for the overlap (checked on the prior) ----
+  const Eigen::Vector3d prior_t = prior_T_prev_curr.translation();
+  const double prior_angle = Eigen::AngleAxisd(prior_T_prev_curr.linear()).angle();
+  if (o.motion_max_translation_m > 0 && prior_t.norm() > o.motion_max_translation_m) {
+    return finish(VoStatus::kMotionTooLarge,
+                  Format("prior step %.3f m exceeds %.3f m; re-initialised", prior_t.norm(),
+                         o.motion_max_translation_m));
+  }
+  if (o.motion_max_rotation_deg > 0 && prior_angle > o.motion_max_rotation_deg * kDeg) {
+    return finish(VoStatus::kMotionTooLarge,
+                  Format("prior turn %.1f deg exceeds %.1f deg; re-initialised",
+                         prior_angle / kDeg, o.motion_max_rotation_deg));
+  }
+
+  // ---- VO-6: tracking through the motion prior ----
+  const Eigen::Matrix3d R_pc = prior_T_prev_curr.linear();
+  const Eigen::Vector3d rpy = geometry::RpyFromRotation(R_pc);
+  Eigen::Matrix3d dR[3];
+  {
+    const Eigen::Matrix3d Rx = Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()).toRotationMatrix();
+    const Eigen::Matrix3d Ry = Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()).toRotationMatrix();
+    const Eigen::Matrix3d Rz = Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    dR[0] = Rz * Ry * Rx * geometry::Skew(Eigen::Vector3d::UnitX());
+    dR[1] = Rz * Ry * geometry::Skew(Eigen::Vector3d::UnitY()) * Rx;
+    dR[2] = geometry::Skew(Eigen::Vector3d::UnitZ()) * Rz * Ry * Rx;
+  }
+  const Eigen::Matrix3d R_cp = R_pc.transpose();
+  const TriangulationLimits limits = s.Limits(c);
+  const int levels = static_cast<int>(std::min(prev->left_band.size(), c.left_band.size()));
+  const int border = o.feature_border_px;
+
+  std::vector<Correspondence> corr;
+  corr.reserve(prev->features.size());
+  std::vector<char> fixed;  // VO-11: stayed put in the image while predicted to move
+  fixed.reserve(prev->features.size());
+  int predicted_inside = 0;
+  double stereo_ms = 0;
+  for (const Feature& f : prev->features) {
+    const Eigen::Vector3d d = f.P - prior_t;
+    const Eigen::Vector3d P_pred = R_cp * d;
+    Eigen::Matrix<double, 3, 6> Jm;
+    Jm.leftCols<3>() = -R_cp;
+    for (int i = 0; i < 3; ++i) Jm.col(3 + i) = dR[i].transpose() * d;
+    const Eigen::Matrix3d Sigma_pred =
+        R_cp * f.Sigma * R_cp.transpose() + Jm * prior_covariance * Jm.transpose();
+    Eigen::Vector2d u_pred;
+    Eigen::Matrix<double, 2, 3> Jp;
+    if (!c.rig.left->Project(P_pred, &u_pred, &Jp)) continue;
+    if (u_pred.x() < border || u_pred.y() < border || u_pred.x() > c.width - 1 - border ||
+        u_pred.y() > c.height - 1 - border) {
+      continue;
+    }
+    ++predicted_inside;
+    const Eigen::Matrix2d Sigma_u = Jp * Sigma_pred * Jp.transpose();
+    const double sigma_u = std::sqrt(std::max(0.0, Sigma_u.selfadjointView<Eigen::Upper>().eigenvalues().maxCoeff()));
+    const int radius = std::clamp(static_cast<int>(std::ceil(o.track_window_sigmas * sigma_u)),
+                                  o.track_min_radius_px, o.track_max_radius_px);
+    int L = 0;
+    while (L + 1 < levels && radius > o.track_coarse_radius_px * (1 << L)) ++L;
+
+    // Coarse to fine: search the whole window at level L, then +-2 px at each finer one.
+    int bx = 0, by = 0;
+    float score = 0;
+    bool ok = true;
+    for (int l = L; l >= 0 && ok; --l) {
+      const int tx = static_cast<int>(std::lround(ToLevel(f.left.x(), l)));
+      const int ty = static_cast<int>(std::lround(ToLevel(f.left.y(), l)));
+      const int side = l == 0 ? o.match_template_px : o.track_coarse_template_px;
+      if (!s.tmpl.Extract(prev->left_band[l], tx, ty, side)) {
+        ok = false;
+        break;
+      }
+      int cx, cy, r;
+      if (l == L) {
+        cx = static_cast<int>(std::lround(ToLevel(u_pred.x(), l)));
+        cy = static_cast<int>(std::lround(ToLevel(u_pred.y(), l)));
+        r = (radius + (1 << l) - 1) >> l;
+      } else {
+        cx = 2 * bx;
+        cy = 2 * by;
+        r = 2;
+      }
+      ok = s.correlator.SearchWindow(s.tmpl, c.left_band[l], cx - r, cx + r,
+                                     cy - r, cy + r, &bx, &by, &score);
+    }
+    if (!ok || score < o.track_min_score) continue;
+    MatchResult m = Correlator::Refine(s.tmpl, c.left_band[0], bx, by,
+                                       o.match_covariance_scale, o.match_min_sigma_px);
+    if (!m.ok || m.score < o.track_min_score) continue;
+    s.correlator.Iterate(s.tmpl, c.left_band[0], o.match_subpixel_iterations,
+                         o.match_covariance_scale, o.match_min_sigma_px, &m);
+
+    // Stereo match of the tracked feature, its disparity narrowed by the known 3-D
+    // position (VO-6).
+    const auto t_s = Clock::now();
+    if (!s.tmpl.ExtractSubpixel(c.left_band[0], m.position.x(), m.position.y(),
+                                o.match_template_px)) {
+      continue;
+    }
+    Eigen::Vector3d C1, r1;
+    c.rig.left->BackProject(m.position, &C1, &r1);
+    const double range = (P_pred - C1).dot(r1);
+    const double sigma_range = std::sqrt(std::max(0.0, r1.dot(Sigma_pred * r1)));
+    const double near = std::max(o.stereo_min_range_m, range - o.track_window_sigmas * sigma_range);
+    const double far = std::min(c.far_range, range + o.track_window_sigmas * sigma_range);
+    Eigen::Vector2d right;
+    Eigen::Matrix2d Sigma_right;
+    const bool matched = far > near && s.MatchRight(c, C1, r1, near, far,
+                                                    o.track_stereo_margin_px, &right, &Sigma_right);
+    stereo_ms += Ms(t_s, Clock::now());
+    if (!matched) continue;
+    StereoPoint sp;
+    if (!TriangulateStereo(c.rig, m.position, m.covariance, right, Sigma_right, limits, &sp)) {
+      continue;
+    }
+    // Drop features whose 3-D positions disagree beyond their uncertainty (VO-6).
+    const Eigen::Vector3d diff = sp.P - P_pred;
+    const Eigen::Matrix3d S = sp.Sigma + Sigma_pred;
+    if (o.track_max_chi2 > 0 && diff.dot(S.ldlt().solve(diff)) > o.track_max_chi2) continue;
+    Correspondence x;
+    x.P_prev = f.P;
+    x.Sigma_prev = f.Sigma;
+    x.P_curr = sp.P;
+    x.Sigma_curr = sp.Sigma;
+    x.left = m.position;
+    x.right = right;
+    corr.push_back(x);
+    fixed.push_back((m.position - f.left).norm() < o.shadow_fixed_px &&
+                    (u_pred - f.left).norm() > o.shadow_min_predicted_px);
+  }
+  res.num_tracked = static_cast<int>(corr.size());
+  {
+    const auto now = Clock::now();
+    res.times.track_ms = Ms(t, now) - stereo_ms;
+    res.times.stereo_ms += stereo_ms;
+    t = now;
+  }
+  const double overlap = double(predicted_inside) / double(prev->features.size());
+  if (overlap < o.motion_min_overlap) {
+    return finish(VoStatus::kMotionTooLarge,
+                  Format("prior leaves %.0f %% of features in view (need %.0f %%); re-initialised",
+                         100 * overlap, 100 * o.motion_min_overlap));
+  }
+  if (res.num_tracked < o.min_tracked) {
+    return finish(VoStatus::kTooFewMatches, Format("%.0f features tracked (need %.0f)",
+                                                   res.num_tracked, o.min_tracked));
+  }
+
+  // ---- VO-7: weighted least squares inside RANSAC ----
+  RansacOptions ro;
+  ro.iterations = o.ransac_iterations;
+  ro.sample_size = o.ransac_sample_size;
+  ro.inlier_px = o.ransac_inlier_px;
+  ro.seed = o.ransac_seed + 0x9E3779B97F4A7C15ull * s.calls;
+  RansacOutcome rs = RansacMotion(corr, c.rig, ro);
+
+  // ---- VO-11: the rover's shadow (features fixed in the image) ----
+  if (o.shadow_check) {
+    int fixed_inliers = 0;
+    for (int k : rs.inliers) fixed_inliers += fixed[k];
+    if (2 * fixed_inliers > static_cast<int>(rs.inliers.size())) {
+      // The winning motion rests on image-fixed features. If the other features agree on
+      // a different motion, the two explanations compete: refuse rather than guess.
+      std::vector<char> in(corr.size(), 0);
+      for (int k : rs.inliers) in[k] = 1;
+      std::vector<int> rest;
+      for (int k = 0; k < static_cast<int>(corr.size()); ++k) {
+        if (!in[k] && !fixed[k]) rest.push_back(k);
+      }
+      if (static_cast<int>(rest.size()) >= o.min_inliers) {
+        const RansacOutcome alt = RansacMotion(corr, c.rig, ro, rest);
+        if (static_cast<int>(alt.inliers.size()) >= o.min_inliers) {
+          res.times.ransac_ms = Ms(t, Clock::now());
+          return finish(VoStatus::kShadowAmbiguous,
+                        Format("%.0f inliers fixed in the image against %.0f features moving "
+                               "otherwise",
+                               fixed_inliers, alt.inliers.size()));
+        }
+      }
+    }
+  }
+  {
+    const auto now = Clock::now();
+    res.times.ransac_ms = Ms(t, now);
+    t = now;
+  }
+  if (static_cast<int>(rs.inliers.size()) < o.min_inliers) {
+    res.num_inliers = static_cast<int>(rs.inliers.size());
+    return finish(VoStatus::kTooFewInliers, Format("%.0f RANSAC inliers (need %.0f)",
+                                                   rs.inliers.size(), o.min_inliers));
+  }
+
+  // ---- VO-8: maximum likelihood ----
+  std::vector<int> inliers = rs.inliers;
+  MlOutcome ml = MaximumLikelihoodMotion(corr, inliers, rs.T_curr_prev.inverse(),
+                                         o.ml_max_iterations, o.ml_tolerance);
+  int iterations = ml.iterations;
+  if (ml.converged && o.ml_outlier_chi2 > 0) {
+    std::vector<int> kept;
+    for (int k : inliers) {
+      if (MahalanobisSquared(corr[k], ml.T_prev_curr) <= o.ml_outlier_chi2) kept.push_back(k);
+    }
+    if (kept.size() < inliers.size() && static_cast<int>(kept.size()) >= o.min_inliers) {
+      inliers = std::move(kept);
+      ml = MaximumLikelihoodMotion(corr, inliers, ml.T_prev_curr, o.ml_max_iterations,
+                                   o.ml_tolerance);
+      iterations += ml.iterations;
+    }
+  }
+  res.iterations = iterations;
+  res.num_inliers = static_cast<int>(inliers.size());
+  res.times.ml_ms = Ms(t, Clock::now());
+  if (!ml.converged) {
+    return finish(VoStatus::kNoConvergence,
+                  Format("maximum likelihood did not converge in %.0f iterations",
+                         o.ml_max_iterations));
+  }
+  res.T_prev_curr = ml.T_prev_curr;
+  res.covariance = ml.covariance;
+
+  // ---- VO-10 on the estimate, VO-9 sanity ----
+  const Eigen::Vector3d dt = ml.T_prev_curr.translation();
+  const Eigen::Vector3d drpy = geometry::RpyFromRotation(ml.T_prev_curr.linear());
+  const double angle = Eigen::AngleAxisd(ml.T_prev_curr.linear()).angle();
+  auto reject = [&](VoStatus st, std::string why) {
+    res.T_prev_curr = Eigen::Isometry3d::Identity();
+    res.covariance.setZero();
+    return finish(st, std::move(why));
+  };
+  if (o.motion_max_translation_m > 0 && dt.norm() > o.motion_max_translation_m) {
+    return reject(VoStatus::kMotionTooLarge, Format("step %.3f m exceeds %.3f m; re-initialised",
+                                                    dt.norm(), o.motion_max_translation_m));
+  }
+  if (o.motion_max_rotation_deg > 0 && angle > o.motion_max_rotation_deg * kDeg) {
+    return reject(VoStatus::kMotionTooLarge, Format("turn %.1f deg exceeds %.1f deg; re-initialised",
+                                                    angle / kDeg, o.motion_max_rotation_deg));
+  }
+  if (o.sanity_max_translation_m > 0 && dt.norm() > o.sanity_max_translation_m) {
+    return reject(VoStatus::kSanityFailed, Format("update %.3f m exceeds %.3f m", dt.norm(),
+                                                  o.sanity_max_translation_m));
+  }
+  const char* axis[3] = {"roll", "pitch", "yaw"};
+  const double limit_deg[3] = {o.sanity_max_roll_deg, o.sanity_max_pitch_deg, o.sanity_max_yaw_deg};
+  for (int i = 0; i < 3; ++i) {
+    if (limit_deg[i] > 0 && std::abs(drpy[i]) > limit_deg[i] * kDeg) {
+      return reject(VoStatus::kSanityFailed,
+                    std::string(axis[i]) + Format(" update %.2f deg exceeds %.2f deg",
+                                                  std::abs(drpy[i]) / kDeg, limit_deg[i]));
+    }
+  }
+  if (images.R_site_ref) {
+    const Eigen::Vector3d site = *images.R_site_ref * dt;
+    if (o.sanity_max_site_dx_m > 0 && std::abs(site.x()) > o.sanity_max_site_dx_m) {
+      return reject(VoStatus::kSanityFailed, Format("site X update %.3f m exceeds %.3f m",
+                                                    site.x(), o.sanity_max_site_dx_m));
+    }
+    if (o.sanity_max_site_dy_m > 0 && std::abs(site.y()) > o.sanity_max_site_dy_m) {
+      return reject(VoStatus::kSanityFailed, Format("site Y update %.3f m exceeds %.3f m",
+                                                    site.y(), o.sanity_max_site_dy_m));
+    }
+    if (o.sanity_max_downslope_angle_deg > 0 && site.norm() > 0.01) {
+      // Downslope: gravity (site +Z) projected on the ground plane, whose normal is the
+      // reference frame's z axis (rover frame, Z down).
+      const Eigen::Vector3d normal = images.R_site_ref->col(2);
+      const Eigen::Vector3d g(0, 0, 1);
+      const Eigen::Vector3d down = g - g.dot(normal) * normal;
+      if (down.norm() > std::sin(2.0 * kDeg)) {
+        const double a = std::acos(std::clamp(site.normalized().dot(down.normalized()), -1.0, 1.0));
+        if (a > o.sanity_max_downslope_angle_deg * kDeg) {
+          return reject(VoStatus::kSanityFailed,
+                        Format("update is %.1f deg from downslope (limit %.1f deg)", a / kDeg,
+                               o.sanity_max_downslope_angle_deg));
+        }
+      }
+    }
+  }
+
+  // ---- VO-12: degenerate geometry ----
+  {
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (int k : inliers) mean += corr[k].left;
+    mean /= double(inliers.size());
+    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+    for (int k : inliers) scatter += (corr[k].left - mean) * (corr[k].left - mean).transpose();
+    scatter /= double(inliers.size());
+    const double spread = std::sqrt(std::max(0.0, scatter.selfadjointView<Eigen::Upper>().eigenvalues().minCoeff())) /
+                          std::min(c.width, c.height);
+    if (spread < o.degenerate_min_spread) {
+      return reject(VoStatus::kDegenerate,
+                    Format("inliers clustered: spread %.3f of the image (need %.3f)", spread,
+                           o.degenerate_min_spread));
+    }
+    const double sigma_t = std::sqrt(ml.covariance.topLeftCorner<3, 3>().trace());
+    const double sigma_r = std::sqrt(ml.covariance.bottomRightCorner<3, 3>().trace());
+    if (o.degenerate_max_translation_sigma_m > 0 && sigma_t > o.degenerate_max_translation_sigma_m) {
+      return reject(VoStatus::kDegenerate, Format("translation poorly determined: sigma %.3f m "
+                                                  "(limit %.3f m)",
+                                                  sigma_t, o.degenerate_max_translation_sigma_m));
+    }
+    if (o.degenerate_max_rotation_sigma_deg > 0 && sigma_r > o.degenerate_max_rotation_sigma_deg * kDeg) {
+      return reject(VoStatus::kDegenerate, Format("rotation poorly determined: sigma %.2f deg "
+                                                  "(limit %.2f deg)",
+                                                  sigma_r / kDeg, o.degenerate_max_rotation_sigma_deg));
+    }
+  }
+  return finish(VoStatus::kOk, "");
+}
+
+}  // namespace rover::vo
