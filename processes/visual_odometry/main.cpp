@@ -86,6 +86,12 @@ int main(int argc, char** argv) {
         channels::kStereoFrame,
         [&](const rover_msgs::stereo_frame_t& frame) {
           proc.ObserveTime(frame.utime);
+          // Science pairs are for the operator; a baseline pair starts a new VO chain.
+          if (frame.purpose == "science") return;
+          if (frame.purpose == "vo_baseline") {
+            vo.Reset();
+            previous.reset();
+          }
           rover_msgs::vo_update_t out{};
           out.utime = frame.utime;
           out.to_frame_id = frame.frame_id;

@@ -1,0 +1,114 @@
+// Every process and tool meets bad arguments and bad configs with one clear line and a
+// non-zero exit; the launcher reports a process that dies and exits non-zero.
+#include "integration/run_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+namespace rover::test {
+namespace {
+
+int CountLines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+const char* kProcesses[] = {"rover_sim", "state_estimator", "hazard_monitor", "sequence_executor",
+                            "camera_capture", "visual_odometry"};
+
+TEST(ProcessCli, HelpPrintsUsageAndExitsZero) {
+  for (const char* p : kProcesses) {
+    const auto r = RunCommand(Bin(p) + " --help");
+    EXPECT_EQ(r.exit_code, 0) << p;
+    EXPECT_NE(r.output.find("usage: "), std::string::npos) << p << ": " << r.output;
+    EXPECT_NE(r.output.find("--lcm-url"), std::string::npos) << p;
+  }
+}
+
+TEST(ProcessCli, UnknownArgumentIsOneLineAndExitTwo) {
+  for (const char* p : kProcesses) {
+    const auto r = RunCommand(Bin(p) + " --bogus");
+    EXPECT_EQ(r.exit_code, 2) << p;
+    EXPECT_EQ(r.output, std::string(p) + ": argument --bogus: unknown option (expected one of "
+                                         "the options in --help)\n");
+  }
+}
+
+TEST(ProcessCli, BadConfigNamesFileKeyAndExpectation) {
+  const std::string dir = OutDir("process_cli");
+  const std::string bad = dir + "/bad.yaml";
+  std::ofstream(bad) << "estimator:\n  publish_hz: fast\n";
+  auto r = RunCommand(Bin("state_estimator") + " --config " + bad);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, bad + ": estimator.publish_hz: expected a finite number in [8, 1000], got \"fast\"\n");
+
+  std::ofstream(bad) << "hazards:\n  roll_limit_deg: 30\n  pich_limit_deg: 30\n";
+  r = RunCommand(Bin("hazard_monitor") + " --config " + bad);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(CountLines(r.output), 1) << r.output;
+  EXPECT_EQ(r.output.rfind(bad + ": hazards.pich_limit_deg: unknown key", 0), 0u) << r.output;
+
+  std::ofstream(bad) << "nonsense: [1, 2\n";
+  r = RunCommand(Bin("sequence_executor") + " --config " + bad);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(CountLines(r.output), 1) << r.output;
+  EXPECT_EQ(r.output.rfind(bad + ":", 0), 0u) << r.output;
+
+  r = RunCommand(Bin("rover_sim") + " --config configs/rover.yaml --world /nonexistent.yaml");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, "/nonexistent.yaml: cannot open file (expected a readable YAML file)\n");
+
+  r = RunCommand(Bin("rover_sim") + " --config configs/rover.yaml --world configs/worlds/flat_rock_course.yaml --start 1,x,0");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, "rover_sim: argument --start: \"1,x,0\": expected 3 finite numbers separated by commas\n");
+}
+
+TEST(ProcessCli, OperatorSubmitChecksTheFileFirst) {
+  const auto r = RunCommand(Bin("rover_seq") + " submit configs/sequences/bad_units.seq");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.output,
+            "configs/sequences/bad_units.seq:5:9: wrong unit 'deg' for drive distance (expected m or cm)\n");
+}
+
+TEST(Launcher, ReportsAProcessThatDiesAndStopsTheRest) {
+  const std::string dir = OutDir("launcher");
+  const std::string deployment = dir + "/deploy.yaml";
+  std::ofstream(deployment) << "processes:\n"
+                               "  - name: hazard_monitor\n"
+                               "    args: [--config, configs/rover.yaml]\n"
+                               "  - name: state_estimator\n"
+                               "    args: [--config, /nonexistent/rover.yaml]\n";
+  const auto r = RunCommand("ROVER_LCM_URL='" + PrivateUrl(3) + "' timeout 30 " + Bin("launcher") +
+                            " " + deployment);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  // The child's own error line, prefixed with its name, then the launcher's verdict.
+  EXPECT_NE(r.output.find("[state_estimator] /nonexistent/rover.yaml: cannot open file"),
+            std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("launcher: state_estimator exited with code 2 unexpectedly"),
+            std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("launcher: all processes stopped"), std::string::npos) << r.output;
+}
+
+TEST(Launcher, StopsEverythingCleanlyOnSigterm) {
+  const auto r = RunCommand("ROVER_LCM_URL='" + PrivateUrl(4) + "' timeout --preserve-status -s TERM 3 " +
+                            Bin("launcher") + " configs/deploy/sim.yaml");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("launcher: started sequence_executor"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("launcher: all processes stopped"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("unexpectedly"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("killing it"), std::string::npos) << r.output;
+}
+
+TEST(Launcher, BadDeploymentIsOneLine) {
+  const std::string dir = OutDir("launcher_bad");
+  const std::string deployment = dir + "/deploy.yaml";
+  std::ofstream(deployment) << "processes:\n  - nam: rover_sim\n";
+  const auto r = RunCommand(Bin("launcher") + " " + deployment);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, deployment + ": processes[0].nam: unknown key (expected one of: name, program, args)\n");
+}
+
+}  // namespace
+}  // namespace rover::test
