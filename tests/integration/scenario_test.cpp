@@ -41,13 +41,17 @@ TEST(Scenario, DemoCompletesDriveTurnArcGotoInsideTheDisc) {
   for (const auto& st : s["steps"]) {
     EXPECT_LE(std::abs(st["commanded"]["distance_m"].as<double>()), 0.5 + 1e-9);
   }
-  // Blind driving: the goto reached its 0.3 m disc by the estimate; the truth lies within
-  // the disc plus the wheel-odometry error (under 10 % of the distance on this ground).
+  // The goto reached its 0.3 m disc by the VO-corrected estimate; the truth lies within the
+  // disc plus the estimate's error, which VO keeps to a few percent of the distance (wheel
+  // odometry alone passes 10 % on these cobbles).
   const double distance = s["distance_travelled_m"].as<double>();
   EXPECT_GT(distance, 5.0);
   EXPECT_LT(Horizontal(s["final_estimate"], 5.0, 3.0), 0.3);
-  EXPECT_LT(Horizontal(s["final_truth"], 5.0, 3.0), 0.3 + 0.1 * distance);
-  EXPECT_LT(s["position_error_pct"].as<double>(), 10.0);
+  EXPECT_LT(Horizontal(s["final_truth"], 5.0, 3.0), 0.3 + 0.05 * distance);
+  EXPECT_LT(s["position_error_pct"].as<double>(), 5.0);
+  int vo_ok = 0;
+  for (const auto& st : s["steps"]) vo_ok += st["vo_status"].as<int>() == 0;
+  EXPECT_GT(vo_ok, 10) << "VO should have converged on most steps";
 }
 
 TEST(Scenario, KeepOutStopsShortOfTheRock) {
