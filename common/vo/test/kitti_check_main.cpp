@@ -2,7 +2,7 @@
 // prior and prints the KITTI-style average translational error and ms per frame.
 // Usage: vo_kitti_check [DATASET_DIR] [vo.yaml] [--scale S]
 // (The project's evaluator is tools/vo_eval; this exists to tune and check the library.)
-#include "test_pinhole.hpp"
+#include "geometry/kitti_calib.hpp"
 #include "vo/visual_odometry.hpp"
 
 #include <opencv2/core.hpp>
@@ -51,23 +51,12 @@ int main(int argc, char** argv) {
   vo::VoOptions opt;
   if (!yaml.empty()) opt = vo::LoadVoOptions(config::ConfigNode::LoadFile(yaml)["vo"]);
   if (scale > 0) opt.working_scale = scale;
-  std::ifstream calib(dir + "/calib.txt");
-  double P0[12], P1[12];
-  std::string tag;
-  calib >> tag;
-  for (double& v : P0) calib >> v;
-  calib >> tag;
-  for (double& v : P1) calib >> v;
-  if (!calib) {
-    std::cerr << "cannot read " << dir << "/calib.txt\n";
-    return 1;
-  }
   const auto gt = ReadPoses(dir + "/poses.txt");
   char name[64];
   std::snprintf(name, sizeof(name), "/image_0/%06d.png", 0);
   cv::Mat first = cv::imread(dir + name, cv::IMREAD_UNCHANGED);
   const int W = first.cols, H = first.rows;
-  geometry::StereoRig rig = vo::test::MakeRig(W, H, P0[0], P0[2], P0[6], -P1[3] / P1[0]);
+  const geometry::StereoRig rig = geometry::LoadKittiCalib(dir + "/calib.txt", W, H);
   vo::VisualOdometry odo(opt);
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   std::vector<Eigen::Isometry3d> est{pose};

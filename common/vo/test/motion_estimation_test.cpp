@@ -1,7 +1,7 @@
 // VO-7 (weighted least squares in RANSAC) and VO-8 (maximum likelihood) on synthetic
 // 3-D points with a known motion.
 #include "geometry/pose.hpp"
-#include "test_pinhole.hpp"
+#include "test_rig.hpp"
 #include "vo/motion_estimation.hpp"
 #include "vo/triangulation.hpp"
 

@@ -1,5 +1,5 @@
 // VO-4 (ray intersection, gap test) and VO-5 (covariance from the Jacobian).
-#include "test_pinhole.hpp"
+#include "test_rig.hpp"
 #include "vo/triangulation.hpp"
 
 #include <gtest/gtest.h>

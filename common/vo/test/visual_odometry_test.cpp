@@ -1,6 +1,6 @@
 // The whole pipeline on rendered stereo pairs (VO-1..VO-10), features (VO-2) and options.
 #include "geometry/pose.hpp"
-#include "test_pinhole.hpp"
+#include "test_rig.hpp"
 #include "vo/features.hpp"
 #include "vo/visual_odometry.hpp"
 
