@@ -51,7 +51,7 @@ TEST(Scenario, DemoCompletesDriveTurnArcGotoInsideTheDisc) {
   EXPECT_LT(s["position_error_pct"].as<double>(), 5.0);
   int vo_ok = 0;
   for (const auto& st : s["steps"]) vo_ok += st["vo_status"].as<int>() == 0;
-  EXPECT_GT(vo_ok, 10) << "VO should have converged on most steps";
+  EXPECT_GE(2 * vo_ok, static_cast<int>(s["steps"].size())) << "VO should converge on most steps";
 }
 
 TEST(Scenario, KeepOutStopsShortOfTheRock) {
