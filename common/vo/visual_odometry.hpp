@@ -55,8 +55,8 @@ struct VoOptions {
   double working_scale = 1.0;
 
   // ---- VO-2 features ----
-  // Harris corner response: k, and the side of the Gaussian window (pixels) over which
-  // the structure tensor of 3x3 Sobel gradients is summed.
+  // Harris corner response: k, and the side (odd, <= 63) of the binomial (Gaussian-like)
+  // window over which the structure tensor of 3x3 Sobel gradients is summed.
   double feature_harris_k = 0.04;
   int feature_harris_block = 5;
   // Grid cell (pixels); each cell keeps its strongest local maximum. Must be smaller than

@@ -57,7 +57,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "degenerate_max_rotation_sigma_deg"});
   node.Get("working_scale", o.working_scale, 0.0625, 1.0);
   node.Get("feature_harris_k", o.feature_harris_k, 0.0, 0.25);
-  node.Get("feature_harris_block", o.feature_harris_block, 2, 31);
+  node.Get("feature_harris_block", o.feature_harris_block, 3, 31);
   node.Get("feature_grid_cell_px", o.feature_grid_cell_px, 1, 1000);
   node.Get("feature_min_distance_px", o.feature_min_distance_px, 1.0, 1000.0);
   node.Get("feature_count", o.feature_count, 3, 100000);
