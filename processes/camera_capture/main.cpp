@@ -156,6 +156,11 @@ int main(int argc, char** argv) {
     section.GetEnum("encoding", encoding, {"png", "raw"});
     section.Get("rate_hz", rate_hz, 0.0, 100.0);
     if (proc.option("--dataset")) source = "dataset";
+    // A relative rig path is relative to the config file, so that configs/ in the
+    // repository and /etc/rover on a rover computer both work.
+    if (!rig_path.empty() && rig_path[0] != '/' && !proc.config_path().empty()) {
+      rig_path = (fs::path(proc.config_path()).parent_path() / rig_path).string();
+    }
 
     std::unique_ptr<ImageSource> cameras;
     if (source == "sim") {

@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -48,6 +49,7 @@ TEST(Replay, StateEstimatorReproducesRecordedPosesFromLogplayer) {
   // Record a blind drive. (With VO in the loop, rendering saturates both cores and the
   // logger has been seen to miss a few small messages, which a replay cannot restore;
   // the estimator's handling of VO updates is shown deterministic in its unit tests.)
+  std::filesystem::current_path(SourceDir());  // the recorded arguments are relative to it
   const std::string out = OutDir("replay");
   const auto run = RunCommand(Bin("scenario_runner") +
                               " configs/scenarios/keepout_abort.yaml --quiet --out " + out);
