@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the rover process set on a rover computer (configs/systemd/README.md):
 #   binaries  build/bin/<process>            -> /opt/rover/bin/
-#   configs   configs/rover.yaml, rover.env, worlds/, cameras/ -> /etc/rover/ (never overwritten)
+#   configs   configs/rover.yaml, vo.yaml, rover.env, worlds/, cameras/ -> /etc/rover/ (never overwritten)
 #   units     configs/systemd/*.service, *.target -> /etc/systemd/system/ (always overwritten)
 #   account   rover.sysusers -> /etc/sysusers.d/rover.conf; sysctl 90-rover-lcm.conf -> /etc/sysctl.d/
 # then enables the process units into their targets and runs daemon-reload. It does not
@@ -89,6 +89,7 @@ done
 [ "${#installed_units[@]}" -gt 0 ] || die "no unit files found in $HERE"
 
 install_config "$ROOT/configs/rover.yaml" "$ETC/rover.yaml"
+install_config "$ROOT/configs/vo.yaml" "$ETC/vo.yaml"
 install_config "$HERE/rover.env" "$ETC/rover.env"
 for dir in worlds cameras; do
   for f in "$ROOT/configs/$dir"/*.yaml; do

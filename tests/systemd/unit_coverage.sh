@@ -69,7 +69,7 @@ for p in $(printf '%s\n' "${!wanted[@]}" | sort); do
   has "After=rover-lcm-route.service"
   has "User=rover"
   has "NoNewPrivileges=yes"
-  has "ExecStart=/opt/rover/bin/$p --config /etc/rover/rover.yaml( .*)?"
+  has "ExecStart=/opt/rover/bin/$p --config /etc/rover/(rover|vo).yaml( .*)?"
   grep -q '^WatchdogSec=' "$u" && err "$n sets WatchdogSec= but $p never calls sd_notify: systemd would kill it"
   [ $errors -eq $before ] && echo "ok: $p -> $n"
 done
