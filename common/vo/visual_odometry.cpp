@@ -39,8 +39,9 @@ struct Pair {
   geometry::StereoRig rig;
   std::vector<cv::Mat> left_band;  // band-passed pyramid, level 0 = working resolution
   cv::Mat right_band;
+  cv::Mat right_band_half;  // level 1, for coarse-to-fine stereo of new features
   // Reused buffers (a Pair is recycled every other frame, so nothing is reallocated).
-  cv::Mat left, right, scratch, response;
+  cv::Mat left, right, right_half, scratch, response;
   std::vector<cv::Mat> left_levels;
   std::vector<Feature> features;
   int width = 0, height = 0;
@@ -76,7 +77,7 @@ struct VisualOdometry::State {
   std::unique_ptr<Pair> prev;
   std::unique_ptr<Pair> spare;  // the pair before prev, recycled for its buffers
   Correlator correlator;
-  Template tmpl;
+  Template tmpl, coarse_tmpl;
   std::uint64_t calls = 0;
 
   std::string CheckInput(const StereoImages& im) const;
@@ -84,7 +85,7 @@ struct VisualOdometry::State {
   void StereoMatchFresh(Pair* pair, const std::vector<Corner>& corners);
   bool MatchRight(const Pair& pair, const Eigen::Vector3d& C1, const Eigen::Vector3d& r1,
                   double range_near, double range_far, double margin_px,
-                  Eigen::Vector2d* right, Eigen::Matrix2d* Sigma_right);
+                  const Template* coarse, Eigen::Vector2d* right, Eigen::Matrix2d* Sigma_right);
   TriangulationLimits Limits(const Pair& pair) const {
     TriangulationLimits l;
     l.max_gap_rad = o.triangulation_max_gap_px * pair.pixel_angle;
@@ -163,6 +164,13 @@ std::unique_ptr<Pair> VisualOdometry::State::Prepare(const StereoImages& im, VoR
   pair->left_band.resize(levels);
   BandPass(right, o.match_prefilter_sigma, o.match_prefilter_box_px, &pair->right_band,
            &pair->scratch);
+  if (o.stereo_coarse_to_fine && pair->left_band.size() > 1) {
+    cv::resize(right, pair->right_half, pair->left_band[1].size(), 0, 0, cv::INTER_AREA);
+    BandPass(pair->right_half, o.match_prefilter_sigma, o.match_prefilter_box_px,
+             &pair->right_band_half, &pair->scratch);
+  } else {
+    pair->right_band_half.release();
+  }
 
   CornerOptions co;
   co.harris_k = o.feature_harris_k;
@@ -189,7 +197,8 @@ std::unique_ptr<Pair> VisualOdometry::State::Prepare(const StereoImages& im, VoR
 bool VisualOdometry::State::MatchRight(const Pair& pair, const Eigen::Vector3d& C1,
                                        const Eigen::Vector3d& r1, double range_near,
                                        double range_far, double margin_px,
-                                       Eigen::Vector2d* right, Eigen::Matrix2d* Sigma_right) {
+                                       const Template* coarse, Eigen::Vector2d* right,
+                                       Eigen::Matrix2d* Sigma_right) {
   // VO-3: the epipolar segment is the projection of the left ray between the two ranges.
   Eigen::Vector2d a, b;
   if (!pair.rig.right->Project(C1 + r1 * range_far, &a)) return false;
@@ -210,7 +219,19 @@ bool VisualOdometry::State::MatchRight(const Pair& pair, const Eigen::Vector3d& 
   // stay within the band above and below the line (a few pixels, VO-3).
   int bx = 0, by = 0;
   float score = 0;
-  if (!correlator.SearchSegment(tmpl, pair.right_band, a, b, 0, &bx, &by, &score)) {
+  if (coarse && !pair.right_band_half.empty() && (b - a).norm() > 8) {
+    // Coarse to fine: the whole segment at half resolution, then +-2 px at full.
+    const Eigen::Vector2d half(0.5, 0.5);
+    int cx = 0, cy = 0;
+    if (!correlator.SearchSegment(*coarse, pair.right_band_half, (a + half) / 2 - half,
+                                  (b + half) / 2 - half, 0, &cx, &cy, &score)) {
+      return false;
+    }
+    if (!correlator.SearchWindow(tmpl, pair.right_band, 2 * cx - 2, 2 * cx + 3, 2 * cy - 1,
+                                 2 * cy + 2, &bx, &by, &score)) {
+      return false;
+    }
+  } else if (!correlator.SearchSegment(tmpl, pair.right_band, a, b, 0, &bx, &by, &score)) {
     return false;
   }
   MatchResult m = Correlator::Refine(tmpl, pair.right_band, bx, by, o.match_covariance_scale,
@@ -243,8 +264,12 @@ void VisualOdometry::State::StereoMatchFresh(Pair* pair, const std::vector<Corne
     pair->rig.left->BackProject(left, &C1, &r1);
     Eigen::Vector2d right;
     Eigen::Matrix2d Sigma_right;
-    if (!MatchRight(*pair, C1, r1, o.stereo_min_range_m, pair->far_range, 0.0, &right,
-                    &Sigma_right)) {
+    const bool coarse =
+        !pair->right_band_half.empty() &&
+        coarse_tmpl.Extract(pair->left_band[1], static_cast<int>(std::lround(ToLevel(c.x, 1))),
+                            static_cast<int>(std::lround(ToLevel(c.y, 1))), o.match_template_px);
+    if (!MatchRight(*pair, C1, r1, o.stereo_min_range_m, pair->far_range, 0.0,
+                    coarse ? &coarse_tmpl : nullptr, &right, &Sigma_right)) {
       continue;
     }
     StereoPoint sp;
@@ -419,7 +444,8 @@ VoResult VisualOdometry::Process(const StereoImages& images,
     Eigen::Vector2d right;
     Eigen::Matrix2d Sigma_right;
     const bool matched = far > near && s.MatchRight(c, C1, r1, near, far,
-                                                    o.track_stereo_margin_px, &right, &Sigma_right);
+                                                    o.track_stereo_margin_px, nullptr, &right,
+                                                    &Sigma_right);
     stereo_ms += Ms(t_s, Clock::now());
     if (!matched) continue;
     StereoPoint sp;

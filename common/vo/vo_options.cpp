@@ -37,7 +37,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "feature_min_distance_px", "feature_count", "feature_min_response",
                   "feature_border_px",
                   "match_template_px", "match_prefilter_sigma", "match_prefilter_box_px",
-                  "stereo_epipolar_band_px", "stereo_min_range_m", "stereo_min_disparity_px",
+                  "stereo_epipolar_band_px", "stereo_coarse_to_fine", "stereo_min_range_m", "stereo_min_disparity_px",
                   "match_min_score", "match_covariance_scale", "match_min_sigma_px",
                   "match_subpixel_iterations",
                   "triangulation_max_gap_px", "triangulation_max_range_m",
@@ -67,6 +67,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   node.Get("match_prefilter_sigma", o.match_prefilter_sigma, 0.0, 10.0);
   node.Get("match_prefilter_box_px", o.match_prefilter_box_px, 0, 101);
   node.Get("stereo_epipolar_band_px", o.stereo_epipolar_band_px, 0, 20);
+  node.Get("stereo_coarse_to_fine", o.stereo_coarse_to_fine);
   node.Get("stereo_min_range_m", o.stereo_min_range_m, 1e-3, kInf);
   node.Get("stereo_min_disparity_px", o.stereo_min_disparity_px, 0.0, 1000.0);
   node.Get("match_min_score", o.match_min_score, -1.0, 1.0);
