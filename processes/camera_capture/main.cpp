@@ -20,7 +20,10 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <chrono>
 #include <deque>
+#include <future>
+#include <mutex>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -54,21 +57,31 @@ class SimulatedCameras : public ImageSource {
         rig_(std::move(rig)),
         renderer_(std::move(options)) {}
   bool Ready(std::int64_t request_utime) const override {
+    std::lock_guard<std::mutex> lock(mutex_);
     return truth_ && truth_->utime >= request_utime;
   }
-  void OnTruth(const rover_msgs::sim_truth_t& t) override { truth_ = t; }
+  void OnTruth(const rover_msgs::sim_truth_t& t) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    truth_ = t;
+  }
   CapturedPair Capture(std::int64_t frame_id) override {
+    rover_msgs::sim_truth_t truth;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      truth = *truth_;
+    }
     geometry::Pose T = geometry::Pose::Identity();
-    T.linear() = bus::QuaternionFromArray(truth_->orientation).toRotationMatrix();
-    T.translation() = Eigen::Vector3d(truth_->position[0], truth_->position[1], truth_->position[2]);
+    T.linear() = bus::QuaternionFromArray(truth.orientation).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(truth.position[0], truth.position[1], truth.position[2]);
     auto images = renderer_.RenderPair(world_, rig_, T, frame_id);
-    return {images.left, images.right, images.rig, truth_->utime};
+    return {images.left, images.right, images.rig, truth.utime};
   }
 
  private:
   terrain::World world_;
   geometry::StereoRig rig_;
   render::StereoRenderer renderer_;
+  mutable std::mutex mutex_;  // truth arrives on the bus thread while a render runs
   std::optional<rover_msgs::sim_truth_t> truth_;
 };
 
@@ -186,40 +199,51 @@ int main(int argc, char** argv) {
     proc.bus().Subscribe<rover_msgs::capture_request_t>(
         channels::kCaptureRequest, [&](const rover_msgs::capture_request_t& m) { pending.push_back(m); });
 
-    auto capture = [&](const rover_msgs::capture_request_t& request) {
+    // A capture (a render takes seconds) runs on a worker thread, so that the loop keeps
+    // answering and heartbeating: the executor takes a silent process for a dead one.
+    std::future<rover_msgs::stereo_frame_t> job;
+    auto capture_frame = [&cameras, png](rover_msgs::capture_request_t request, rover_msgs::pose_t pose,
+                                         std::int64_t now) {
       const auto pair = cameras->Capture(request.frame_id);
       rover_msgs::stereo_frame_t frame{};
-      frame.utime = pair.utime != 0 ? pair.utime : proc.now();
+      frame.utime = pair.utime != 0 ? pair.utime : now;
       frame.frame_id = request.frame_id;
       frame.purpose = request.purpose;
       frame.left = EncodeImage(pair.left, png);
       frame.right = EncodeImage(pair.right, png);
       frame.left_model = EncodeModel(*pair.rig.left);
       frame.right_model = EncodeModel(*pair.rig.right);
-      if (pose) {
-        frame.pose_at_capture = *pose;
-      } else {
-        frame.pose_at_capture.orientation[0] = 1.0;
-      }
-      proc.bus().Publish(channels::kStereoFrame, frame);
+      frame.pose_at_capture = pose;
+      return frame;
+    };
+    auto start = [&](const rover_msgs::capture_request_t& request) {
+      rover_msgs::pose_t at_capture{};
+      at_capture.orientation[0] = 1.0;
+      if (pose) at_capture = *pose;
+      job = std::async(std::launch::async, capture_frame, request, at_capture, proc.now());
     };
 
     proc.Run(
         [&] {
-          while (!pending.empty() && cameras->Ready(pending.front().utime)) {
-            capture(pending.front());
-            pending.pop_front();
+          if (job.valid()) {
+            if (job.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+            proc.bus().Publish(channels::kStereoFrame, job.get());  // rethrows a capture error
           }
-          if (rate_hz > 0 && proc.now() >= next_auto_utime && cameras->Ready(proc.now())) {
+          if (!pending.empty() && cameras->Ready(pending.front().utime)) {
+            start(pending.front());
+            pending.pop_front();
+          } else if (pending.empty() && rate_hz > 0 && proc.now() >= next_auto_utime &&
+                     cameras->Ready(proc.now())) {
             rover_msgs::capture_request_t r{};
             r.utime = proc.now();
             r.frame_id = next_auto_id++;
             r.purpose = "periodic";
-            capture(r);
+            start(r);
             next_auto_utime = proc.now() + static_cast<std::int64_t>(1e6 / rate_hz);
           }
         },
         5);
+    if (job.valid()) job.wait();
     return 0;
   });
 }

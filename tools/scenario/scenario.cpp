@@ -5,7 +5,7 @@
 #include "config/yaml_config.hpp"
 #include "geometry/pose.hpp"
 #include "hazards/keepout.hpp"
-#include "scenario/json_writer.hpp"
+#include "report/json_writer.hpp"
 #include "sequence/parser.hpp"
 
 #include <lcm/lcm-cpp.hpp>

@@ -1,6 +1,7 @@
 #include "vo_eval/vo_evaluation.hpp"
 
 #include "geometry/pose.hpp"
+#include "report/json_writer.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -38,33 +39,9 @@ std::string CsvQuoted(const std::string& s) {
   return out + "\"";
 }
 
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
+std::string JsonString(const std::string& s) { return tools::JsonWriter::Quote(s); }
 
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
+std::string JsonNumber(double v) { return tools::JsonWriter::Number(v); }
 
 double ThreadCpuMs() {
   timespec ts{};

@@ -1,4 +1,4 @@
-// A minimal JSON emitter for summary.json and metrics files. Written by hand because the
+// A minimal JSON emitter for summary.json and metrics.json. Written by hand because the
 // project needs only to write a few flat objects, which does not justify a new dependency;
 // the output is read back in tests with yaml-cpp (YAML 1.2 reads JSON).
 #pragma once
@@ -30,12 +30,7 @@ class JsonWriter {
   JsonWriter& Value(int v) { return Raw(std::to_string(v)); }
   JsonWriter& Value(long v) { return Raw(std::to_string(v)); }
   JsonWriter& Value(long long v) { return Raw(std::to_string(v)); }
-  JsonWriter& Value(double v) {
-    if (!std::isfinite(v)) return Raw("null");
-    char buf[40];
-    std::snprintf(buf, sizeof(buf), "%.6g", v);
-    return Raw(buf);
-  }
+  JsonWriter& Value(double v) { return Raw(Number(v)); }
   JsonWriter& Null() { return Raw("null"); }
   template <class T>
   JsonWriter& Field(const std::string& key, const T& v) {
@@ -44,6 +39,35 @@ class JsonWriter {
   }
 
   std::string str() const { return os_.str() + "\n"; }
+
+  // A JSON number (6 significant digits; null when not finite).
+  static std::string Number(double v) {
+    if (!std::isfinite(v)) return "null";
+    char buf[40];
+    std::snprintf(buf, sizeof(buf), "%.6g", v);
+    return buf;
+  }
+  // A JSON string literal, escaped.
+  static std::string Quote(const std::string& s) {
+    std::string out = "\"";
+    for (char c : s) {
+      switch (c) {
+        case '"': out += "\\\""; break;
+        case '\\': out += "\\\\"; break;
+        case '\n': out += "\\n"; break;
+        case '\t': out += "\\t"; break;
+        default:
+          if (static_cast<unsigned char>(c) < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+            out += buf;
+          } else {
+            out += c;
+          }
+      }
+    }
+    return out + "\"";
+  }
 
  private:
   JsonWriter& Open(char c) {
@@ -73,26 +97,6 @@ class JsonWriter {
     if (!first_.back()) os_ << ",";
     os_ << "\n" << std::string(2 * first_.size(), ' ');
     first_.back() = false;
-  }
-  static std::string Quote(const std::string& s) {
-    std::string out = "\"";
-    for (char c : s) {
-      switch (c) {
-        case '"': out += "\\\""; break;
-        case '\\': out += "\\\\"; break;
-        case '\n': out += "\\n"; break;
-        case '\t': out += "\\t"; break;
-        default:
-          if (static_cast<unsigned char>(c) < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-            out += buf;
-          } else {
-            out += c;
-          }
-      }
-    }
-    return out + "\"";
   }
 
   std::ostringstream os_;
