@@ -14,6 +14,10 @@ class Ground {
   virtual double Elevation(double x, double y) const = 0;
   // Lambertian albedo in [0, 1]; may carry detail down to millimetres.
   virtual double Albedo(double x, double y) const = 0;
+  // The albedo as a pixel that sees a ground patch `footprint_m` across records it: a
+  // ground may leave out texture finer than the patch (it would only alias). Default: the
+  // point value.
+  virtual double AlbedoOver(double x, double y, double /*footprint_m*/) const { return Albedo(x, y); }
 
   // A ground that IS a bilinear height grid exposes it, and the renderer traces that grid
   // itself: every hit then lies exactly on Elevation()'s surface. Node (i, j) is at

@@ -164,27 +164,33 @@ double HeightGrid::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
   }
   const double gu = (o.x() - x0_) / h_, gv = (o.y() - y0_) / h_;
   const double du = d.x() / h_, dv = d.y() / h_;
+  // Reciprocals once per ray: the walk below then needs no division per step.
+  const double iu = du != 0 ? 1.0 / du : 0.0, iv = dv != 0 ? 1.0 / dv : 0.0;
+  const int su = du > 0 ? 1 : 0, sv = dv > 0 ? 1 : 0;
   const int top = static_cast<int>(mips_.size()) - 1;
   int m = std::min(top, 6);
   double t = t0;
   while (t <= t1) {
     const double u = gu + du * t, v = gv + dv * t;
     const double s = static_cast<double>(1 << m);
-    int I = static_cast<int>(std::floor(u / s));
-    int J = static_cast<int>(std::floor(v / s));
-    I = std::clamp(I, 0, cx_[m] - 1);
-    J = std::clamp(J, 0, cy_[m] - 1);
+    // u, v >= 0 up to rounding inside the clipped box, so truncation is floor here.
+    const int I = std::clamp(static_cast<int>(u * (1.0 / s)), 0, cx_[m] - 1);
+    const int J = std::clamp(static_cast<int>(v * (1.0 / s)), 0, cy_[m] - 1);
     double t_exit = t1;
-    if (du > 0) t_exit = std::min(t_exit, ((I + 1) * s - gu) / du);
-    if (du < 0) t_exit = std::min(t_exit, (I * s - gu) / du);
-    if (dv > 0) t_exit = std::min(t_exit, ((J + 1) * s - gv) / dv);
-    if (dv < 0) t_exit = std::min(t_exit, (J * s - gv) / dv);
+    if (du != 0) t_exit = std::min(t_exit, ((I + su) * s - gu) * iu);
+    if (dv != 0) t_exit = std::min(t_exit, ((J + sv) * s - gv) * iv);
     t_exit = std::max(t_exit, t);
     const float cell_max = mips_[m][static_cast<std::size_t>(J) * cx_[m] + I];
     const double e_min = de < 0 ? oe + de * t_exit : oe + de * t;
     if (e_min > cell_max) {
       t = t_exit + kNudge;
-      if (m < top) ++m;
+      // Go coarser only when the step left the parent cell too: within the same parent
+      // its bound has just failed, and would again.
+      if (m < top) {
+        const double un = gu + du * t, vn = gv + dv * t;
+        const double s2 = 2 * s;
+        if (static_cast<int>(un * (1.0 / s2)) != (I >> 1) || static_cast<int>(vn * (1.0 / s2)) != (J >> 1)) ++m;
+      }
       continue;
     }
     if (m > 0) {
@@ -225,6 +231,54 @@ Eigen::Vector3d HeightGrid::NormalUpAt(double x, double y) const {
   }
   // Up is -Z in the site frame.
   return Eigen::Vector3d(-gx, -gy, -1.0).normalized();
+}
+
+std::vector<float> HeightGrid::SunHorizon(double sx, double sy, double tan_el) const {
+  std::vector<float> horizon(z_.size(), kNoHorizon);
+  if (z_.empty() || !(sx * sx + sy * sy > 1e-12)) return horizon;
+  // Sweep along the dominant axis of the sun's direction, from the sun side inward; the
+  // upstream point of node (i, j) lies on the neighbouring grid line, `frac` nodes across.
+  const bool along_x = std::abs(sx) >= std::abs(sy);
+  const double main = along_x ? sx : sy, cross = along_x ? sy : sx;
+  const int n_main = along_x ? nx_ : ny_, n_cross = along_x ? ny_ : nx_;
+  const int step = main > 0 ? 1 : -1;
+  const double frac = cross / std::abs(main);
+  const double drop = h_ / std::abs(main) * tan_el;
+  const int first = main > 0 ? n_main - 1 : 0;
+  // The best of surface and horizon on the upstream line, per node.
+  std::vector<float> up_best(static_cast<std::size_t>(n_cross));
+  auto node = [&](int a, int c) -> std::size_t {
+    return along_x ? static_cast<std::size_t>(c) * nx_ + a : static_cast<std::size_t>(a) * nx_ + c;
+  };
+  for (int c = 0; c < n_cross; ++c) up_best[c] = z_[node(first, c)];
+  for (int a = first - step; a >= 0 && a < n_main; a -= step) {
+    for (int c = 0; c < n_cross; ++c) {
+      const double q = c + frac;
+      const int c0 = static_cast<int>(std::floor(q));
+      float hz = kNoHorizon;
+      if (c0 >= 0 && c0 < n_cross) {
+        const double w = q - c0;
+        const double v0 = up_best[c0];
+        const double v1 = c0 + 1 < n_cross ? up_best[c0 + 1] : (w > 1e-9 ? kNoHorizon : v0);
+        if (v0 > 0.5 * kNoHorizon && v1 > 0.5 * kNoHorizon) hz = static_cast<float>((1 - w) * v0 + w * v1 - drop);
+      }
+      horizon[node(a, c)] = hz;
+    }
+    for (int c = 0; c < n_cross; ++c) {
+      const std::size_t k = node(a, c);
+      up_best[c] = std::max(z_[k], horizon[k]);
+    }
+  }
+  return horizon;
+}
+
+double HeightGrid::InterpolateNodes(const std::vector<float>& field, double x, double y) const {
+  const double u = std::clamp((x - x0_) / h_, 0.0, nx_ - 1.000001);
+  const double v = std::clamp((y - y0_) / h_, 0.0, ny_ - 1.000001);
+  const int i = static_cast<int>(u), j = static_cast<int>(v);
+  const double a = u - i, b = v - j;
+  const std::size_t k = static_cast<std::size_t>(j) * nx_ + i;
+  return (1 - b) * ((1 - a) * field[k] + a * field[k + 1]) + b * ((1 - a) * field[k + nx_] + a * field[k + nx_ + 1]);
 }
 
 void HeightLevels::Build(const Ground& ground, const Eigen::Vector2d& centre,

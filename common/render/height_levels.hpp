@@ -44,6 +44,19 @@ class HeightGrid {
   double ElevationAt(double x, double y) const;
   Eigen::Vector3d NormalUpAt(double x, double y) const;  // in site axes, Z down
 
+  // The sun's horizon on this grid: for each node, the lowest elevation at which a point
+  // there still sees the sun over the grid's surface (the highest of e(q) - tan(el) |q - p|
+  // over the surface toward the sun), or kNoHorizon where nothing can shade it. A hit
+  // is in the terrain's shadow when its elevation is below the bilinear horizon there.
+  // One O(nodes) sweep from the sun side: each node takes the better of its upstream
+  // neighbour line's surface and horizon (linear along that grid line, exact for the
+  // surface), lowered by the drop over one step. `toward_sun_xy` is the horizontal unit
+  // vector toward the sun; its reach is the whole grid (no shadow_reach_m limit).
+  static constexpr float kNoHorizon = -1e30f;
+  std::vector<float> SunHorizon(double toward_sun_x, double toward_sun_y, double tan_elevation) const;
+  // Bilinear value of a node field (same layout as the grid: row j of nx nodes) at (x, y).
+  double InterpolateNodes(const std::vector<float>& field, double x, double y) const;
+
   double cell() const { return h_; }
   double max_elevation() const { return global_max_; }
   bool Contains(double x, double y) const;

@@ -21,6 +21,7 @@ using internal::HeightLevels;
 struct StereoRenderer::RayTable {
   int width = 0, height = 0;
   Eigen::Vector3d origin;                // rover frame, when all rays share it
+  double pixel_angle = 0;                // smallest angle between neighbouring rays, rad
   std::vector<Eigen::Vector3f> dirs;     // rover frame, unit
   std::vector<Eigen::Vector3f> origins;  // per pixel, only for non-central models
 };
@@ -29,6 +30,10 @@ struct StereoRenderer::GridCache {
   Ground::GridView view;
   std::array<float, 8> probe{};
   HeightLevels levels;
+  // The terrain's shadow for one sun, swept once and kept while grid and sun stay.
+  double sun_azimuth_deg = 0, sun_elevation_deg = 0;
+  bool has_horizon = false;
+  std::vector<float> horizon;
 };
 
 namespace {
@@ -73,18 +78,47 @@ struct RoverSolids {
   bool has_mast = false;
   double mx = 0, my = 0, mr = 0, mz_top = 0, mz_bottom = 0;
 
-  // Does the ray p + t s, t > 0 (rover frame), pass through a solid?
+  // A sphere around every solid and the sun direction's reciprocals, set by Prepare for
+  // one frame: most ground points' sun rays miss the sphere, and the slab tests of those
+  // that do not need no division.
+  Eigen::Vector3d bound_centre = Eigen::Vector3d::Zero();
+  double bound_radius = -1;
+  Eigen::Vector3d inv_s = Eigen::Vector3d::Zero();
+
+  void Prepare(const Eigen::Vector3d& s) {
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector3d hi = -lo;
+    for (const auto& b : boxes) {
+      lo = lo.cwiseMin(Eigen::Vector3d(b[0], b[2], b[4]));
+      hi = hi.cwiseMax(Eigen::Vector3d(b[1], b[3], b[5]));
+    }
+    if (has_mast) {
+      lo = lo.cwiseMin(Eigen::Vector3d(mx - mr, my - mr, mz_top));
+      hi = hi.cwiseMax(Eigen::Vector3d(mx + mr, my + mr, mz_bottom));
+    }
+    if (lo.x() <= hi.x()) {
+      bound_centre = 0.5 * (lo + hi);
+      bound_radius = 0.5 * (hi - lo).norm() + 1e-6;
+    }
+    for (int k = 0; k < 3; ++k) inv_s[k] = std::abs(s[k]) < 1e-15 ? 0.0 : 1.0 / s[k];
+  }
+
+  // Does the ray p + t s, t > 0 (rover frame), pass through a solid? s as in Prepare.
   bool Blocks(const Eigen::Vector3d& p, const Eigen::Vector3d& s) const {
+    if (bound_radius < 0) return false;
+    const Eigen::Vector3d v = bound_centre - p;
+    const double tc = v.dot(s);
+    if (tc < -bound_radius || v.squaredNorm() - tc * tc > bound_radius * bound_radius) return false;
     for (const auto& b : boxes) {
       double t0 = 1e-6, t1 = std::numeric_limits<double>::infinity();
       bool miss = false;
       for (int k = 0; k < 3 && !miss; ++k) {
         const double lo = b[2 * k], hi = b[2 * k + 1];
-        if (std::abs(s[k]) < 1e-15) {
+        if (inv_s[k] == 0.0) {
           miss = p[k] < lo || p[k] > hi;
           continue;
         }
-        double ta = (lo - p[k]) / s[k], tb = (hi - p[k]) / s[k];
+        double ta = (lo - p[k]) * inv_s[k], tb = (hi - p[k]) * inv_s[k];
         if (ta > tb) std::swap(ta, tb);
         t0 = std::max(t0, ta);
         t1 = std::min(t1, tb);
@@ -197,6 +231,20 @@ const StereoRenderer::RayTable& StereoRenderer::RaysFor(const geometry::CameraMo
     }
   }
   if (!central) table->origins = std::move(origins);
+  // The finest angular pixel over a coarse lattice of the image, so that the albedo
+  // footprint is never overstated where the model's pixels are smallest.
+  double angle = M_PI;
+  for (int v = 0; v + 1 < table->height; v += std::max(1, table->height / 16)) {
+    for (int u = 0; u + 1 < table->width; u += std::max(1, table->width / 16)) {
+      const std::size_t k = static_cast<std::size_t>(v) * table->width + u;
+      const Eigen::Vector3d d0 = table->dirs[k].cast<double>();
+      for (const std::size_t kn : {k + 1, k + table->width}) {
+        const Eigen::Vector3d d1 = table->dirs[kn].cast<double>();
+        angle = std::min(angle, std::atan2(d0.cross(d1).norm(), d0.dot(d1)));
+      }
+    }
+  }
+  table->pixel_angle = angle;
   ray_cache_[key] = table;
   return *table;
 }
@@ -236,6 +284,10 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
 
   // ---- The height field this frame traces.
   const HeightLevels* levels = nullptr;
+  const bool sun_up = el > 0;
+  // The native grid's terrain shadow as a horizon field (SunHorizon); other grounds are
+  // resampled per frame and trace a shadow ray per lit pixel instead.
+  const std::vector<float>* horizon = nullptr;
   HeightLevels frame_levels;
   Ground::GridView view;
   if (ground.NativeGrid(&view)) {
@@ -253,6 +305,15 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
       grid_cache_->levels.Adopt(view);
     }
     levels = &grid_cache_->levels;
+    if (sun_up && o.shadow_reach_m > 0 &&
+        (!grid_cache_->has_horizon || grid_cache_->sun_azimuth_deg != sun.azimuth_deg ||
+         grid_cache_->sun_elevation_deg != sun.elevation_deg)) {
+      grid_cache_->horizon = levels->level(0).SunHorizon(std::cos(az), std::sin(az), std::tan(el));
+      grid_cache_->sun_azimuth_deg = sun.azimuth_deg;
+      grid_cache_->sun_elevation_deg = sun.elevation_deg;
+      grid_cache_->has_horizon = true;
+    }
+    if (sun_up && o.shadow_reach_m > 0) horizon = &grid_cache_->horizon;
   } else {
     // Sample the ground into nested grids around the rig, over what the cameras can see
     // and what can shadow it.
@@ -313,10 +374,10 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
   const auto t_grid = std::chrono::steady_clock::now();
 
   // ---- Trace both images.
-  const RoverSolids solids = MakeRoverSolids(o.rover_shadow, out.rig);
+  RoverSolids solids = MakeRoverSolids(o.rover_shadow, out.rig);
   const bool check_rover = !solids.boxes.empty() || solids.has_mast;
   const Eigen::Vector3d s_rover = R.transpose() * s_site;
-  const bool sun_up = el > 0;
+  solids.Prepare(s_rover);
   const double t_shadow = o.shadow_reach_m / std::max(std::cos(el), 1e-3);
   const std::vector<float>& normal = NormalTable();
   const std::uint64_t base_seed = SplitMix(o.noise_seed ^ SplitMix(static_cast<std::uint64_t>(frame_seed)));
@@ -346,13 +407,21 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
           const Eigen::Vector3d p = os + t * ds;
           const internal::HeightGrid& g = levels->level(level);
           const Eigen::Vector3d n = g.NormalUpAt(p.x(), p.y());
-          const double albedo = ground.Albedo(p.x(), p.y());
+          // The pixel sees t * pixel_angle of ground across the ray and that over
+          // cos(incidence) along it: the footprint is the side of the square of the same
+          // area, so texture the pixel can only alias is left out, and no more.
+          const double across = t * tab.pixel_angle;
+          const double footprint = across / std::sqrt(std::max(std::abs(n.dot(ds)), 0.05));
+          const double albedo = ground.AlbedoOver(p.x(), p.y(), footprint);
           double direct = 0;
           const double cos_i = n.dot(s_site);
           if (sun_up && cos_i > 0) {
             bool lit = true;
             if (check_rover) lit = !solids.Blocks(R.transpose() * (p - tr), s_rover);
-            if (lit && t_shadow > 0) {
+            if (lit && horizon) {
+              // The same lift off the surface as the shadow ray below.
+              lit = -p.z() + std::max(0.002, 0.05 * g.cell()) >= g.InterpolateNodes(*horizon, p.x(), p.y());
+            } else if (lit && t_shadow > 0) {
               // Start a little above the surface so the ray does not hit its own cell.
               const Eigen::Vector3d start(p.x(), p.y(), p.z() - std::max(0.002, 0.05 * g.cell()));
               lit = levels->Intersect(start, s_site, 0.0, t_shadow) < 0;

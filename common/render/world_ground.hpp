@@ -12,6 +12,11 @@ class WorldGround : public Ground {
   explicit WorldGround(const terrain::World& world) : world_(world) {}
   double Elevation(double x, double y) const override { return world_.Elevation(x, y); }
   double Albedo(double x, double y) const override { return world_.Albedo(x, y); }
+  // World::Albedo drops texture octaves shorter than twice the footprint: above the
+  // pixel's Nyquist limit, and the costliest octaves of the noise.
+  double AlbedoOver(double x, double y, double footprint_m) const override {
+    return world_.Albedo(x, y, footprint_m);
+  }
   bool NativeGrid(GridView* view) const override {
     view->x0 = world_.x_min();
     view->y0 = world_.y_min();
