@@ -219,6 +219,18 @@ Eigen::Vector3d HeightGrid::NormalUpAt(double x, double y) const {
   const int i = static_cast<int>(u), j = static_cast<int>(v);
   const double a = u - i, b = v - j;
   double gx = 0, gy = 0;
+  if (i >= 1 && j >= 1 && i + 2 < nx_ && j + 2 < ny_) {
+    // Inside the grid every node has both neighbours: central differences over 2h.
+    const float* r0 = &z_[static_cast<std::size_t>(j) * nx_ + i];
+    const float* rm = r0 - nx_;
+    const float* r1 = r0 + nx_;
+    const float* r2 = r1 + nx_;
+    const double w00 = (1 - a) * (1 - b), w10 = a * (1 - b), w01 = (1 - a) * b, w11 = a * b;
+    const double k = 0.5 / h_;
+    gx = k * (w00 * (r0[1] - r0[-1]) + w10 * (r0[2] - r0[0]) + w01 * (r1[1] - r1[-1]) + w11 * (r1[2] - r1[0]));
+    gy = k * (w00 * (r1[0] - rm[0]) + w10 * (r1[1] - rm[1]) + w01 * (r2[0] - r0[0]) + w11 * (r2[1] - r0[1]));
+    return Eigen::Vector3d(-gx, -gy, -1.0).normalized();
+  }
   for (int dj = 0; dj < 2; ++dj) {
     for (int di = 0; di < 2; ++di) {
       const int ni = i + di, nj = j + dj;
@@ -308,6 +320,7 @@ std::size_t HeightLevels::nodes() const {
 }
 
 int HeightLevels::LevelAt(double x, double y) const {
+  if (grids_.size() <= 1) return 0;
   const double rho = std::hypot(x - centre_.x(), y - centre_.y());
   if (rho <= near_range_) return 0;
   const int L = static_cast<int>(std::ceil(std::log2(rho / near_range_)));
@@ -318,6 +331,12 @@ double HeightLevels::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& 
                                double t1, int* level_out) const {
   if (grids_.empty() || t0 > t1) return -1;
   if (d.z() <= 0 && -o.z() + (-d.z()) * t0 > global_max_) return -1;
+  if (grids_.size() == 1) {
+    // One level (a ground's own grid): no circles to split at.
+    const double hit = grids_[0].Intersect(o, d, t0, t1);
+    if (hit >= 0 && level_out) *level_out = 0;
+    return hit;
+  }
   // Split the ray where it crosses the level circles; each piece lies in one level.
   double cuts[64];
   int n = 0;
