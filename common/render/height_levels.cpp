@@ -1,6 +1,7 @@
 #include "render/height_levels.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -10,6 +11,20 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Step past a cell wall so that the next cell is a different one; far below 1 mm.
 constexpr double kNudge = 1e-9;
+// Mip cell sizes 2^m and their reciprocals (exact), so the walk needs no division.
+constexpr int kMaxMips = 40;
+constexpr std::array<double, kMaxMips> kPow2 = [] {
+  std::array<double, kMaxMips> a{};
+  double x = 1;
+  for (double& v : a) { v = x; x *= 2; }
+  return a;
+}();
+constexpr std::array<double, kMaxMips> kInvPow2 = [] {
+  std::array<double, kMaxMips> a{};
+  double x = 1;
+  for (double& v : a) { v = x; x *= 0.5; }
+  return a;
+}();
 }  // namespace
 
 void Box2::Add(double x, double y) {
@@ -172,10 +187,10 @@ double HeightGrid::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
   double t = t0;
   while (t <= t1) {
     const double u = gu + du * t, v = gv + dv * t;
-    const double s = static_cast<double>(1 << m);
+    const double s = kPow2[m], inv_s = kInvPow2[m];
     // u, v >= 0 up to rounding inside the clipped box, so truncation is floor here.
-    const int I = std::clamp(static_cast<int>(u * (1.0 / s)), 0, cx_[m] - 1);
-    const int J = std::clamp(static_cast<int>(v * (1.0 / s)), 0, cy_[m] - 1);
+    const int I = std::clamp(static_cast<int>(u * inv_s), 0, cx_[m] - 1);
+    const int J = std::clamp(static_cast<int>(v * inv_s), 0, cy_[m] - 1);
     double t_exit = t1;
     if (du != 0) t_exit = std::min(t_exit, ((I + su) * s - gu) * iu);
     if (dv != 0) t_exit = std::min(t_exit, ((J + sv) * s - gv) * iv);
@@ -188,8 +203,8 @@ double HeightGrid::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
       // its bound has just failed, and would again.
       if (m < top) {
         const double un = gu + du * t, vn = gv + dv * t;
-        const double s2 = 2 * s;
-        if (static_cast<int>(un * (1.0 / s2)) != (I >> 1) || static_cast<int>(vn * (1.0 / s2)) != (J >> 1)) ++m;
+        const double inv_s2 = 0.5 * inv_s;
+        if (static_cast<int>(un * inv_s2) != (I >> 1) || static_cast<int>(vn * inv_s2) != (J >> 1)) ++m;
       }
       continue;
     }
