@@ -11,23 +11,132 @@ namespace rover::vo {
 
 namespace {
 
-// out -= box mean (side n, replicated borders): vertical running sum, then the horizontal
-// sum as n shifted, contiguous adds (a running sum would serialise on its latency).
-// OpenCV's float box filter took ~2 ms on 1226x370 on one core; this a fraction of it.
-__attribute__((target_clones("avx2", "default")))
-void SubtractBoxMean(const cv::Mat& image, int n, cv::Mat* out) {
-  const int h = n / 2, W = image.cols, H = image.rows;
-  thread_local std::vector<float> column, padded, acc;
-  column.assign(W, 0.0f);
-  padded.resize(W + 2 * h);
-  acc.resize(W);
+// Symmetric filter of a row: dst[x] = c[0] p[x] + sum_j c[j] (p[x-j] + p[x+j]), all taps
+// in one pass (separate passes per tap were bound by their stores). HK = 0: any width.
+template <int HK>
+__attribute__((always_inline)) inline void SymmetricRow(const float* c, int hk, const float* p,
+                                                        int W, float* __restrict dst) {
+  if constexpr (HK > 0) {
+    for (int x = 0; x < W; ++x) {
+      float v = c[0] * p[x];
+      for (int j = 1; j <= HK; ++j) v += c[j] * (p[x - j] + p[x + j]);
+      dst[x] = v;
+    }
+  } else {
+    for (int x = 0; x < W; ++x) dst[x] = c[0] * p[x];
+    for (int j = 1; j <= hk; ++j) {
+      const float cj = c[j];
+      for (int x = 0; x < W; ++x) dst[x] += cj * (p[x - j] + p[x + j]);
+    }
+  }
+}
+
+// o[x] -= inv * sum_{j=0}^{n-1} p[x+j], in one pass. N = 0: any n.
+template <int N>
+__attribute__((always_inline)) inline void SubtractBoxRow(const float* p, int n, float inv, int W,
+                                                          float* __restrict o) {
+  if constexpr (N > 0) {
+    for (int x = 0; x < W; ++x) {
+      float v = 0;
+      for (int j = 0; j < N; ++j) v += p[x + j];
+      o[x] -= v * inv;
+    }
+  } else {
+    thread_local std::vector<float> acc;
+    acc.resize(W);
+    float* __restrict s = acc.data();
+    std::copy(p, p + W, s);
+    for (int j = 1; j < n; ++j) {
+      const float* __restrict q = p + j;
+      for (int x = 0; x < W; ++x) s[x] += q[x];
+    }
+    for (int x = 0; x < W; ++x) o[x] -= s[x] * inv;
+  }
+}
+
+// One streaming pass, row by row, so each image is read once and written once (OpenCV's
+// GaussianBlur followed by a second pass for the box took ~1.7 ms on 1226x370 on one
+// core; this about a third of it):
+//   out = Gaussian(taps, reflected borders, as cv::GaussianBlur with BORDER_REFLECT)
+//         - box mean (side n, replicated borders; skipped when n < 3).
+// The Gaussian filters rows into a ring of k rows, then combines them down the columns.
+// The box sums columns with a running sum, then n shifted copies of the row in one pass
+// (a running sum along the row would serialise on its latency).
+__attribute__((target_clones("avx2,fma", "default")))
+void BandPassRows(const cv::Mat& image, const std::vector<float>& taps, int n, cv::Mat* out) {
+  const int W = image.cols, H = image.rows;
+  const int k = static_cast<int>(taps.size()), hk = k / 2;
+  const int h = n / 2;
+  thread_local std::vector<float> ring, gpad, column, padded;
+  auto reflect = [](int i, int len) {
+    // BORDER_REFLECT: fedcba|abcdefgh|hgfedcb (images are wider than the kernel).
+    if (i < 0) i = -i - 1;
+    if (i >= len) i = 2 * len - i - 1;
+    return std::clamp(i, 0, len - 1);
+  };
+  if (k > 0) {
+    ring.resize(static_cast<std::size_t>(k) * W);
+    gpad.resize(W + 2 * hk);
+  }
+  auto slot = [&](int y) { return ring.data() + static_cast<std::size_t>(y % k) * W; };
+  auto filter_row = [&](int y) __attribute__((always_inline)) {
+    const float* src = image.ptr<float>(y);
+    float* __restrict p = gpad.data();
+    std::copy(src, src + W, p + hk);
+    for (int j = 1; j <= hk; ++j) {
+      p[hk - j] = src[reflect(-j, W)];
+      p[hk + W - 1 + j] = src[reflect(W - 1 + j, W)];
+    }
+    float* __restrict dst = slot(y);
+    switch (hk) {
+      case 1: SymmetricRow<1>(taps.data() + hk, hk, p + hk, W, dst); break;
+      case 2: SymmetricRow<2>(taps.data() + hk, hk, p + hk, W, dst); break;
+      case 3: SymmetricRow<3>(taps.data() + hk, hk, p + hk, W, dst); break;
+      default: SymmetricRow<0>(taps.data() + hk, hk, p + hk, W, dst); break;
+    }
+  };
+  int next_row = 0;
+  const bool box = n >= 3;
+  if (box) {
+    column.assign(W, 0.0f);
+    padded.resize(W + 2 * h);
+  }
   auto row_at = [&](int y) { return image.ptr<float>(std::clamp(y, 0, H - 1)); };
-  for (int y = -h; y <= h; ++y) {
-    const float* r = row_at(y);
-    for (int x = 0; x < W; ++x) column[x] += r[x];
+  if (box) {
+    for (int y = -h; y <= h; ++y) {
+      const float* r = row_at(y);
+      for (int x = 0; x < W; ++x) column[x] += r[x];
+    }
   }
   const float inv = 1.0f / float(n * n);
   for (int y = 0; y < H; ++y) {
+    float* __restrict o = out->ptr<float>(y);
+    if (k > 0) {
+      for (const int last = std::min(H - 1, y + hk); next_row <= last; ++next_row) {
+        filter_row(next_row);
+      }
+      // Vertical: the ring rows at reflected offsets, all taps in one pass.
+      const float* c = taps.data() + hk;
+      const float* m = slot(y);
+      if (hk == 2) {
+        const float *u2 = slot(reflect(y - 2, H)), *u1 = slot(reflect(y - 1, H));
+        const float *d1 = slot(reflect(y + 1, H)), *d2 = slot(reflect(y + 2, H));
+        for (int x = 0; x < W; ++x) {
+          o[x] = c[0] * m[x] + c[1] * (u1[x] + d1[x]) + c[2] * (u2[x] + d2[x]);
+        }
+      } else {
+        for (int x = 0; x < W; ++x) o[x] = c[0] * m[x];
+        for (int j = 1; j <= hk; ++j) {
+          const float* __restrict up = slot(reflect(y - j, H));
+          const float* __restrict down = slot(reflect(y + j, H));
+          for (int x = 0; x < W; ++x) o[x] += c[j] * (up[x] + down[x]);
+        }
+      }
+    } else {
+      const float* src = image.ptr<float>(y);
+      std::copy(src, src + W, o);
+    }
+    if (!box) continue;
     if (y > 0) {
       const float* add = row_at(y + h);
       const float* sub = row_at(y - h - 1);
@@ -40,14 +149,13 @@ void SubtractBoxMean(const cv::Mat& image, int n, cv::Mat* out) {
       p[W + h + x] = column[W - 1];
     }
     std::copy(column.begin(), column.end(), p + h);
-    float* __restrict s = acc.data();
-    std::copy(p, p + W, s);
-    for (int j = 1; j < n; ++j) {
-      const float* __restrict q = p + j;
-      for (int x = 0; x < W; ++x) s[x] += q[x];
+    switch (n) {
+      case 5: SubtractBoxRow<5>(p, n, inv, W, o); break;
+      case 7: SubtractBoxRow<7>(p, n, inv, W, o); break;
+      case 9: SubtractBoxRow<9>(p, n, inv, W, o); break;
+      case 11: SubtractBoxRow<11>(p, n, inv, W, o); break;
+      default: SubtractBoxRow<0>(p, n, inv, W, o); break;
     }
-    float* __restrict o = out->ptr<float>(y);
-    for (int x = 0; x < W; ++x) o[x] -= s[x] * inv;
   }
 }
 
@@ -56,13 +164,25 @@ void SubtractBoxMean(const cv::Mat& image, int n, cv::Mat* out) {
 void BandPass(const cv::Mat& image, double sigma, int box_px, cv::Mat* out, cv::Mat* scratch) {
   CV_Assert(image.type() == CV_32FC1);
   (void)scratch;
+  std::vector<float> taps;
   if (sigma > 0) {
     const int k = 2 * static_cast<int>(std::ceil(2.5 * sigma)) + 1;
-    cv::GaussianBlur(image, *out, cv::Size(k, k), sigma, sigma, cv::BORDER_REFLECT);
-  } else {
-    image.copyTo(*out);
+    const int half = k / 2;
+    if (image.cols <= half || image.rows <= half) {
+      // Too small for one reflection: OpenCV's general path.
+      cv::GaussianBlur(image, *out, cv::Size(k, k), sigma, sigma, cv::BORDER_REFLECT);
+      if (box_px >= 3) {
+        cv::Mat mean;
+        cv::blur(image, mean, cv::Size(box_px, box_px), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+        *out -= mean;
+      }
+      return;
+    }
+    const cv::Mat kernel = cv::getGaussianKernel(k, sigma, CV_32F);
+    taps.assign(kernel.ptr<float>(), kernel.ptr<float>() + k);
   }
-  if (box_px >= 3) SubtractBoxMean(image, box_px, out);
+  out->create(image.size(), CV_32F);
+  BandPassRows(image, taps, box_px >= 3 ? box_px : 0, out);
 }
 
 cv::Mat BandPass(const cv::Mat& image, double sigma, int box_px) {
@@ -111,6 +231,30 @@ bool Template::ExtractSubpixel(const cv::Mat& band, double x, double y, int side
   return true;
 }
 
+// Cross term sum(ab) for K adjacent centres on one row. Two sets of K sums (even and
+// odd template rows) keep 2K independent add chains in flight.
+template <int K>
+__attribute__((always_inline)) inline void CrossSmall(const Template& t, const cv::Mat& band,
+                                                      int y, int x0, float* out) {
+  const int n = t.n, h = n / 2;
+  float even[K] = {}, odd[K] = {};
+  auto add_row = [&](int r, float* acc) {
+    const float* b = band.ptr<float>(y - h + r) + (x0 - h);
+    const float* tr = t.pixels.data() + r * n;
+    for (int c = 0; c < n; ++c) {
+      const float a = tr[c];
+      for (int k = 0; k < K; ++k) acc[k] += a * b[c + k];
+    }
+  };
+  int r = 0;
+  for (; r + 1 < n; r += 2) {
+    add_row(r, even);
+    add_row(r + 1, odd);
+  }
+  if (r < n) add_row(r, even);
+  for (int k = 0; k < K; ++k) out[k] = even[k] + odd[k];
+}
+
 // Compiled for AVX2+FMA as well as the baseline; the loader picks the best the CPU has.
 __attribute__((target_clones("avx2,fma", "default")))
 void ScoreRow(const Template& t, const cv::Mat& band, int y, int x0, int count, float* out) {
@@ -119,16 +263,17 @@ void ScoreRow(const Template& t, const cv::Mat& band, int y, int x0, int count, 
   thread_local std::vector<float> column_sq;
   column_sq.assign(span, 0.0f);
   if (count <= 8) {
-    // Few positions (refinement, fine pyramid levels): one dot product each, summed in
-    // registers; the position-inner form below would stall on its stores.
-    for (int k = 0; k < count; ++k) {
-      float sum = 0;
-      for (int r = 0; r < n; ++r) {
-        const float* b = band.ptr<float>(y - h + r) + (x0 - h + k);
-        const float* tr = t.pixels.data() + r * n;
-        for (int c = 0; c < n; ++c) sum += tr[c] * b[c];
-      }
-      out[k] = sum;
+    // Few positions (refinement, fine pyramid levels): all of them at once, each in its
+    // own registers. One running sum per position would serialise on the add latency.
+    switch (count) {
+      case 1: CrossSmall<1>(t, band, y, x0, out); break;
+      case 2: CrossSmall<2>(t, band, y, x0, out); break;
+      case 3: CrossSmall<3>(t, band, y, x0, out); break;
+      case 4: CrossSmall<4>(t, band, y, x0, out); break;
+      case 5: CrossSmall<5>(t, band, y, x0, out); break;
+      case 6: CrossSmall<6>(t, band, y, x0, out); break;
+      case 7: CrossSmall<7>(t, band, y, x0, out); break;
+      default: CrossSmall<8>(t, band, y, x0, out); break;
     }
     for (int r = 0; r < n; ++r) {
       const float* row = band.ptr<float>(y - h + r) + (x0 - h);

@@ -23,13 +23,17 @@ void HarrisResponse(const cv::Mat& image, int n, float k, cv::Mat* response) {
   float total = 0;
   for (int i = 0; i < n; ++i) total += w[i];
   for (int i = 0; i < n; ++i) w[i] /= total;
-  thread_local cv::Mat products;  // rows of gx^2 | gx*gy | gy^2, each W wide
-  products.create(H, 3 * W, CV_32F);
-  for (int y = 0; y < H; ++y) {
+  // Gradient products stream through a ring of n rows (gx^2 | gx*gy | gy^2, each W wide),
+  // so the window pass reads from cache: the whole product image (5 MB at KITTI size) did
+  // not fit, and memory traffic cost more than the arithmetic.
+  thread_local std::vector<float> ring;
+  ring.resize(static_cast<std::size_t>(n) * 3 * W);
+  auto slot = [&](int y) { return ring.data() + static_cast<std::size_t>(y % n) * 3 * W; };
+  auto products_of = [&](int y) __attribute__((always_inline)) {
     const float* up = image.ptr<float>(std::max(0, y - 1));
     const float* row = image.ptr<float>(y);
     const float* down = image.ptr<float>(std::min(H - 1, y + 1));
-    float* __restrict xx = products.ptr<float>(y);
+    float* __restrict xx = slot(y);
     float* __restrict xy = xx + W;
     float* __restrict yy = xy + W;
 #pragma GCC ivdep
@@ -44,14 +48,18 @@ void HarrisResponse(const cv::Mat& image, int n, float k, cv::Mat* response) {
       yy[x] = gy * gy;
     }
     xx[0] = xy[0] = yy[0] = xx[W - 1] = xy[W - 1] = yy[W - 1] = 0.0f;
-  }
+  };
+  int next_row = 0;  // the next image row whose products are not yet in the ring
   // Separable window: weighted rows, then weighted shifted columns, three planes at once.
   thread_local std::vector<float> column, sum;
   column.resize(3 * W);
   sum.resize(3 * W);
-  auto plane_row = [&](int y) { return products.ptr<float>(std::clamp(y, 0, H - 1)); };
+  auto plane_row = [&](int y) -> const float* { return slot(std::clamp(y, 0, H - 1)); };
   response->create(H, W, CV_32F);
   for (int y = 0; y < H; ++y) {
+    for (const int last = std::min(H - 1, y + h); next_row <= last; ++next_row) {
+      products_of(next_row);
+    }
     float* __restrict c = column.data();
     if (n == 5) {  // the default: one pass, one store per element
       const float* __restrict r0 = plane_row(y - 2);
@@ -113,32 +121,40 @@ std::vector<Corner> DetectCorners(const cv::Mat& image, const CornerOptions& opt
 
   // Grid pass: the strongest 3x3 local maximum in each cell (the paper's grid, whose
   // cells are smaller than the minimum distance, so no cell can hold two features).
-  // Local maxima come from a 3x3 dilation (vectorised), so the scan touches only them.
+  // A candidate must also be a 3x3 local maximum; that test runs only for a pixel that
+  // would beat its cell's best so far (a dilation of the whole image cost more).
   const int cell = std::max(1, options.grid_cell_px);
   const int border = std::max(options.border_px, 1);
   const int x_begin = border, x_end = image.cols - border;  // exclusive
   const int y_begin = border, y_end = image.rows - border;
   std::vector<Corner> candidates;
   if (x_end <= x_begin || y_end <= y_begin) return candidates;
-  thread_local cv::Mat dilated, peak;
-  cv::dilate(response, dilated, cv::Mat());
-  cv::compare(response, dilated, peak, cv::CMP_GE);
   const int gx = (x_end - x_begin + cell - 1) / cell, gy = (y_end - y_begin + cell - 1) / cell;
   std::vector<Corner> best(static_cast<std::size_t>(gx) * gy);
   const float floor = static_cast<float>(options.min_response);
   for (int y = y_begin; y < y_end; ++y) {
     const float* row = response.ptr<float>(y);
-    const uchar* is_peak = peak.ptr<uchar>(y);
+    const float* above = response.ptr<float>(y - 1);
+    const float* below = response.ptr<float>(y + 1);
     Corner* cell_row = best.data() + static_cast<std::size_t>((y - y_begin) / cell) * gx;
-    for (int x = x_begin; x < x_end; ++x) {
-      if (!is_peak[x]) continue;
-      const float v = row[x];
-      if (v <= floor) continue;
-      Corner& b = cell_row[(x - x_begin) / cell];
-      if (v <= b.response) continue;
-      b.x = x;
-      b.y = y;
-      b.response = v;
+    for (int i = 0, x0 = x_begin; x0 < x_end; ++i, x0 += cell) {
+      Corner& b = cell_row[i];
+      const int x1 = std::min(x0 + cell, x_end);
+      // Most of a cell's row cannot beat the cell's best: one max over the run skips it.
+      float run_max = row[x0];
+      for (int x = x0 + 1; x < x1; ++x) run_max = std::max(run_max, row[x]);
+      if (run_max <= floor || run_max <= b.response) continue;
+      for (int x = x0; x < x1; ++x) {
+        const float v = row[x];
+        if (v <= floor || v <= b.response) continue;
+        if (v < row[x - 1] || v < row[x + 1] || v < above[x - 1] || v < above[x] ||
+            v < above[x + 1] || v < below[x - 1] || v < below[x] || v < below[x + 1]) {
+          continue;
+        }
+        b.x = x;
+        b.y = y;
+        b.response = v;
+      }
     }
   }
   for (const Corner& c : best) {

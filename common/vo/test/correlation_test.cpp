@@ -35,6 +35,34 @@ cv::Mat Texture(int w, int h, double dx, double dy, std::uint32_t seed) {
   return img;
 }
 
+TEST(BandPass, VO3_StreamingFilterEqualsGaussianMinusBoxMean) {
+  // The fused one-pass prefilter must equal OpenCV's Gaussian (reflected borders) minus
+  // its box mean (replicated borders), including the image edges.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0, 1);
+  cv::Mat image(37, 53, CV_32F);
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) image.at<float>(y, x) = u(rng);
+  }
+  for (const auto& [sigma, box] : std::vector<std::pair<double, int>>{
+           {0.8, 9}, {0.8, 0}, {0.0, 9}, {1.5, 7}, {3.5, 13}, {0.4, 3}}) {
+    cv::Mat expected;
+    if (sigma > 0) {
+      const int k = 2 * static_cast<int>(std::ceil(2.5 * sigma)) + 1;
+      cv::GaussianBlur(image, expected, cv::Size(k, k), sigma, sigma, cv::BORDER_REFLECT);
+    } else {
+      expected = image.clone();
+    }
+    if (box >= 3) {
+      cv::Mat mean;
+      cv::blur(image, mean, cv::Size(box, box), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+      expected -= mean;
+    }
+    const cv::Mat got = BandPass(image, sigma, box);
+    EXPECT_LT(cv::norm(got, expected, cv::NORM_INF), 1e-5) << "sigma " << sigma << " box " << box;
+  }
+}
+
 TEST(PseudoNormalizedCorrelation, VO3_ScoreIsOneForIdenticalAndLowerForScaledPatch) {
   const cv::Mat a = BandPass(Texture(64, 64, 0, 0, 1), 0.8, 9);
   Template t;
