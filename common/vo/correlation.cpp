@@ -231,14 +231,16 @@ bool Template::ExtractSubpixel(const cv::Mat& band, double x, double y, int side
   return true;
 }
 
-// Cross term sum(ab) for K adjacent centres on one row. Two sets of K sums (even and
-// odd template rows) keep 2K independent add chains in flight.
-template <int K>
+// Cross term sum(ab) for K adjacent centres on one row, the K sums held in registers
+// (vectorised across the centres). Two sets (even and odd template rows) keep twice as
+// many independent add chains in flight.
+template <int K, int N = 0>
 __attribute__((always_inline)) inline void CrossSmall(const Template& t, const cv::Mat& band,
                                                       int y, int x0, float* out) {
-  const int n = t.n, h = n / 2;
+  // N > 0: the template side known at compile time (the defaults), loops fully unrolled.
+  const int n = N > 0 ? N : t.n, h = n / 2;
   float even[K] = {}, odd[K] = {};
-  auto add_row = [&](int r, float* acc) {
+  auto add_row = [&](int r, float* acc) __attribute__((always_inline)) {
     const float* b = band.ptr<float>(y - h + r) + (x0 - h);
     const float* tr = t.pixels.data() + r * n;
     for (int c = 0; c < n; ++c) {
@@ -255,55 +257,58 @@ __attribute__((always_inline)) inline void CrossSmall(const Template& t, const c
   for (int k = 0; k < K; ++k) out[k] = even[k] + odd[k];
 }
 
+template <int K>
+__attribute__((always_inline)) inline void CrossFew(const Template& t, const cv::Mat& band,
+                                                    int y, int x0, float* out) {
+  switch (t.n) {
+    case 7: CrossSmall<K, 7>(t, band, y, x0, out); break;
+    case 11: CrossSmall<K, 11>(t, band, y, x0, out); break;
+    default: CrossSmall<K>(t, band, y, x0, out); break;
+  }
+}
+
 // Compiled for AVX2+FMA as well as the baseline; the loader picks the best the CPU has.
 __attribute__((target_clones("avx2,fma", "default")))
 void ScoreRow(const Template& t, const cv::Mat& band, int y, int x0, int count, float* out) {
   const int n = t.n, h = n / 2;
   const int span = count + n - 1;
-  thread_local std::vector<float> column_sq;
-  column_sq.assign(span, 0.0f);
-  if (count <= 8) {
-    // Few positions (refinement, fine pyramid levels): all of them at once, each in its
-    // own registers. One running sum per position would serialise on the add latency.
-    switch (count) {
-      case 1: CrossSmall<1>(t, band, y, x0, out); break;
-      case 2: CrossSmall<2>(t, band, y, x0, out); break;
-      case 3: CrossSmall<3>(t, band, y, x0, out); break;
-      case 4: CrossSmall<4>(t, band, y, x0, out); break;
-      case 5: CrossSmall<5>(t, band, y, x0, out); break;
-      case 6: CrossSmall<6>(t, band, y, x0, out); break;
-      case 7: CrossSmall<7>(t, band, y, x0, out); break;
-      default: CrossSmall<8>(t, band, y, x0, out); break;
-    }
-    for (int r = 0; r < n; ++r) {
-      const float* row = band.ptr<float>(y - h + r) + (x0 - h);
-      float* __restrict cs = column_sq.data();
-      for (int j = 0; j < span; ++j) cs[j] += row[j] * row[j];
-    }
-  } else {
-    std::fill(out, out + count, 0.0f);
-    for (int r = 0; r < n; ++r) {
-      const float* row = band.ptr<float>(y - h + r) + (x0 - h);
-      const float* tr = t.pixels.data() + r * n;
-      for (int c = 0; c < n; ++c) {
-        const float a = tr[c];
-        const float* __restrict b = row + c;
-        float* __restrict acc = out;
-        for (int k = 0; k < count; ++k) acc[k] += a * b[k];
-      }
-      float* __restrict cs = column_sq.data();
-      for (int j = 0; j < span; ++j) cs[j] += row[j] * row[j];
-    }
+  thread_local std::vector<float> column_sq_heap;
+  float column_sq_stack[512];
+  float* column_sq = column_sq_stack;
+  if (span > 512) {
+    column_sq_heap.resize(span);
+    column_sq = column_sq_heap.data();
+  }
+  std::fill(column_sq, column_sq + span, 0.0f);
+  // The cross term in blocks of adjacent centres whose sums stay in registers (a run of
+  // sums in memory was bound by its loads and stores); then the few left over.
+  int k = 0;
+  for (; k + 32 <= count; k += 32) CrossSmall<32>(t, band, y, x0 + k, out + k);
+  for (; k + 8 <= count; k += 8) CrossFew<8>(t, band, y, x0 + k, out + k);
+  switch (count - k) {
+    case 1: CrossFew<1>(t, band, y, x0 + k, out + k); break;
+    case 2: CrossFew<2>(t, band, y, x0 + k, out + k); break;
+    case 3: CrossFew<3>(t, band, y, x0 + k, out + k); break;
+    case 4: CrossFew<4>(t, band, y, x0 + k, out + k); break;
+    case 5: CrossFew<5>(t, band, y, x0 + k, out + k); break;
+    case 6: CrossFew<6>(t, band, y, x0 + k, out + k); break;
+    case 7: CrossFew<7>(t, band, y, x0 + k, out + k); break;
+    default: break;
+  }
+  for (int r = 0; r < n; ++r) {
+    const float* row = band.ptr<float>(y - h + r) + (x0 - h);
+    float* __restrict cs = column_sq;
+    for (int j = 0; j < span; ++j) cs[j] += row[j] * row[j];
   }
   // sum(b^2) over the window: slide n column sums along the row (double, no drift).
   double window = 0;
   for (int j = 0; j < n - 1; ++j) window += column_sq[j];
   const double ta = t.sum_sq;
-  for (int k = 0; k < count; ++k) {
-    window += column_sq[k + n - 1];
+  for (int i = 0; i < count; ++i) {
+    window += column_sq[i + n - 1];
     const double den = ta + window;
-    out[k] = den > 1e-20 ? static_cast<float>(2.0 * out[k] / den) : 0.0f;
-    window -= column_sq[k];
+    out[i] = den > 1e-20 ? static_cast<float>(2.0 * out[i] / den) : 0.0f;
+    window -= column_sq[i];
   }
 }
 

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 namespace rover::vo {
 
@@ -252,7 +253,18 @@ bool VisualOdometry::State::MatchRight(const Pair& pair, const Eigen::Vector3d& 
 void VisualOdometry::State::StereoMatchFresh(Pair* pair, const std::vector<Corner>& corners) {
   const TriangulationLimits limits = Limits(*pair);
   pair->features.reserve(corners.size());
-  for (const Corner& c : corners) {
+  // Visit the corners top to bottom, so the correlation windows stream through the images
+  // instead of jumping about (the corners come strongest first); the features are kept in
+  // the corners' order, on which RANSAC's draws depend.
+  std::vector<int> order(corners.size());
+  for (int i = 0; i < static_cast<int>(order.size()); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return std::tie(corners[a].y, corners[a].x) < std::tie(corners[b].y, corners[b].x);
+  });
+  std::vector<Feature> found(corners.size());
+  std::vector<char> ok(corners.size(), 0);
+  for (const int i : order) {
+    const Corner& c = corners[i];
     if (!tmpl.Extract(pair->left_band[0], c.x, c.y, o.match_template_px)) continue;
     // The left location's covariance comes from the template's own correlation peak
     // (its sharpness), fitted the same way as the right match (VO-3, VO-5).
@@ -276,7 +288,11 @@ void VisualOdometry::State::StereoMatchFresh(Pair* pair, const std::vector<Corne
     if (!TriangulateStereo(pair->rig, left, self.covariance, right, Sigma_right, limits, &sp)) {
       continue;
     }
-    pair->features.push_back({left, sp.P, sp.Sigma});
+    found[i] = {left, sp.P, sp.Sigma};
+    ok[i] = 1;
+  }
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    if (ok[i]) pair->features.push_back(found[i]);
   }
 }
 
@@ -373,7 +389,20 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   fixed.reserve(prev->features.size());
   int predicted_inside = 0;
   double stereo_ms = 0;
-  for (const Feature& f : prev->features) {
+  // Top to bottom through the images, for the cache; results kept in feature order (as
+  // for the fresh features), which RANSAC's draws depend on.
+  const int nprev = static_cast<int>(prev->features.size());
+  std::vector<int> order(nprev);
+  for (int i = 0; i < nprev; ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    const Eigen::Vector2d& pa = prev->features[a].left;
+    const Eigen::Vector2d& pb = prev->features[b].left;
+    return std::tie(pa.y(), pa.x()) < std::tie(pb.y(), pb.x());
+  });
+  std::vector<Correspondence> tracked(nprev);
+  std::vector<char> tracked_ok(nprev, 0), tracked_fixed(nprev, 0);
+  for (const int fi : order) {
+    const Feature& f = prev->features[fi];
     const Eigen::Vector3d d = f.P - prior_t;
     const Eigen::Vector3d P_pred = R_cp * d;
     Eigen::Matrix<double, 3, 6> Jm;
@@ -463,9 +492,15 @@ VoResult VisualOdometry::Process(const StereoImages& images,
     x.Sigma_curr = sp.Sigma;
     x.left = m.position;
     x.right = right;
-    corr.push_back(x);
-    fixed.push_back((m.position - f.left).norm() < o.shadow_fixed_px &&
-                    (u_pred - f.left).norm() > o.shadow_min_predicted_px);
+    tracked[fi] = x;
+    tracked_ok[fi] = 1;
+    tracked_fixed[fi] = (m.position - f.left).norm() < o.shadow_fixed_px &&
+                        (u_pred - f.left).norm() > o.shadow_min_predicted_px;
+  }
+  for (int i = 0; i < nprev; ++i) {
+    if (!tracked_ok[i]) continue;
+    corr.push_back(tracked[i]);
+    fixed.push_back(tracked_fixed[i]);
   }
   res.num_tracked = static_cast<int>(corr.size());
   {
