@@ -196,16 +196,20 @@ bool Template::Extract(const cv::Mat& band, int x, int y, int side) {
   n = side;
   pixels.resize(static_cast<std::size_t>(n) * n);
   const int h = n / 2;
-  double ss = 0;
+  // Four partial sums: one running sum serialised on the add latency.
+  double ss[4] = {0, 0, 0, 0};
   for (int r = 0; r < n; ++r) {
     const float* src = band.ptr<float>(y - h + r) + (x - h);
-    float* dst = pixels.data() + r * n;
-    for (int c = 0; c < n; ++c) {
-      dst[c] = src[c];
-      ss += static_cast<double>(src[c]) * src[c];
-    }
+    std::copy(src, src + n, pixels.data() + r * n);
   }
-  sum_sq = ss;
+  const float* p = pixels.data();
+  const int total = n * n;
+  int i = 0;
+  for (; i + 4 <= total; i += 4) {
+    for (int j = 0; j < 4; ++j) ss[j] += static_cast<double>(p[i + j]) * p[i + j];
+  }
+  for (; i < total; ++i) ss[0] += static_cast<double>(p[i]) * p[i];
+  sum_sq = (ss[0] + ss[1]) + (ss[2] + ss[3]);
   return true;
 }
 
