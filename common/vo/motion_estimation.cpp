@@ -96,7 +96,15 @@ RansacOutcome RansacMotion(const std::vector<Correspondence>& c, const geometry:
     in->clear();
     *err = 0;
     for (int k : pool) {
-      const double g = ReprojectionGap(c[k], rig, T);
+      // The gap is the larger of the two images': a left gap already over the threshold
+      // settles it without projecting into the right image (same inliers, same error).
+      const Eigen::Vector3d P = T * c[k].P_prev;
+      Eigen::Vector2d pl, pr;
+      if (!rig.left->Project(P, &pl)) continue;
+      const double gl = (pl - c[k].left).norm();
+      if (!(gl < options.inlier_px)) continue;
+      if (!rig.right->Project(P, &pr)) continue;
+      const double g = std::max(gl, (pr - c[k].right).norm());
       if (g < options.inlier_px) {
         in->push_back(k);
         *err += g;
