@@ -121,8 +121,8 @@ std::vector<Corner> DetectCorners(const cv::Mat& image, const CornerOptions& opt
 
   // Grid pass: the strongest 3x3 local maximum in each cell (the paper's grid, whose
   // cells are smaller than the minimum distance, so no cell can hold two features).
-  // A candidate must also be a 3x3 local maximum; that test runs only for a pixel that
-  // would beat its cell's best so far (a dilation of the whole image cost more).
+  // The local-maximum test is done row by row in registers (a dilation of the whole image
+  // and a branchy per-pixel scan each cost more than the Harris response).
   const int cell = std::max(1, options.grid_cell_px);
   const int border = std::max(options.border_px, 1);
   const int x_begin = border, x_end = image.cols - border;  // exclusive
@@ -132,37 +132,42 @@ std::vector<Corner> DetectCorners(const cv::Mat& image, const CornerOptions& opt
   const int gx = (x_end - x_begin + cell - 1) / cell, gy = (y_end - y_begin + cell - 1) / cell;
   std::vector<Corner> best(static_cast<std::size_t>(gx) * gy);
   const float floor = static_cast<float>(options.min_response);
+  // Per row, first (vectorised): a pixel's value where it is a 3x3 local maximum above the
+  // floor, else 0. Then per cell run: the largest, first on ties (raster order, as a
+  // pixel-by-pixel scan with a strict comparison would keep).
+  thread_local std::vector<float> peak_value;
+  peak_value.assign(image.cols, 0.0f);
   for (int y = y_begin; y < y_end; ++y) {
     const float* row = response.ptr<float>(y);
     const float* above = response.ptr<float>(y - 1);
     const float* below = response.ptr<float>(y + 1);
+    float* __restrict pv = peak_value.data();
+    for (int x = x_begin; x < x_end; ++x) {
+      const float v = row[x];
+      float m = std::max(std::max(above[x - 1], above[x]), std::max(above[x + 1], row[x - 1]));
+      m = std::max(m, std::max(std::max(row[x + 1], below[x - 1]), std::max(below[x], below[x + 1])));
+      pv[x] = (v >= m && v > floor) ? v : 0.0f;
+    }
     Corner* cell_row = best.data() + static_cast<std::size_t>((y - y_begin) / cell) * gx;
     for (int i = 0, x0 = x_begin; x0 < x_end; ++i, x0 += cell) {
       Corner& b = cell_row[i];
       const int x1 = std::min(x0 + cell, x_end);
-      // Most of a cell's row cannot beat the cell's best: one max over the run skips it.
-      float m0 = row[x0], m1 = m0, m2 = m0, m3 = m0;  // four chains, not one serial max
+      float m0 = pv[x0], m1 = m0, m2 = m0, m3 = m0;  // four chains, not one serial max
       int x = x0 + 1;
       for (; x + 4 <= x1; x += 4) {
-        m0 = std::max(m0, row[x]);
-        m1 = std::max(m1, row[x + 1]);
-        m2 = std::max(m2, row[x + 2]);
-        m3 = std::max(m3, row[x + 3]);
+        m0 = std::max(m0, pv[x]);
+        m1 = std::max(m1, pv[x + 1]);
+        m2 = std::max(m2, pv[x + 2]);
+        m3 = std::max(m3, pv[x + 3]);
       }
-      for (; x < x1; ++x) m0 = std::max(m0, row[x]);
+      for (; x < x1; ++x) m0 = std::max(m0, pv[x]);
       const float run_max = std::max(std::max(m0, m1), std::max(m2, m3));
-      if (run_max <= floor || run_max <= b.response) continue;
-      for (int x = x0; x < x1; ++x) {
-        const float v = row[x];
-        if (v <= floor || v <= b.response) continue;
-        if (v < row[x - 1] || v < row[x + 1] || v < above[x - 1] || v < above[x] ||
-            v < above[x + 1] || v < below[x - 1] || v < below[x] || v < below[x + 1]) {
-          continue;
-        }
-        b.x = x;
-        b.y = y;
-        b.response = v;
-      }
+      if (run_max <= b.response) continue;  // 0 (no peak) never beats a cell's start of 0
+      int first = x0;
+      while (pv[first] != run_max) ++first;
+      b.x = first;
+      b.y = y;
+      b.response = run_max;
     }
   }
   for (const Corner& c : best) {
