@@ -72,6 +72,27 @@ TEST(ProcessCli, OperatorSubmitChecksTheFileFirst) {
             "configs/sequences/bad_units.seq:5:9: wrong unit 'deg' for drive distance (expected m or cm)\n");
 }
 
+// The operator's command line against a launched process set: submit and follow to the
+// end, then submit, abort, and see the abort reported.
+TEST(OperatorCommandLine, SubmitFollowsToTheEndAndAbortStopsTheDrive) {
+  const std::string dir = OutDir("operator");
+  std::ofstream(dir + "/short.seq") << "vo off step 50 cm\ndrive 1 m\n";
+  std::ofstream(dir + "/long.seq") << "vo off step 50 cm\nturn 180 deg\ndrive 5 m\n";
+  const std::string url = PrivateUrl(5);
+  const auto r = RunCommand(
+      "export ROVER_LCM_URL='" + url + "'; " + Bin("launcher") + " configs/deploy/sim.yaml > " + dir +
+      "/launch.log 2>&1 & L=$!; sleep 2; " +
+      "timeout 60 " + Bin("rover_seq") + " submit " + dir + "/short.seq; echo \"submit rc=$?\"; " +
+      "timeout 10 " + Bin("rover_seq") + " submit " + dir + "/long.seq --no-follow; sleep 1; " +
+      Bin("rover_seq") + " abort 'stop for the test'; " +
+      "timeout 10 " + Bin("rover_seq") + " status; echo \"status rc=$?\"; kill -TERM $L; wait $L");
+  EXPECT_NE(r.output.find("[completed"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("submit rc=0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("abort_reason=operator"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("stop for the test"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("status rc=1"), std::string::npos) << r.output;  // aborted
+}
+
 TEST(Launcher, ReportsAProcessThatDiesAndStopsTheRest) {
   const std::string dir = OutDir("launcher");
   const std::string deployment = dir + "/deploy.yaml";

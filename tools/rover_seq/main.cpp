@@ -58,23 +58,24 @@ double Now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-// Follows statuses (of `submission_id`, or any when < 0) until a terminal one.
+// Follows statuses (of `submission_id`, or of any sequence when < 0) until a terminal
+// one: exit 0 when it completed, 1 when it was aborted or rejected. With `once`, prints
+// the first status heard and returns 0. 3 when no status is heard for `silence_s`.
 int Follow(rover::bus::Bus& bus, std::int64_t submission_id, bool once, double silence_s) {
   std::string last;
   int result = -1;
   double last_heard = Now();
   bus.Subscribe<sequence_status_t>(rover::channels::kSequenceStatus, [&](const sequence_status_t& st) {
-    if (submission_id >= 0 && st.submission_id != submission_id) return;
+    if (result >= 0 || (submission_id >= 0 && st.submission_id != submission_id)) return;
     last_heard = Now();
     std::ostringstream key;
-    key << static_cast<int>(st.state) << st.command_index << "/" << st.step_index << st.detail;
-    if (key.str() != last || once) Print(st);
+    key << static_cast<int>(st.state) << " " << st.command_index << "/" << st.step_index << " " << st.detail;
+    if (key.str() != last) Print(st);
     last = key.str();
-    if (once) result = 0;
-    if (Terminal(st.state) && (submission_id >= 0 || once || last.size())) {
-      if (submission_id >= 0 || once) {
-        result = st.state == sequence_status_t::STATE_COMPLETED ? 0 : 1;
-      }
+    if (once) {
+      result = 0;
+    } else if (Terminal(st.state)) {
+      result = st.state == sequence_status_t::STATE_COMPLETED ? 0 : 1;
     }
   });
   while (result < 0) {
