@@ -49,9 +49,14 @@ TEST(Scenario, DemoCompletesDriveTurnArcGotoInsideTheDisc) {
   EXPECT_LT(Horizontal(s["final_estimate"], 5.0, 3.0), 0.3);
   EXPECT_LT(Horizontal(s["final_truth"], 5.0, 3.0), 0.3 + 0.05 * distance);
   EXPECT_LT(s["position_error_pct"].as<double>(), 5.0);
-  int vo_ok = 0;
-  for (const auto& st : s["steps"]) vo_ok += st["vo_status"].as<int>() == 0;
-  EXPECT_GE(2 * vo_ok, static_cast<int>(s["steps"].size())) << "VO should converge on most steps";
+  // VO converges on most driving steps (turns in place may refuse: too little overlap).
+  int drive_steps = 0, drive_vo_ok = 0;
+  for (const auto& st : s["steps"]) {
+    if (std::abs(st["commanded"]["distance_m"].as<double>()) < 1e-6) continue;
+    ++drive_steps;
+    drive_vo_ok += st["vo_status"].as<int>() == 0;
+  }
+  EXPECT_GE(2 * drive_vo_ok, drive_steps) << drive_vo_ok << " of " << drive_steps;
 }
 
 TEST(Scenario, KeepOutStopsShortOfTheRock) {
