@@ -5,6 +5,7 @@
 // the executor treats as unsafe.
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
+#include "bus/keepout_convert.hpp"
 #include "bus/process.hpp"
 #include "hazards/hazard_assessor.hpp"
 
@@ -17,26 +18,9 @@
 
 #include <cmath>
 #include <iostream>
+#include <stdexcept>
 
 using namespace rover;
-
-namespace {
-
-std::vector<hazards::KeepOutZone> ZonesFromMsg(const rover_msgs::keepout_zones_t& msg) {
-  std::vector<hazards::KeepOutZone> zones;
-  for (const auto& z : msg.zones) {
-    if (z.shape == rover_msgs::keepout_zone_t::SHAPE_CIRCLE) {
-      zones.push_back(hazards::KeepOutZone::Circle(z.name, z.center[0], z.center[1], z.radius_m));
-    } else {
-      std::vector<Eigen::Vector2d> vertices;
-      for (int i = 0; i < z.num_vertices; ++i) vertices.emplace_back(z.vertices_x[i], z.vertices_y[i]);
-      zones.push_back(hazards::KeepOutZone::Polygon(z.name, vertices));
-    }
-  }
-  return zones;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   return bus::RunMain("hazard_monitor", [&]() -> int {
@@ -75,9 +59,13 @@ int main(int argc, char** argv) {
     proc.bus().Subscribe<rover_msgs::keepout_zones_t>(
         channels::kKeepOutZones, [&](const rover_msgs::keepout_zones_t& m) {
           auto zones = config_zones;
-          const auto from_msg = ZonesFromMsg(m);
-          zones.insert(zones.end(), from_msg.begin(), from_msg.end());
-          zone_error = hazards::ZoneSetProblem(zones);
+          try {
+            const auto from_msg = bus::ZonesFromMsg(m);
+            zones.insert(zones.end(), from_msg.begin(), from_msg.end());
+            zone_error = hazards::ZoneSetProblem(zones);
+          } catch (const std::invalid_argument& e) {
+            zone_error = e.what();  // a zone that cannot be built: undecidable, so UNKNOWN
+          }
           if (!zone_error.empty()) {
             std::cerr << "hazard_monitor: KEEPOUT_ZONES: " << zone_error << "\n";
             return;

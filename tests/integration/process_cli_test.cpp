@@ -1,6 +1,14 @@
 // Every process and tool meets bad arguments and bad configs with one clear line and a
 // non-zero exit; the launcher reports a process that dies and exits non-zero.
+#include "bus/bus.hpp"
+#include "bus/channels.hpp"
 #include "integration/run_support.hpp"
+#include "launch/process_set.hpp"
+
+#include <rover_msgs/hazard_status_t.hpp>
+#include <rover_msgs/keepout_zones_t.hpp>
+
+#include <chrono>
 
 #include <gtest/gtest.h>
 
@@ -91,6 +99,39 @@ TEST(OperatorCommandLine, SubmitFollowsToTheEndAndAbortStopsTheDrive) {
   EXPECT_NE(r.output.find("abort_reason=operator"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("stop for the test"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("status rc=1"), std::string::npos) << r.output;  // aborted
+}
+
+// A zone that cannot be built (negative radius) neither crashes the hazard monitor nor
+// is ignored: the monitor cannot decide, says UNKNOWN, and the executor would stop.
+TEST(HazardMonitor, InvalidZoneMessageGivesUnknownAndKeepsRunning) {
+  const std::string dir = OutDir("hazard_bad_zone");
+  const std::string url = PrivateUrl(6);
+  bus::Bus bus(url);
+  std::string unknown_detail;
+  bus.Subscribe<rover_msgs::hazard_status_t>(channels::kHazardStatus, [&](const rover_msgs::hazard_status_t& h) {
+    if (h.state == rover_msgs::hazard_status_t::STATE_UNKNOWN &&
+        h.detail.find("invalid keep-out zones") != std::string::npos) {
+      unknown_detail = h.detail;
+    }
+  });
+  launch::ProcessSet set(std::string(ROVER_BINARY_DIR) + "/bin", dir, false);
+  set.Start({"hazard_monitor", "hazard_monitor", {"--config", SourceDir() + "/configs/rover.yaml"}},
+            {"ROVER_LCM_URL=" + url});
+  rover_msgs::keepout_zones_t zones{};
+  rover_msgs::keepout_zone_t zone{};
+  zone.name = "rock";
+  zone.shape = rover_msgs::keepout_zone_t::SHAPE_CIRCLE;
+  zone.radius_m = -1.0;
+  zones.zones.push_back(zone);
+  zones.num_zones = 1;
+  const auto start = std::chrono::steady_clock::now();
+  while (unknown_detail.empty() && std::chrono::steady_clock::now() - start < std::chrono::seconds(10)) {
+    bus.Publish(channels::kKeepOutZones, zones);
+    bus.Handle(200);
+  }
+  EXPECT_NE(unknown_detail.find("rock"), std::string::npos) << unknown_detail;
+  EXPECT_TRUE(set.Running("hazard_monitor"));
+  set.StopAll();
 }
 
 TEST(Launcher, ReportsAProcessThatDiesAndStopsTheRest) {

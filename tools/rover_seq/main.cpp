@@ -6,7 +6,7 @@
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
 #include "bus/process.hpp"
-#include "sequence/parser.hpp"
+#include "sequence/executor.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/sequence_control_t.hpp>
@@ -25,24 +25,14 @@ using rover_msgs::sequence_status_t;
 
 namespace {
 
-const char* StateName(int s) {
-  switch (s) {
-    case sequence_status_t::STATE_RUNNING: return "running";
-    case sequence_status_t::STATE_PAUSED: return "paused";
-    case sequence_status_t::STATE_COMPLETED: return "completed";
-    case sequence_status_t::STATE_ABORTED: return "aborted";
-    case sequence_status_t::STATE_REJECTED: return "rejected";
-    default: return "idle";
-  }
-}
-
 bool Terminal(int s) {
   return s == sequence_status_t::STATE_COMPLETED || s == sequence_status_t::STATE_ABORTED ||
          s == sequence_status_t::STATE_REJECTED;
 }
 
 void Print(const sequence_status_t& st) {
-  std::cout << std::fixed << std::setprecision(1) << "[" << StateName(st.state) << " t=" << st.elapsed_s
+  const auto state = static_cast<rover::sequence::SequenceState>(st.state);
+  std::cout << std::fixed << std::setprecision(1) << "[" << rover::sequence::ToString(state) << " t=" << st.elapsed_s
             << " s] " << st.sequence_name;
   if (st.command_index >= 0) {
     std::cout << " command " << st.command_index + 1 << "/" << st.num_commands << " (line "

@@ -2,11 +2,12 @@
 
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
+#include "bus/keepout_convert.hpp"
 #include "config/yaml_config.hpp"
 #include "geometry/pose.hpp"
 #include "hazards/keepout.hpp"
 #include "report/json_writer.hpp"
-#include "sequence/parser.hpp"
+#include "sequence/executor.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/keepout_zones_t.hpp>
@@ -92,31 +93,6 @@ const rover_msgs::sim_truth_t* TruthAt(const std::vector<rover_msgs::sim_truth_t
   return &*it;
 }
 
-std::vector<hazards::KeepOutZone> ZonesFromMsg(const rover_msgs::keepout_zones_t& msg) {
-  std::vector<hazards::KeepOutZone> zones;
-  for (const auto& z : msg.zones) {
-    if (z.shape == rover_msgs::keepout_zone_t::SHAPE_CIRCLE) {
-      zones.push_back(hazards::KeepOutZone::Circle(z.name, z.center[0], z.center[1], z.radius_m));
-    } else {
-      std::vector<Eigen::Vector2d> vertices;
-      for (int i = 0; i < z.num_vertices; ++i) vertices.emplace_back(z.vertices_x[i], z.vertices_y[i]);
-      zones.push_back(hazards::KeepOutZone::Polygon(z.name, vertices));
-    }
-  }
-  return zones;
-}
-
-const char* StateName(int state) {
-  switch (state) {
-    case rover_msgs::sequence_status_t::STATE_COMPLETED: return "completed";
-    case rover_msgs::sequence_status_t::STATE_ABORTED: return "aborted";
-    case rover_msgs::sequence_status_t::STATE_REJECTED: return "rejected";
-    case rover_msgs::sequence_status_t::STATE_RUNNING: return "running";
-    case rover_msgs::sequence_status_t::STATE_PAUSED: return "paused";
-    default: return "idle";
-  }
-}
-
 }  // namespace
 
 ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footprint& footprint) {
@@ -145,7 +121,12 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
       if (m.decode(ev->data, 0, ev->datalen) >= 0) last_pose = m;
     } else if (ch == channels::kKeepOutZones) {
       rover_msgs::keepout_zones_t m;
-      if (m.decode(ev->data, 0, ev->datalen) >= 0) zone_sets.emplace_back(m.utime, ZonesFromMsg(m));
+      if (m.decode(ev->data, 0, ev->datalen) < 0) continue;
+      try {
+        zone_sets.emplace_back(m.utime, bus::ZonesFromMsg(m));
+      } catch (const std::invalid_argument&) {
+        // An invalid set was never in force (the hazard monitor refused it).
+      }
     } else if (ch == channels::kSequenceSubmit) {
       // The commands, with their lines, come from the submitted text itself.
       rover_msgs::sequence_submit_t m;
@@ -173,7 +154,7 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
 
   ScenarioSummary s;
   if (final_status) {
-    s.outcome = StateName(final_status->state);
+    s.outcome = sequence::ToString(static_cast<sequence::SequenceState>(final_status->state));
     s.abort_reason = final_status->abort_reason;
     s.detail = final_status->detail;
     for (int i = 0; i < num_commands; ++i) {
