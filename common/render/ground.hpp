@@ -18,6 +18,12 @@ class Ground {
   // ground may leave out texture finer than the patch (it would only alias). Default: the
   // point value.
   virtual double AlbedoOver(double x, double y, double /*footprint_m*/) const { return Albedo(x, y); }
+  // AlbedoOver for n points at once (the renderer asks a row at a time, so a ground can
+  // vectorise). Default: one point at a time.
+  virtual void AlbedoOverBatch(int n, const double* x, const double* y, const double* footprint_m,
+                               double* out) const {
+    for (int p = 0; p < n; ++p) out[p] = AlbedoOver(x[p], y[p], footprint_m[p]);
+  }
 
   // A ground that IS a bilinear height grid exposes it, and the renderer traces that grid
   // itself: every hit then lies exactly on Elevation()'s surface. Node (i, j) is at

@@ -5,13 +5,16 @@ namespace rover::render {
 RenderOptions LoadRenderOptions(const config::ConfigNode& node) {
   RenderOptions o;
   if (node.IsNull()) return o;
-  node.CheckKeys({"image_scale", "noise_sigma_dn", "noise_seed", "exposure_dn", "ambient", "sky_dn",
+  node.CheckKeys({"image_scale", "noise_sigma_dn", "noise_seed", "exposure_dn", "auto_exposure",
+                  "target_mean_dn", "ambient", "sky_dn",
                   "far_ground_dn", "max_range_m", "shadow_reach_m", "grid_near_range_m",
                   "grid_cell_pixels", "sun", "rover_shadow"});
   node.Get("image_scale", o.image_scale, 1e-3, 4.0);
   node.Get("noise_sigma_dn", o.noise_sigma_dn, 0.0, 100.0);
   node.Get("noise_seed", o.noise_seed);
   node.Get("exposure_dn", o.exposure_dn, 1e-3, 1e5);
+  node.Get("auto_exposure", o.auto_exposure);
+  node.Get("target_mean_dn", o.target_mean_dn, 1.0, 254.0);
   node.Get("ambient", o.ambient, 0.0, 1.0);
   node.Get("sky_dn", o.sky_dn, 0.0, 255.0);
   node.Get("far_ground_dn", o.far_ground_dn, 0.0, 255.0);

@@ -44,8 +44,13 @@ struct RenderOptions {
   // Sensor: additive Gaussian read noise in DN (8-bit), seeded by (noise_seed, frame seed).
   double noise_sigma_dn = 1.5;
   std::uint64_t noise_seed = 1;
-  // DN of a surface of albedo 1 facing the sun.
+  // DN of a surface of albedo 1 facing the sun, before the automatic exposure.
   double exposure_dn = 600.0;
+  // Automatic exposure: one gain for both images so that the left image's mean is
+  // target_mean_dn (the real NAVCAMs auto-exposed; a fixed exposure leaves a low-sun
+  // scene nearly black). Off: exposure_dn is the exposure.
+  bool auto_exposure = true;
+  double target_mean_dn = 100.0;
   // Fraction of light from the dusty sky (lights shadows too; Mars: about 0.2-0.3).
   double ambient = 0.22;
   // Flat value of the sky above the horizon, and of ground beyond max_range_m.

@@ -382,15 +382,25 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
   const std::vector<float>& normal = NormalTable();
   const std::uint64_t base_seed = SplitMix(o.noise_seed ^ SplitMix(static_cast<std::uint64_t>(frame_seed)));
 
+  // Scene radiance first, in DN at exposure_dn; the exposure and the sensor come after,
+  // once both images are known.
+  cv::Mat radiance[2];
+  // One row's hits, so that the ground's albedo is asked for a row at a time.
+  std::vector<double> hit_x, hit_y, hit_footprint, hit_albedo, hit_light;
+  std::vector<int> hit_column;
   for (int cam = 0; cam < 2; ++cam) {
     const RayTable& tab = *tables[cam];
-    cv::Mat img(tab.height, tab.width, CV_8UC1);
+    cv::Mat rad(tab.height, tab.width, CV_32FC1);
     cv::Mat depth(tab.height, tab.width, CV_32FC1);
     const Eigen::Vector3d origin_site = T_site_rover * tab.origin;
-    const std::uint64_t cam_seed = SplitMix(base_seed + 0x1234567ull * (cam + 1));
     for (int v = 0; v < tab.height; ++v) {
-      std::uint8_t* row = img.ptr<std::uint8_t>(v);
+      float* rrow = rad.ptr<float>(v);
       float* drow = depth.ptr<float>(v);
+      hit_x.clear();
+      hit_y.clear();
+      hit_footprint.clear();
+      hit_light.clear();
+      hit_column.clear();
       for (int u = 0; u < tab.width; ++u) {
         const std::size_t k = static_cast<std::size_t>(v) * tab.width + u;
         Eigen::Vector3d os = origin_site;
@@ -398,49 +408,74 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
         const Eigen::Vector3d ds = R * tab.dirs[k].cast<double>();
         int level = 0;
         const double t = levels->Intersect(os, ds, 0.0, o.max_range_m, &level);
-        double value;
         if (t < 0) {
-          value = ds.z() < 0 ? o.sky_dn : o.far_ground_dn;
+          rrow[u] = static_cast<float>(ds.z() < 0 ? o.sky_dn : o.far_ground_dn);
           drow[u] = 0.0f;
-        } else {
-          drow[u] = static_cast<float>(t);
-          const Eigen::Vector3d p = os + t * ds;
-          const internal::HeightGrid& g = levels->level(level);
-          const Eigen::Vector3d n = g.NormalUpAt(p.x(), p.y());
-          // The pixel sees t * pixel_angle of ground across the ray and that over
-          // cos(incidence) along it: the footprint is the side of the square of the same
-          // area, so texture the pixel can only alias is left out, and no more.
-          const double across = t * tab.pixel_angle;
-          const double footprint = across / std::sqrt(std::max(std::abs(n.dot(ds)), 0.05));
-          const double albedo = ground.AlbedoOver(p.x(), p.y(), footprint);
-          double direct = 0;
-          const double cos_i = n.dot(s_site);
-          if (sun_up && cos_i > 0) {
-            bool lit = true;
-            if (check_rover) lit = !solids.Blocks(R.transpose() * (p - tr), s_rover);
-            if (lit && horizon) {
-              // The same lift off the surface as the shadow ray below.
-              lit = -p.z() + std::max(0.002, 0.05 * g.cell()) >= g.InterpolateNodes(*horizon, p.x(), p.y());
-            } else if (lit && t_shadow > 0) {
-              // Start a little above the surface so the ray does not hit its own cell.
-              const Eigen::Vector3d start(p.x(), p.y(), p.z() - std::max(0.002, 0.05 * g.cell()));
-              lit = levels->Intersect(start, s_site, 0.0, t_shadow) < 0;
-            }
-            if (lit) direct = cos_i;
-          }
-          value = o.exposure_dn * albedo * (o.ambient + (1 - o.ambient) * direct);
+          continue;
         }
+        drow[u] = static_cast<float>(t);
+        const Eigen::Vector3d p = os + t * ds;
+        const internal::HeightGrid& g = levels->level(level);
+        const Eigen::Vector3d n = g.NormalUpAt(p.x(), p.y());
+        // The pixel sees t * pixel_angle of ground across the ray and that over
+        // cos(incidence) along it: the footprint is the side of the square of the same
+        // area, so texture the pixel can only alias is left out, and no more.
+        const double across = t * tab.pixel_angle;
+        hit_footprint.push_back(across / std::sqrt(std::max(std::abs(n.dot(ds)), 0.05)));
+        hit_x.push_back(p.x());
+        hit_y.push_back(p.y());
+        hit_column.push_back(u);
+        double direct = 0;
+        const double cos_i = n.dot(s_site);
+        if (sun_up && cos_i > 0) {
+          bool lit = true;
+          if (check_rover) lit = !solids.Blocks(R.transpose() * (p - tr), s_rover);
+          if (lit && horizon) {
+            // The same lift off the surface as the shadow ray below.
+            lit = -p.z() + std::max(0.002, 0.05 * g.cell()) >= g.InterpolateNodes(*horizon, p.x(), p.y());
+          } else if (lit && t_shadow > 0) {
+            // Start a little above the surface so the ray does not hit its own cell.
+            const Eigen::Vector3d start(p.x(), p.y(), p.z() - std::max(0.002, 0.05 * g.cell()));
+            lit = levels->Intersect(start, s_site, 0.0, t_shadow) < 0;
+          }
+          if (lit) direct = cos_i;
+        }
+        hit_light.push_back(o.exposure_dn * (o.ambient + (1 - o.ambient) * direct));
+      }
+      const int hits = static_cast<int>(hit_column.size());
+      hit_albedo.resize(hit_column.size());
+      ground.AlbedoOverBatch(hits, hit_x.data(), hit_y.data(), hit_footprint.data(), hit_albedo.data());
+      for (int h = 0; h < hits; ++h) rrow[hit_column[h]] = static_cast<float>(hit_albedo[h] * hit_light[h]);
+    }
+    radiance[cam] = rad;
+    (cam == 0 ? out.depth_left : out.depth_right) = depth;
+  }
+
+  // Automatic exposure, as the NAVCAMs had: one gain for both cameras (stereo matching
+  // wants the pair alike), from the left image's mean, so that low sun is not simply
+  // dark. It depends on the rendered radiance only, not on anything else from truth.
+  double gain = 1.0;
+  if (o.auto_exposure) {
+    const double mean = cv::mean(radiance[0])[0];
+    if (mean > 1e-9) gain = o.target_mean_dn / mean;
+  }
+  out.exposure_gain = gain;
+  for (int cam = 0; cam < 2; ++cam) {
+    const cv::Mat& rad = radiance[cam];
+    cv::Mat img(rad.rows, rad.cols, CV_8UC1);
+    const std::uint64_t cam_seed = SplitMix(base_seed + 0x1234567ull * (cam + 1));
+    for (int v = 0; v < rad.rows; ++v) {
+      const float* rrow = rad.ptr<float>(v);
+      std::uint8_t* row = img.ptr<std::uint8_t>(v);
+      for (int u = 0; u < rad.cols; ++u) {
+        const std::size_t k = static_cast<std::size_t>(v) * rad.cols + u;
+        double value = gain * rrow[u];
         if (o.noise_sigma_dn > 0) value += o.noise_sigma_dn * normal[SplitMix(cam_seed + k) & 0xFFFF];
-        row[u] = static_cast<std::uint8_t>(std::clamp(std::lround(value), 0L, 255L));
+        // Round half up and clamp, without a library call per pixel.
+        row[u] = static_cast<std::uint8_t>(std::clamp(std::floor(value + 0.5), 0.0, 255.0));
       }
     }
-    if (cam == 0) {
-      out.left = img;
-      out.depth_left = depth;
-    } else {
-      out.right = img;
-      out.depth_right = depth;
-    }
+    (cam == 0 ? out.left : out.right) = img;
   }
   const auto t_end = std::chrono::steady_clock::now();
   timing_.grid_seconds = Seconds(t_start, t_grid);

@@ -36,6 +36,7 @@ struct StereoImages {
   cv::Mat depth_left, depth_right;  // CV_32FC1: range along the pixel's ray, metres;
                                     // 0 where nothing is hit within max_range_m
   geometry::StereoRig rig;          // the models the images were rendered with (scaled)
+  double exposure_gain = 1.0;       // the automatic exposure's gain on exposure_dn (1 if off)
 };
 
 // Where the time went in the last RenderPair.

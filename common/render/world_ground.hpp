@@ -17,6 +17,10 @@ class WorldGround : public Ground {
   double AlbedoOver(double x, double y, double footprint_m) const override {
     return world_.Albedo(x, y, footprint_m);
   }
+  void AlbedoOverBatch(int n, const double* x, const double* y, const double* footprint_m,
+                       double* out) const override {
+    world_.AlbedoBatch(n, x, y, footprint_m, out);
+  }
   bool NativeGrid(GridView* view) const override {
     view->x0 = world_.x_min();
     view->y0 = world_.y_min();

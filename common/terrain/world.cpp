@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "terrain/albedo_noise.hpp"
 #include "terrain/random.hpp"
 
 namespace rover::terrain {
@@ -25,6 +26,11 @@ enum SeedTag : std::uint64_t {
 // Albedo texture is flatter across scales than the relief (hurst 0.3), so centimetre
 // texture survives: that is what the VO corner detector lives on.
 constexpr double kAlbedoHurst = 0.3;
+// Rock surfaces carry texture from 1 cm to 16 cm; the dust mottling common to all soils
+// is one octave of 5 m.
+constexpr double kRockTextureMinWavelength = 0.01;
+constexpr double kRockTextureMaxWavelength = 0.16;
+constexpr double kMottleWavelength = 5.0;
 
 // Standard deviation of FractalNoise for these octaves, so `contrast` is a relative std.
 double FractalStd(double min_wl, double max_wl, double hurst) {
@@ -218,7 +224,10 @@ World::World(WorldOptions options) : options_(std::move(options)) {
     const SoilAlbedo& s = AlbedoOf(o.albedo, static_cast<Soil>(k));
     soil_texture_norm_[k] = 1.0 / FractalStd(s.min_wavelength_m, s.max_wavelength_m, kAlbedoHurst);
   }
-  rock_texture_norm_ = 1.0 / FractalStd(0.01, 0.16, kAlbedoHurst);
+  rock_texture_norm_ = 1.0 / FractalStd(kRockTextureMinWavelength, kRockTextureMaxWavelength, kAlbedoHurst);
+  albedo_seed_ = static_cast<std::uint32_t>(SubSeed(o.seed, kTagAlbedo));
+  rock_albedo_seed_ = static_cast<std::uint32_t>(SubSeed(o.seed, kTagRockAlbedo));
+  mottle_seed_ = static_cast<std::uint32_t>(SubSeed(o.seed, kTagAlbedo) ^ 0xABCDull);
   BuildSoil();
   BuildGround();
   BuildRocks();
@@ -458,8 +467,9 @@ double World::SlopeAngle(double x, double y) const {
 }
 
 Soil World::SoilAt(double x, double y) const {
-  const int i = std::clamp(static_cast<int>(std::lround((x - x0_) / res_)), 0, nx_ - 1);
-  const int j = std::clamp(static_cast<int>(std::lround((y - y0_) / res_)), 0, ny_ - 1);
+  // Nearest node, clamped to the map (clamping first keeps the conversion in range).
+  const int i = static_cast<int>(std::clamp((x - x0_) / res_, 0.0, nx_ - 1.0) + 0.5);
+  const int j = static_cast<int>(std::clamp((y - y0_) / res_, 0.0, ny_ - 1.0) + 0.5);
   return static_cast<Soil>(soil_[static_cast<std::size_t>(i) * ny_ + j]);
 }
 
@@ -490,38 +500,84 @@ const Rock* World::FindRock(const std::string& name) const {
 }
 
 double World::Albedo(double x, double y, double footprint_m) const {
-  const auto& a = options_.albedo;
-  const std::uint64_t seed = SubSeed(options_.seed, kTagAlbedo);
-  const double mottling = 1.0 + a.large_scale_contrast * ValueNoise(x / 5.0, y / 5.0, seed ^ 0xABCDull) /
-                                     kValueNoiseStd;
+  double out = 0.0;
+  AlbedoBatch(1, &x, &y, &footprint_m, &out);
+  return out;
+}
 
-  // Rock surfaces: the rock's own shade plus fine texture.
-  if (x >= x0_ && y >= y0_ && x <= x_max() && y <= y_max()) {
-    const int bi = std::min(bx_ - 1, static_cast<int>((x - x0_) / bucket_size_));
-    const int bj = std::min(by_ - 1, static_cast<int>((y - y0_) / bucket_size_));
-    const std::size_t b = static_cast<std::size_t>(bi) * by_ + bj;
-    for (int n = bucket_start_[b]; n < bucket_start_[b + 1]; ++n) {
-      const Rock& r = rocks_[bucket_rocks_[n]];
-      const double R = 0.5 * r.diameter_m;
-      const double dx = x - r.position.x(), dy = y - r.position.y();
-      if (dx * dx + dy * dy < R * R) {
-        const double t = FractalNoise(x, y, std::max(0.01, 2.0 * footprint_m), 0.16, kAlbedoHurst,
-                                      SubSeed(options_.seed, kTagRockAlbedo)) *
-                         rock_texture_norm_;
-        return std::clamp(r.albedo * (1.0 + a.rock_contrast * t), 0.02, 0.95);
+void World::AlbedoBatch(int n, const double* x, const double* y, const double* footprint_m,
+                        double* out) const {
+  const auto& a = options_.albedo;
+  // Per point: what it is (a rock's surface or a soil), and so its mean, contrast and
+  // texture octaves; then two vectorised noise passes (texture and mottling).
+  struct Scratch {
+    std::vector<float> x, y, inv_wl, texture, mottle_inv, mottle;
+    std::vector<std::uint32_t> seed, mottle_seed;
+    std::vector<int> octaves, mottle_octaves;
+    std::vector<double> mean, gain;  // albedo = mean * (1 + gain * texture) * mottling
+    std::vector<unsigned char> mottled;
+  };
+  thread_local Scratch s;
+  const std::size_t m = static_cast<std::size_t>(std::max(n, 0));
+  for (auto* v : {&s.x, &s.y, &s.inv_wl, &s.texture, &s.mottle_inv, &s.mottle}) v->resize(m);
+  s.seed.resize(m);
+  s.mottle_seed.resize(m);
+  s.octaves.resize(m);
+  s.mottle_octaves.resize(m);
+  s.mean.resize(m);
+  s.gain.resize(m);
+  s.mottled.resize(m);
+  const float rock_inv = static_cast<float>(1.0 / kRockTextureMaxWavelength);
+  for (int p = 0; p < n; ++p) {
+    const double px = x[p], py = y[p];
+    s.x[p] = static_cast<float>(px);
+    s.y[p] = static_cast<float>(py);
+    s.mottle_inv[p] = static_cast<float>(1.0 / kMottleWavelength);
+    s.mottle_seed[p] = mottle_seed_;
+    // Octaves shorter than twice the footprint are left out (Albedo's contract).
+    const double shortest = 2.0 * footprint_m[p];
+    const Rock* rock = nullptr;
+    if (px >= x0_ && py >= y0_ && px <= x_max() && py <= y_max()) {
+      const int bi = std::min(bx_ - 1, static_cast<int>((px - x0_) / bucket_size_));
+      const int bj = std::min(by_ - 1, static_cast<int>((py - y0_) / bucket_size_));
+      const std::size_t b = static_cast<std::size_t>(bi) * by_ + bj;
+      for (int k = bucket_start_[b]; k < bucket_start_[b + 1] && !rock; ++k) {
+        const Rock& r = rocks_[bucket_rocks_[k]];
+        const double R = 0.5 * r.diameter_m;
+        const double dx = px - r.position.x(), dy = py - r.position.y();
+        if (dx * dx + dy * dy < R * R) rock = &r;
       }
     }
+    if (rock) {
+      s.mean[p] = rock->albedo;
+      s.gain[p] = a.rock_contrast * rock_texture_norm_;
+      s.inv_wl[p] = rock_inv;
+      s.seed[p] = rock_albedo_seed_;
+      s.octaves[p] = OctaveCount(std::max(kRockTextureMinWavelength, shortest), kRockTextureMaxWavelength);
+      s.mottle_octaves[p] = 0;
+      s.mottled[p] = 0;
+    } else {
+      const Soil soil = SoilAt(px, py);
+      const SoilAlbedo& sa = AlbedoOf(a, soil);
+      s.mean[p] = sa.mean;
+      s.gain[p] = sa.contrast * soil_texture_norm_[static_cast<int>(soil)];
+      s.inv_wl[p] = static_cast<float>(1.0 / sa.max_wavelength_m);
+      s.seed[p] = albedo_seed_;
+      s.octaves[p] = sa.contrast > 0.0 ? OctaveCount(std::max(sa.min_wavelength_m, shortest), sa.max_wavelength_m) : 0;
+      s.mottle_octaves[p] = 1;
+      s.mottled[p] = 1;
+    }
   }
-  const Soil soil = SoilAt(x, y);
-  const SoilAlbedo& s = AlbedoOf(a, soil);
-  double texture = 0.0;
-  if (s.contrast > 0.0) {
-    texture = s.contrast *
-              FractalNoise(x, y, std::max(s.min_wavelength_m, 2.0 * footprint_m), s.max_wavelength_m,
-                           kAlbedoHurst, seed) *
-              soil_texture_norm_[static_cast<int>(soil)];
+  const float amp_step = static_cast<float>(std::pow(0.5, kAlbedoHurst));
+  FractalNoiseBatch(n, s.x.data(), s.y.data(), s.inv_wl.data(), s.seed.data(), s.octaves.data(), amp_step,
+                    s.texture.data());
+  FractalNoiseBatch(n, s.x.data(), s.y.data(), s.mottle_inv.data(), s.mottle_seed.data(), s.mottle_octaves.data(),
+                    1.0f, s.mottle.data());
+  const double mottle_gain = a.large_scale_contrast / kValueNoise32Std;
+  for (int p = 0; p < n; ++p) {
+    const double mottling = s.mottled[p] ? 1.0 + mottle_gain * s.mottle[p] : 1.0;
+    out[p] = std::clamp(s.mean[p] * (1.0 + s.gain[p] * s.texture[p]) * mottling, 0.02, 0.95);
   }
-  return std::clamp(s.mean * (1.0 + texture) * mottling, 0.02, 0.95);
 }
 
 }  // namespace rover::terrain

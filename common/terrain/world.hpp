@@ -199,6 +199,9 @@ class World {
   // twice it are left out (their mean is zero), which filters them instead of aliasing
   // them, and makes distant pixels cheaper. 0 = every octave.
   double Albedo(double x, double y, double footprint_m = 0.0) const;
+  // Albedo() of n points at once, the same values: the renderer's path (about two million
+  // points a frame), vectorised over the points (albedo_noise.hpp).
+  void AlbedoBatch(int n, const double* x, const double* y, const double* footprint_m, double* out) const;
 
   const std::vector<Rock>& rocks() const { return rocks_; }
   // Indices into rocks() of the rocks whose disc comes within `radius_m` of (x, y).
@@ -246,6 +249,7 @@ class World {
   std::vector<int> bucket_rocks_;
   double soil_texture_norm_[kNumSoils] = {1, 1, 1};
   double rock_texture_norm_ = 1.0;
+  std::uint32_t albedo_seed_ = 0, rock_albedo_seed_ = 0, mottle_seed_ = 0;
 };
 
 }  // namespace rover::terrain

@@ -19,6 +19,8 @@ using test::NavcamRig;
 RenderOptions QuietOptions() {
   RenderOptions o;
   o.noise_sigma_dn = 0;
+  // A fixed exposure, so that two renders compare pixel by pixel.
+  o.auto_exposure = false;
   o.rover_shadow.enabled = false;
   o.sun_override = true;
   o.sun_azimuth_deg = 0;
@@ -307,6 +309,27 @@ TEST(StereoRenderer, SandGivesFarFewerCornersThanBedrock) {
   }
   EXPECT_GT(corners[1], 100) << "bedrock";
   EXPECT_LT(corners[0] * 5, corners[1]) << "sand " << corners[0] << " bedrock " << corners[1];
+}
+
+TEST(StereoRenderer, AutoExposureBringsALowSunSceneToTheTargetMean) {
+  MarkedGround sand;
+  sand.albedo = 0.2;
+  const Eigen::Isometry3d T = geometry::PoseFromXyzRpy(0, 0, 0, 0, 0, 0);
+  RenderOptions opt = QuietOptions();
+  opt.sun_elevation_deg = 8;  // low sun: little direct light on flat ground
+  StereoRenderer fixed(opt);
+  opt.auto_exposure = true;
+  opt.target_mean_dn = 110;
+  StereoRenderer automatic(opt);
+  const StereoImages dark = fixed.RenderPair(sand, Sun{}, NavcamRig(128), T, 1);
+  const StereoImages lit = automatic.RenderPair(sand, Sun{}, NavcamRig(128), T, 1);
+  const double dark_mean = cv::mean(dark.left)[0];
+  EXPECT_LT(dark_mean, 60) << "fixed exposure leaves low sun dark";
+  EXPECT_NEAR(cv::mean(lit.left)[0], 110, 1.0);
+  EXPECT_NEAR(lit.exposure_gain, 110 / dark_mean, 0.05 * 110 / dark_mean);
+  // One gain for both cameras: the right image is scaled alike, not to its own mean.
+  EXPECT_NEAR(cv::mean(lit.right)[0], lit.exposure_gain * cv::mean(dark.right)[0], 0.5 * lit.exposure_gain + 0.5);
+  EXPECT_EQ(dark.exposure_gain, 1.0);
 }
 
 TEST(StereoRenderer, RejectsBadOptions) {
