@@ -2,34 +2,66 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace rover::render {
 
-cv::Mat To8Bit(const cv::Mat& image) {
-  if (image.channels() != 1) throw std::invalid_argument("To8Bit: expected a one-channel image");
-  if (image.depth() == CV_8U) return image;
-  double lo = 0, hi = 0;
-  cv::minMaxLoc(image, &lo, &hi);
-  if (hi <= lo) hi = lo + 1;
+namespace {
+
+cv::Mat ToFloat(const cv::Mat& image) {
+  if (image.empty() || image.channels() != 1) {
+    throw std::invalid_argument("image statistics: expected a non-empty one-channel image");
+  }
+  const int d = image.depth();
+  if (d != CV_8U && d != CV_16U && d != CV_32F) {
+    throw std::invalid_argument("image statistics: expected CV_8U, CV_16U or CV_32F");
+  }
+  cv::Mat f;
+  image.convertTo(f, CV_32F);
+  return f;
+}
+
+double Median(const cv::Mat& f) {
+  std::vector<float> v;
+  v.reserve(f.total());
+  for (int r = 0; r < f.rows; ++r) v.insert(v.end(), f.ptr<float>(r), f.ptr<float>(r) + f.cols);
+  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+cv::Mat Scale(const cv::Mat& f, double median, double target) {
+  if (!(median > 0)) throw std::invalid_argument("image statistics: the image's median is not positive");
   cv::Mat out;
-  image.convertTo(out, CV_8U, 255.0 / (hi - lo), -255.0 * lo / (hi - lo));
+  f.convertTo(out, CV_32F, target / median);
   return out;
 }
 
-ImageStatistics MeasureImage(const cv::Mat& image, const ImageStatisticsOptions& options) {
-  cv::Mat img8 = To8Bit(image);
-  if (img8.cols != options.working_width) {
-    const double s = static_cast<double>(options.working_width) / img8.cols;
-    cv::resize(img8, img8, cv::Size(), s, s, s < 1 ? cv::INTER_AREA : cv::INTER_LINEAR);
-  }
-  cv::Mat f;
-  img8.convertTo(f, CV_32F, 1.0 / 255.0);
-  ImageStatistics st;
+}  // namespace
 
+cv::Mat NormaliseToMedian(const cv::Mat& image, double target_median) {
+  const cv::Mat f = ToFloat(image);
+  return Scale(f, Median(f), target_median);
+}
+
+ImageStatistics MeasureImage(const cv::Mat& image, const ImageStatisticsOptions& options) {
+  cv::Mat f = ToFloat(image);
+  if (f.cols != options.working_width) {
+    const double s = static_cast<double>(options.working_width) / f.cols;
+    cv::resize(f, f, cv::Size(), s, s, s < 1 ? cv::INTER_AREA : cv::INTER_LINEAR);
+  }
+  ImageStatistics st;
+  // A gain commutes with the (linear) resize, so the median of the working image serves.
+  st.median_dn = Median(f);
+  const cv::Mat dn = Scale(f, st.median_dn, options.target_median_dn);
+
+  cv::Mat unit;
+  dn.convertTo(unit, CV_32F, 1.0 / 255.0);
   cv::Mat harris;
-  cv::cornerHarris(f, harris, 5, 3, 0.04);
+  cv::cornerHarris(unit, harris, 5, 3, 0.04);
   cv::Mat dilated;
   const int d = 2 * options.min_distance_px + 1;
   cv::dilate(harris, dilated, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(d, d)));
@@ -43,7 +75,7 @@ ImageStatistics MeasureImage(const cv::Mat& image, const ImageStatisticsOptions&
   st.corners_per_mpix = st.corners / (harris.rows * static_cast<double>(harris.cols) / 1e6);
 
   cv::Mat g;
-  img8.convertTo(g, CV_64F);
+  dn.convertTo(g, CV_64F);
   const cv::Size w(options.window_px, options.window_px);
   cv::Mat mean, mean_sq;
   cv::boxFilter(g, mean, CV_64F, w, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
@@ -54,8 +86,10 @@ ImageStatistics MeasureImage(const cv::Mat& image, const ImageStatisticsOptions&
   cv::sqrt(var, local_std);
   cv::Scalar m, s;
   cv::meanStdDev(local_std, m, s);
-  st.local_std_mean = m[0];
-  st.local_std_spread = s[0];
+  // In percent of the median whatever target_median_dn is.
+  const double to_percent = 100.0 / options.target_median_dn;
+  st.local_std_mean = m[0] * to_percent;
+  st.local_std_spread = s[0] * to_percent;
   return st;
 }
 
