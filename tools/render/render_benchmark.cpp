@@ -5,11 +5,12 @@
 // rendered world: which real images' range each figure falls in, or how far outside.
 //
 // The two worlds are catalogue worlds seen from their start pose, so that what is measured
-// is what scenarios drive on (the demo drives flat_rock_course).
+// is what scenarios drive on (the demo drives flat_rock_course). The sand is meridiani_ripples:
+// featureless_sand is blander than any real Meridiani image on purpose (VO must fail on it).
 //
 //   render_benchmark [--rig configs/cameras/navcam_pinhole.yaml] [--repeats 3]
 //                    [--rocky configs/worlds/flat_rock_course.yaml]
-//                    [--sand configs/worlds/featureless_sand.yaml] [--realism-only]
+//                    [--sand configs/worlds/meridiani_ripples.yaml] [--realism-only]
 // --realism-only renders one 1024 pair per world and skips the timing (for tuning worlds).
 #include "config/yaml_config.hpp"
 #include "geometry/camera_io.hpp"
@@ -171,7 +172,7 @@ void PrintVerdict(const std::string& name, const render::ImageStatistics& s, con
 int main(int argc, char** argv) {
   std::string rig_path;
   std::string rocky_path = std::string(ROVER_SOURCE_DIR) + "/configs/worlds/flat_rock_course.yaml";
-  std::string sand_path = std::string(ROVER_SOURCE_DIR) + "/configs/worlds/featureless_sand.yaml";
+  std::string sand_path = std::string(ROVER_SOURCE_DIR) + "/configs/worlds/meridiani_ripples.yaml";
   int repeats = 3;
   bool realism_only = false;
   for (int i = 1; i < argc; ++i) {
