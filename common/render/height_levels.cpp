@@ -47,6 +47,7 @@ void Box2::Add(const Box2& b) {
 
 void HeightGrid::Build(const Ground& ground, const Box2& box, double cell_m) {
   h_ = cell_m;
+  inv_h_ = 1.0 / h_;
   // Nodes sit on a site-wide lattice of multiples of h, so that the same ground is
   // sampled at the same points from frame to frame and the surface does not swim.
   x0_ = std::floor(box.x_min / h_) * h_;
@@ -65,6 +66,7 @@ void HeightGrid::Build(const Ground& ground, const Box2& box, double cell_m) {
 
 void HeightGrid::Adopt(const Ground::GridView& view) {
   h_ = view.h;
+  inv_h_ = 1.0 / h_;
   x0_ = view.x0;
   y0_ = view.y0;
   nx_ = view.nx;
@@ -152,8 +154,10 @@ double HeightGrid::HitInCell(int i, int j, double gu, double gv, double du, doub
 }
 
 double HeightGrid::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
-                             double t1) const {
+                             double t1, int start_mip) const {
   if (z_.empty()) return -1;
+  // Reciprocals once per ray: neither the clip nor the walk below then divides.
+  const double rdx = d.x() != 0 ? 1.0 / d.x() : 0.0, rdy = d.y() != 0 ? 1.0 / d.y() : 0.0;
   // Clip to the grid's rectangle.
   for (int k = 0; k < 2; ++k) {
     const double lo = k == 0 ? box_.x_min : box_.y_min;
@@ -162,7 +166,8 @@ double HeightGrid::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
       if (o[k] < lo || o[k] > hi) return -1;
       continue;
     }
-    double ta = (lo - o[k]) / d[k], tb = (hi - o[k]) / d[k];
+    const double r = k == 0 ? rdx : rdy;
+    double ta = (lo - o[k]) * r, tb = (hi - o[k]) * r;
     if (ta > tb) std::swap(ta, tb);
     t0 = std::max(t0, ta);
     t1 = std::min(t1, tb);
@@ -177,13 +182,12 @@ double HeightGrid::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
     t0 = std::max(t0, t_top);
     if (t0 > t1) return -1;
   }
-  const double gu = (o.x() - x0_) / h_, gv = (o.y() - y0_) / h_;
-  const double du = d.x() / h_, dv = d.y() / h_;
-  // Reciprocals once per ray: the walk below then needs no division per step.
-  const double iu = du != 0 ? 1.0 / du : 0.0, iv = dv != 0 ? 1.0 / dv : 0.0;
+  const double gu = (o.x() - x0_) * inv_h_, gv = (o.y() - y0_) * inv_h_;
+  const double du = d.x() * inv_h_, dv = d.y() * inv_h_;
+  const double iu = h_ * rdx, iv = h_ * rdy;
   const int su = du > 0 ? 1 : 0, sv = dv > 0 ? 1 : 0;
   const int top = static_cast<int>(mips_.size()) - 1;
-  int m = std::min(top, 6);
+  int m = std::clamp(start_mip, 0, top);
   double t = t0;
   while (t <= t1) {
     const double u = gu + du * t, v = gv + dv * t;
@@ -219,9 +223,59 @@ double HeightGrid::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
   return -1;
 }
 
+double HeightGrid::MaxOver(const Box2& box) const {
+  if (z_.empty() || box.empty()) return -kInf;
+  const double x_lo = std::max(box.x_min, box_.x_min), x_hi = std::min(box.x_max, box_.x_max);
+  const double y_lo = std::max(box.y_min, box_.y_min), y_hi = std::min(box.y_max, box_.y_max);
+  if (x_lo > x_hi || y_lo > y_hi) return -kInf;
+  // The level whose cells are at least half the box: at most 3 x 3 of them to visit.
+  const double w = std::max(x_hi - x_lo, y_hi - y_lo) / h_;
+  int m = 0;
+  while (m + 1 < static_cast<int>(mips_.size()) && kPow2[m] * 2 < w) ++m;
+  const double inv_s = kInvPow2[m];
+  const int i0 = std::clamp(static_cast<int>((x_lo - x0_) / h_ * inv_s), 0, cx_[m] - 1);
+  const int i1 = std::clamp(static_cast<int>((x_hi - x0_) / h_ * inv_s), 0, cx_[m] - 1);
+  const int j0 = std::clamp(static_cast<int>((y_lo - y0_) / h_ * inv_s), 0, cy_[m] - 1);
+  const int j1 = std::clamp(static_cast<int>((y_hi - y0_) / h_ * inv_s), 0, cy_[m] - 1);
+  const std::vector<float>& mip = mips_[m];
+  float best = -std::numeric_limits<float>::infinity();
+  for (int j = j0; j <= j1; ++j) {
+    for (int i = i0; i <= i1; ++i) best = std::max(best, mip[static_cast<std::size_t>(j) * cx_[m] + i]);
+  }
+  return best;
+}
+
+double HeightGrid::ConeFreeRange(const Eigen::Vector3d& o, const Eigen::Vector3d& c, double half_angle,
+                                 double max_range, double resolution_m) const {
+  if (z_.empty() || !(half_angle >= 0) || half_angle > 0.5) return 0;
+  // Lowest climb of any direction in the cone (site Z is down, so up is -z), and how far a
+  // point at range r can be from the axis point o + r c.
+  const double el_axis = std::asin(std::clamp(-c.z(), -1.0, 1.0));
+  const double lowest_up = std::sin(std::max(el_axis - half_angle, -M_PI / 2));
+  const double spread = 2 * std::sin(0.5 * half_angle);
+  const double oe = -o.z();
+  double r = 0, step = std::max(resolution_m, 0.25);
+  // Nothing can be met before the lowest ray comes down to the highest node.
+  if (lowest_up < 0 && oe > global_max_) r = std::min(max_range, (global_max_ - oe) / lowest_up);
+  while (r < max_range && step >= resolution_m) {
+    const double rb = std::min(max_range, r + step);
+    const double rad = spread * rb;
+    Box2 box{std::min(o.x() + r * c.x(), o.x() + rb * c.x()) - rad, std::max(o.x() + r * c.x(), o.x() + rb * c.x()) + rad,
+             std::min(o.y() + r * c.y(), o.y() + rb * c.y()) - rad, std::max(o.y() + r * c.y(), o.y() + rb * c.y()) + rad};
+    const double e_min = oe + std::min(r * lowest_up, rb * lowest_up);
+    if (MaxOver(box) < e_min) {
+      r = rb;
+      step *= 2;
+    } else {
+      step *= 0.5;
+    }
+  }
+  return std::min(r, max_range);
+}
+
 double HeightGrid::ElevationAt(double x, double y) const {
-  const double u = std::clamp((x - x0_) / h_, 0.0, nx_ - 1.000001);
-  const double v = std::clamp((y - y0_) / h_, 0.0, ny_ - 1.000001);
+  const double u = std::clamp((x - x0_) * inv_h_, 0.0, nx_ - 1.000001);
+  const double v = std::clamp((y - y0_) * inv_h_, 0.0, ny_ - 1.000001);
   const int i = static_cast<int>(u), j = static_cast<int>(v);
   const double a = u - i, b = v - j;
   return (1 - b) * ((1 - a) * Z(i, j) + a * Z(i + 1, j)) +
@@ -229,8 +283,8 @@ double HeightGrid::ElevationAt(double x, double y) const {
 }
 
 Eigen::Vector3d HeightGrid::NormalUpAt(double x, double y) const {
-  const double u = std::clamp((x - x0_) / h_, 0.0, nx_ - 1.000001);
-  const double v = std::clamp((y - y0_) / h_, 0.0, ny_ - 1.000001);
+  const double u = std::clamp((x - x0_) * inv_h_, 0.0, nx_ - 1.000001);
+  const double v = std::clamp((y - y0_) * inv_h_, 0.0, ny_ - 1.000001);
   const int i = static_cast<int>(u), j = static_cast<int>(v);
   const double a = u - i, b = v - j;
   double gx = 0, gy = 0;
@@ -241,7 +295,7 @@ Eigen::Vector3d HeightGrid::NormalUpAt(double x, double y) const {
     const float* r1 = r0 + nx_;
     const float* r2 = r1 + nx_;
     const double w00 = (1 - a) * (1 - b), w10 = a * (1 - b), w01 = (1 - a) * b, w11 = a * b;
-    const double k = 0.5 / h_;
+    const double k = 0.5 * inv_h_;
     gx = k * (w00 * (r0[1] - r0[-1]) + w10 * (r0[2] - r0[0]) + w01 * (r1[1] - r1[-1]) + w11 * (r1[2] - r1[0]));
     gy = k * (w00 * (r1[0] - rm[0]) + w10 * (r1[1] - rm[1]) + w01 * (r2[0] - r0[0]) + w11 * (r2[1] - r0[1]));
     return Eigen::Vector3d(-gx, -gy, -1.0).normalized();
@@ -300,8 +354,8 @@ std::vector<float> HeightGrid::SunHorizon(double sx, double sy, double tan_el) c
 }
 
 double HeightGrid::InterpolateNodes(const std::vector<float>& field, double x, double y) const {
-  const double u = std::clamp((x - x0_) / h_, 0.0, nx_ - 1.000001);
-  const double v = std::clamp((y - y0_) / h_, 0.0, ny_ - 1.000001);
+  const double u = std::clamp((x - x0_) * inv_h_, 0.0, nx_ - 1.000001);
+  const double v = std::clamp((y - y0_) * inv_h_, 0.0, ny_ - 1.000001);
   const int i = static_cast<int>(u), j = static_cast<int>(v);
   const double a = u - i, b = v - j;
   const std::size_t k = static_cast<std::size_t>(j) * nx_ + i;
@@ -343,12 +397,12 @@ int HeightLevels::LevelAt(double x, double y) const {
 }
 
 double HeightLevels::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
-                               double t1, int* level_out) const {
+                               double t1, int* level_out, int start_mip) const {
   if (grids_.empty() || t0 > t1) return -1;
   if (d.z() <= 0 && -o.z() + (-d.z()) * t0 > global_max_) return -1;
   if (grids_.size() == 1) {
     // One level (a ground's own grid): no circles to split at.
-    const double hit = grids_[0].Intersect(o, d, t0, t1);
+    const double hit = grids_[0].Intersect(o, d, t0, t1, start_mip);
     if (hit >= 0 && level_out) *level_out = 0;
     return hit;
   }
@@ -378,7 +432,7 @@ double HeightLevels::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& 
     if (tb <= ta) continue;
     const double tm = 0.5 * (ta + tb);
     const int L = LevelAt(o.x() + tm * d.x(), o.y() + tm * d.y());
-    const double hit = grids_[L].Intersect(o, d, ta, tb);
+    const double hit = grids_[L].Intersect(o, d, ta, tb, start_mip);
     if (hit >= 0) {
       if (level_out) *level_out = L;
       return hit;

@@ -36,8 +36,21 @@ class HeightGrid {
 
   // First hit of o + t d (site frame, Z down, |d| = 1) for t in [t0, t1]; returns t or
   // a negative value for none.
+  // `start_mip`: the max-mip level the walk starts on; low when o + t0 d is known to be
+  // near the surface (the walk climbs by itself where the ray is high).
   double Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
-                   double t1) const;
+                   double t1, int start_mip = 6) const;
+
+  // A bundle of rays from one origin o whose unit directions all lie within `half_angle`
+  // (rad) of the unit axis c: the largest r found such that no ray of the bundle meets
+  // the surface at a distance below r (every ray may start its own trace there). Found by
+  // marching the cone's bounding boxes through the max-mip, so it never overshoots: a
+  // cone section is passed only when the highest node under its box is below its lowest
+  // point. Stops refining at steps of `resolution_m`. Returns 0 when nothing can be said.
+  double ConeFreeRange(const Eigen::Vector3d& o, const Eigen::Vector3d& c, double half_angle,
+                       double max_range, double resolution_m) const;
+  // The highest node over the cells that meet `box`; -infinity when it misses the grid.
+  double MaxOver(const Box2& box) const;
 
   // Elevation (up) and smooth up-normal at a point: the normal interpolates node
   // gradients so that shading shows no cell pattern.
@@ -69,7 +82,7 @@ class HeightGrid {
   double HitInCell(int i, int j, double gu, double gv, double du, double dv, double oe,
                    double de, double t, double t_exit) const;
 
-  double x0_ = 0, y0_ = 0, h_ = 1;
+  double x0_ = 0, y0_ = 0, h_ = 1, inv_h_ = 1;
   int nx_ = 0, ny_ = 0;
   Box2 box_;
   std::vector<float> z_;  // elevation up, row-major (j rows of i)
@@ -89,7 +102,7 @@ class HeightLevels {
   // First hit along o + t d, t in [t0, t1]. Returns t, or a negative value.
   // `level_out` gets the level of the hit.
   double Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
-                   double t1, int* level_out = nullptr) const;
+                   double t1, int* level_out = nullptr, int start_mip = 6) const;
 
   // One level: the ground's own grid.
   void Adopt(const Ground::GridView& view);

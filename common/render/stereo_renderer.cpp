@@ -24,6 +24,13 @@ struct StereoRenderer::RayTable {
   double pixel_angle = 0;                // smallest angle between neighbouring rays, rad
   std::vector<Eigen::Vector3f> dirs;     // rover frame, unit
   std::vector<Eigen::Vector3f> origins;  // per pixel, only for non-central models
+  // Square tiles of `tile` x `tile` pixels (central models only): the axis and half-angle
+  // of a cone holding every ray of the tile, for ConeFreeRange. About 6 mrad across, so a
+  // cone is a few centimetres wide where it meets the ground.
+  int tile = 8;
+  int tiles_x = 0, tiles_y = 0;
+  std::vector<Eigen::Vector3d> tile_axis;
+  std::vector<double> tile_half_angle;
 };
 
 struct StereoRenderer::GridCache {
@@ -103,12 +110,18 @@ struct RoverSolids {
     for (int k = 0; k < 3; ++k) inv_s[k] = std::abs(s[k]) < 1e-15 ? 0.0 : 1.0 / s[k];
   }
 
+  // Does the ray p + t s, t > 0, miss the bounding sphere centred at `centre`? The same
+  // in any frame, so the site frame can ask before transforming the point.
+  bool MissesBound(const Eigen::Vector3d& centre, const Eigen::Vector3d& p, const Eigen::Vector3d& s) const {
+    if (bound_radius < 0) return true;
+    const Eigen::Vector3d v = centre - p;
+    const double tc = v.dot(s);
+    return tc < -bound_radius || v.squaredNorm() - tc * tc > bound_radius * bound_radius;
+  }
+
   // Does the ray p + t s, t > 0 (rover frame), pass through a solid? s as in Prepare.
   bool Blocks(const Eigen::Vector3d& p, const Eigen::Vector3d& s) const {
-    if (bound_radius < 0) return false;
-    const Eigen::Vector3d v = bound_centre - p;
-    const double tc = v.dot(s);
-    if (tc < -bound_radius || v.squaredNorm() - tc * tc > bound_radius * bound_radius) return false;
+    if (MissesBound(bound_centre, p, s)) return false;
     for (const auto& b : boxes) {
       double t0 = 1e-6, t1 = std::numeric_limits<double>::infinity();
       bool miss = false;
@@ -230,7 +243,6 @@ const StereoRenderer::RayTable& StereoRenderer::RaysFor(const geometry::CameraMo
       if ((o - table->origin).norm() > 1e-9) central = false;
     }
   }
-  if (!central) table->origins = std::move(origins);
   // The finest angular pixel over a coarse lattice of the image, so that the albedo
   // footprint is never overstated where the model's pixels are smallest.
   double angle = M_PI;
@@ -245,6 +257,33 @@ const StereoRenderer::RayTable& StereoRenderer::RaysFor(const geometry::CameraMo
     }
   }
   table->pixel_angle = angle;
+  if (!central) {
+    table->origins = std::move(origins);
+  } else {
+    const int T = table->tile = std::clamp(static_cast<int>(std::lround(0.006 / table->pixel_angle)), 2, 16);
+    table->tiles_x = (table->width + T - 1) / T;
+    table->tiles_y = (table->height + T - 1) / T;
+    for (int ty = 0; ty < table->tiles_y; ++ty) {
+      for (int tx = 0; tx < table->tiles_x; ++tx) {
+        Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+        const int v1 = std::min(table->height, (ty + 1) * T), u1 = std::min(table->width, (tx + 1) * T);
+        for (int v = ty * T; v < v1; ++v) {
+          for (int u = tx * T; u < u1; ++u) axis += table->dirs[static_cast<std::size_t>(v) * table->width + u].cast<double>();
+        }
+        axis.normalize();
+        double half = 0;
+        for (int v = ty * T; v < v1; ++v) {
+          for (int u = tx * T; u < u1; ++u) {
+            const Eigen::Vector3d d = table->dirs[static_cast<std::size_t>(v) * table->width + u].cast<double>();
+            half = std::max(half, std::atan2(axis.cross(d).norm(), axis.dot(d)));
+          }
+        }
+        table->tile_axis.push_back(axis);
+        // A margin for the rotation into the site frame.
+        table->tile_half_angle.push_back(half + 1e-6);
+      }
+    }
+  }
   ray_cache_[key] = table;
   return *table;
 }
@@ -378,6 +417,7 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
   const bool check_rover = !solids.boxes.empty() || solids.has_mast;
   const Eigen::Vector3d s_rover = R.transpose() * s_site;
   solids.Prepare(s_rover);
+  const Eigen::Vector3d bound_centre_site = T_site_rover * solids.bound_centre;
   const double t_shadow = o.shadow_reach_m / std::max(std::cos(el), 1e-3);
   const std::vector<float>& normal = NormalTable();
   const std::uint64_t base_seed = SplitMix(o.noise_seed ^ SplitMix(static_cast<std::uint64_t>(frame_seed)));
@@ -390,24 +430,37 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
   std::vector<int> hit_column;
   for (int cam = 0; cam < 2; ++cam) {
     const RayTable& tab = *tables[cam];
+    for (auto* a : {&hit_x, &hit_y, &hit_footprint, &hit_albedo, &hit_light}) a->resize(tab.width);
+    hit_column.resize(tab.width);
     cv::Mat rad(tab.height, tab.width, CV_32FC1);
     cv::Mat depth(tab.height, tab.width, CV_32FC1);
     const Eigen::Vector3d origin_site = T_site_rover * tab.origin;
+    // Where each tile's rays may start: no ray of the tile meets the ground before it.
+    // Only on a single grid (the world's own), which is where the time goes.
+    const bool tiled = !tab.tile_axis.empty() && levels->levels() == 1;
+    std::vector<double> tile_start(static_cast<std::size_t>(std::max(tab.tiles_x, 1)), 0.0);
     for (int v = 0; v < tab.height; ++v) {
+      if (tiled && v % tab.tile == 0) {
+        const internal::HeightGrid& g = levels->level(0);
+        for (int tx = 0; tx < tab.tiles_x; ++tx) {
+          const std::size_t i = static_cast<std::size_t>(v / tab.tile) * tab.tiles_x + tx;
+          // Less a part in a million: the float directions are unit only to that.
+          tile_start[tx] = (1 - 1e-6) * g.ConeFreeRange(origin_site, R * tab.tile_axis[i], tab.tile_half_angle[i],
+                                                        o.max_range_m, 2 * g.cell());
+        }
+      }
       float* rrow = rad.ptr<float>(v);
       float* drow = depth.ptr<float>(v);
-      hit_x.clear();
-      hit_y.clear();
-      hit_footprint.clear();
-      hit_light.clear();
-      hit_column.clear();
+      int hits = 0;
       for (int u = 0; u < tab.width; ++u) {
         const std::size_t k = static_cast<std::size_t>(v) * tab.width + u;
         Eigen::Vector3d os = origin_site;
         if (!tab.origins.empty()) os += R * tab.origins[k].cast<double>();
         const Eigen::Vector3d ds = R * tab.dirs[k].cast<double>();
         int level = 0;
-        const double t = levels->Intersect(os, ds, 0.0, o.max_range_m, &level);
+        // A tile's rays start close to the ground: from the finest mip.
+        const double t = tiled ? levels->Intersect(os, ds, tile_start[u / tab.tile], o.max_range_m, &level, 0)
+                               : levels->Intersect(os, ds, 0.0, o.max_range_m, &level);
         if (t < 0) {
           rrow[u] = static_cast<float>(ds.z() < 0 ? o.sky_dn : o.far_ground_dn);
           drow[u] = 0.0f;
@@ -421,15 +474,17 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
         // cos(incidence) along it: the footprint is the side of the square of the same
         // area, so texture the pixel can only alias is left out, and no more.
         const double across = t * tab.pixel_angle;
-        hit_footprint.push_back(across / std::sqrt(std::max(std::abs(n.dot(ds)), 0.05)));
-        hit_x.push_back(p.x());
-        hit_y.push_back(p.y());
-        hit_column.push_back(u);
+        hit_footprint[hits] = across / std::sqrt(std::max(std::abs(n.dot(ds)), 0.05));
+        hit_x[hits] = p.x();
+        hit_y[hits] = p.y();
+        hit_column[hits] = u;
         double direct = 0;
         const double cos_i = n.dot(s_site);
         if (sun_up && cos_i > 0) {
           bool lit = true;
-          if (check_rover) lit = !solids.Blocks(R.transpose() * (p - tr), s_rover);
+          if (check_rover && !solids.MissesBound(bound_centre_site, p, s_site)) {
+            lit = !solids.Blocks(R.transpose() * (p - tr), s_rover);
+          }
           if (lit && horizon) {
             // The same lift off the surface as the shadow ray below.
             lit = -p.z() + std::max(0.002, 0.05 * g.cell()) >= g.InterpolateNodes(*horizon, p.x(), p.y());
@@ -440,10 +495,8 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
           }
           if (lit) direct = cos_i;
         }
-        hit_light.push_back(o.exposure_dn * (o.ambient + (1 - o.ambient) * direct));
+        hit_light[hits++] = o.exposure_dn * (o.ambient + (1 - o.ambient) * direct);
       }
-      const int hits = static_cast<int>(hit_column.size());
-      hit_albedo.resize(hit_column.size());
       ground.AlbedoOverBatch(hits, hit_x.data(), hit_y.data(), hit_footprint.data(), hit_albedo.data());
       for (int h = 0; h < hits; ++h) rrow[hit_column[h]] = static_cast<float>(hit_albedo[h] * hit_light[h]);
     }

@@ -386,28 +386,42 @@ void World::StampRocks() {
   for (std::size_t c = 0; c < ground_.size(); ++c) surface_[c] = ground_[c] + bump[c];
 }
 
+namespace {
+
+// Rock indices by the cells of a `cell`-sized grid over [x0, x0 + nx cell) x [y0, ...) that
+// their discs touch, as a compressed list (start per cell, then the rocks, in rock order).
+void BucketRocks(const std::vector<Rock>& rocks, double x0, double y0, double cell, int nx, int ny,
+                 std::vector<int>& start, std::vector<int>& list) {
+  std::vector<std::vector<int>> buckets(static_cast<std::size_t>(nx) * ny);
+  for (int k = 0; k < static_cast<int>(rocks.size()); ++k) {
+    const Rock& r = rocks[k];
+    const double R = 0.5 * r.diameter_m;
+    const int i0 = std::clamp(static_cast<int>(std::floor((r.position.x() - R - x0) / cell)), 0, nx - 1);
+    const int i1 = std::clamp(static_cast<int>(std::floor((r.position.x() + R - x0) / cell)), 0, nx - 1);
+    const int j0 = std::clamp(static_cast<int>(std::floor((r.position.y() - R - y0) / cell)), 0, ny - 1);
+    const int j1 = std::clamp(static_cast<int>(std::floor((r.position.y() + R - y0) / cell)), 0, ny - 1);
+    for (int i = i0; i <= i1; ++i) {
+      for (int j = j0; j <= j1; ++j) buckets[static_cast<std::size_t>(i) * ny + j].push_back(k);
+    }
+  }
+  start.assign(buckets.size() + 1, 0);
+  list.clear();
+  for (std::size_t b = 0; b < buckets.size(); ++b) {
+    start[b] = static_cast<int>(list.size());
+    list.insert(list.end(), buckets[b].begin(), buckets[b].end());
+  }
+  start.back() = static_cast<int>(list.size());
+}
+
+}  // namespace
+
 void World::IndexRocks() {
   bx_ = std::max(1, static_cast<int>(std::ceil((x_max() - x0_) / bucket_size_)) + 1);
   by_ = std::max(1, static_cast<int>(std::ceil((y_max() - y0_) / bucket_size_)) + 1);
-  std::vector<std::vector<int>> buckets(static_cast<std::size_t>(bx_) * by_);
-  for (int k = 0; k < static_cast<int>(rocks_.size()); ++k) {
-    const Rock& r = rocks_[k];
-    const double R = 0.5 * r.diameter_m;
-    const int i0 = std::clamp(static_cast<int>(std::floor((r.position.x() - R - x0_) / bucket_size_)), 0, bx_ - 1);
-    const int i1 = std::clamp(static_cast<int>(std::floor((r.position.x() + R - x0_) / bucket_size_)), 0, bx_ - 1);
-    const int j0 = std::clamp(static_cast<int>(std::floor((r.position.y() - R - y0_) / bucket_size_)), 0, by_ - 1);
-    const int j1 = std::clamp(static_cast<int>(std::floor((r.position.y() + R - y0_) / bucket_size_)), 0, by_ - 1);
-    for (int i = i0; i <= i1; ++i) {
-      for (int j = j0; j <= j1; ++j) buckets[static_cast<std::size_t>(i) * by_ + j].push_back(k);
-    }
-  }
-  bucket_start_.assign(buckets.size() + 1, 0);
-  bucket_rocks_.clear();
-  for (std::size_t b = 0; b < buckets.size(); ++b) {
-    bucket_start_[b] = static_cast<int>(bucket_rocks_.size());
-    bucket_rocks_.insert(bucket_rocks_.end(), buckets[b].begin(), buckets[b].end());
-  }
-  bucket_start_.back() = static_cast<int>(bucket_rocks_.size());
+  BucketRocks(rocks_, x0_, y0_, bucket_size_, bx_, by_, bucket_start_, bucket_rocks_);
+  fbx_ = std::max(1, static_cast<int>(std::ceil((x_max() - x0_) / kFineBucket)) + 1);
+  fby_ = std::max(1, static_cast<int>(std::ceil((y_max() - y0_) / kFineBucket)) + 1);
+  BucketRocks(rocks_, x0_, y0_, kFineBucket, fbx_, fby_, fine_start_, fine_rocks_);
 }
 
 bool World::Contains(double x, double y) const {
@@ -538,11 +552,11 @@ void World::AlbedoBatch(int n, const double* x, const double* y, const double* f
     const double shortest = 2.0 * footprint_m[p];
     const Rock* rock = nullptr;
     if (px >= x0_ && py >= y0_ && px <= x_max() && py <= y_max()) {
-      const int bi = std::min(bx_ - 1, static_cast<int>((px - x0_) / bucket_size_));
-      const int bj = std::min(by_ - 1, static_cast<int>((py - y0_) / bucket_size_));
-      const std::size_t b = static_cast<std::size_t>(bi) * by_ + bj;
-      for (int k = bucket_start_[b]; k < bucket_start_[b + 1] && !rock; ++k) {
-        const Rock& r = rocks_[bucket_rocks_[k]];
+      const int bi = std::min(fbx_ - 1, static_cast<int>((px - x0_) * (1.0 / kFineBucket)));
+      const int bj = std::min(fby_ - 1, static_cast<int>((py - y0_) * (1.0 / kFineBucket)));
+      const std::size_t b = static_cast<std::size_t>(bi) * fby_ + bj;
+      for (int k = fine_start_[b]; k < fine_start_[b + 1] && !rock; ++k) {
+        const Rock& r = rocks_[fine_rocks_[k]];
         const double R = 0.5 * r.diameter_m;
         const double dx = px - r.position.x(), dy = py - r.position.y();
         if (dx * dx + dy * dy < R * R) rock = &r;

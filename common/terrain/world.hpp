@@ -247,6 +247,12 @@ class World {
   int bx_ = 0, by_ = 0;
   std::vector<int> bucket_start_;
   std::vector<int> bucket_rocks_;
+  // The same on a fine grid for Albedo, which asks for every pixel: a 1 m bucket of a
+  // pebble field holds hundreds of rocks, one of kFineBucket a handful.
+  static constexpr double kFineBucket = 0.125;
+  int fbx_ = 0, fby_ = 0;
+  std::vector<int> fine_start_;
+  std::vector<int> fine_rocks_;
   double soil_texture_norm_[kNumSoils] = {1, 1, 1};
   double rock_texture_norm_ = 1.0;
   std::uint32_t albedo_seed_ = 0, rock_albedo_seed_ = 0, mottle_seed_ = 0;
