@@ -120,6 +120,7 @@ void HeightGrid::BuildMips() {
     cy_.push_back(cy);
   }
   global_max_ = mips_.back()[0];
+  BuildGradients();
 }
 
 bool HeightGrid::Contains(double x, double y) const {
@@ -246,7 +247,7 @@ double HeightGrid::MaxOver(const Box2& box) const {
 }
 
 double HeightGrid::ConeFreeRange(const Eigen::Vector3d& o, const Eigen::Vector3d& c, double half_angle,
-                                 double max_range, double resolution_m) const {
+                                 double max_range, double resolution_m, double known_free) const {
   if (z_.empty() || !(half_angle >= 0) || half_angle > 0.5) return 0;
   // Lowest climb of any direction in the cone (site Z is down, so up is -z), and how far a
   // point at range r can be from the axis point o + r c.
@@ -257,6 +258,7 @@ double HeightGrid::ConeFreeRange(const Eigen::Vector3d& o, const Eigen::Vector3d
   double r = 0, step = std::max(resolution_m, 0.25);
   // Nothing can be met before the lowest ray comes down to the highest node.
   if (lowest_up < 0 && oe > global_max_) r = std::min(max_range, (global_max_ - oe) / lowest_up);
+  r = std::max(r, std::min(known_free, max_range));
   while (r < max_range && step >= resolution_m) {
     const double rb = std::min(max_range, r + step);
     const double rad = spread * rb;
@@ -282,34 +284,32 @@ double HeightGrid::ElevationAt(double x, double y) const {
          b * ((1 - a) * Z(i, j + 1) + a * Z(i + 1, j + 1));
 }
 
+void HeightGrid::BuildGradients() {
+  // Each node's central difference (one-sided at the edges): NormalUpAt interpolates
+  // these bilinearly, so shading shows no cell pattern and costs one lookup per hit.
+  grad_.resize(z_.size());
+  for (int j = 0; j < ny_; ++j) {
+    const int jl = std::max(j - 1, 0), jh = std::min(j + 1, ny_ - 1);
+    for (int i = 0; i < nx_; ++i) {
+      const int il = std::max(i - 1, 0), ih = std::min(i + 1, nx_ - 1);
+      grad_[static_cast<std::size_t>(j) * nx_ + i] = {
+          static_cast<float>((Z(ih, j) - Z(il, j)) / ((ih - il) * h_)),
+          static_cast<float>((Z(i, jh) - Z(i, jl)) / ((jh - jl) * h_))};
+    }
+  }
+}
+
 Eigen::Vector3d HeightGrid::NormalUpAt(double x, double y) const {
   const double u = std::clamp((x - x0_) * inv_h_, 0.0, nx_ - 1.000001);
   const double v = std::clamp((y - y0_) * inv_h_, 0.0, ny_ - 1.000001);
   const int i = static_cast<int>(u), j = static_cast<int>(v);
   const double a = u - i, b = v - j;
-  double gx = 0, gy = 0;
-  if (i >= 1 && j >= 1 && i + 2 < nx_ && j + 2 < ny_) {
-    // Inside the grid every node has both neighbours: central differences over 2h.
-    const float* r0 = &z_[static_cast<std::size_t>(j) * nx_ + i];
-    const float* rm = r0 - nx_;
-    const float* r1 = r0 + nx_;
-    const float* r2 = r1 + nx_;
-    const double w00 = (1 - a) * (1 - b), w10 = a * (1 - b), w01 = (1 - a) * b, w11 = a * b;
-    const double k = 0.5 * inv_h_;
-    gx = k * (w00 * (r0[1] - r0[-1]) + w10 * (r0[2] - r0[0]) + w01 * (r1[1] - r1[-1]) + w11 * (r1[2] - r1[0]));
-    gy = k * (w00 * (r1[0] - rm[0]) + w10 * (r1[1] - rm[1]) + w01 * (r2[0] - r0[0]) + w11 * (r2[1] - r0[1]));
-    return Eigen::Vector3d(-gx, -gy, -1.0).normalized();
-  }
-  for (int dj = 0; dj < 2; ++dj) {
-    for (int di = 0; di < 2; ++di) {
-      const int ni = i + di, nj = j + dj;
-      const double w = (di ? a : 1 - a) * (dj ? b : 1 - b);
-      const int il = std::max(ni - 1, 0), ih = std::min(ni + 1, nx_ - 1);
-      const int jl = std::max(nj - 1, 0), jh = std::min(nj + 1, ny_ - 1);
-      gx += w * (Z(ih, nj) - Z(il, nj)) / ((ih - il) * h_);
-      gy += w * (Z(ni, jh) - Z(ni, jl)) / ((jh - jl) * h_);
-    }
-  }
+  const std::size_t k = static_cast<std::size_t>(j) * nx_ + i;
+  const std::array<float, 2>* g0 = &grad_[k];
+  const std::array<float, 2>* g1 = g0 + nx_;
+  const double w00 = (1 - a) * (1 - b), w10 = a * (1 - b), w01 = (1 - a) * b, w11 = a * b;
+  const double gx = w00 * g0[0][0] + w10 * g0[1][0] + w01 * g1[0][0] + w11 * g1[1][0];
+  const double gy = w00 * g0[0][1] + w10 * g0[1][1] + w01 * g1[0][1] + w11 * g1[1][1];
   // Up is -Z in the site frame.
   return Eigen::Vector3d(-gx, -gy, -1.0).normalized();
 }

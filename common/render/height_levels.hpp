@@ -15,6 +15,8 @@
 
 #include <Eigen/Core>
 
+#include <array>
+
 #include <vector>
 
 namespace rover::render::internal {
@@ -47,8 +49,10 @@ class HeightGrid {
   // marching the cone's bounding boxes through the max-mip, so it never overshoots: a
   // cone section is passed only when the highest node under its box is below its lowest
   // point. Stops refining at steps of `resolution_m`. Returns 0 when nothing can be said.
+  // `known_free`: a range already known to be free for this bundle (say, from a wider
+  // cone that holds it), where the march may begin.
   double ConeFreeRange(const Eigen::Vector3d& o, const Eigen::Vector3d& c, double half_angle,
-                       double max_range, double resolution_m) const;
+                       double max_range, double resolution_m, double known_free = 0) const;
   // The highest node over the cells that meet `box`; -infinity when it misses the grid.
   double MaxOver(const Box2& box) const;
 
@@ -78,6 +82,7 @@ class HeightGrid {
 
  private:
   void BuildMips();
+  void BuildGradients();
   float Z(int i, int j) const { return z_[static_cast<std::size_t>(j) * nx_ + i]; }
   double HitInCell(int i, int j, double gu, double gv, double du, double dv, double oe,
                    double de, double t, double t_exit) const;
@@ -86,6 +91,7 @@ class HeightGrid {
   int nx_ = 0, ny_ = 0;
   Box2 box_;
   std::vector<float> z_;  // elevation up, row-major (j rows of i)
+  std::vector<std::array<float, 2>> grad_;  // d(elevation)/dx, /dy per node, same layout
   // mips_[m] has cells of 2^m base cells; size cx_[m] x cy_[m].
   std::vector<std::vector<float>> mips_;
   std::vector<int> cx_, cy_;

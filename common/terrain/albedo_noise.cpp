@@ -56,9 +56,13 @@ inline float Value(float u, float v, std::uint32_t s) {
 float ValueNoise32(float x, float y, std::uint32_t seed) { return Value(x, y, seed); }
 
 int OctaveCount(double min_wavelength, double max_wavelength) {
-  int n = 0;
-  for (double lambda = max_wavelength; lambda >= min_wavelength * 0.999 && n < 64; lambda *= 0.5) ++n;
-  return n;
+  // Octave k is kept while max / 2^k >= 0.999 min, i.e. 2^k <= r: k = 0 .. floor(log2 r),
+  // and frexp gives floor(log2 r) + 1 exactly (r = f 2^e, f in [0.5, 1)).
+  const double r = max_wavelength / (min_wavelength * 0.999);
+  if (!(r >= 1.0)) return 0;
+  int e = 0;
+  std::frexp(r, &e);
+  return std::min(e, 64);
 }
 
 namespace {

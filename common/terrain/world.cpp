@@ -571,7 +571,10 @@ void World::AlbedoBatch(int n, const double* x, const double* y, const double* f
       s.mottle_octaves[p] = 0;
       s.mottled[p] = 0;
     } else {
-      const Soil soil = SoilAt(px, py);
+      // SoilAt, inline: this loop runs for every pixel.
+      const int i = static_cast<int>(std::clamp((px - x0_) / res_, 0.0, nx_ - 1.0) + 0.5);
+      const int j = static_cast<int>(std::clamp((py - y0_) / res_, 0.0, ny_ - 1.0) + 0.5);
+      const Soil soil = static_cast<Soil>(soil_[static_cast<std::size_t>(i) * ny_ + j]);
       const SoilAlbedo& sa = AlbedoOf(a, soil);
       s.mean[p] = sa.mean;
       s.gain[p] = sa.contrast * soil_texture_norm_[static_cast<int>(soil)];
