@@ -34,12 +34,14 @@ struct Marker {
   double x, y, sigma;
 };
 
-// A plane (elevation = base + gx x + gy y), optional smooth rocks (half-ellipsoids), a
+// A plane (elevation = base + gx x + gy y), optional smooth rocks (half-ellipsoids, or
+// flat-topped: a level summit of radius flat_top inside an ellipsoidal shoulder), a
 // uniform albedo, and markers.
 class MarkedGround : public Ground {
  public:
   struct Bump {
     double x, y, radius, height;
+    double flat_top = 0;
   };
   double base = 0, gx = 0, gy = 0, albedo = 0.5, marker_depth = 0.8;
   std::vector<Bump> bumps;
@@ -48,8 +50,13 @@ class MarkedGround : public Ground {
   double Elevation(double x, double y) const override {
     double e = base + gx * x + gy * y;
     for (const Bump& b : bumps) {
-      const double r2 = ((x - b.x) * (x - b.x) + (y - b.y) * (y - b.y)) / (b.radius * b.radius);
-      if (r2 < 1) e += b.height * std::sqrt(1 - r2);
+      const double r = std::hypot(x - b.x, y - b.y);
+      if (r <= b.flat_top) {
+        e += b.height;
+      } else if (r < b.radius) {
+        const double q = (r - b.flat_top) / (b.radius - b.flat_top);
+        e += b.height * std::sqrt(1 - q * q);
+      }
     }
     return e;
   }
