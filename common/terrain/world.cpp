@@ -198,7 +198,7 @@ std::vector<Rock> SampleGolombekRocks(const RockFieldOptions& o, const Eigen::Ve
     r.diameter_m = d[b - 1] + t * (d[b] - d[b - 1]);
     r.position = {rng.Uniform(lo.x(), hi.x()), rng.Uniform(lo.y(), hi.y())};
     r.height_m = r.diameter_m * o.height_ratio * (1.0 + o.height_spread * rng.Uniform(-1.0, 1.0));
-    r.albedo = 0.30 * (1.0 + 0.25 * rng.Uniform(-1.0, 1.0));
+    r.albedo = o.albedo_mean * (1.0 + o.albedo_spread * rng.Uniform(-1.0, 1.0));
     r.name = "rock_" + std::to_string(n);
     rocks.push_back(std::move(r));
   }

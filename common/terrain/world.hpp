@@ -109,6 +109,8 @@ struct RockFieldOptions {
   double max_diameter_m = 1.0;
   double height_ratio = 0.5;   // height = ratio * D
   double height_spread = 0.2;  // relative spread of the ratio, uniform +-
+  double albedo_mean = 0.30;   // mean albedo of the rocks' surfaces
+  double albedo_spread = 0.25;  // relative spread of a rock's albedo, uniform +-
   std::vector<Soil> soils{Soil::kBedrock, Soil::kPackedSoil, Soil::kSand};  // where they lie
   std::vector<Region> exclude;  // no random rocks whose disc touches these regions
 };

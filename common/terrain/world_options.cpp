@@ -193,7 +193,7 @@ WorldOptions WorldOptions::Load(const ConfigNode& root) {
     if (n.Has("random")) {
       const ConfigNode r = n["random"];
       r.CheckKeys({"abundance_k", "min_diameter_m", "max_diameter_m", "height_ratio",
-                   "height_spread", "soils", "exclude"});
+                   "height_spread", "albedo_mean", "albedo_spread", "soils", "exclude"});
       auto& f = o.random_rocks;
       r.Get("abundance_k", f.abundance_k, 0.0, 0.5);
       r.Get("min_diameter_m", f.min_diameter_m, 0.01, 10.0);
@@ -203,6 +203,8 @@ WorldOptions WorldOptions::Load(const ConfigNode& root) {
       }
       r.Get("height_ratio", f.height_ratio, 0.0, 2.0);
       r.Get("height_spread", f.height_spread, 0.0, 1.0);
+      r.Get("albedo_mean", f.albedo_mean, 0.02, 0.9);
+      r.Get("albedo_spread", f.albedo_spread, 0.0, 0.9);
       if (r.Has("soils")) f.soils = ParseSoilList(r["soils"]);
       if (r.Has("exclude")) {
         const ConfigNode list = r["exclude"];
