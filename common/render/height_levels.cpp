@@ -224,6 +224,59 @@ double HeightGrid::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
   return -1;
 }
 
+double HeightGrid::IntersectNear(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0, double t1,
+                                 int max_cells) const {
+  if (z_.empty()) return -1;
+  const double rdx = d.x() != 0 ? 1.0 / d.x() : 0.0, rdy = d.y() != 0 ? 1.0 / d.y() : 0.0;
+  // Clip to the grid's rectangle, as Intersect does.
+  for (int k = 0; k < 2; ++k) {
+    const double lo = k == 0 ? box_.x_min : box_.y_min;
+    const double hi = k == 0 ? box_.x_max : box_.y_max;
+    if (d[k] == 0) {
+      if (o[k] < lo || o[k] > hi) return -1;
+      continue;
+    }
+    const double r = k == 0 ? rdx : rdy;
+    double ta = (lo - o[k]) * r, tb = (hi - o[k]) * r;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  if (t0 > t1) return -1;
+  const double oe = -o.z(), de = -d.z();
+  const double gu = (o.x() - x0_) * inv_h_, gv = (o.y() - y0_) * inv_h_;
+  const double du = d.x() * inv_h_, dv = d.y() * inv_h_;
+  const double iu = h_ * rdx, iv = h_ * rdy;
+  const int su = du > 0 ? 1 : 0, sv = dv > 0 ? 1 : 0;
+  const int step_i = du > 0 ? 1 : -1, step_j = dv > 0 ? 1 : -1;
+  const int cx = cx_[0], cy = cy_[0];
+  const std::vector<float>& cells = mips_[0];
+  double t = t0;
+  int I = std::clamp(static_cast<int>(gu + du * t), 0, cx - 1);
+  int J = std::clamp(static_cast<int>(gv + dv * t), 0, cy - 1);
+  for (int n = 0; n < max_cells; ++n) {
+    // Each wall crossing is computed afresh from the cell index, so nothing accumulates.
+    const double tu = du != 0 ? ((I + su) - gu) * iu : kInf;
+    const double tv = dv != 0 ? ((J + sv) - gv) * iv : kInf;
+    const double t_exit = std::max(t, std::min(t1, std::min(tu, tv)));
+    const double e_min = de < 0 ? oe + de * t_exit : oe + de * t;
+    if (e_min <= cells[static_cast<std::size_t>(J) * cx + I]) {
+      const double hit = HitInCell(I, J, gu, gv, du, dv, oe, de, t, t_exit);
+      if (hit >= 0) return hit;
+    }
+    if (t_exit >= t1) return -1;
+    t = t_exit;
+    if (tu <= tv) {
+      I += step_i;
+      if (I < 0 || I >= cx) return -1;
+    } else {
+      J += step_j;
+      if (J < 0 || J >= cy) return -1;
+    }
+  }
+  return Intersect(o, d, t, t1, 0);
+}
+
 double HeightGrid::MaxOver(const Box2& box) const {
   if (z_.empty() || box.empty()) return -kInf;
   const double x_lo = std::max(box.x_min, box_.x_min), x_hi = std::min(box.x_max, box_.x_max);

@@ -43,6 +43,12 @@ class HeightGrid {
   double Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
                    double t1, int start_mip = 6) const;
 
+  // Intersect for a ray known to start close to the surface (from ConeFreeRange): walks
+  // the finest cells one by one (a plain grid DDA, cheaper per step than the max-mip walk)
+  // for up to `max_cells`, then hands what is left to Intersect. Same result.
+  double IntersectNear(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0, double t1,
+                       int max_cells = 24) const;
+
   // A bundle of rays from one origin o whose unit directions all lie within `half_angle`
   // (rad) of the unit axis c: the largest r found such that no ray of the bundle meets
   // the surface at a distance below r (every ray may start its own trace there). Found by

@@ -516,7 +516,7 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
         const Eigen::Vector3d ds = R * tab.dirs[k].cast<double>();
         int level = 0;
         // A tile's rays start close to the ground: from the finest mip.
-        const double t = tiled ? levels->level(0).Intersect(os, ds, tile_start[u / tab.tile], o.max_range_m, 0)
+        const double t = tiled ? levels->level(0).IntersectNear(os, ds, tile_start[u / tab.tile], o.max_range_m)
                                : levels->Intersect(os, ds, 0.0, o.max_range_m, &level);
         if (t < 0) {
           rrow[u] = static_cast<float>(ds.z() < 0 ? o.sky_dn : o.far_ground_dn);
