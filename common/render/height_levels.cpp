@@ -154,26 +154,30 @@ double HeightGrid::HitInCell(int i, int j, double gu, double gv, double du, doub
   return -1;
 }
 
-double HeightGrid::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
-                             double t1, int start_mip) const {
-  if (z_.empty()) return -1;
-  // Reciprocals once per ray: neither the clip nor the walk below then divides.
-  const double rdx = d.x() != 0 ? 1.0 / d.x() : 0.0, rdy = d.y() != 0 ? 1.0 / d.y() : 0.0;
-  // Clip to the grid's rectangle.
+inline bool HeightGrid::ClipToBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double rdx, double rdy, double* t0,
+                           double* t1) const {
   for (int k = 0; k < 2; ++k) {
     const double lo = k == 0 ? box_.x_min : box_.y_min;
     const double hi = k == 0 ? box_.x_max : box_.y_max;
     if (d[k] == 0) {
-      if (o[k] < lo || o[k] > hi) return -1;
+      if (o[k] < lo || o[k] > hi) return false;
       continue;
     }
     const double r = k == 0 ? rdx : rdy;
     double ta = (lo - o[k]) * r, tb = (hi - o[k]) * r;
     if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
+    *t0 = std::max(*t0, ta);
+    *t1 = std::min(*t1, tb);
   }
-  if (t0 > t1) return -1;
+  return *t0 <= *t1;
+}
+
+double HeightGrid::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
+                             double t1, int start_mip) const {
+  if (z_.empty()) return -1;
+  // Reciprocals once per ray: neither the clip nor the walk below then divides.
+  const double rdx = d.x() != 0 ? 1.0 / d.x() : 0.0, rdy = d.y() != 0 ? 1.0 / d.y() : 0.0;
+  if (!ClipToBox(o, d, rdx, rdy, &t0, &t1)) return -1;
   const double oe = -o.z(), de = -d.z();
   // A ray that is above every node and not descending cannot hit.
   if (de >= 0 && oe + de * t0 > global_max_) return -1;
@@ -228,21 +232,7 @@ double HeightGrid::IntersectNear(const Eigen::Vector3d& o, const Eigen::Vector3d
                                  int max_cells) const {
   if (z_.empty()) return -1;
   const double rdx = d.x() != 0 ? 1.0 / d.x() : 0.0, rdy = d.y() != 0 ? 1.0 / d.y() : 0.0;
-  // Clip to the grid's rectangle, as Intersect does.
-  for (int k = 0; k < 2; ++k) {
-    const double lo = k == 0 ? box_.x_min : box_.y_min;
-    const double hi = k == 0 ? box_.x_max : box_.y_max;
-    if (d[k] == 0) {
-      if (o[k] < lo || o[k] > hi) return -1;
-      continue;
-    }
-    const double r = k == 0 ? rdx : rdy;
-    double ta = (lo - o[k]) * r, tb = (hi - o[k]) * r;
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-  }
-  if (t0 > t1) return -1;
+  if (!ClipToBox(o, d, rdx, rdy, &t0, &t1)) return -1;
   const double oe = -o.z(), de = -d.z();
   const double gu = (o.x() - x0_) * inv_h_, gv = (o.y() - y0_) * inv_h_;
   const double du = d.x() * inv_h_, dv = d.y() * inv_h_;

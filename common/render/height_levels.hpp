@@ -88,6 +88,10 @@ class HeightGrid {
 
  private:
   void BuildMips();
+  // Narrows [t0, t1] of o + t d to the grid's rectangle (rdx, rdy: 1/d.x, 1/d.y or 0);
+  // false when the ray misses it.
+  bool ClipToBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double rdx, double rdy, double* t0,
+                 double* t1) const;
   void BuildGradients();
   float Z(int i, int j) const { return z_[static_cast<std::size_t>(j) * nx_ + i]; }
   double HitInCell(int i, int j, double gu, double gv, double du, double dv, double oe,
