@@ -318,14 +318,7 @@ double HeightGrid::ConeFreeRange(const Eigen::Vector3d& o, const Eigen::Vector3d
   return std::min(r, max_range);
 }
 
-double HeightGrid::ElevationAt(double x, double y) const {
-  const double u = std::clamp((x - x0_) * inv_h_, 0.0, nx_ - 1.000001);
-  const double v = std::clamp((y - y0_) * inv_h_, 0.0, ny_ - 1.000001);
-  const int i = static_cast<int>(u), j = static_cast<int>(v);
-  const double a = u - i, b = v - j;
-  return (1 - b) * ((1 - a) * Z(i, j) + a * Z(i + 1, j)) +
-         b * ((1 - a) * Z(i, j + 1) + a * Z(i + 1, j + 1));
-}
+double HeightGrid::ElevationAt(double x, double y) const { return InterpolateNodes(z_, x, y); }
 
 void HeightGrid::BuildGradients() {
   // Each node's central difference (one-sided at the edges): NormalUpAt interpolates
@@ -342,12 +335,16 @@ void HeightGrid::BuildGradients() {
   }
 }
 
-Eigen::Vector3d HeightGrid::NormalUpAt(double x, double y) const {
+inline void HeightGrid::Locate(double x, double y, std::size_t* k, double* a, double* b) const {
   const double u = std::clamp((x - x0_) * inv_h_, 0.0, nx_ - 1.000001);
   const double v = std::clamp((y - y0_) * inv_h_, 0.0, ny_ - 1.000001);
   const int i = static_cast<int>(u), j = static_cast<int>(v);
-  const double a = u - i, b = v - j;
-  const std::size_t k = static_cast<std::size_t>(j) * nx_ + i;
+  *a = u - i;
+  *b = v - j;
+  *k = static_cast<std::size_t>(j) * nx_ + i;
+}
+
+inline Eigen::Vector3d HeightGrid::NormalAtNode(std::size_t k, double a, double b) const {
   const std::array<float, 2>* g0 = &grad_[k];
   const std::array<float, 2>* g1 = g0 + nx_;
   const double w00 = (1 - a) * (1 - b), w10 = a * (1 - b), w01 = (1 - a) * b, w11 = a * b;
@@ -355,6 +352,23 @@ Eigen::Vector3d HeightGrid::NormalUpAt(double x, double y) const {
   const double gy = w00 * g0[0][1] + w10 * g0[1][1] + w01 * g1[0][1] + w11 * g1[1][1];
   // Up is -Z in the site frame.
   return Eigen::Vector3d(-gx, -gy, -1.0).normalized();
+}
+
+Eigen::Vector3d HeightGrid::NormalUpAt(double x, double y) const {
+  std::size_t k = 0;
+  double a = 0, b = 0;
+  Locate(x, y, &k, &a, &b);
+  return NormalAtNode(k, a, b);
+}
+
+Eigen::Vector3d HeightGrid::NormalUpAt(double x, double y, const std::vector<float>& field,
+                                       double* field_value) const {
+  std::size_t k = 0;
+  double a = 0, b = 0;
+  Locate(x, y, &k, &a, &b);
+  *field_value =
+      (1 - b) * ((1 - a) * field[k] + a * field[k + 1]) + b * ((1 - a) * field[k + nx_] + a * field[k + nx_ + 1]);
+  return NormalAtNode(k, a, b);
 }
 
 std::vector<float> HeightGrid::SunHorizon(double sx, double sy, double tan_el) const {
@@ -397,11 +411,9 @@ std::vector<float> HeightGrid::SunHorizon(double sx, double sy, double tan_el) c
 }
 
 double HeightGrid::InterpolateNodes(const std::vector<float>& field, double x, double y) const {
-  const double u = std::clamp((x - x0_) * inv_h_, 0.0, nx_ - 1.000001);
-  const double v = std::clamp((y - y0_) * inv_h_, 0.0, ny_ - 1.000001);
-  const int i = static_cast<int>(u), j = static_cast<int>(v);
-  const double a = u - i, b = v - j;
-  const std::size_t k = static_cast<std::size_t>(j) * nx_ + i;
+  std::size_t k = 0;
+  double a = 0, b = 0;
+  Locate(x, y, &k, &a, &b);
   return (1 - b) * ((1 - a) * field[k] + a * field[k + 1]) + b * ((1 - a) * field[k + nx_] + a * field[k + nx_ + 1]);
 }
 

@@ -66,6 +66,9 @@ class HeightGrid {
   // gradients so that shading shows no cell pattern.
   double ElevationAt(double x, double y) const;
   Eigen::Vector3d NormalUpAt(double x, double y) const;  // in site axes, Z down
+  // The same, and InterpolateNodes(*field, x, y) into *field_value with the same weights
+  // (one lookup for a hit's normal and its sun horizon).
+  Eigen::Vector3d NormalUpAt(double x, double y, const std::vector<float>& field, double* field_value) const;
 
   // The sun's horizon on this grid: for each node, the lowest elevation at which a point
   // there still sees the sun over the grid's surface (the highest of e(q) - tan(el) |q - p|
@@ -93,6 +96,10 @@ class HeightGrid {
   bool ClipToBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double rdx, double rdy, double* t0,
                  double* t1) const;
   void BuildGradients();
+  // The cell of (x, y) (clamped into the grid): node index k of its low corner and the
+  // bilinear fractions a (along x) and b (along y).
+  void Locate(double x, double y, std::size_t* k, double* a, double* b) const;
+  Eigen::Vector3d NormalAtNode(std::size_t k, double a, double b) const;
   float Z(int i, int j) const { return z_[static_cast<std::size_t>(j) * nx_ + i]; }
   double HitInCell(int i, int j, double gu, double gv, double du, double dv, double oe,
                    double de, double t, double t_exit) const;

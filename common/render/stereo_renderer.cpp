@@ -526,7 +526,8 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
         drow[u] = static_cast<float>(t);
         const Eigen::Vector3d p = os + t * ds;
         const internal::HeightGrid& g = levels->level(level);
-        const Eigen::Vector3d n = g.NormalUpAt(p.x(), p.y());
+        double horizon_here = 0;
+        const Eigen::Vector3d n = horizon ? g.NormalUpAt(p.x(), p.y(), *horizon, &horizon_here) : g.NormalUpAt(p.x(), p.y());
         // The pixel sees t * pixel_angle of ground across the ray and that over
         // cos(incidence) along it: the footprint is the side of the square of the same
         // area, so texture the pixel can only alias is left out, and no more.
@@ -544,7 +545,7 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
           }
           if (lit && horizon) {
             // The same lift off the surface as the shadow ray below.
-            lit = -p.z() + std::max(0.002, 0.05 * g.cell()) >= g.InterpolateNodes(*horizon, p.x(), p.y());
+            lit = -p.z() + std::max(0.002, 0.05 * g.cell()) >= horizon_here;
           } else if (lit && t_shadow > 0) {
             // Start a little above the surface so the ray does not hit its own cell.
             const Eigen::Vector3d start(p.x(), p.y(), p.z() - std::max(0.002, 0.05 * g.cell()));
