@@ -1,6 +1,7 @@
 #include "terrain/albedo_noise.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace rover::terrain {
@@ -58,10 +59,11 @@ float ValueNoise32(float x, float y, std::uint32_t seed) { return Value(x, y, se
 int OctaveCount(double min_wavelength, double max_wavelength) {
   // Octave k is kept while max / 2^k >= 0.999 min, i.e. 2^k <= r: k = 0 .. floor(log2 r),
   // and frexp gives floor(log2 r) + 1 exactly (r = f 2^e, f in [0.5, 1)).
+  // The exponent is read from the bits (what frexp returns, without a library call per
+  // pixel); r >= 1 is a normal number, or infinity, whose exponent field caps at 64 below.
   const double r = max_wavelength / (min_wavelength * 0.999);
   if (!(r >= 1.0)) return 0;
-  int e = 0;
-  std::frexp(r, &e);
+  const int e = static_cast<int>((std::bit_cast<std::uint64_t>(r) >> 52) & 0x7FF) - 1022;
   return std::min(e, 64);
 }
 

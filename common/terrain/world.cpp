@@ -542,6 +542,7 @@ void World::AlbedoBatch(int n, const double* x, const double* y, const double* f
   s.gain.resize(m);
   s.mottled.resize(m);
   const float rock_inv = static_cast<float>(1.0 / kRockTextureMaxWavelength);
+  const double inv_res = 1.0 / res_;
   for (int p = 0; p < n; ++p) {
     const double px = x[p], py = y[p];
     s.x[p] = static_cast<float>(px);
@@ -572,8 +573,8 @@ void World::AlbedoBatch(int n, const double* x, const double* y, const double* f
       s.mottled[p] = 0;
     } else {
       // SoilAt, inline: this loop runs for every pixel.
-      const int i = static_cast<int>(std::clamp((px - x0_) / res_, 0.0, nx_ - 1.0) + 0.5);
-      const int j = static_cast<int>(std::clamp((py - y0_) / res_, 0.0, ny_ - 1.0) + 0.5);
+      const int i = static_cast<int>(std::clamp((px - x0_) * inv_res, 0.0, nx_ - 1.0) + 0.5);
+      const int j = static_cast<int>(std::clamp((py - y0_) * inv_res, 0.0, ny_ - 1.0) + 0.5);
       const Soil soil = static_cast<Soil>(soil_[static_cast<std::size_t>(i) * ny_ + j]);
       const SoilAlbedo& sa = AlbedoOf(a, soil);
       s.mean[p] = sa.mean;
