@@ -45,4 +45,14 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
   return S;
 }
 
+void RotationFromRpyDerivatives(const Eigen::Vector3d& rpy, Eigen::Matrix3d* R, Eigen::Matrix3d dR[3]) {
+  const Eigen::Matrix3d Rx = Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Matrix3d Ry = Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d Rz = Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  if (R) *R = Rz * Ry * Rx;
+  dR[0] = Rz * Ry * Rx * Skew(Eigen::Vector3d::UnitX());
+  dR[1] = Rz * Ry * Skew(Eigen::Vector3d::UnitY()) * Rx;
+  dR[2] = Skew(Eigen::Vector3d::UnitZ()) * Rz * Ry * Rx;
+}
+
 }  // namespace rover::geometry

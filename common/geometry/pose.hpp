@@ -33,4 +33,8 @@ double WrapAngle(double a);
 // Skew-symmetric matrix of v: Skew(v) * w == v.cross(w).
 Eigen::Matrix3d Skew(const Eigen::Vector3d& v);
 
+// R = RotationFromRpy(rpy) (R may be null) and its derivatives dR/d(roll), dR/d(pitch),
+// dR/d(yaw): the Jacobians of the motion estimate and of VO tracking.
+void RotationFromRpyDerivatives(const Eigen::Vector3d& rpy, Eigen::Matrix3d* R, Eigen::Matrix3d dR[3]);
+
 }  // namespace rover::geometry

@@ -452,12 +452,12 @@ int HeightLevels::LevelAt(double x, double y) const {
 }
 
 double HeightLevels::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
-                               double t1, int* level_out, int start_mip) const {
+                               double t1, int* level_out) const {
   if (grids_.empty() || t0 > t1) return -1;
   if (d.z() <= 0 && -o.z() + (-d.z()) * t0 > global_max_) return -1;
   if (grids_.size() == 1) {
     // One level (a ground's own grid): no circles to split at.
-    const double hit = grids_[0].Intersect(o, d, t0, t1, start_mip);
+    const double hit = grids_[0].Intersect(o, d, t0, t1);
     if (hit >= 0 && level_out) *level_out = 0;
     return hit;
   }
@@ -487,7 +487,7 @@ double HeightLevels::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& 
     if (tb <= ta) continue;
     const double tm = 0.5 * (ta + tb);
     const int L = LevelAt(o.x() + tm * d.x(), o.y() + tm * d.y());
-    const double hit = grids_[L].Intersect(o, d, ta, tb, start_mip);
+    const double hit = grids_[L].Intersect(o, d, ta, tb);
     if (hit >= 0) {
       if (level_out) *level_out = L;
       return hit;

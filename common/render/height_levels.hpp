@@ -125,7 +125,7 @@ class HeightLevels {
   // First hit along o + t d, t in [t0, t1]. Returns t, or a negative value.
   // `level_out` gets the level of the hit.
   double Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
-                   double t1, int* level_out = nullptr, int start_mip = 6) const;
+                   double t1, int* level_out = nullptr) const;
 
   // One level: the ground's own grid.
   void Adopt(const Ground::GridView& view);

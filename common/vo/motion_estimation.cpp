@@ -22,17 +22,6 @@ double Weight(const Correspondence& c) {
   return d > 0 ? 1.0 / d : 0.0;
 }
 
-// dR/d(roll), dR/d(pitch), dR/d(yaw) for R = Rz(yaw) Ry(pitch) Rx(roll).
-void RotationDerivatives(const Eigen::Vector3d& rpy, Eigen::Matrix3d* R, Eigen::Matrix3d dR[3]) {
-  const Eigen::Matrix3d Rx = Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()).toRotationMatrix();
-  const Eigen::Matrix3d Ry = Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()).toRotationMatrix();
-  const Eigen::Matrix3d Rz = Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  *R = Rz * Ry * Rx;
-  dR[0] = Rz * Ry * Rx * geometry::Skew(Eigen::Vector3d::UnitX());
-  dR[1] = Rz * Ry * geometry::Skew(Eigen::Vector3d::UnitY()) * Rx;
-  dR[2] = geometry::Skew(Eigen::Vector3d::UnitZ()) * Rz * Ry * Rx;
-}
-
 }  // namespace
 
 Eigen::Isometry3d WeightedLeastSquaresMotion(const std::vector<Correspondence>& c,
@@ -161,7 +150,7 @@ MlOutcome MaximumLikelihoodMotion(const std::vector<Correspondence>& c,
   Matrix6d H = Matrix6d::Zero();
   Eigen::Matrix3d R, dR[3];
   auto linearise = [&](Matrix6d* Hout, Vector6d* gout, double* cost) {
-    RotationDerivatives(rpy, &R, dR);
+    geometry::RotationFromRpyDerivatives(rpy, &R, dR);
     const Eigen::Matrix3d Rcp = R.transpose();
     Hout->setZero();
     gout->setZero();

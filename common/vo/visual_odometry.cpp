@@ -370,14 +370,7 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   const Eigen::Matrix3d R_pc = prior_T_prev_curr.linear();
   const Eigen::Vector3d rpy = geometry::RpyFromRotation(R_pc);
   Eigen::Matrix3d dR[3];
-  {
-    const Eigen::Matrix3d Rx = Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()).toRotationMatrix();
-    const Eigen::Matrix3d Ry = Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()).toRotationMatrix();
-    const Eigen::Matrix3d Rz = Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    dR[0] = Rz * Ry * Rx * geometry::Skew(Eigen::Vector3d::UnitX());
-    dR[1] = Rz * Ry * geometry::Skew(Eigen::Vector3d::UnitY()) * Rx;
-    dR[2] = geometry::Skew(Eigen::Vector3d::UnitZ()) * Rz * Ry * Rx;
-  }
+  geometry::RotationFromRpyDerivatives(rpy, nullptr, dR);
   const Eigen::Matrix3d R_cp = R_pc.transpose();
   const TriangulationLimits limits = s.Limits(c);
   const int levels = static_cast<int>(std::min(prev->left_band.size(), c.left_band.size()));

@@ -58,56 +58,32 @@ std::string Trimmed(const std::string& s) {
   return s.substr(b, e - b + 1);
 }
 
-}  // namespace
-
-KittiCalib ReadKittiCalib(const std::string& path) {
+// The non-blank lines of a text file of numbers, each exactly `count` of them; `what`
+// says what a line holds, for the one-line error.
+std::vector<std::vector<double>> ReadNumberLines(const std::string& path, std::size_t count,
+                                                 const std::string& what) {
   std::ifstream in(path);
-  if (!in) Fail(path, "expected a KITTI calib.txt with P0: and P1: lines, cannot open");
-  KittiCalib calib;
-  bool have0 = false, have1 = false;
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    const std::string t = Trimmed(line);
-    const bool is0 = t.rfind("P0:", 0) == 0, is1 = t.rfind("P1:", 0) == 0;
-    if (!is0 && !is1) continue;
-    std::vector<double> v;
-    if (!ParseNumbers(t.substr(3), &v) || v.size() != 12) {
-      Fail(path, "line " + std::to_string(line_no) + ": expected " + t.substr(0, 3) +
-                     " followed by 12 numbers");
-    }
-    Eigen::Matrix<double, 3, 4>& P = is0 ? calib.P0 : calib.P1;
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 4; ++c) P(r, c) = v[static_cast<std::size_t>(4 * r + c)];
-    }
-    (is0 ? have0 : have1) = true;
-  }
-  if (!have0 || !have1) Fail(path, std::string("expected a line starting with ") +
-                                       (have0 ? "P1:" : "P0:") + ", none found");
-  if (!(calib.fx() > 0.0) || !(calib.fy() > 0.0)) {
-    Fail(path, "P0: expected positive focal lengths P0[0] and P0[5]");
-  }
-  if (!(calib.P1(0, 0) > 0.0) || !(calib.baseline_m() > 0.0)) {
-    Fail(path, "P1: expected a right camera with P1[0] > 0 and P1[3] < 0 (baseline "
-               "-P1[3]/P1[0] > 0)");
-  }
-  return calib;
-}
-
-PoseList ReadKittiPoses(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) Fail(path, "expected a KITTI poses file (12 numbers a line), cannot open");
-  PoseList poses;
+  if (!in) Fail(path, "expected " + what + " a line, cannot open");
+  std::vector<std::vector<double>> rows;
   std::string line;
   int line_no = 0;
   while (std::getline(in, line)) {
     ++line_no;
     if (Trimmed(line).empty()) continue;
     std::vector<double> v;
-    if (!ParseNumbers(line, &v) || v.size() != 12) {
-      Fail(path, "line " + std::to_string(line_no) + ": expected 12 numbers (row-major 3x4 [R|t])");
+    if (!ParseNumbers(line, &v) || v.size() != count) {
+      Fail(path, "line " + std::to_string(line_no) + ": expected " + what);
     }
+    rows.push_back(std::move(v));
+  }
+  return rows;
+}
+
+}  // namespace
+
+PoseList ReadKittiPoses(const std::string& path) {
+  PoseList poses;
+  for (const std::vector<double>& v : ReadNumberLines(path, 12, "12 numbers (row-major 3x4 [R|t])")) {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 4; ++c) T.matrix()(r, c) = v[static_cast<std::size_t>(4 * r + c)];
@@ -158,24 +134,9 @@ KittiSequence OpenKittiSequence(const std::string& dir) {
     seq.right_paths.push_back((fs::path(right_dir) / right[i]).string());
   }
 
-  seq.calib_path = (fs::path(dir) / "calib.txt").string();
-  seq.calib = ReadKittiCalib(seq.calib_path);
-
   const std::string times_path = (fs::path(dir) / "times.txt").string();
-  {
-    std::ifstream in(times_path);
-    if (!in) Fail(times_path, "expected one timestamp (s) per frame, cannot open");
-    std::string line;
-    int line_no = 0;
-    while (std::getline(in, line)) {
-      ++line_no;
-      if (Trimmed(line).empty()) continue;
-      std::vector<double> v;
-      if (!ParseNumbers(line, &v) || v.size() != 1) {
-        Fail(times_path, "line " + std::to_string(line_no) + ": expected one number (seconds)");
-      }
-      seq.times_s.push_back(v[0]);
-    }
+  for (const std::vector<double>& v : ReadNumberLines(times_path, 1, "one number (seconds)")) {
+    seq.times_s.push_back(v[0]);
   }
   if (seq.times_s.size() != left.size()) {
     Fail(times_path, "expected " + std::to_string(left.size()) + " timestamps (one per image), found " +
@@ -193,6 +154,12 @@ KittiSequence OpenKittiSequence(const std::string& dir) {
   if (first.empty()) Fail(seq.left_paths[0], "expected a readable PNG image, cannot decode");
   seq.width = first.cols;
   seq.height = first.rows;
+  seq.calib_path = (fs::path(dir) / "calib.txt").string();
+  try {
+    seq.rig = geometry::LoadKittiCalib(seq.calib_path, seq.width, seq.height);
+  } catch (const std::exception& e) {
+    throw DatasetError(e.what());  // already one line naming the file and line
+  }
   return seq;
 }
 
@@ -225,14 +192,6 @@ StereoFrameImages LoadStereoFrame(const KittiSequence& sequence, int index) {
   images.left = LoadGray(sequence.left_paths[i], sequence.width, sequence.height);
   images.right = LoadGray(sequence.right_paths[i], sequence.width, sequence.height);
   return images;
-}
-
-geometry::StereoRig KittiRig(const KittiSequence& sequence) {
-  try {
-    return geometry::LoadKittiCalib(sequence.calib_path, sequence.width, sequence.height);
-  } catch (const std::exception& e) {
-    throw DatasetError(e.what());
-  }
 }
 
 }  // namespace rover::vo_eval

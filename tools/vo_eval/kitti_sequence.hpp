@@ -23,24 +23,15 @@ class DatasetError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// The rectified projection matrices of the two cameras.
-struct KittiCalib {
-  Eigen::Matrix<double, 3, 4> P0 = Eigen::Matrix<double, 3, 4>::Zero();
-  Eigen::Matrix<double, 3, 4> P1 = Eigen::Matrix<double, 3, 4>::Zero();
-  double fx() const { return P0(0, 0); }
-  double fy() const { return P0(1, 1); }
-  double cx() const { return P0(0, 2); }
-  double cy() const { return P0(1, 2); }
-  double baseline_m() const { return -P1(0, 3) / P1(0, 0); }
-};
-
 struct KittiSequence {
   std::string dir;
   std::vector<std::string> left_paths;
   std::vector<std::string> right_paths;
   std::vector<double> times_s;
   PoseList truth;  // empty when poses.txt is absent
-  KittiCalib calib;
+  // calib.txt's rectified pair as two pinhole models in the left camera frame, read once
+  // (geometry::LoadKittiCalib) at the first image's size.
+  geometry::StereoRig rig;
   std::string calib_path;
   int width = 0;   // of the first left image; every image must match
   int height = 0;
@@ -48,8 +39,6 @@ struct KittiSequence {
   bool has_truth() const { return !truth.empty(); }
 };
 
-// Reads calib.txt: lines "P0: 12 numbers" and "P1: 12 numbers" (other lines ignored).
-KittiCalib ReadKittiCalib(const std::string& path);
 // Reads a KITTI poses file (12 numbers a line).
 PoseList ReadKittiPoses(const std::string& path);
 // Writes poses in the same format (%e, like the KITTI files).
@@ -66,8 +55,5 @@ struct StereoFrameImages {
   cv::Mat right;
 };
 StereoFrameImages LoadStereoFrame(const KittiSequence& sequence, int index);
-
-// The rectified stereo rig of the sequence: two pinhole models in the left camera frame.
-geometry::StereoRig KittiRig(const KittiSequence& sequence);
 
 }  // namespace rover::vo_eval

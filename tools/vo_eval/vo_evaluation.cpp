@@ -107,7 +107,7 @@ EvalInput KittiInput(const KittiSequence& sequence, int max_frames) {
   EvalInput in;
   in.name = sequence.dir;
   in.num_frames = max_frames > 0 ? std::min(max_frames, sequence.size()) : sequence.size();
-  in.rig = KittiRig(sequence);
+  in.rig = sequence.rig;
   in.times_s.assign(sequence.times_s.begin(), sequence.times_s.begin() + in.num_frames);
   if (sequence.has_truth()) {
     in.truth.assign(sequence.truth.begin(), sequence.truth.begin() + in.num_frames);

@@ -41,3 +41,18 @@ TEST(Frames, WrapAngle) {
   EXPECT_NEAR(WrapAngle(-M_PI), M_PI, 1e-12);
   EXPECT_NEAR(WrapAngle(0.3), 0.3, 1e-12);
 }
+
+TEST(Frames, RotationDerivativesMatchFiniteDifferences) {
+  const Eigen::Vector3d rpy(0.3, -0.7, 2.1);
+  Eigen::Matrix3d R, dR[3];
+  RotationFromRpyDerivatives(rpy, &R, dR);
+  EXPECT_LT((R - RotationFromRpy(rpy[0], rpy[1], rpy[2])).norm(), 1e-12);
+  const double h = 1e-6;
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Vector3d a = rpy, b = rpy;
+    a[k] += h;
+    b[k] -= h;
+    const Eigen::Matrix3d numeric = (RotationFromRpy(a[0], a[1], a[2]) - RotationFromRpy(b[0], b[1], b[2])) / (2 * h);
+    EXPECT_LT((dR[k] - numeric).norm(), 1e-8) << "angle " << k;
+  }
+}

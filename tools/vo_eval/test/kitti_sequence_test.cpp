@@ -62,10 +62,6 @@ TEST_F(KittiLayout, GoodSequenceReadsBack) {
   EXPECT_EQ(seq.size(), 3);
   EXPECT_EQ(seq.width, 64);
   EXPECT_EQ(seq.height, 16);
-  EXPECT_DOUBLE_EQ(seq.calib.fx(), 700.0);
-  EXPECT_DOUBLE_EQ(seq.calib.cx(), 31.0);
-  EXPECT_DOUBLE_EQ(seq.calib.cy(), 15.0);
-  EXPECT_DOUBLE_EQ(seq.calib.baseline_m(), 0.5);
   ASSERT_TRUE(seq.has_truth());
   EXPECT_DOUBLE_EQ(seq.truth[2].translation().x(), 0.5);
   EXPECT_DOUBLE_EQ(seq.truth[2].translation().z(), 2.0);
@@ -74,10 +70,12 @@ TEST_F(KittiLayout, GoodSequenceReadsBack) {
   EXPECT_EQ(f.left.type(), CV_8UC1);
   EXPECT_EQ(f.left.at<unsigned char>(3, 3), 20);
 
-  const geometry::StereoRig rig = KittiRig(seq);
+  const geometry::StereoRig& rig = seq.rig;
   EXPECT_NEAR(rig.Baseline(), 0.5, 1e-12);
   Eigen::Vector2d pl, pr;
   ASSERT_TRUE(rig.left->Project(Eigen::Vector3d(0, 0, 10), &pl));
+  EXPECT_NEAR(pl.x(), 31.0, 1e-9);  // cx
+  EXPECT_NEAR(pl.y(), 15.0, 1e-9);  // cy
   ASSERT_TRUE(rig.right->Project(Eigen::Vector3d(0, 0, 10), &pr));
   EXPECT_NEAR(pl.x() - pr.x(), 700.0 * 0.5 / 10.0, 1e-9);  // disparity = f B / Z
 }
@@ -107,19 +105,19 @@ TEST_F(KittiLayout, MissingCalibNamesIt) {
   fs::remove(dir_ / "calib.txt");
   const std::string msg = OpenError();
   EXPECT_NE(msg.find(Path("calib.txt")), std::string::npos) << msg;
-  EXPECT_NE(msg.find("P0"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("cannot open"), std::string::npos) << msg;
 }
 
 TEST_F(KittiLayout, ShortCalibLineNamesTheLine) {
   Write("calib.txt", "P0: 1 0 0 0 0 1 0 0 0 0 1\nP1: 1 0 0 -1 0 1 0 0 0 0 1 0\n");
   const std::string msg = OpenError();
-  EXPECT_NE(msg.find(Path("calib.txt") + ": line 1: expected P0: followed by 12 numbers"),
-            std::string::npos) << msg;
+  EXPECT_NE(msg.find(Path("calib.txt") + ":1: P0: has 11 numbers (expected 12"), std::string::npos) << msg;
 }
 
 TEST_F(KittiLayout, CalibWithoutRightCameraFails) {
   Write("calib.txt", "P0: 7.0e+02 0 3.1e+01 0 0 7.0e+02 1.5e+01 0 0 0 1 0\n");
-  EXPECT_NE(OpenError().find("expected a line starting with P1:"), std::string::npos);
+  const std::string msg = OpenError();
+  EXPECT_NE(msg.find("no P1: line"), std::string::npos) << msg;
 }
 
 TEST_F(KittiLayout, MissingRightImageIsACountMismatch) {
