@@ -1,7 +1,8 @@
 #include "config/yaml_config.hpp"
 
+#include "config/file_read.hpp"
+
 #include <algorithm>
-#include <fstream>
 #include <sstream>
 
 namespace rover::config {
@@ -40,11 +41,7 @@ std::string RangeText(double lo, double hi) {
 }  // namespace
 
 ConfigNode ConfigNode::LoadFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot open file (expected a readable YAML file)");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return FromString(ss.str(), path);
+  return FromString(ReadBoundedRegularFile(path, kMaxConfigFileBytes, "YAML file"), path);
 }
 
 ConfigNode ConfigNode::FromString(const std::string& text, const std::string& source_name) {

@@ -27,7 +27,8 @@ class ConfigError : public std::runtime_error {
 
 class ConfigNode {
  public:
-  // Reads a YAML file. Throws ConfigError "<path>: <reason>" if it cannot be read or parsed.
+  // Reads a YAML file: a regular file of at most kMaxConfigFileBytes (config/file_read.hpp).
+  // Throws ConfigError "<path>: <reason>" if it cannot be read or parsed.
   static ConfigNode LoadFile(const std::string& path);
   // Parses YAML text; `source_name` stands in for the file name in messages.
   static ConfigNode FromString(const std::string& text, const std::string& source_name);
