@@ -99,7 +99,8 @@ MobilityOptions MobilityOptions::Load(const ConfigNode& root) {
   MobilityOptions o;
   const ConfigNode m = root["mobility"];
   m.CheckKeys({"seed", "geometry", "speed_mps", "turn_rate_deg_s", "max_curvature_per_m",
-               "max_substep_s", "slip", "rock_collision"});
+               "max_substep_s", "slip", "rock_collision",
+               "deadman_s"});  // deadman_s: read by LoadDeadmanOptions (deadman.hpp)
   m.Get("seed", o.seed);
   if (m.Has("geometry")) {
     const ConfigNode g = m["geometry"];

@@ -141,6 +141,12 @@ void RoverSimulator::SetStatus(MobilityState state, const std::string& detail) {
   pending_status_.push_back(status_);
 }
 
+void RoverSimulator::Halt(const std::string& detail) {
+  if (!moving()) return;
+  target_ = 0.0;
+  SetStatus(MobilityState::kStopped, detail);
+}
+
 void RoverSimulator::Command(const MotionCommand& c) {
   RequireFinite(c.distance_m, "distance_m", c.id);
   RequireFinite(c.curvature_per_m, "curvature_per_m", c.id);

@@ -109,6 +109,10 @@ class RoverSimulator {
   // "preempted by <id>"). Stop halts at once. Throws std::invalid_argument on a non-finite
   // value, a curvature beyond geometry.max_curvature_per_m, or a negative speed or rate.
   void Command(const MotionCommand& command);
+  // Stops the motion in progress by the rover's own decision (the dead-man,
+  // deadman.hpp): its status becomes stopped with `detail`, keeping its command id.
+  // Does nothing when no motion is in progress.
+  void Halt(const std::string& detail);
 
   // Advances rover time by dt_s (> 0; any length: it integrates in substeps and emits
   // each IMU and encoder sample exactly at its scheduled time). Allocation-free once the
