@@ -1,16 +1,29 @@
 // Typed publish/subscribe over LCM 1.3.1, which has no lambda subscribe (it came in 1.4).
 //
-// Messages are decoded here rather than by LCM's typed subscribe, so that a corrupt
-// message gets one clear line naming the channel and the expected type, instead of
-// LCM's bare "error decoding". A callback must not throw: the Bus records the first
-// error and Handle() re-raises it in the loop (the Drake habit).
+// Messages are decoded here rather than by LCM's typed subscribe, so that nothing a
+// packet holds can stop a process. Before a callback sees a message, the Bus:
+//   1. bounds its size per channel (MaxPayloadBytes) before decoding;
+//   2. decodes it under an allocation cap, so a lying length field cannot allocate
+//      gigabytes, and with every exception caught;
+//   3. checks its fields (bus/validate.hpp: finite numbers, known enums, sane counts);
+//   4. checks that its utime is plausible against this process's rover clock;
+//   5. checks its authentication tag, for command messages when a key is configured.
+// A message that fails is dropped with one line naming the channel, the type and what
+// was wrong (rate-limited per channel), and counted (dropped(), sent in the heartbeat).
+// An exception from a callback is reported and counted the same way; the process goes on.
+//
+// Publish stamps `pub_seq` (the publisher's id and its count on the channel), so a
+// log checker can find every lost message, and signs command messages when a key is set.
 #pragma once
+
+#include "bus/guard.hpp"
+#include "bus/validate.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 
 #include <cstdint>
-#include <exception>
 #include <functional>
+#include <map>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -19,9 +32,14 @@
 namespace rover::bus {
 
 // The default bus: loopback-only multicast (ttl=0) with a socket buffer large enough for
-// stereo frames. On a rover spread over a LAN use ttl=1 (see README, "Deploying").
+// stereo frames. On a rover spread over a LAN use ttl=1 (see README, "Deploying on a
+// rover computer").
 inline constexpr const char* kDefaultLcmUrl =
     "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608";
+
+// The id a publisher stamps into the high 32 bits of pub_seq: FNV-1a of its name, so the
+// same process publishes the same bytes in every run (replays compare byte for byte).
+std::uint32_t PublisherId(const std::string& name);
 
 class Bus {
  public:
@@ -29,26 +47,54 @@ class Bus {
   Bus(const Bus&) = delete;
   Bus& operator=(const Bus&) = delete;
 
+  // The name this bus publishes under (pub_seq's publisher id; heartbeats).
+  void set_publisher(const std::string& name);
+  const std::string& publisher() const { return publisher_; }
+
   // Subscribes `callback(msg)` to `channel`. `queue_capacity` bounds LCM's queue.
   template <class Msg>
   void Subscribe(const std::string& channel, std::function<void(const Msg&)> callback,
                  int queue_capacity = 30);
 
   template <class Msg>
-  void Publish(const std::string& channel, const Msg& msg) {
-    if (lcm_.publish(channel, &msg) != 0) {
-      throw std::runtime_error("LCM publish failed on channel " + channel);
-    }
-  }
+  void Publish(const std::string& channel, const Msg& msg);
 
   // Dispatches messages for at most `timeout_ms`. Returns true if any was handled.
-  // Re-raises the first exception thrown by a callback.
   bool Handle(int timeout_ms);
 
-  // Number of messages dropped because they did not decode.
-  std::int64_t corrupt_count() const { return corrupt_count_; }
+  // Rover time as this process sees it (bus/guard.hpp).
+  RoverClock& clock() { return clock_; }
+  const RoverClock& clock() const { return clock_; }
+
+  // Messages dropped so far, for any reason, and the last reason.
+  std::int64_t dropped() const { return dropped_; }
+  const std::string& last_drop() const { return last_drop_; }
+  // Kept for older callers: the same count.
+  std::int64_t corrupt_count() const { return dropped_; }
+  // Records a drop found by a receiver after the Bus's own checks (an image that does not
+  // match its camera model, say): same line, same count.
+  void Drop(const std::string& channel, const std::string& type, const std::string& why);
+
   const std::string& url() const { return url_; }
   lcm::LCM& lcm() { return lcm_; }
+
+  // Authentication: a signer for what this process publishes and a verifier for what it
+  // receives, on command channels (see bus/signing.hpp). Type-erased so that the Bus does
+  // not depend on the crypto library.
+  struct Auth {
+    // Fills sender and counter, then the tag over the message encoded with them and an
+    // empty tag (the callback encodes; see Publish).
+    std::function<void(std::string* sender, std::int64_t* counter)> next;
+    std::function<std::vector<std::uint8_t>(const std::vector<std::uint8_t>& bytes)> tag;
+    // "" when (sender, counter, tag over bytes) is acceptable, else why not. Accepting
+    // records the counter.
+    std::function<std::string(const std::string& sender, std::int64_t counter,
+                              const std::vector<std::uint8_t>& bytes,
+                              const std::vector<std::uint8_t>& tag)> verify;
+    bool required = false;
+  };
+  void set_auth(Auth auth) { auth_ = std::move(auth); has_auth_ = true; }
+  bool has_auth() const { return has_auth_; }
 
  private:
   struct Handler {
@@ -58,29 +104,120 @@ class Bus {
   struct TypedHandler : Handler {
     Bus* bus;
     std::function<void(const Msg&)> callback;
-    void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-      Msg msg;
-      if (msg.decode(rbuf->data, 0, rbuf->data_size) < 0) {
-        bus->ReportCorrupt(channel, Msg::getTypeName(), rbuf->data_size);
-        return;
-      }
-      if (bus->pending_error_) return;  // the loop will stop; drop the rest
-      try {
-        callback(msg);
-      } catch (...) {
-        bus->pending_error_ = std::current_exception();
-      }
-    }
+    void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   };
 
-  void ReportCorrupt(const std::string& channel, const char* type, std::uint32_t size);
+  template <class Msg>
+  std::string Admit(const std::string& channel, const lcm::ReceiveBuffer* rbuf, Msg* msg);
+  template <class Msg>
+  std::string Authenticate(const Msg& msg);
+  template <class Msg>
+  void Sign(Msg* msg);
 
   std::string url_;
   lcm::LCM lcm_;
+  std::string publisher_;
+  std::uint64_t publisher_bits_ = 0;
+  std::map<std::string, std::uint32_t> published_;
   std::vector<std::unique_ptr<Handler>> handlers_;
-  std::exception_ptr pending_error_;
-  std::int64_t corrupt_count_ = 0;
+  RoverClock clock_;
+  RateLimitedLog log_;
+  std::int64_t dropped_ = 0;
+  std::string last_drop_;
+  Auth auth_;
+  bool has_auth_ = false;
 };
+
+template <class Msg>
+std::string Bus::Authenticate(const Msg& msg) {
+  if constexpr (requires { msg.auth.tag; }) {
+    if (!has_auth_) return "";
+    if (msg.auth.tag_size == 0) return auth_.required ? "no authentication tag (a key is required on this bus)" : "";
+    Msg copy = msg;
+    copy.auth.tag_size = 0;
+    copy.auth.tag.clear();
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(copy.getEncodedSize()));
+    if (copy.encode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0) return "cannot re-encode to check its tag";
+    return auth_.verify(msg.auth.sender, msg.auth.counter, bytes, msg.auth.tag);
+  }
+  return "";
+}
+
+template <class Msg>
+void Bus::Sign(Msg* msg) {
+  if constexpr (requires { msg->auth.tag; }) {
+    if (!has_auth_ || !auth_.next) return;
+    auth_.next(&msg->auth.sender, &msg->auth.counter);
+    msg->auth.tag_size = 0;
+    msg->auth.tag.clear();
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(msg->getEncodedSize()));
+    if (msg->encode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0)
+      throw std::runtime_error("cannot encode a command to sign it");
+    msg->auth.tag = auth_.tag(bytes);
+    msg->auth.tag_size = static_cast<std::int32_t>(msg->auth.tag.size());
+  }
+}
+
+template <class Msg>
+void Bus::Publish(const std::string& channel, const Msg& msg) {
+  int status = 0;
+  if constexpr (requires { msg.pub_seq; } || requires { msg.auth; }) {
+    Msg stamped = msg;
+    if constexpr (requires { msg.pub_seq; }) {
+      stamped.pub_seq = static_cast<std::int64_t>(publisher_bits_ | published_[channel]++);
+    }
+    Sign(&stamped);
+    status = lcm_.publish(channel, &stamped);
+  } else {
+    status = lcm_.publish(channel, &msg);
+  }
+  if (status != 0) throw std::runtime_error("LCM publish failed on channel " + channel);
+}
+
+// The checks in order; "" admits the message into `msg`.
+template <class Msg>
+std::string Bus::Admit(const std::string& channel, const lcm::ReceiveBuffer* rbuf, Msg* msg) {
+  const std::size_t max_bytes = MaxPayloadBytes(channel);
+  if (rbuf->data_size > max_bytes) {
+    return std::to_string(rbuf->data_size) + " bytes is over the channel's limit of " +
+           std::to_string(max_bytes);
+  }
+  try {
+    // Decoded objects are larger than their bytes (headers of strings and vectors), but no
+    // single allocation can honestly exceed a few times the payload.
+    DecodeAllocationCap cap(16 * static_cast<std::size_t>(rbuf->data_size) + 65536);
+    if (msg->decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0)
+      return "does not decode (truncated, a wrong type fingerprint or a length past the end)";
+  } catch (const std::exception& e) {
+    return std::string("does not decode (a length field out of bounds: ") + e.what() + ")";
+  }
+  if constexpr (requires { Problem(*msg); }) {
+    if (std::string p = Problem(*msg); !p.empty()) return p;
+  }
+  if constexpr (requires { msg->utime; }) {
+    if (TimeChecked(channel)) {
+      if (std::string p = clock_.Judge(msg->utime, RoverClock::WallClock::now()); !p.empty()) return p;
+    }
+  }
+  if (std::string p = Authenticate(*msg); !p.empty()) return "rejected: " + p;
+  return "";
+}
+
+template <class Msg>
+void Bus::TypedHandler<Msg>::OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  Msg msg;
+  if (std::string why = bus->Admit(channel, rbuf, &msg); !why.empty()) {
+    bus->Drop(channel, Msg::getTypeName(), why);
+    return;
+  }
+  try {
+    callback(msg);
+  } catch (const std::exception& e) {
+    bus->Drop(channel, Msg::getTypeName(), std::string("its handler failed: ") + e.what());
+  } catch (...) {
+    bus->Drop(channel, Msg::getTypeName(), "its handler failed");
+  }
+}
 
 template <class Msg>
 void Bus::Subscribe(const std::string& channel, std::function<void(const Msg&)> callback,

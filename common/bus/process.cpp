@@ -87,12 +87,26 @@ std::map<std::string, std::string> ParseArgs(const std::string& name, const std:
   return parsed;
 }
 
+// The `bus:` section: how far from the rover clock a message's utime may be.
+TimeWindow LoadTimeWindow(const config::ConfigNode& section) {
+  TimeWindow w;
+  section.CheckKeys({"max_ahead_wall_s", "max_ahead_rover_s", "max_behind_wall_s",
+                     "max_behind_rover_s", "resync_wall_s", "resync_count"});
+  section.Get("max_ahead_wall_s", w.max_ahead_wall_s, 0.0, 3600.0);
+  section.Get("max_ahead_rover_s", w.max_ahead_rover_s, 0.0, 86400.0);
+  section.Get("max_behind_wall_s", w.max_behind_wall_s, 0.0, 3600.0);
+  section.Get("max_behind_rover_s", w.max_behind_rover_s, 0.0, 86400.0);
+  section.Get("resync_wall_s", w.resync_wall_s, 0.1, 3600.0);
+  section.Get("resync_count", w.resync_count, 1, 1000000);
+  return w;
+}
+
 }  // namespace
 
 const std::vector<std::string>& KnownConfigSections() {
   static const std::vector<std::string> sections = {
       "mobility", "sensors",  "sim",    "estimator",       "hazards",
-      "executor", "vo",       "camera", "visual_odometry", "capture"};
+      "executor", "vo",       "camera", "visual_odometry", "capture", "bus", "auth"};
   return sections;
 }
 
@@ -110,9 +124,13 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
   } else {
     config_ = config::ConfigNode::FromString("{}", "(no config)");
   }
+  bus_.set_publisher(name_);
+  bus_.clock().set_window(LoadTimeWindow(config_["bus"]));
   InstallSignalHandlers();
   bus_.Subscribe<rover_msgs::rover_clock_t>(
-      channels::kClock, [this](const rover_msgs::rover_clock_t& msg) { ObserveTime(msg.utime); });
+      channels::kClock, [this](const rover_msgs::rover_clock_t& msg) {
+        bus_.clock().ObserveClock(msg.utime, msg.rate, std::chrono::steady_clock::now());
+      });
 }
 
 std::optional<std::string> Process::option(const std::string& flag) const {
@@ -133,11 +151,13 @@ bool Process::stopping() const { return stop_requested_ || g_signalled; }
 
 void Process::PublishHeartbeat() {
   rover_msgs::heartbeat_t hb{};
-  hb.utime = now_utime_;
+  hb.utime = now();
   hb.process = name_;
   hb.seq = heartbeat_seq_++;
   hb.state = health_state_;
   hb.detail = health_detail_;
+  hb.dropped = bus_.dropped();
+  if (bus_.dropped() > 0 && hb.detail.empty()) hb.detail = "last drop: " + bus_.last_drop();
   bus_.Publish(channels::kHeartbeat, hb);
 }
 

@@ -43,9 +43,10 @@ class Process {
   Bus& bus() { return bus_; }
 
   // Rover time in microseconds: the latest ROVER_CLOCK message, or any utime observed.
-  std::int64_t now() const { return now_utime_; }
+  // The Bus judges every message's utime against this clock (bus/guard.hpp).
+  std::int64_t now() const { return bus_.clock().now(); }
   void ObserveTime(std::int64_t utime) {
-    if (utime > now_utime_) now_utime_ = utime;
+    bus_.clock().Observe(utime, std::chrono::steady_clock::now());
   }
   // Seconds of wall time since start (for dead-peer guards only; ARCHITECTURE.md "Time").
   double wall_seconds() const;
@@ -65,7 +66,6 @@ class Process {
   config::ConfigNode config_;
   std::map<std::string, std::string> options_;
   Bus bus_;
-  std::int64_t now_utime_ = 0;
   std::int64_t heartbeat_seq_ = 0;
   std::int8_t health_state_ = 0;
   std::string health_detail_;

@@ -1,0 +1,156 @@
+#include "bus/guard.hpp"
+
+#include "bus/channels.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <new>
+
+namespace rover::bus {
+
+namespace {
+// 0 = no cap. Thread-local, so a decode on one thread never limits another.
+thread_local std::size_t t_allocation_cap = 0;
+
+std::string Seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f s", s);
+  return buf;
+}
+
+void* Allocate(std::size_t size) {
+  if (t_allocation_cap != 0 && size > t_allocation_cap) throw std::bad_alloc();
+  if (size == 0) size = 1;
+  if (void* p = std::malloc(size)) return p;
+  throw std::bad_alloc();
+}
+
+void* AllocateAligned(std::size_t size, std::align_val_t align) {
+  if (t_allocation_cap != 0 && size > t_allocation_cap) throw std::bad_alloc();
+  const std::size_t a = static_cast<std::size_t>(align);
+  std::size_t rounded = (size + a - 1) / a * a;
+  if (rounded == 0) rounded = a;
+  if (void* p = std::aligned_alloc(a, rounded)) return p;
+  throw std::bad_alloc();
+}
+}  // namespace
+
+DecodeAllocationCap::DecodeAllocationCap(std::size_t max_bytes) : previous_(t_allocation_cap) {
+  if (previous_ == 0 || max_bytes < previous_) t_allocation_cap = max_bytes;
+}
+
+DecodeAllocationCap::~DecodeAllocationCap() { t_allocation_cap = previous_; }
+
+std::size_t MaxPayloadBytes(const std::string& channel) {
+  constexpr std::size_t kKiB = 1024, kMiB = 1024 * kKiB;
+  // Two 16-bit 2048x2048 raw images and their models fit; anything larger is not a NAVCAM
+  // pair this stack can use.
+  if (channel == channels::kStereoFrame) return 48 * kMiB;
+  // A sequence file is at most 1 MiB (common/config file limits); zones and queries are
+  // lists an operator writes.
+  if (channel == channels::kSequenceSubmit || channel == channels::kSequenceStatus ||
+      channel == channels::kKeepOutZones || channel == channels::kHazardQuery)
+    return 2 * kMiB;
+  return 64 * kKiB;
+}
+
+bool TimeChecked(const std::string& channel) {
+  return channel != channels::kHeartbeat && channel != channels::kSequenceSubmit &&
+         channel != channels::kSequenceControl;
+}
+
+void RoverClock::Anchor(std::int64_t utime, WallClock::time_point wall) {
+  anchored_ = true;
+  anchor_utime_ = utime;
+  anchor_wall_ = wall;
+}
+
+void RoverClock::ObserveClock(std::int64_t utime, double rate, WallClock::time_point wall) {
+  if (rate > 0 && std::isfinite(rate)) rate_ = rate;
+  Anchor(utime, wall);
+  Observe(utime, wall);
+}
+
+void RoverClock::Observe(std::int64_t utime, WallClock::time_point wall) {
+  if (!anchored_) Anchor(utime, wall);
+  if (utime > newest_) newest_ = utime;
+  // A trusted time ahead of the extrapolated anchor moves the anchor (no ROVER_CLOCK on
+  // this bus, or it lags).
+  const double extrapolated =
+      anchor_utime_ + std::chrono::duration<double>(wall - anchor_wall_).count() * rate_ * 1e6;
+  if (utime > extrapolated) Anchor(utime, wall);
+}
+
+std::string RoverClock::Judge(std::int64_t utime, WallClock::time_point wall) {
+  if (!anchored_) {
+    behind_streak_ = 0;
+    return "";
+  }
+  const double since_anchor_s = std::chrono::duration<double>(wall - anchor_wall_).count();
+  const double ahead_limit = anchor_utime_ + since_anchor_s * rate_ * 1e6 +
+                             (window_.max_ahead_wall_s * rate_ + window_.max_ahead_rover_s) * 1e6;
+  const double behind_limit =
+      newest_ - (window_.max_behind_wall_s * rate_ + window_.max_behind_rover_s) * 1e6;
+  const double t = static_cast<double>(utime);
+  if (t > ahead_limit) {
+    return "utime " + std::to_string(utime) + " is " +
+           Seconds((t - anchor_utime_) * 1e-6 - since_anchor_s * rate_) +
+           " ahead of the rover clock (expected within " +
+           Seconds(window_.max_ahead_wall_s * rate_ + window_.max_ahead_rover_s) + ")";
+  }
+  if (t < behind_limit) {
+    if (behind_streak_ == 0) behind_streak_start_ = wall;
+    ++behind_streak_;
+    if (behind_streak_ >= window_.resync_count &&
+        std::chrono::duration<double>(wall - behind_streak_start_).count() >= window_.resync_wall_s) {
+      std::cerr << "bus: rover clock re-anchored at " << utime << " after " << behind_streak_
+                << " messages older than it (it was poisoned before it had an anchor)\n";
+      anchored_ = false;
+      newest_ = 0;
+      behind_streak_ = 0;
+      return "";
+    }
+    return "utime " + std::to_string(utime) + " is " + Seconds((newest_ - t) * 1e-6) +
+           " behind the rover clock (expected within " +
+           Seconds(window_.max_behind_wall_s * rate_ + window_.max_behind_rover_s) + ")";
+  }
+  behind_streak_ = 0;
+  return "";
+}
+
+void RateLimitedLog::Report(const std::string& channel, const std::string& line) {
+  auto& c = channels_[channel];
+  const auto now = std::chrono::steady_clock::now();
+  const bool in_budget = c.printed < budget_;
+  const bool due = std::chrono::duration<double>(now - c.last).count() >= every_s_;
+  if (!in_budget && !due) {
+    ++c.suppressed;
+    return;
+  }
+  std::cerr << line;
+  if (c.suppressed > 0) std::cerr << " (" << c.suppressed << " more on " << channel << " not shown)";
+  std::cerr << "\n";
+  c.suppressed = 0;
+  ++c.printed;
+  c.last = now;
+}
+
+}  // namespace rover::bus
+
+// The replaceable global allocation functions, so that DecodeAllocationCap applies to the
+// allocations inside LCM's generated decode (std::vector::resize, std::string::assign).
+void* operator new(std::size_t size) { return rover::bus::Allocate(size); }
+void* operator new[](std::size_t size) { return rover::bus::Allocate(size); }
+void* operator new(std::size_t size, std::align_val_t a) { return rover::bus::AllocateAligned(size, a); }
+void* operator new[](std::size_t size, std::align_val_t a) { return rover::bus::AllocateAligned(size, a); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
