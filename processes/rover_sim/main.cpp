@@ -2,9 +2,13 @@
 // Owns the rover clock in simulation and runs it faster than real time (--rate).
 // Reads MOBILITY_COMMAND; writes ROVER_CLOCK, IMU, WHEEL_ODOMETRY, MOBILITY_STATUS and
 // SIM_TRUTH (truth: read only by tests and evaluation).
+// The dead-man (common/mobility/deadman.hpp): a motion stops by itself when the
+// sequence_executor's HEARTBEAT, SEQUENCE_STATUS and MOBILITY_COMMAND have all been silent
+// for mobility.deadman_s of WALL time.
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
+#include "mobility/deadman.hpp"
 #include "mobility/rover_simulator.hpp"
 #include "terrain/world.hpp"
 
@@ -14,6 +18,7 @@
 #include <rover_msgs/mobility_status_t.hpp>
 #include <rover_msgs/pose_t.hpp>
 #include <rover_msgs/rover_clock_t.hpp>
+#include <rover_msgs/sequence_status_t.hpp>
 #include <rover_msgs/sim_truth_t.hpp>
 #include <rover_msgs/wheel_odometry_t.hpp>
 
@@ -27,6 +32,9 @@
 using namespace rover;
 
 namespace {
+
+// sim.rate and --rate: rover seconds per wall second.
+constexpr double kMinRate = 0.1, kMaxRate = 10000.0;
 
 struct SimOptions {
   double rate = 50.0;        // rover seconds per wall second
@@ -49,7 +57,7 @@ SimOptions LoadSimOptions(const config::ConfigNode& section) {
                      "max_lead_s", "lead_wait_s"});
   section.Get("max_lead_s", o.max_lead_s, 0.0, 3600.0);
   section.Get("lead_wait_s", o.lead_wait_s, 0.0, 60.0);
-  section.Get("rate", o.rate, 0.1, 10000.0);
+  section.Get("rate", o.rate, kMinRate, kMaxRate);
   section.Get("step_s", o.step_s, 0.001, 0.1);
   section.Get("truth_hz", o.truth_hz, 1.0, 1000.0);
   section.Get("clock_hz", o.clock_hz, 1.0, 1000.0);
@@ -84,14 +92,20 @@ int main(int argc, char** argv) {
                        {"--rate", "R", "rover seconds per wall second (overrides sim.rate)"},
                        {"--hold-for", "NAMES", "comma-separated processes whose heartbeats must be heard before the clock starts"}});
     SimOptions options = LoadSimOptions(proc.config()["sim"]);
-    if (auto r = proc.option("--rate")) {
+    if (auto r = proc.option("--rate")) {  // the same range as sim.rate
       options.rate = bus::ParseNumberList(*r, 1, "rover_sim: argument --rate")[0];
-      if (!(options.rate > 0)) throw config::ConfigError("rover_sim: argument --rate: expected a number > 0");
+      if (!(options.rate >= kMinRate && options.rate <= kMaxRate)) {
+        std::ostringstream range;
+        range << "[" << kMinRate << ", " << kMaxRate << "]";
+        throw config::ConfigError("rover_sim: argument --rate: \"" + *r + "\": expected a number in " +
+                                  range.str());
+      }
     }
     const auto world_path = proc.option("--world");
     if (!world_path) throw config::ConfigError("rover_sim: missing argument --world FILE (expected a world YAML)");
     const terrain::World world(terrain::WorldOptions::LoadFile(*world_path));
     const auto mobility_options = mobility::MobilityOptions::Load(proc.config());
+    mobility::Deadman deadman(mobility::LoadDeadmanOptions(proc.config()));
 
     std::unique_ptr<mobility::RoverSimulator> sim;
     if (auto s = proc.option("--start")) {
@@ -109,6 +123,7 @@ int main(int argc, char** argv) {
 
     proc.bus().Subscribe<rover_msgs::mobility_command_t>(
         channels::kMobilityCommand, [&](const rover_msgs::mobility_command_t& m) {
+          deadman.OnCommanderMessage(proc.wall_seconds());
           mobility::MotionCommand c;
           c.id = m.command_id;
           c.distance_m = m.distance_m;
@@ -151,11 +166,24 @@ int main(int argc, char** argv) {
       for (std::string n; std::getline(ss, n, ',');)
         if (!n.empty()) waiting.insert(n);
     }
-    proc.bus().Subscribe<rover_msgs::heartbeat_t>(channels::kHeartbeat,
-                                                  [&](const rover_msgs::heartbeat_t& hb) { waiting.erase(hb.process); });
+    proc.bus().Subscribe<rover_msgs::heartbeat_t>(
+        channels::kHeartbeat, [&](const rover_msgs::heartbeat_t& hb) {
+          waiting.erase(hb.process);
+          deadman.OnHeartbeat(hb.process, proc.wall_seconds());
+        });
+    proc.bus().Subscribe<rover_msgs::sequence_status_t>(
+        channels::kSequenceStatus, [&](const rover_msgs::sequence_status_t&) {
+          deadman.OnCommanderMessage(proc.wall_seconds());
+        });
     const auto hold_start = std::chrono::steady_clock::now();
+    double next_hold_heartbeat_wall = 0;
     while (!waiting.empty() && !proc.stopping()) {
-      proc.PublishHeartbeat();
+      // Once a wall second, as everywhere: every heartbeat on the bus (this one included)
+      // wakes Handle(), so sending one per wake-up floods the bus.
+      if (proc.wall_seconds() >= next_hold_heartbeat_wall) {
+        proc.PublishHeartbeat();
+        next_hold_heartbeat_wall = proc.wall_seconds() + 1.0;
+      }
       proc.bus().Handle(200);
       if (std::chrono::steady_clock::now() - hold_start > std::chrono::seconds(30)) {
         std::string list;
@@ -185,6 +213,10 @@ int main(int argc, char** argv) {
                    options.lead_wait_s) {
           proc.bus().Handle(2);
         }
+      }
+      if (const auto why = deadman.Check(sim->moving(), proc.wall_seconds())) {
+        std::cerr << "rover_sim: command " << sim->status().command_id << ": " << *why << "\n";
+        sim->Halt(*why);
       }
       const auto& out = sim->Step(options.step_s);
       const std::int64_t now = sim->utime();
