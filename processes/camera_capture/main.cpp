@@ -9,6 +9,7 @@
 #include "bus/process.hpp"
 #include "geometry/camera_io.hpp"
 #include "geometry/kitti_calib.hpp"
+#include "imaging/image_check.hpp"
 #include "render/render_options.hpp"
 #include "render/stereo_renderer.hpp"
 #include "terrain/world.hpp"
@@ -25,6 +26,7 @@
 #include <future>
 #include <mutex>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <optional>
 
@@ -85,8 +87,28 @@ class SimulatedCameras : public ImageSource {
   std::optional<rover_msgs::sim_truth_t> truth_;
 };
 
+// What a dataset image's PNG header says; throws ConfigError naming the file when it is
+// not a gray 8- or 16-bit PNG within the imaging limits.
+imaging::PngHeader DatasetPngHeader(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::uint8_t bytes[imaging::kPngHeaderBytes] = {};
+  in.read(reinterpret_cast<char*>(bytes), sizeof(bytes));
+  imaging::PngHeader header;
+  std::string bad = imaging::ReadPngHeader(bytes, static_cast<std::size_t>(in.gcount()), header);
+  if (bad.empty()) bad = imaging::CheckPngHeader(header, header.width, header.height);
+  const imaging::ImageLimits limits;
+  if (bad.empty() && std::int64_t{header.width} * header.height > limits.max_pixels) {
+    bad = "PNG is " + std::to_string(header.width) + "x" + std::to_string(header.height) +
+          " (expected at most " + std::to_string(limits.max_pixels) + " px)";
+  }
+  if (!bad.empty()) throw config::ConfigError(path + ": " + bad);
+  return header;
+}
+
 class DatasetCameras : public ImageSource {
  public:
+  // Every image's header is read before the first capture: a pair of the wrong size,
+  // depth or colour stops the process at start with one line, not in the middle of a drive.
   explicit DatasetCameras(const std::string& dir) : dir_(dir) {
     for (int i = 0;; ++i) {
       char name[32];
@@ -97,9 +119,23 @@ class DatasetCameras : public ImageSource {
     if (names_.empty()) {
       throw config::ConfigError(dir_ + "/image_0: no images (expected 000000.png, 000001.png, ...)");
     }
-    const cv::Mat first = cv::imread(dir_ + "/image_0/" + names_[0], cv::IMREAD_UNCHANGED);
-    if (first.empty()) throw config::ConfigError(dir_ + "/image_0/" + names_[0] + ": cannot read the image");
-    rig_ = geometry::LoadKittiCalib(dir_ + "/calib.txt", first.cols, first.rows);
+    const std::string first = dir_ + "/image_0/" + names_[0];
+    const imaging::PngHeader size = DatasetPngHeader(first);
+    for (const auto& name : names_) {
+      for (const char* side : {"/image_0/", "/image_1/"}) {
+        const std::string path = dir_ + side + name;
+        const imaging::PngHeader h = DatasetPngHeader(path);
+        if (h.width != size.width || h.height != size.height || h.bit_depth != size.bit_depth) {
+          throw config::ConfigError(path + ": " + std::to_string(h.width) + "x" + std::to_string(h.height) +
+                                    ", " + std::to_string(h.bit_depth) + "-bit (expected " +
+                                    std::to_string(size.width) + "x" + std::to_string(size.height) + ", " +
+                                    std::to_string(size.bit_depth) + "-bit like " + first + ")");
+        }
+      }
+    }
+    width_ = static_cast<int>(size.width);
+    height_ = static_cast<int>(size.height);
+    rig_ = geometry::LoadKittiCalib(dir_ + "/calib.txt", width_, height_);
   }
   bool Ready(std::int64_t) const override { return true; }
   CapturedPair Capture(std::int64_t) override {
@@ -111,6 +147,15 @@ class DatasetCameras : public ImageSource {
     if (pair.left.empty() || pair.right.empty()) {
       throw std::runtime_error(dir_ + ": cannot read pair " + name);
     }
+    // The files were checked at start; one replaced since is caught here.
+    for (const cv::Mat* m : {&pair.left, &pair.right}) {
+      if (m->cols != width_ || m->rows != height_ || m->channels() != 1) {
+        throw std::runtime_error(dir_ + ": pair " + name + " is " + std::to_string(m->cols) + "x" +
+                                 std::to_string(m->rows) + " with " + std::to_string(m->channels()) +
+                                 " channels (expected " + std::to_string(width_) + "x" +
+                                 std::to_string(height_) + " gray, as at start)");
+      }
+    }
     pair.rig = rig_;
     return pair;
   }
@@ -119,6 +164,7 @@ class DatasetCameras : public ImageSource {
   std::string dir_;
   std::vector<std::string> names_;
   std::size_t next_ = 0;
+  int width_ = 0, height_ = 0;
   geometry::StereoRig rig_;
 };
 
@@ -233,7 +279,12 @@ int main(int argc, char** argv) {
         [&] {
           if (job.valid()) {
             if (job.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
-            proc.bus().Publish(channels::kStereoFrame, job.get());  // rethrows a capture error
+            try {
+              proc.bus().Publish(channels::kStereoFrame, job.get());  // rethrows a capture error
+            } catch (const std::exception& e) {
+              // No frame for this request: the executor counts a VO failure; the process goes on.
+              std::cerr << "camera_capture: capture failed, no frame sent: " << e.what() << "\n";
+            }
           }
           if (!pending.empty() && cameras->Ready(pending.front().utime)) {
             start(pending.front());
