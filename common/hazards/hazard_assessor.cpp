@@ -264,7 +264,8 @@ HazardStatus HazardAssessor::Assess(int64_t now_utime) const {
   return s;
 }
 
-SweptCheck HazardAssessor::CheckStep(const std::vector<Pose2>& path, int64_t now_utime) const {
+SweptCheck HazardAssessor::CheckStep(const std::vector<Pose2>& path, int64_t now_utime,
+                                     double margin_m) const {
   const std::string stale = Staleness(now_utime);
   if (!stale.empty()) {
     SweptCheck check;
@@ -273,7 +274,7 @@ SweptCheck HazardAssessor::CheckStep(const std::vector<Pose2>& path, int64_t now
     return check;
   }
   return CheckSweptPath(zones_, options_.footprint, path, pose_->position_sigma_m,
-                        options_.sigma_multiplier);
+                        options_.sigma_multiplier, margin_m);
 }
 
 }  // namespace rover::hazards

@@ -113,9 +113,11 @@ class HazardAssessor {
   // The status at rover time `now_utime`.
   HazardStatus Assess(int64_t now_utime) const;
 
-  // "Would this step's swept footprint enter a zone?" with the latest pose's sigma.
-  // Unknown when there is no pose or it is stale at `now_utime`.
-  SweptCheck CheckStep(const std::vector<Pose2>& path, int64_t now_utime) const;
+  // "Would this step's swept footprint enter a zone?" with the latest pose's sigma and
+  // the asker's extra margin (hazard_query_t.margin_m). Unknown when there is no pose or
+  // it is stale at `now_utime`, or the margin is not a finite value >= 0.
+  SweptCheck CheckStep(const std::vector<Pose2>& path, int64_t now_utime,
+                       double margin_m = 0.0) const;
 
   const std::vector<KeepOutZone>& zones() const { return zones_; }
   const HazardOptions& options() const { return options_; }

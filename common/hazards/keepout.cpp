@@ -321,7 +321,8 @@ const char* ToString(Verdict verdict) {
 
 SweptCheck CheckSweptPath(const std::vector<KeepOutZone>& zones, const Footprint& footprint,
                           const std::vector<Pose2>& path, double position_sigma_m,
-                          double sigma_multiplier, double max_corner_step_m) {
+                          double sigma_multiplier, double extra_margin_m,
+                          double max_corner_step_m) {
   SweptCheck check;
   auto unknown = [&](const std::string& why) {
     check.verdict = Verdict::kUnknown;
@@ -335,6 +336,9 @@ SweptCheck CheckSweptPath(const std::vector<KeepOutZone>& zones, const Footprint
   if (!std::isfinite(sigma_multiplier) || sigma_multiplier < 0.0) {
     return unknown("sigma multiplier " + Num(sigma_multiplier) + " is not a finite value >= 0");
   }
+  if (!std::isfinite(extra_margin_m) || extra_margin_m < 0.0) {
+    return unknown("extra margin " + Num(extra_margin_m) + " m is not a finite value >= 0");
+  }
   if (!std::isfinite(max_corner_step_m) || max_corner_step_m <= 0.0) {
     return unknown("max corner step " + Num(max_corner_step_m) + " m is not a finite value > 0");
   }
@@ -347,7 +351,7 @@ SweptCheck CheckSweptPath(const std::vector<KeepOutZone>& zones, const Footprint
     check.detail = "no keep-out zones";
     return check;
   }
-  const double uncertainty = sigma_multiplier * position_sigma_m;
+  const double uncertainty = sigma_multiplier * position_sigma_m + extra_margin_m;
   // The farthest footprint point from the rover origin sets how far a turn sweeps.
   const double reach = std::hypot(std::abs(footprint.center_forward_m) + 0.5 * footprint.length_m,
                                   0.5 * footprint.width_m);
@@ -380,7 +384,9 @@ SweptCheck CheckSweptPath(const std::vector<KeepOutZone>& zones, const Footprint
   std::ostringstream os;
   os << (check.min_clearance_m < 0.0 ? "enters " : "clears ") << Quoted(check.zone_name)
      << ": clearance " << check.min_clearance_m << " m (" << check.min_clearance_m + uncertainty
-     << " m less " << sigma_multiplier << " x " << position_sigma_m << " m) at pose "
+     << " m less " << sigma_multiplier << " x " << position_sigma_m << " m"
+     << (extra_margin_m > 0.0 ? " and a margin of " + Num(extra_margin_m) + " m" : std::string())
+     << ") at pose "
      << check.worst_pose_index << " of " << path.size() << " (x " << w.x << ", y " << w.y
      << ", yaw " << w.yaw << ")";
   check.detail = os.str();

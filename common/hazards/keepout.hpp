@@ -6,8 +6,8 @@
 //
 // Why a swept check: on Mars, keep-out zones around rocks stopped the rover before it got
 // too close; near the rock Wopmay, Opportunity halted correctly when VO showed it sliding
-// toward the rock (OPERATIONS.md). A step whose swept footprint, grown by the position
-// uncertainty, would enter a zone is not commanded at all.
+// toward the rock. A step whose swept footprint, grown by the position uncertainty and by
+// the drift measured over the recent steps, would enter a zone is not commanded at all.
 #pragma once
 
 #include <Eigen/Core>
@@ -94,14 +94,16 @@ struct SweptCheck {
 };
 
 // Checks a sampled path against every zone: clearance less
-// sigma_multiplier * position_sigma_m. Unsafe when any is < 0. So that coarse samples
-// cannot step over a small rock, poses are interpolated between consecutive inputs (x, y
-// linearly, yaw the short way) until no footprint corner moves more than max_corner_step_m
-// between checks. Unknown (never safe) for an empty path, a non-finite pose or sigma, or a
-// negative sigma. With no zones the path is safe.
+// sigma_multiplier * position_sigma_m less extra_margin_m (what the asker adds: the drift VO
+// measured and the uncertainty the step itself adds). Unsafe when any is < 0. So that coarse
+// samples cannot step over a small rock, poses are interpolated between consecutive inputs
+// (x, y linearly, yaw the short way) until no footprint corner moves more than
+// max_corner_step_m between checks. Unknown (never safe) for an empty path, a non-finite
+// pose, sigma or margin, or a negative sigma or margin. With no zones the path is safe.
 SweptCheck CheckSweptPath(const std::vector<KeepOutZone>& zones, const Footprint& footprint,
                           const std::vector<Pose2>& path, double position_sigma_m,
-                          double sigma_multiplier, double max_corner_step_m = 0.02);
+                          double sigma_multiplier, double extra_margin_m = 0.0,
+                          double max_corner_step_m = 0.02);
 
 // Poses along one planned step, start and end included: first a turn in place by turn_rad
 // (+ = clockwise from above), then an arc of signed length distance_m (negative = backward)

@@ -1,5 +1,6 @@
 #include "sequence/executor.hpp"
 
+#include "hazards/hazard_assessor.hpp"
 #include "hazards/keepout.hpp"
 
 #include <algorithm>
@@ -76,6 +77,18 @@ void ValidateExecutorOptions(const ExecutorOptions& o) {
   positive(o.path_sample_spacing_m, "path_sample_spacing_m");
   positive(o.path_sample_turn_deg, "path_sample_turn_deg");
   positive(o.status_period_s, "status_period_s");
+  positive(o.blind_slope_deg, "blind_slope_deg");
+  positive(o.blind_slip_pct, "blind_slip_pct");
+  positive(o.lost_min_step_m, "lost_min_step_m");
+  positive(o.margin_sigma_multiplier, "margin_sigma_multiplier");
+  if (o.recent_steps < 1) {
+    throw std::invalid_argument("executor option recent_steps must be >= 1, got " +
+                                std::to_string(o.recent_steps));
+  }
+  if (!(o.step_sigma_growth_pct >= 0.0) || !std::isfinite(o.step_sigma_growth_pct)) {
+    throw std::invalid_argument("executor option step_sigma_growth_pct must be >= 0, got " +
+                                std::to_string(o.step_sigma_growth_pct));
+  }
   if (!(o.start_wait_s >= 0.0)) {
     throw std::invalid_argument("executor option start_wait_s must be >= 0, got " +
                                 std::to_string(o.start_wait_s));
@@ -97,7 +110,9 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "default_step_m", "default_max_turn_deg", "goto_turn_threshold_deg",
                "goto_default_distance_factor", "goto_default_distance_margin_m",
                "predictive_hazard_check", "reactive_hazard_abort", "path_sample_spacing_m",
-               "path_sample_turn_deg", "slip_min_step_m", "status_period_s"});
+               "path_sample_turn_deg", "slip_min_step_m", "status_period_s", "blind_slope_deg",
+               "blind_slip_pct", "recent_steps", "lost_min_step_m", "step_sigma_growth_pct",
+               "margin_sigma_multiplier", "state_file"});
   auto names = [&](const char* key, std::vector<std::string>& out) {
     if (!n.Has(key)) return;
     const config::ConfigNode list = n[key];
@@ -136,6 +151,13 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("path_sample_turn_deg", o.path_sample_turn_deg, 0.01, 45.0);
   n.Get("slip_min_step_m", o.slip_min_step_m, 0.0, 0.75);
   n.Get("status_period_s", o.status_period_s, 1e-3, kInf);
+  n.Get("blind_slope_deg", o.blind_slope_deg, 0.1, 45.0);
+  n.Get("blind_slip_pct", o.blind_slip_pct, 0.1, 100.0);
+  n.Get("recent_steps", o.recent_steps, 1, 100);
+  n.Get("lost_min_step_m", o.lost_min_step_m, 0.01, 0.75);
+  n.Get("step_sigma_growth_pct", o.step_sigma_growth_pct, 0.0, 100.0);
+  n.Get("margin_sigma_multiplier", o.margin_sigma_multiplier, 0.1, 10.0);
+  n.Get("state_file", o.state_file);
   return o;
 }
 
@@ -164,6 +186,8 @@ SequenceExecutor::SequenceExecutor(ExecutorOptions options, int64_t first_id)
   step_m_ = options_.default_step_m;
   max_turn_rad_ = options_.default_max_turn_deg * kDeg;
   vo_wait_s_ = options_.vo_wait_s;
+  blind_slope_rad_ = options_.blind_slope_deg * kDeg;
+  blind_slip_pct_ = options_.blind_slip_pct;
 }
 
 bool SequenceExecutor::Active() const {
@@ -216,6 +240,14 @@ void SequenceExecutor::Submit(Sequence sequence, int64_t submission_id, const st
   limits_ = LimitSetting{};
   zones_.clear();
   vo_frame_valid_ = false;
+  last_vo_frame_ = -1;
+  vo_lost_ = VoLostSetting{};
+  blind_slope_rad_ = options_.blind_slope_deg * kDeg;
+  blind_slip_pct_ = options_.blind_slip_pct;
+  vo_off_by_failures_ = false;
+  recent_slip_pct_.clear();
+  recent_drift_.clear();
+  lost_step_scale_ = 1.0;
   sequence_uses_vo_ = false;
   for (const Command& c : sequence_.commands) {
     if (const auto* v = std::get_if<VoSetting>(&c.action); v && v->enabled) sequence_uses_vo_ = true;
@@ -241,6 +273,19 @@ void SequenceExecutor::Abort(const std::string& detail) {
   } else {
     EmitStop();  // commanding a stop is always safe
   }
+}
+
+void SequenceExecutor::RecordInterrupted(int64_t submission_id, const std::string& name,
+                                         const std::string& detail) {
+  if (Active()) return;
+  sequence_ = Sequence{name, {}};
+  submission_id_ = submission_id;
+  started_ = false;
+  command_index_ = -1;
+  step_index_ = 0;
+  distance_m_ = 0.0;
+  vo_failures_total_ = 0;
+  AbortWith(abort_reason::kInterrupted, detail);
 }
 
 void SequenceExecutor::Pause() {
@@ -558,6 +603,7 @@ void SequenceExecutor::StartCommand() {
   steps_.clear();
   next_step_ = 0;
   no_progress_count_ = 0;
+  lost_step_scale_ = 1.0;
   if (const auto* d = std::get_if<Drive>(&c.action)) {
     steps_ = SplitArc(d->distance_m, 0.0, step_m_, max_turn_rad_);
   } else if (const auto* a = std::get_if<Arc>(&c.action)) {
@@ -593,6 +639,11 @@ void SequenceExecutor::ApplySetting(const Command& c) {
     }
     if (v->wait_s) vo_wait_s_ = *v->wait_s;
     vo_policy_failures_ = 0;
+    vo_off_by_failures_ = false;
+  } else if (const auto* l = std::get_if<VoLostSetting>(&c.action)) {
+    vo_lost_ = *l;
+    if (l->slope_rad) blind_slope_rad_ = *l->slope_rad;
+    if (l->slip_pct) blind_slip_pct_ = *l->slip_pct;
   } else if (const auto* s = std::get_if<SlipSetting>(&c.action)) {
     slip_ = *s;
     no_progress_count_ = 0;
@@ -657,8 +708,8 @@ bool SequenceExecutor::NextStepOfCommand() {
   }
   PlannedStep step;
   if (is_goto_) {
-    const GotoDecision d = SteerToward(CurrentPlanePose(), goto_.target, goto_.tolerance_m, step_m_,
-                                       max_turn_rad_, options_.goto_turn_threshold_deg * kDeg);
+    const GotoDecision d = SteerToward(CurrentPlanePose(), goto_.target, goto_.tolerance_m, StepLength(),
+                                       MaxTurn(), options_.goto_turn_threshold_deg * kDeg);
     if (d.arrived) {
       detail_ = "goto reached the disc: " + Fixed(d.remaining_m) + " m from the target";
       return false;
@@ -667,6 +718,15 @@ bool SequenceExecutor::NextStepOfCommand() {
   } else {
     if (next_step_ >= steps_.size()) return false;
     step = steps_[next_step_];
+  }
+  // VO switched off by `then continue` comes back on where slip is likely: there, wheel
+  // odometry is no evidence of where the rover went.
+  if (vo_off_by_failures_) {
+    if (const std::string why = SlipLikely(*pose_, *pose_); !why.empty()) {
+      vo_enabled_ = true;
+      vo_off_by_failures_ = false;
+      detail_ = "VO back on: slip is likely here (" + why + ")";
+    }
   }
   // MER took a baseline pair before the first step so that the first step has a VO answer.
   if (VoActive() && !vo_frame_valid_) {
@@ -688,6 +748,9 @@ void SequenceExecutor::BeginStep(const PlannedStep& step) {
   hazard_reply_.reset();
   step_vo_failed_ = false;
   step_note_.clear();
+  step_vo_on_ = VoActive();
+  step_ref_frame_ = vo_frame_valid_ ? last_vo_frame_ : -1;
+  step_retries_ = 0;
   frame_id_ = -1;
   if (options_.predictive_hazard_check) {
     // Predictive keep-out: a step whose swept footprint would enter a zone is never commanded.
@@ -703,9 +766,20 @@ void SequenceExecutor::BeginStep(const PlannedStep& step) {
       AbortWith(abort_reason::kHazardUnknown, std::string("cannot sample the step's path: ") + e.what());
       return;
     }
-    HazardQuery q{now_utime_, query_id_, {}};
-    q.samples.reserve(path.size());
+    HazardQuery q{now_utime_, query_id_, {}, 0.0};
     for (const auto& s : path) q.samples.push_back({s.x, s.y, s.yaw});
+    if (!turn) {
+      // Opportunity stopped near Wopmay when VO showed it sliding toward the rock: the step
+      // is checked where the drift VO measured over the recent steps would take it, with
+      // the spread of that drift and the uncertainty the step adds as extra clearance.
+      const std::vector<StepDrift> recent(recent_drift_.begin(), recent_drift_.end());
+      const DriftPrediction drift = PredictDrift(recent, step_.distance_m);
+      q.samples = PathWithDrift(q.samples, drift);
+      const double sigma = hazards::HorizontalSigma(pose_->covariance);
+      q.margin_m = drift.spread_m +
+                   options_.margin_sigma_multiplier *
+                       StepSigmaGrowth(sigma, step_.distance_m, options_.step_sigma_growth_pct / 100.0);
+    }
     outputs_.push_back(std::move(q));
     EnterPhase(Phase::kQuery);
   } else {
@@ -758,6 +832,7 @@ void SequenceExecutor::AfterMotion() {
 
 void SequenceExecutor::StartCapture(const std::string& purpose) {
   frame_id_ = NewId();
+  if (purpose != "science") last_vo_frame_ = frame_id_;
   vo_update_.reset();
   outputs_.push_back(CaptureRequest{now_utime_, frame_id_, purpose});
 }
@@ -771,6 +846,23 @@ void SequenceExecutor::CountVoFailure(const std::string& why) {
 
 void SequenceExecutor::FinishStep() {
   const PoseEstimate after = *pose_;
+  // VO lost: VO (on for the step, or switched off by `then continue`) did not measure the
+  // step, where slip is likely. `retry` takes pairs again before anything else happens.
+  const bool measured = StepMeasured();
+  const std::string slip_likely = measured ? std::string() : SlipLikely(pose_before_, after);
+  const bool vo_lost = !slip_likely.empty() && (step_vo_on_ || vo_off_by_failures_);
+  if (vo_lost && vo_lost_.action == VoLostAction::kRetry && step_vo_on_ &&
+      step_retries_ < vo_lost_.retries) {
+    ++step_retries_;
+    step_note_ += "VO lost (" + slip_likely + "), pair taken again (" + std::to_string(step_retries_) +
+                  " of " + std::to_string(vo_lost_.retries) + "); ";
+    detail_ = "step " + std::to_string(step_index_) + ": " + step_note_;
+    done_pose_count_ = pose_count_;  // the pose must come after this pair's VO answer
+    StartCapture("vo");
+    vo_frame_valid_ = true;
+    EnterPhase(Phase::kWaitVo);
+    return;
+  }
   const StepMotion m = MeasureStep(ToPose(pose_before_), ToPose(after), step_);
   distance_m_ += (after.position - pose_before_.position).norm();
 
@@ -812,22 +904,30 @@ void SequenceExecutor::FinishStep() {
                                        Fixed(pitch / kDeg, 1) + " deg");
     return;
   }
-  // 2. Progress / slip, from the VO-corrected motion against the commanded (MER: a 40 %
-  //    limit stopped a drive at 44.5 % slip).
-  if (slip_.enabled && step_.kind == PlannedStep::Kind::kArc &&
+  // 2. VO lost: the `vo lost` policy (abort, retries exhausted, or shorter steps).
+  if (vo_lost && !OnVoLost(step_text, slip_likely)) return;
+  //    Progress / slip, from the VO-corrected motion against the commanded (MER: a 40 %
+  //    limit stopped a drive at 44.5 % slip). Where slip is likely, wheel odometry is no
+  //    evidence of progress: a step VO lost is left to `vo lost`, and a step driven with VO
+  //    off counts as no progress (the check cannot decide, so it stops the rover).
+  RecordStep(m, measured, after);
+  if (slip_.enabled && !vo_lost && step_.kind == PlannedStep::Kind::kArc &&
       std::abs(step_.distance_m) >= options_.slip_min_step_m) {
-    if (m.slip_pct > slip_.limit_pct) {
+    const bool evidence = measured || slip_likely.empty();
+    if (evidence && m.slip_pct > slip_.limit_pct) {
       AbortWith(abort_reason::kProgress, step_text + "slip " + Fixed(m.slip_pct, 1) + " % > limit " +
                                              Fixed(slip_.limit_pct, 1) + " % (moved " +
                                              Fixed(m.estimated_distance_m, 3) + " m of " +
                                              Fixed(step_.distance_m, 3) + " m)");
       return;
     }
-    no_progress_count_ = m.progress_fraction < slip_.no_progress_fraction ? no_progress_count_ + 1 : 0;
+    const bool no_progress = !evidence || m.progress_fraction < slip_.no_progress_fraction;
+    no_progress_count_ = no_progress ? no_progress_count_ + 1 : 0;
     if (no_progress_count_ >= slip_.over_steps) {
-      AbortWith(abort_reason::kProgress, step_text + "progress below " +
-                                             Fixed(100.0 * slip_.no_progress_fraction, 1) + " % for " +
-                                             std::to_string(no_progress_count_) + " steps");
+      AbortWith(abort_reason::kProgress,
+                step_text + (evidence ? "progress below " + Fixed(100.0 * slip_.no_progress_fraction, 1) + " %"
+                                      : "progress unknown (VO off where slip is likely: " + slip_likely + ")") +
+                    " for " + std::to_string(no_progress_count_) + " steps");
       return;
     }
   }
@@ -839,10 +939,18 @@ void SequenceExecutor::FinishStep() {
                                                " allowed (" + step_note_ + ")");
       return;
     }
+    // `then continue` keeps its Mars meaning on ground where slip is unlikely; where it is
+    // likely, VO stays on and `vo lost` decides.
     if (vo_enabled_) {
-      vo_enabled_ = false;
-      detail_ = "VO off after " + std::to_string(vo_policy_failures_) +
-                " failures; continuing on wheel odometry";
+      if (const std::string why = SlipLikely(after, after); !why.empty()) {
+        step_note_ += "VO stays on past " + std::to_string(*vo_max_failures_) +
+                      " failures: slip is likely (" + why + "); ";
+      } else {
+        vo_enabled_ = false;
+        vo_off_by_failures_ = true;
+        detail_ = "VO off after " + std::to_string(vo_policy_failures_) +
+                  " failures; continuing on wheel odometry";
+      }
     }
   }
   // 4. Limits.
@@ -875,6 +983,92 @@ void SequenceExecutor::FinishStep() {
   }
   if (!step_note_.empty()) detail_ = step_text + step_note_;
   EnterPhase(Phase::kReady);
+}
+
+// ---- VO lost ----
+
+bool SequenceExecutor::StepMeasured() const {
+  if (!step_vo_on_ || !vo_update_ || vo_update_->status != VoUpdate::kStatusOk) return false;
+  // The pose must include the update, and the update must span the step: a pair taken
+  // again after a failure is measured from the failed pair when VO kept that as reference.
+  return pose_ && pose_->last_vo_to_frame >= frame_id_ && vo_update_->from_frame_id <= step_ref_frame_;
+}
+
+std::string SequenceExecutor::SlipLikely(const PoseEstimate& before, const PoseEstimate& after) const {
+  const double tilt = std::max(TiltAngle(before.orientation.normalized().toRotationMatrix()),
+                               TiltAngle(after.orientation.normalized().toRotationMatrix()));
+  if (tilt > blind_slope_rad_) {
+    return "tilt " + Fixed(tilt / kDeg, 1) + " deg > " + Fixed(blind_slope_rad_ / kDeg, 1) + " deg";
+  }
+  for (const double pct : recent_slip_pct_) {
+    if (pct > blind_slip_pct_) {
+      return "VO measured " + Fixed(pct, 1) + " % slip or drift in the last " +
+             std::to_string(options_.recent_steps) + " steps > " + Fixed(blind_slip_pct_, 1) + " %";
+    }
+  }
+  return "";
+}
+
+bool SequenceExecutor::OnVoLost(const std::string& step_text, const std::string& why) {
+  const std::string lost = step_text + "VO did not measure the step where slip is likely (" + why + ")";
+  switch (vo_lost_.action) {
+    case VoLostAction::kAbort:
+      AbortWith(abort_reason::kVoLost, lost);
+      return false;
+    case VoLostAction::kRetry:
+      AbortWith(abort_reason::kVoLost, lost + (step_vo_on_ ? ", also after " + std::to_string(step_retries_) +
+                                                                  " more pairs"
+                                                            : ", and VO was off"));
+      return false;
+    case VoLostAction::kShorten: {
+      const double shortest = std::min(1.0, options_.lost_min_step_m / step_m_);
+      if (lost_step_scale_ <= shortest + 1e-9) {
+        AbortWith(abort_reason::kVoLost, lost + ", at the shortest step (" + Fixed(StepLength()) + " m)");
+        return false;
+      }
+      lost_step_scale_ = std::max(0.5 * lost_step_scale_, shortest);
+      ShortenRemainingSteps();
+      if (vo_off_by_failures_) {
+        vo_enabled_ = true;
+        vo_off_by_failures_ = false;
+      }
+      step_note_ += "VO lost (" + why + "): steps shortened to " + Fixed(StepLength()) + " m, " +
+                    Fixed(MaxTurn() / kDeg, 1) + " deg; ";
+      return true;
+    }
+  }
+  return true;
+}
+
+void SequenceExecutor::ShortenRemainingSteps() {
+  if (is_goto_ || next_step_ >= steps_.size()) return;  // goto re-plans with StepLength()
+  const PlannedStep kind = steps_[next_step_];
+  double rest = 0.0;
+  for (std::size_t i = next_step_; i < steps_.size(); ++i) {
+    rest += kind.kind == PlannedStep::Kind::kTurn ? steps_[i].turn_rad : steps_[i].distance_m;
+  }
+  steps_ = kind.kind == PlannedStep::Kind::kTurn
+               ? SplitTurn(rest, MaxTurn())
+               : SplitArc(rest, kind.curvature_per_m, StepLength(), MaxTurn());
+  next_step_ = 0;
+}
+
+void SequenceExecutor::RecordStep(const StepMotion& motion, bool measured, const PoseEstimate& after) {
+  const bool arc = step_.kind == PlannedStep::Kind::kArc &&
+                   std::abs(step_.distance_m) >= options_.slip_min_step_m;
+  double slip_pct = 0.0;
+  if (measured && arc) {
+    const auto plane = [](const PoseEstimate& p) {
+      const Eigen::Vector3d rpy = geometry::RpyFromRotation(p.orientation.normalized().toRotationMatrix());
+      return PlanePose{p.position.x(), p.position.y(), rpy.z()};
+    };
+    const StepDrift drift = DriftOfStep(plane(pose_before_), plane(after), step_);
+    slip_pct = std::max(motion.slip_pct, drift.cross_pct);
+    recent_drift_.push_back(drift);
+    while (static_cast<int>(recent_drift_.size()) > options_.recent_steps) recent_drift_.pop_front();
+  }
+  recent_slip_pct_.push_back(slip_pct);
+  while (static_cast<int>(recent_slip_pct_.size()) > options_.recent_steps) recent_slip_pct_.pop_front();
 }
 
 // ---- finishing and status ----

@@ -1,5 +1,5 @@
-// The sequence executor: runs a checked Sequence step by step (OPERATIONS.md, "Semantics of
-// a drive with VO on"). It knows nothing of LCM. The process shell feeds it the messages it
+// The sequence executor: runs a checked Sequence step by step (LANGUAGE.md, "What runs
+// between steps"). It knows nothing of LCM. The process shell feeds it the messages it
 // reads (On*), the operator's requests (Submit, Abort, Pause, Resume) and the clocks (Tick),
 // and publishes what TakeOutputs() returns. Every input struct mirrors its lcmtypes message.
 //
@@ -17,6 +17,7 @@
 #include <Eigen/Geometry>
 
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <optional>
 #include <string>
@@ -69,7 +70,25 @@ struct ExecutorOptions {
   double path_sample_spacing_m = 0.05;  // swept-path samples in a hazard query
   double path_sample_turn_deg = 2.0;
   double slip_min_step_m = 0.05;        // shorter steps are not slip-checked (noise)
+
+  // Where slip is likely, a step VO could not measure is "VO lost" (`vo lost` in LANGUAGE.md):
+  // the rover tilts more than blind_slope_deg (from the pose's roll and pitch), or VO measured
+  // more than blind_slip_pct of slip or sideways drift in one of the last recent_steps steps.
+  double blind_slope_deg = 15.0;
+  double blind_slip_pct = 20.0;
+  int recent_steps = 3;                 // also the drift history of the predictive check
+  double lost_min_step_m = 0.15;        // `vo lost shorten` halves steps down to this
+
+  // Predictive keep-out margin (hazard_query_t.margin_m), on top of the monitor's k sigma:
+  // the spread of the drift VO measured over the recent steps, and the position sigma the
+  // step adds (the estimator's wheel-odometry error, % of the step), times this multiplier.
+  double step_sigma_growth_pct = 2.0;
+  double margin_sigma_multiplier = 3.0;
   double status_period_s = 1.0;         // wall: periodic status
+
+  // The running sequence's submission id, name and state, kept on disk (run_state.hpp)
+  // so that a restarted executor reports it interrupted. Empty = off. Used by the shell.
+  std::string state_file;
 };
 
 ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root);  // reads root["executor"]
@@ -153,7 +172,10 @@ struct CaptureRequest {  // capture_request_t
 struct HazardQuery {  // hazard_query_t
   int64_t utime = 0;
   int64_t query_id = 0;
-  std::vector<PlanePose> samples;  // site x, y, yaw of the swept path
+  // Site x, y, yaw of the swept path: the commanded path, then (when VO measured drift) the
+  // path shifted by the predicted drift, from its end back to the start.
+  std::vector<PlanePose> samples;
+  double margin_m = 0.0;           // extra clearance: drift spread and the step's sigma growth
 };
 struct KeepOutZoneSet {  // keepout_zones_t: the whole set in force, replacing the previous
   int64_t utime = 0;
@@ -210,6 +232,7 @@ inline constexpr const char* kKeepout = "keepout";
 inline constexpr const char* kProgress = "progress";
 inline constexpr const char* kTilt = "tilt";
 inline constexpr const char* kVoFailures = "vo_failures";
+inline constexpr const char* kVoLost = "vo_lost";
 inline constexpr const char* kTimeLimit = "time_limit";
 inline constexpr const char* kDistanceLimit = "distance_limit";
 inline constexpr const char* kGotoTimeLimit = "goto_time_limit";
@@ -221,6 +244,7 @@ inline constexpr const char* kMobilityFault = "mobility_fault";
 inline constexpr const char* kTimeout = "timeout";
 inline constexpr const char* kInvalidSequence = "invalid_sequence";  // rejections only
 inline constexpr const char* kBusy = "busy";                         // rejections only
+inline constexpr const char* kInterrupted = "interrupted";  // the executor restarted mid-sequence
 }  // namespace abort_reason
 
 const char* ToString(SequenceState state);
@@ -241,6 +265,10 @@ class SequenceExecutor {
   void SubmitText(std::string_view text, int64_t submission_id, const std::string& name,
                   const LanguageLimits& limits = {});
   void Abort(const std::string& detail);  // reason "operator"; always commands STOP
+  // After a restart: the sequence the previous executor was running (its state file)
+  // is reported ABORTED with reason "interrupted" and `detail`, and STOP is commanded
+  // once. It is never resumed. Does nothing while a sequence is active.
+  void RecordInterrupted(int64_t submission_id, const std::string& name, const std::string& detail);
   void Pause();   // takes effect between steps: the current step finishes first
   void Resume();
 
@@ -301,6 +329,15 @@ class SequenceExecutor {
   void EmitStatus();
   void EmitStop();
   void CountVoFailure(const std::string& why);
+  // VO lost: whether the step's motion was measured by VO, why slip is likely here (empty:
+  // it is not), and the `vo lost` policy (false: the sequence was aborted).
+  bool StepMeasured() const;
+  std::string SlipLikely(const PoseEstimate& before, const PoseEstimate& after) const;
+  bool OnVoLost(const std::string& step_text, const std::string& why);
+  void ShortenRemainingSteps();
+  void RecordStep(const StepMotion& motion, bool measured, const PoseEstimate& after);
+  double StepLength() const { return step_m_ * lost_step_scale_; }
+  double MaxTurn() const { return max_turn_rad_ * lost_step_scale_; }
 
   std::vector<std::string> SilentProcesses(bool include_vo) const;
   bool ProcessFresh(const std::string& entry) const;
@@ -360,6 +397,15 @@ class SequenceExecutor {
   LimitSetting limits_;
   std::vector<KeepOutZone> zones_;
   bool vo_frame_valid_ = false;  // the last VO frame was taken where the rover stands
+  int64_t last_vo_frame_ = -1;   // id of the last VO pair asked for (baseline or step)
+  VoLostSetting vo_lost_;        // policy; slope and slip in force below
+  double blind_slope_rad_;
+  double blind_slip_pct_;
+  bool vo_off_by_failures_ = false;  // `then continue` switched VO off (not the operator)
+  // The last recent_steps steps: the largest of slip and sideways drift VO measured (0 when
+  // VO did not measure the step); and the drift of the last recent_steps measured arc steps.
+  std::deque<double> recent_slip_pct_;
+  std::deque<StepDrift> recent_drift_;
 
   // The command in progress.
   bool command_active_ = false;
@@ -371,6 +417,7 @@ class SequenceExecutor {
   double goto_start_distance_ = 0.0;
   double goto_distance_limit_ = 0.0;
   bool baseline_done_ = false;
+  double lost_step_scale_ = 1.0;  // `vo lost shorten` halves it, for the rest of the command
 
   // The step in progress.
   PlannedStep step_;
@@ -381,6 +428,9 @@ class SequenceExecutor {
   std::optional<MobilityStatus> mobility_done_;
   uint64_t done_pose_count_ = 0;
   int64_t frame_id_ = -1;
+  int64_t step_ref_frame_ = -1;  // the VO pair the step's motion is measured from
+  bool step_vo_on_ = false;      // VO was on for this step
+  int step_retries_ = 0;         // `vo lost retry`: pairs taken again after the step
   std::optional<VoUpdate> vo_update_;
   bool step_vo_failed_ = false;
   std::string step_note_;

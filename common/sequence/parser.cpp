@@ -281,7 +281,7 @@ class LineParser {
     // "3 ft" says "unknown unit"; keywords of the language are not units.
     static const char* kKeywords[] = {"radius", "distance", "within", "time", "step", "maxturn",
                                       "failures", "wait", "noprogress", "over", "roll", "pitch",
-                                      "then", "polygon", "circle"};
+                                      "then", "polygon", "circle", "slope", "slip"};
     for (const char* k : kKeywords) {
       if (t == k) return false;
     }
@@ -464,9 +464,11 @@ class SequenceParser {
     return g;
   }
 
-  VoSetting ParseVo(LineParser& p) {
+  Action ParseVo(LineParser& p) {
+    const std::size_t mode = p.Choice({"on", "off", "lost"}, "VO mode");
+    if (mode == 2) return ParseVoLost(p);
     VoSetting v;
-    v.enabled = p.Choice({"on", "off"}, "VO mode") == 0;
+    v.enabled = mode == 0;
     std::vector<bool> seen(4, false);
     while (!p.AtEnd()) {
       const int opt_col = p.Peek().col;
@@ -494,6 +496,32 @@ class SequenceParser {
       }
     }
     return v;
+  }
+
+  // vo lost abort|shorten|retry N [slope A] [slip P]
+  VoLostSetting ParseVoLost(LineParser& p) {
+    VoLostSetting l;
+    const std::size_t action = p.Choice({"abort", "shorten", "retry"}, "VO lost action");
+    l.action = action == 0 ? VoLostAction::kAbort : action == 1 ? VoLostAction::kShorten
+                                                                 : VoLostAction::kRetry;
+    if (l.action == VoLostAction::kRetry) {
+      l.retries = p.Integer("number of retries", 1, limits_.max_vo_retries);
+    }
+    while (!p.AtEnd()) {
+      const int opt_col = p.Peek().col;
+      int col = 0;
+      if (p.Choice({"slope", "slip"}, "vo lost option") == 0) {
+        if (l.slope_rad) p.Fail(opt_col, "'slope' given twice", "each vo lost option at most once");
+        l.slope_rad = p.Quantity(Dimension::kAngle, "slip-prone slope", &col);
+        p.Range(*l.slope_rad, col, "slip-prone slope", 0.0, limits_.max_tilt_deg * kDeg, true, kDeg,
+                "deg");
+      } else {
+        if (l.slip_pct) p.Fail(opt_col, "'slip' given twice", "each vo lost option at most once");
+        l.slip_pct = p.Quantity(Dimension::kPercent, "slip-prone slip", &col);
+        p.Range(*l.slip_pct, col, "slip-prone slip", 0.0, 100.0, true, 1.0, "%");
+      }
+    }
+    return l;
   }
 
   SlipSetting ParseSlip(LineParser& p) {

@@ -13,7 +13,7 @@
 
 namespace rover::sequence {
 
-// Ranges the checker enforces. Defaults follow the MER practice in OPERATIONS.md.
+// Ranges the checker enforces. Defaults follow MER practice (LANGUAGE.md).
 struct LanguageLimits {
   double max_step_m = 0.75;             // VO overlap: steps of at most ~75 cm
   double max_turn_per_step_deg = 90.0;  // 18 deg keeps 60 % overlap; larger is allowed
@@ -28,6 +28,7 @@ struct LanguageLimits {
   double max_distance_limit_m = 10000.0;
   double max_tilt_deg = 45.0;
   int max_vo_failures = 1000;
+  int max_vo_retries = 10;              // `vo lost retry N`
   int max_over_steps = 100;
   int max_polygon_vertices = 64;
   int max_line_bytes = 1000;

@@ -53,6 +53,17 @@ struct VoSetting {
   std::optional<VoFailureAction> past_max; // what happens past max_failures
   std::optional<double> wait_s;            // wall-clock wait for a VO answer
 };
+// `vo lost`: what the executor does when VO could not measure a step on ground where slip
+// is likely (a slope steeper than `slope`, or VO measured more than `slip` % of slip or
+// sideways drift in one of the recent steps). There, wheel odometry is no evidence of
+// progress: Sol 206's rover reported metres uphill while it slid downhill.
+enum class VoLostAction { kAbort, kRetry, kShorten };
+struct VoLostSetting {
+  VoLostAction action = VoLostAction::kAbort;
+  int retries = 0;                    // kRetry: pairs taken again where the rover stands
+  std::optional<double> slope_rad;    // absent: keep the slope in force (executor option)
+  std::optional<double> slip_pct;     // absent: keep the slip in force (executor option)
+};
 struct SlipSetting {
   bool enabled = false;
   double limit_pct = 100.0;              // abort when one step's slip exceeds this
@@ -81,9 +92,9 @@ struct Images {
   ImagePurpose purpose = ImagePurpose::kScience;
 };
 
-using Action = std::variant<Drive, Arc, Turn, TurnTo, Goto, VoSetting, SlipSetting, TiltSetting,
-                            LimitSetting, KeepOutAdd, KeepOutRemove, KeepOutClear, NewSite,
-                            Images>;
+using Action = std::variant<Drive, Arc, Turn, TurnTo, Goto, VoSetting, VoLostSetting, SlipSetting,
+                            TiltSetting, LimitSetting, KeepOutAdd, KeepOutRemove, KeepOutClear,
+                            NewSite, Images>;
 
 struct Command {
   int line = 0;         // 1-based line in the file

@@ -109,4 +109,74 @@ StepMotion MeasureStep(const geometry::Pose& T_site_before, const geometry::Pose
   return m;
 }
 
+StepDrift DriftOfStep(const PlanePose& before, const PlanePose& after, const PlannedStep& step) {
+  StepDrift d;
+  const double length = std::abs(step.distance_m);
+  if (step.kind != PlannedStep::Kind::kArc || length <= 0.0) return d;
+  const PlanePose commanded = EndOfStep(before, step);
+  const Eigen::Vector2d error(after.x - commanded.x, after.y - commanded.y);
+  d.error_per_m = error / length;
+  d.yaw_error_per_m = geometry::WrapAngle(after.yaw - commanded.yaw) / length;
+  const Eigen::Vector2d chord(commanded.x - before.x, commanded.y - before.y);
+  if (chord.norm() > 0.0) {
+    const Eigen::Vector2d u = chord.normalized();
+    d.along_pct = -100.0 * error.dot(u) / length;
+    d.cross_pct = 100.0 * std::abs(u.x() * error.y() - u.y() * error.x()) / length;
+  }
+  return d;
+}
+
+DriftPrediction PredictDrift(const std::vector<StepDrift>& recent, double distance_m) {
+  DriftPrediction p;
+  if (recent.empty()) return p;
+  const double length = std::abs(distance_m);
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  double mean_yaw = 0.0;
+  for (const StepDrift& d : recent) {
+    mean += d.error_per_m;
+    mean_yaw += d.yaw_error_per_m;
+  }
+  mean /= static_cast<double>(recent.size());
+  mean_yaw /= static_cast<double>(recent.size());
+  double spread = 0.0;
+  for (const StepDrift& d : recent) spread = std::max(spread, (d.error_per_m - mean).norm());
+  p.shift = mean * length;
+  p.yaw_shift = mean_yaw * length;
+  p.spread_m = spread * length;
+  return p;
+}
+
+std::vector<PlanePose> PathWithDrift(const std::vector<PlanePose>& commanded,
+                                     const DriftPrediction& drift) {
+  std::vector<PlanePose> path = commanded;
+  if (commanded.size() < 2 || !drift.Any()) return path;
+  std::vector<double> along(commanded.size(), 0.0);
+  for (std::size_t i = 1; i < commanded.size(); ++i) {
+    along[i] = along[i - 1] + std::hypot(commanded[i].x - commanded[i - 1].x,
+                                         commanded[i].y - commanded[i - 1].y);
+  }
+  const double total = along.back();
+  for (std::size_t k = commanded.size(); k-- > 0;) {
+    // A turn in place has no length: its samples share the start, so t follows the index.
+    const double t = total > 0.0 ? along[k] / total
+                                 : static_cast<double>(k) / static_cast<double>(commanded.size() - 1);
+    PlanePose p = commanded[k];
+    p.x += t * drift.shift.x();
+    p.y += t * drift.shift.y();
+    p.yaw = geometry::WrapAngle(p.yaw + t * drift.yaw_shift);
+    path.push_back(p);
+  }
+  return path;
+}
+
+double StepSigmaGrowth(double sigma_m, double distance_m, double growth_fraction) {
+  const double added = growth_fraction * std::abs(distance_m);
+  return std::sqrt(sigma_m * sigma_m + added * added) - sigma_m;
+}
+
+double TiltAngle(const Eigen::Matrix3d& R_site_rover) {
+  // Column 2 is the rover's down axis in the site frame; its z is cos(tilt).
+  return std::acos(std::clamp(R_site_rover(2, 2), -1.0, 1.0));
+}
+
 }  // namespace rover::sequence

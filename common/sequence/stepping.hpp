@@ -37,7 +37,7 @@ struct PlanePose {
 };
 // Where a step ends from `start`, on flat ground.
 PlanePose EndOfStep(const PlanePose& start, const PlannedStep& step);
-// Goto steering from the current pose, re-planned at every step (OPERATIONS.md step 5).
+// Goto steering from the current pose, re-planned at every step (LANGUAGE.md, goto).
 struct GotoDecision {
   bool arrived = false;        // inside the tolerance disc: the goto is done
   double remaining_m = 0.0;    // to the target
@@ -61,5 +61,46 @@ struct StepMotion {
 // slope is not mistaken for slip: the commanded distance is along the ground.
 StepMotion MeasureStep(const geometry::Pose& T_site_before, const geometry::Pose& T_site_after,
                        const PlannedStep& step);
+
+// ---- Drift, for the predictive keep-out check ----
+// What a VO-corrected arc step did that was not commanded, in the site plane, per metre of
+// commanded length: the end position's error against the commanded end (downslope drift
+// and slip), and the heading error. Also the error's share of the step, in %, across the
+// commanded chord (sideways drift) and along it (slip: + = short of the commanded end).
+struct StepDrift {
+  Eigen::Vector2d error_per_m = Eigen::Vector2d::Zero();  // site x, y
+  double yaw_error_per_m = 0.0;
+  double cross_pct = 0.0;  // |sideways error| / |commanded| * 100
+  double along_pct = 0.0;  // shortfall along the commanded chord / |commanded| * 100
+};
+// `step` must be an arc of non-zero length (otherwise the drift is zero).
+StepDrift DriftOfStep(const PlanePose& before, const PlanePose& after, const PlannedStep& step);
+
+// The drift expected over the next step of |distance_m| from the recent steps: the mean
+// error per metre (the site-fixed part: downslope drift, steady slip) scaled to the step,
+// and the spread, the largest deviation of one step's error from that mean, scaled alike.
+struct DriftPrediction {
+  Eigen::Vector2d shift = Eigen::Vector2d::Zero();  // end-of-step position error, site
+  double yaw_shift = 0.0;                           // end-of-step heading error
+  double spread_m = 0.0;
+  bool Any() const { return shift.norm() > 1e-3 || std::abs(yaw_shift) > 1e-4; }
+};
+DriftPrediction PredictDrift(const std::vector<StepDrift>& recent, double distance_m);
+
+// The commanded samples followed, when drift is predicted, by the same samples shifted by
+// t * shift and turned by t * yaw_shift (t: the fraction of the path's length at the sample),
+// from the end back to the start: the closed outline of every path between "no drift" and
+// "the measured drift", so that a footprint swept along it covers both.
+std::vector<PlanePose> PathWithDrift(const std::vector<PlanePose>& commanded,
+                                     const DriftPrediction& drift);
+
+// Position 1-sigma added by a step of |distance_m| whose odometry error grows by
+// `growth_fraction` of the distance, on top of `sigma_m` (independent errors add in
+// quadrature): sqrt(sigma^2 + (f d)^2) - sigma.
+double StepSigmaGrowth(double sigma_m, double distance_m, double growth_fraction);
+
+// The rover's tilt from level (rad): the angle between its down axis and the site's,
+// from roll and pitch together.
+double TiltAngle(const Eigen::Matrix3d& R_site_rover);
 
 }  // namespace rover::sequence

@@ -1,6 +1,8 @@
 // hazard_monitor: keep-out zones against the footprint plus the position uncertainty, and
 // tilt limits (common/hazards). Publishes HAZARD_STATUS at a steady rate and answers the
-// executor's HAZARD_QUERY ("would this step's swept footprint enter a zone?").
+// executor's HAZARD_QUERY ("would this step's swept footprint enter a zone?"), with the
+// query's own margin (the drift VO measured, the uncertainty the step adds) on top of the
+// footprint grown by k sigma.
 // A check that cannot decide (no pose, stale pose, invalid zones) says UNKNOWN, which
 // the executor treats as unsafe.
 #include "bus/channels.hpp"
@@ -90,7 +92,8 @@ int main(int argc, char** argv) {
             r.verdict = rover_msgs::hazard_reply_t::VERDICT_UNKNOWN;
             r.detail = "invalid keep-out zones: " + zone_error;
           } else {
-            const auto check = assessor.CheckStep(path, proc.now());
+            // A non-finite or negative margin makes the check UNKNOWN (CheckSweptPath).
+            const auto check = assessor.CheckStep(path, proc.now(), q.margin_m);
             r.verdict = static_cast<std::int8_t>(check.verdict);
             r.zone_name = check.zone_name;
             r.min_clearance_m = std::isfinite(check.min_clearance_m) ? check.min_clearance_m : 1e9;

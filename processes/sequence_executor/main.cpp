@@ -65,6 +65,7 @@ class OutputPublisher {
       m.y.push_back(s.y);
       m.yaw.push_back(s.yaw);
     }
+    m.margin_m = q.margin_m;
     proc_.bus().Publish(channels::kHazardQuery, m);
   }
   void operator()(const seq::KeepOutZoneSet& set) {

@@ -1,5 +1,5 @@
-// A scenario: a world, a sequence, a deployment and a start pose (OPERATIONS.md,
-// "Scenario catalogue"), run on a fresh private bus and summarised from its log.
+// A scenario: a world, a sequence, a deployment and a start pose (README, "Scenarios"),
+// run on a fresh private bus and summarised from its log.
 #pragma once
 
 #include "hazards/keepout.hpp"
