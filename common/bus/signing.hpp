@@ -3,14 +3,17 @@
 // auth.sender and auth.counter filled in and auth.tag empty (lcmtypes/auth_t.lcm).
 //
 // Sign last: any field set after SignMessage (utime, pub_seq, ...) breaks the tag.
-// The Bus does this for every message type that has an `auth` member when a key is
-// configured (`auth:` in the process's config, LoadConfiguredKey below).
+// The Bus signs and verifies every message type that has an `auth` member once it is
+// given MakeBusAuth(...) (from the `auth:` section of a process's config,
+// LoadConfiguredKey below; tools pass their --key).
 #pragma once
 
 #include "auth/auth.hpp"
+#include "bus/bus.hpp"
 #include "config/yaml_config.hpp"
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -75,35 +78,70 @@ std::optional<std::string> VerifyMessage(const Msg& msg, auth::Verifier& verifie
                          a.tag.empty() ? nullptr : a.tag.data(), a.tag.size());
 }
 
+// The Bus's authentication for a process that signs as `sender` and holds `key`: its
+// counters start at the wall clock; it refuses counters from before it started (less
+// auth::kClockSkewAllowanceUs), so a command captured before a restart cannot be
+// replayed to the restarted process. `reject_unsigned`: a command with no tag is refused
+// too. Leave it true: false lets anyone on the LAN send unsigned commands that are obeyed.
+inline Bus::Auth MakeBusAuth(const auth::Key& key, const std::string& sender,
+                             bool reject_unsigned = true) {
+  auto signer = std::make_shared<auth::Signer>(key, sender);
+  auto verifier = std::make_shared<auth::Verifier>(
+      key, auth::WallClockMicros() - auth::kClockSkewAllowanceUs);
+  Bus::Auth a;
+  a.next = [signer](std::string* name, std::int64_t* counter) {
+    *name = signer->sender();
+    *counter = signer->NextCounter();
+  };
+  a.tag = [signer](const std::vector<std::uint8_t>& bytes) {
+    const auth::Tag tag = signer->Sign(bytes.data(), bytes.size());
+    return std::vector<std::uint8_t>(tag.begin(), tag.end());
+  };
+  a.verify = [verifier](const std::string& name, std::int64_t counter,
+                        const std::vector<std::uint8_t>& bytes,
+                        const std::vector<std::uint8_t>& tag) -> std::string {
+    const auto reason = verifier->Verify(name, counter, bytes.data(), bytes.size(),
+                                         tag.empty() ? nullptr : tag.data(), tag.size());
+    return reason ? *reason : "";
+  };
+  a.required = reject_unsigned;
+  return a;
+}
+
 // The `auth:` section of a process's config:
 //   auth:
-//     key_file: /etc/rover/rover.key   # the deployment's key (configs/systemd/README.md)
-//     required: true                   # refuse to start without a key
-// Returns the key, or nullopt when no key_file is set (commands go unsigned and
-// unchecked). Throws config::ConfigError with one line naming the file and key when the
-// section is malformed, required without a key_file, or the key file is unusable.
-inline std::optional<auth::Key> LoadConfiguredKey(const config::ConfigNode& root) {
+//     key_file: /etc/rover/rover.key   # the deployment's key; relative paths are from the
+//                                      # working directory, like every path in a deployment
+//     required: true                   # refuse to start without a key_file
+struct AuthSettings {
+  std::optional<auth::Key> key;  // nullopt: commands go unsigned and unchecked
+  bool required = false;
+};
+
+// Throws config::ConfigError with one line naming the file and key when the section is
+// malformed, required without a key_file, or the key file is unusable (auth::Key::LoadFile).
+inline AuthSettings LoadAuthSettings(const config::ConfigNode& root) {
+  AuthSettings settings;
   const config::ConfigNode section = root["auth"];
-  if (section.IsNull()) return std::nullopt;
+  if (section.IsNull()) return settings;
   if (!section.IsMap()) section.Fail("expected a mapping with key_file and required");
   section.CheckKeys({"key_file", "required"});
   std::string key_file;
-  bool required = false;
   section.Get("key_file", key_file);
-  section.Get("required", required);
+  section.Get("required", settings.required);
   if (key_file.empty()) {
-    if (required) {
+    if (settings.required) {
       section["key_file"].Fail(
           "missing (auth.required is true: expected the deployment's key file)");
     }
-    return std::nullopt;
+    return settings;
   }
   try {
-    return auth::Key::LoadFile(key_file);
+    settings.key = auth::Key::LoadFile(key_file);
   } catch (const auth::KeyError& e) {
     section["key_file"].Fail(e.what());
   }
-  return std::nullopt;  // not reached: Fail throws
+  return settings;
 }
 
 }  // namespace rover::bus

@@ -1,6 +1,8 @@
 #include "bus/signing.hpp"
 
 #include <gtest/gtest.h>
+#include "bus/channels.hpp"
+
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/keepout_zones_t.hpp>
 #include <rover_msgs/mobility_command_t.hpp>
@@ -145,16 +147,18 @@ TEST(Signing, ConfiguredKeyFromTheAuthSection) {
   const std::string key_path = (dir / "rover.key").string();
   rover::auth::GenerateKeyFile(key_path);
 
-  EXPECT_FALSE(rover::bus::LoadConfiguredKey(ConfigNode::FromString("{}", "c.yaml")));
-  EXPECT_FALSE(rover::bus::LoadConfiguredKey(ConfigNode::FromString("auth: {required: false}", "c.yaml")));
-  const auto key = rover::bus::LoadConfiguredKey(
+  EXPECT_FALSE(rover::bus::LoadAuthSettings(ConfigNode::FromString("{}", "c.yaml")).key);
+  EXPECT_FALSE(
+      rover::bus::LoadAuthSettings(ConfigNode::FromString("auth: {required: false}", "c.yaml")).key);
+  const auto settings = rover::bus::LoadAuthSettings(
       ConfigNode::FromString("auth: {key_file: " + key_path + ", required: true}", "c.yaml"));
-  ASSERT_TRUE(key);
-  EXPECT_EQ(key->size(), 32u);
+  ASSERT_TRUE(settings.key);
+  EXPECT_EQ(settings.key->size(), 32u);
+  EXPECT_TRUE(settings.required);
 
   auto error_of = [](const std::string& yaml) -> std::string {
     try {
-      rover::bus::LoadConfiguredKey(ConfigNode::FromString(yaml, "c.yaml"));
+      rover::bus::LoadAuthSettings(ConfigNode::FromString(yaml, "c.yaml"));
     } catch (const ConfigError& e) {
       return e.what();
     }
@@ -168,4 +172,55 @@ TEST(Signing, ConfiguredKeyFromTheAuthSection) {
                                                                ": mode 0644"),
             std::string::npos);
   EXPECT_NE(error_of("auth: [1, 2]").find("expected a mapping"), std::string::npos);
+}
+
+// The Bus with MakeBusAuth, on LCM's in-process provider: what it publishes is signed
+// after pub_seq is stamped, and what it receives is checked before any callback.
+TEST(Signing, BusSignsWhatItPublishesAndRefusesForgeriesAndReplays) {
+  rover::bus::Bus bus("memq://");
+  bus.set_publisher("rover_seq");
+  bus.set_auth(rover::bus::MakeBusAuth(TestKey(), "rover_seq"));
+  std::vector<sequence_control_t> received;
+  std::vector<std::vector<std::uint8_t>> raw;  // every packet, as a listener on the LAN sees it
+  bus.Subscribe<sequence_control_t>(rover::channels::kSequenceControl,
+                                    [&](const sequence_control_t& m) { received.push_back(m); });
+  bus.Publish(rover::channels::kSequenceControl, Abort("operator"));
+  while (bus.Handle(0)) {
+  }
+  ASSERT_EQ(received.size(), 1u);
+  EXPECT_EQ(received[0].reason, "operator");
+  EXPECT_EQ(received[0].auth.sender, "rover_seq");
+  EXPECT_EQ(received[0].auth.tag_size, 32);
+  EXPECT_EQ(bus.dropped(), 0);
+
+  auto inject = [&](const sequence_control_t& m) {
+    const auto bytes = rover::bus::EncodeMessage(m);
+    bus.lcm().publish(rover::channels::kSequenceControl, bytes.data(), static_cast<unsigned>(bytes.size()));
+    while (bus.Handle(0)) {
+    }
+  };
+  inject(received[0]);  // the same bytes again
+  EXPECT_EQ(received.size(), 1u);
+  EXPECT_EQ(bus.dropped(), 1);
+  EXPECT_NE(bus.last_drop().find("replayed or old counter"), std::string::npos) << bus.last_drop();
+
+  inject(Abort("unsigned"));
+  EXPECT_EQ(received.size(), 1u);
+  EXPECT_EQ(bus.dropped(), 2);
+
+  Signer forger(TestKey(8), "rover_seq");
+  sequence_control_t forged = Abort("forged");
+  SignMessage(forged, forger);
+  inject(forged);
+  EXPECT_EQ(received.size(), 1u);
+  EXPECT_EQ(bus.dropped(), 3);
+  EXPECT_NE(bus.last_drop().find("wrong tag"), std::string::npos) << bus.last_drop();
+
+  // Signed elsewhere with the deployment's key (another tool): accepted.
+  Signer other(TestKey(), "scenario_runner");
+  sequence_control_t genuine = Abort("from the runner");
+  SignMessage(genuine, other);
+  inject(genuine);
+  ASSERT_EQ(received.size(), 2u);
+  EXPECT_EQ(received[1].reason, "from the runner");
 }
