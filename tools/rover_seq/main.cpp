@@ -2,10 +2,15 @@
 //   rover_seq submit FILE [--no-follow]   check FILE locally, submit it, follow it to the end
 //   rover_seq status [--once]             follow the running sequence (or print one status)
 //   rover_seq abort [REASON]              abort the running sequence; the rover stops
-// Uses --lcm-url, else $ROVER_LCM_URL, else the default bus.
+//   rover_seq keygen FILE                 write a new deployment key (mode 0600)
+// Uses --lcm-url, else $ROVER_LCM_URL, else the default bus. With --key FILE, else
+// $ROVER_KEY_FILE, submit and abort are signed with the deployment's key (common/auth),
+// as an executor with `auth:` in its config requires.
+#include "auth/auth.hpp"
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
 #include "bus/process.hpp"
+#include "bus/signing.hpp"
 #include "sequence/executor.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
@@ -18,6 +23,8 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <sstream>
 
 using rover::config::ConfigError;
@@ -51,7 +58,8 @@ double Now() {
 // Follows statuses (of `submission_id`, or of any sequence when < 0) until a terminal
 // one: exit 0 when it completed, 1 when it was aborted or rejected. With `once`, prints
 // the first status heard and returns 0. 3 when no status is heard for `silence_s`.
-int Follow(rover::bus::Bus& bus, std::int64_t submission_id, bool once, double silence_s) {
+int Follow(rover::bus::Bus& bus, std::int64_t submission_id, bool once, double silence_s,
+           bool signed_commands) {
   std::string last;
   int result = -1;
   double last_heard = Now();
@@ -72,11 +80,38 @@ int Follow(rover::bus::Bus& bus, std::int64_t submission_id, bool once, double s
     bus.Handle(100);
     if (Now() - last_heard > silence_s) {
       std::cerr << "rover_seq: no sequence status heard for " << silence_s << " s on " << bus.url()
-                << " (is sequence_executor running on this bus?)\n";
+                << " (is sequence_executor running on this bus?"
+                << (submission_id >= 0 && !signed_commands
+                        ? " If it requires signed commands, pass --key FILE or set $ROVER_KEY_FILE."
+                        : "")
+                << ")\n";
       return 3;
     }
   }
   return result;
+}
+
+// The key from --key, else $ROVER_KEY_FILE; none when neither is given.
+std::optional<rover::auth::Key> LoadKey(const std::string& flag_value) {
+  std::string path = flag_value;
+  const char* env = std::getenv("ROVER_KEY_FILE");
+  if (path.empty() && env != nullptr) path = env;
+  if (path.empty()) return std::nullopt;
+  try {
+    return rover::auth::Key::LoadFile(path);
+  } catch (const rover::auth::KeyError& e) {
+    throw ConfigError(std::string("rover_seq: ") + (flag_value.empty() ? "$ROVER_KEY_FILE: " : "--key: ") +
+                      e.what());
+  }
+}
+
+// A bus for the operator's commands: signed as "rover_seq" when there is a key.
+std::unique_ptr<rover::bus::Bus> OpenBus(const std::string& url,
+                                         const std::optional<rover::auth::Key>& key) {
+  auto bus = std::make_unique<rover::bus::Bus>(url);
+  bus->set_publisher("rover_seq");
+  if (key) bus->set_auth(rover::bus::MakeBusAuth(*key, "rover_seq"));
+  return bus;
 }
 
 }  // namespace
@@ -84,32 +119,49 @@ int Follow(rover::bus::Bus& bus, std::int64_t submission_id, bool once, double s
 int main(int argc, char** argv) {
   return rover::bus::RunMain("rover_seq", [&]() -> int {
     std::vector<std::string> args(argv + 1, argv + argc);
-    std::string url;
+    std::string url, key_flag;
     bool once = false, follow = true;
     std::vector<std::string> positional;
     for (std::size_t i = 0; i < args.size(); ++i) {
       if (args[i] == "--lcm-url" && i + 1 < args.size()) {
         url = args[++i];
+      } else if (args[i] == "--key") {
+        if (i + 1 >= args.size()) throw ConfigError("rover_seq: argument --key: missing value (expected FILE)");
+        key_flag = args[++i];
       } else if (args[i] == "--once") {
         once = true;
       } else if (args[i] == "--no-follow") {
         follow = false;
       } else if (args[i] == "--help" || args[i] == "-h") {
         std::cout << "usage: rover_seq submit FILE [--no-follow] | status [--once] | abort [REASON]"
-                     " [--lcm-url URL]\n";
+                     " | keygen FILE\n"
+                     "                 [--lcm-url URL] [--key FILE]\n\n"
+                     "--key FILE (else $ROVER_KEY_FILE): sign submit and abort with the deployment's\n"
+                     "key. keygen writes a new random key, mode 0600, and never replaces a file.\n";
         return 0;
       } else {
         positional.push_back(args[i]);
       }
     }
     if (positional.empty()) {
-      throw ConfigError("rover_seq: missing subcommand (expected submit, status or abort)");
+      throw ConfigError("rover_seq: missing subcommand (expected submit, status, abort or keygen)");
     }
     if (url.empty()) {
       const char* env = std::getenv("ROVER_LCM_URL");
       url = env != nullptr && *env ? env : rover::bus::kDefaultLcmUrl;
     }
     const std::string sub = positional[0];
+    if (sub == "keygen") {
+      if (positional.size() != 2) throw ConfigError("rover_seq keygen: expected exactly one FILE");
+      try {
+        rover::auth::GenerateKeyFile(positional[1]);
+      } catch (const rover::auth::KeyError& e) {
+        throw ConfigError(std::string("rover_seq keygen: ") + e.what());
+      }
+      std::cout << "wrote a new key to " << positional[1]
+                << " (mode 0600): give every computer and operator of this deployment a copy\n";
+      return 0;
+    }
     if (sub == "submit") {
       if (positional.size() != 2) throw ConfigError("rover_seq submit: expected exactly one FILE");
       std::ifstream in(positional[1], std::ios::binary);
@@ -122,28 +174,32 @@ int main(int argc, char** argv) {
         std::cerr << check.errors.front().ToString() << "\n";
         return 1;
       }
-      rover::bus::Bus bus(url);
+      const auto key = LoadKey(key_flag);
+      auto bus = OpenBus(url, key);
       rover_msgs::sequence_submit_t msg{};
       msg.submission_id = static_cast<std::int64_t>(Now() * 1e3);
       msg.name = positional[1];
       msg.text = ss.str();
-      bus.Publish(rover::channels::kSequenceSubmit, msg);
-      std::cout << "submitted " << positional[1] << " as " << msg.submission_id << "\n";
-      return follow ? Follow(bus, msg.submission_id, false, 10.0) : 0;
+      bus->Publish(rover::channels::kSequenceSubmit, msg);
+      std::cout << (key ? "submitted (signed) " : "submitted ") << positional[1] << " as "
+                << msg.submission_id << "\n";
+      return follow ? Follow(*bus, msg.submission_id, false, 10.0, key.has_value()) : 0;
     }
     if (sub == "status") {
-      rover::bus::Bus bus(url);
-      return Follow(bus, -1, once, 5.0);
+      auto bus = OpenBus(url, std::nullopt);
+      return Follow(*bus, -1, once, 5.0, false);
     }
     if (sub == "abort") {
-      rover::bus::Bus bus(url);
+      const auto key = LoadKey(key_flag);
+      auto bus = OpenBus(url, key);
       rover_msgs::sequence_control_t msg{};
       msg.action = rover_msgs::sequence_control_t::ACTION_ABORT;
       msg.reason = positional.size() > 1 ? positional[1] : "operator abort";
-      bus.Publish(rover::channels::kSequenceControl, msg);
-      std::cout << "abort sent: " << msg.reason << "\n";
+      bus->Publish(rover::channels::kSequenceControl, msg);
+      std::cout << (key ? "abort sent (signed): " : "abort sent: ") << msg.reason << "\n";
       return 0;
     }
-    throw ConfigError("rover_seq: unknown subcommand " + sub + " (expected submit, status or abort)");
+    throw ConfigError("rover_seq: unknown subcommand " + sub +
+                      " (expected submit, status, abort or keygen)");
   });
 }
