@@ -144,6 +144,17 @@ TEST(HazardAssessor, StepCheckUsesTheLatestSigma) {
   EXPECT_EQ(a.CheckStep(path, 0).verdict, Verdict::kUnsafe);
 }
 
+TEST(HazardAssessor, StepCheckAddsTheQueryMargin) {
+  HazardAssessor a(RockAhead());
+  const auto path = SampleStepPath({0, 0, 0}, 1.0, 0.0, 0.0, 0.05, 0.05);
+  a.OnPose(At(0, 0.1));
+  const SweptCheck ok = a.CheckStep(path, 0, 0.35);
+  EXPECT_TRUE(ok.safe());
+  EXPECT_NEAR(ok.min_clearance_m, 0.05, 1e-9);  // 0.7 - 0.3 - 0.35
+  EXPECT_EQ(a.CheckStep(path, 0, 0.45).verdict, Verdict::kUnsafe);
+  EXPECT_EQ(a.CheckStep(path, 0, NAN).verdict, Verdict::kUnknown);
+}
+
 TEST(HazardAssessor, InvalidZonesAreRejectedAndThePreviousSetStays) {
   HazardAssessor a(RockAhead());
   KeepOutZone bad;

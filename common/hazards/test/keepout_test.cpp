@@ -179,6 +179,23 @@ TEST(SweptPath, UncertaintyShrinksClearanceByKSigma) {
   EXPECT_NE(large.detail.find("rock"), std::string::npos) << large.detail;
 }
 
+TEST(SweptPath, TheAskersMarginShrinksClearanceOnTopOfKSigma) {
+  const Footprint f = Box();
+  const std::vector<KeepOutZone> zones = {KeepOutZone::Circle("rock", 5, 2, 0.5)};
+  const auto path = SampleStepPath({0, 0, 0}, 10.0, 0.0, 0.0, 0.05, 0.05);
+  const SweptCheck ok = CheckSweptPath(zones, f, path, 0.1, 3.0, 0.65);
+  EXPECT_TRUE(ok.safe());
+  EXPECT_NEAR(ok.min_clearance_m, 0.05, 1e-9);  // 1.0 - 0.3 - 0.65
+  EXPECT_NE(ok.detail.find("margin of 0.65 m"), std::string::npos) << ok.detail;
+  const SweptCheck over = CheckSweptPath(zones, f, path, 0.1, 3.0, 0.75);
+  EXPECT_EQ(over.verdict, Verdict::kUnsafe);
+  EXPECT_NEAR(over.min_clearance_m, -0.05, 1e-9);
+  // A margin that cannot be trusted is no answer.
+  EXPECT_EQ(CheckSweptPath(zones, f, path, 0.1, 3.0, -0.01).verdict, Verdict::kUnknown);
+  EXPECT_EQ(CheckSweptPath(zones, f, path, 0.1, 3.0, NAN).verdict, Verdict::kUnknown);
+  EXPECT_EQ(CheckSweptPath(zones, f, path, 0.1, 3.0, INFINITY).verdict, Verdict::kUnknown);
+}
+
 TEST(SweptPath, APathIntoAZoneIsUnsafeAndNamesIt) {
   const Footprint f = Box();
   const std::vector<KeepOutZone> zones = {

@@ -27,6 +27,11 @@ class FakeWorld {
   double slip = 0.0;                 // fraction of commanded distance lost
   double drift_rad_per_m = 0.0;      // truth heading drift while driving
   double roll_rad = 0.0;             // terrain roll seen by IMU and estimator
+  double pitch_rad = 0.0;            // terrain pitch (a slope along the heading)
+  Eigen::Vector2d drift_per_m = Eigen::Vector2d::Zero();  // truth slides (site x, y) per metre
+  int vo_fail_next = 0;              // the next n step pairs fail, then VO works again
+  bool failed_pair_is_reference = true;  // VO keeps a failed pair as its reference (not if
+                                         // the pair was unusable)
   double rover_radius_m = 0.5;       // footprint for keep-out checks
   enum class Vo { kOk, kFail, kSilent } vo = Vo::kOk;
   bool mobility_answers = true;
@@ -67,17 +72,17 @@ class FakeWorld {
     PoseEstimate p;
     p.utime = utime;
     p.position = Eigen::Vector3d(estimate.x, estimate.y, 0);
-    p.orientation = Eigen::Quaterniond(rover::geometry::RotationFromRpy(roll_rad, 0, estimate.yaw));
+    p.orientation = Eigen::Quaterniond(rover::geometry::RotationFromRpy(roll_rad, pitch_rad, estimate.yaw));
     p.site_index = site_index;
     p.last_vo_to_frame = last_vo_frame;
     if (nan_pose) p.position.x() = std::nan("");
     return p;
   }
 
-  bool InZone(double x, double y) const {
+  bool InZone(double x, double y, double margin_m = 0.0) const {
     for (const auto& z : zones) {
       if (z.shape == KeepOutZone::Shape::kCircle &&
-          std::hypot(x - z.center.x(), y - z.center.y()) < z.radius_m + rover_radius_m) {
+          std::hypot(x - z.center.x(), y - z.center.y()) < z.radius_m + rover_radius_m + margin_m) {
         return true;
       }
     }
@@ -156,6 +161,8 @@ class FakeWorld {
     actual.distance_m *= (1.0 - slip);
     truth = EndOfStep(truth, actual);
     truth.yaw += drift_rad_per_m * std::abs(actual.distance_m);
+    truth.x += drift_per_m.x() * std::abs(c.distance_m);
+    truth.y += drift_per_m.y() * std::abs(c.distance_m);
     estimate = EndOfStep(estimate, commanded);  // wheel odometry: sees no slip
     utime += static_cast<int64_t>(duration * 1e6);
     pending_.push_back([this, c] {
@@ -171,15 +178,20 @@ class FakeWorld {
     VoUpdate u;
     u.utime = utime;
     u.to_frame_id = c.frame_id;
+    u.from_frame_id = c.purpose == "vo_baseline" ? -1 : vo_reference_;
     if (c.purpose == "vo_baseline") {
       u.status = VoUpdate::kStatusBaseline;
-    } else if (vo == Vo::kFail) {
+    } else if (vo == Vo::kFail || vo_fail_next > 0) {
+      if (vo_fail_next > 0) --vo_fail_next;
       u.status = 4;
       u.reason = "too few inliers";
     } else {
       u.status = VoUpdate::kStatusOk;
     }
     const bool ok = u.status == VoUpdate::kStatusOk;
+    // Like the VO process, every pair becomes the reference for the next, except (here, when
+    // the test says so) a failed one.
+    if (ok || u.status == VoUpdate::kStatusBaseline || failed_pair_is_reference) vo_reference_ = c.frame_id;
     pending_.push_back([this, u, ok] {
       ex_.OnVoUpdate(u);
       if (ok) {
@@ -197,7 +209,7 @@ class FakeWorld {
     r.query_id = q.query_id;
     r.verdict = HazardVerdict::kSafe;
     for (const auto& s : q.samples) {
-      if (InZone(s.x, s.y)) {
+      if (InZone(s.x, s.y, q.margin_m)) {
         r.verdict = HazardVerdict::kUnsafe;
         r.zone_name = zones.front().name;
       }
@@ -219,6 +231,7 @@ class FakeWorld {
 
   SequenceExecutor& ex_;
   std::deque<std::function<void()>> pending_;
+  int64_t vo_reference_ = -1;
 };
 
 ExecutorOptions FastOptions() {
@@ -716,6 +729,9 @@ TEST(ExecutorOptions, LoadsTheExampleAndRejectsBadValues) {
   EXPECT_DOUBLE_EQ(o.heartbeat_timeout_s, 3.0);
   ASSERT_EQ(o.required_processes.size(), 3u);
   EXPECT_EQ(o.required_processes[0], "rover_sim|mobility_driver");
+  EXPECT_DOUBLE_EQ(o.blind_slope_deg, 15.0);
+  EXPECT_EQ(o.recent_steps, 3);
+  EXPECT_DOUBLE_EQ(o.step_sigma_growth_pct, 2.0);
   using rover::config::ConfigError;
   using rover::config::ConfigNode;
   EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  vo_wiat_s: 3\n", "x.yaml")), ConfigError);
@@ -725,6 +741,8 @@ TEST(ExecutorOptions, LoadsTheExampleAndRejectsBadValues) {
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("executor.vo_wait_s"), std::string::npos) << e.what();
   }
+  EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  recent_steps: 0\n", "x.yaml")), ConfigError);
+  EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  blind_slope_deg: 60\n", "x.yaml")), ConfigError);
   const ExecutorOptions d = LoadExecutorOptions(ConfigNode::FromString("other: 1\n", "x.yaml"));
   EXPECT_DOUBLE_EQ(d.vo_wait_s, ExecutorOptions{}.vo_wait_s);
   ExecutorOptions bad;
@@ -765,4 +783,205 @@ TEST(SequenceExecutor, EverySampleSequenceRunsToAnEndInTheFakeWorld) {
     EXPECT_FALSE(w.steps.empty()) << entry.path();
   }
   EXPECT_EQ(files, 5);
+}
+
+// ---- VO lost: no blind slide ----
+
+namespace {
+int CountPurpose(const FakeWorld& w, const std::string& purpose) {
+  int n = 0;
+  for (const auto& c : w.captures) n += c.purpose == purpose;
+  return n;
+}
+}  // namespace
+
+TEST(SequenceExecutor, VoLostOnASlopeAbortsByDefaultInsteadOfDrivingOnWheelOdometry) {
+  // Sol 206: VO fails on every step up a 20 deg slope while the rover slides back. With
+  // `then continue` VO used to switch off and wheel odometry reported metres of progress.
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.pitch_rad = -20 * kDeg;  // nose up
+  w.slip = 1.3;
+  w.vo = FakeWorld::Vo::kFail;
+  SubmitText(ex, "vo on step 60 cm failures 5 then continue\nslip limit 40 % noprogress 10 % over 2 steps\n"
+                 "drive 10 m\n");
+  w.Run();
+  const SequenceStatus last = w.Final();
+  ASSERT_EQ(last.state, SequenceState::kAborted);
+  EXPECT_EQ(last.abort_reason, "vo_lost");
+  EXPECT_NE(last.detail.find("tilt 20.0 deg > 15.0 deg"), std::string::npos) << last.detail;
+  EXPECT_EQ(w.motions.size(), 1u);  // one step, then it stops
+  EXPECT_EQ(w.stops.size(), 1u);
+  // The same on flat ground keeps the Mars meaning: VO off after 5 failures, drive on.
+  SequenceExecutor ex2(FastOptions());
+  FakeWorld w2(ex2);
+  w2.vo = FakeWorld::Vo::kFail;
+  SubmitText(ex2, "vo on step 60 cm failures 5 then continue\ndrive 6 m\n");
+  w2.Run();
+  EXPECT_EQ(w2.Final().state, SequenceState::kCompleted) << w2.Final().detail;
+  EXPECT_EQ(w2.motions.size(), 10u);
+}
+
+TEST(SequenceExecutor, SlipMeasuredInTheRecentStepsMakesAVoFailureVoLost) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.slip = 0.3;  // flat, but VO measures 30 % slip (> 20 %)
+  SubmitText(ex, "vo on step 50 cm\ndrive 4 m\n");
+  w.on_iteration = [&](SequenceExecutor&, int) { if (w.steps.size() == 2) w.vo = FakeWorld::Vo::kFail; };
+  w.Run();
+  EXPECT_EQ(w.Final().abort_reason, "vo_lost");
+  EXPECT_NE(w.Final().detail.find("VO measured 30.0 % slip"), std::string::npos) << w.Final().detail;
+  EXPECT_EQ(w.motions.size(), 3u);
+  // Sideways drift counts as well, and `vo lost ... slip` moves the threshold.
+  SequenceExecutor ex2(FastOptions());
+  FakeWorld w2(ex2);
+  w2.drift_per_m = {0.0, 0.25};  // 25 % of the step sideways
+  SubmitText(ex2, "vo on step 50 cm\nvo lost abort slip 30 %\ndrive 4 m\n");
+  w2.on_iteration = [&](SequenceExecutor&, int) { if (w2.steps.size() == 2) w2.vo = FakeWorld::Vo::kFail; };
+  w2.Run();
+  EXPECT_EQ(w2.Final().state, SequenceState::kCompleted) << w2.Final().detail;
+  SequenceExecutor ex3(FastOptions());
+  FakeWorld w3(ex3);
+  w3.drift_per_m = {0.0, 0.25};
+  SubmitText(ex3, "vo on step 50 cm\ndrive 4 m\n");
+  w3.on_iteration = [&](SequenceExecutor&, int) { if (w3.steps.size() == 2) w3.vo = FakeWorld::Vo::kFail; };
+  w3.Run();
+  EXPECT_EQ(w3.Final().abort_reason, "vo_lost");
+}
+
+TEST(SequenceExecutor, VoSwitchedOffByFailuresDoesNotDriveBlindOntoASlope) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.vo = FakeWorld::Vo::kFail;
+  SubmitText(ex, "vo on step 50 cm failures 1 then continue\ndrive 5 m\n");
+  // Flat for three steps (VO off after the second), then the ground tilts.
+  w.on_iteration = [&](SequenceExecutor&, int) { if (w.motions.size() == 4) w.pitch_rad = 18 * kDeg; };
+  w.Run();
+  EXPECT_EQ(w.Final().abort_reason, "vo_lost");
+  EXPECT_NE(w.Final().detail.find("step 3:"), std::string::npos) << w.Final().detail;
+  EXPECT_EQ(w.motions.size(), 4u);
+  EXPECT_EQ(w.captures.size(), 3u);  // baseline and two pairs; none once VO was off
+}
+
+TEST(SequenceExecutor, VoLostShortenHalvesTheStepsThenAbortsAtTheShortest) {
+  SequenceExecutor ex(FastOptions());  // lost_min_step_m 0.15
+  FakeWorld w(ex);
+  w.pitch_rad = -20 * kDeg;
+  w.vo = FakeWorld::Vo::kFail;
+  SubmitText(ex, "vo on step 60 cm\nvo lost shorten\ndrive 3 m\n");
+  w.Run();
+  EXPECT_EQ(w.Final().abort_reason, "vo_lost");
+  EXPECT_NE(w.Final().detail.find("at the shortest step (0.15 m)"), std::string::npos) << w.Final().detail;
+  ASSERT_EQ(w.motions.size(), 3u);
+  EXPECT_NEAR(w.motions[0].distance_m, 0.6, 1e-12);
+  EXPECT_NEAR(w.motions[1].distance_m, 0.3, 1e-12);   // 2.4 m left in 8 steps
+  EXPECT_NEAR(w.motions[2].distance_m, 0.15, 1e-12);  // 2.1 m left in 14 steps
+  // When VO measures again, the drive goes on in the shorter steps to the end.
+  SequenceExecutor ex2(FastOptions());
+  FakeWorld w2(ex2);
+  w2.pitch_rad = -20 * kDeg;
+  w2.vo_fail_next = 1;
+  SubmitText(ex2, "vo on step 60 cm\nvo lost shorten\ndrive 3 m\n");
+  w2.Run();
+  ASSERT_EQ(w2.Final().state, SequenceState::kCompleted) << w2.Final().detail;
+  ASSERT_EQ(w2.motions.size(), 9u);
+  for (std::size_t i = 1; i < w2.motions.size(); ++i) EXPECT_NEAR(w2.motions[i].distance_m, 0.3, 1e-12);
+  EXPECT_NEAR(w2.truth.x, 3.0, 1e-9);
+}
+
+TEST(SequenceExecutor, VoLostRetryCountsOnlyAPairMeasuredAcrossTheStep) {
+  // An unusable pair (VO keeps the pair before the step as its reference): the pair taken
+  // again measures the whole step, and the drive goes on.
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.pitch_rad = -20 * kDeg;
+  w.vo_fail_next = 1;
+  w.failed_pair_is_reference = false;
+  SubmitText(ex, "vo on step 50 cm\nvo lost retry 2\ndrive 1 m\n");
+  w.Run();
+  ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+  EXPECT_EQ(w.motions.size(), 2u);
+  EXPECT_EQ(CountPurpose(w, "vo"), 3);  // two steps and one retry
+  EXPECT_EQ(w.steps.front().vo_status, VoUpdate::kStatusOk);
+  // A failed pair that VO took as its reference: the retries measure from it, not across
+  // the step, so they do not count; after two the sequence aborts.
+  SequenceExecutor ex2(FastOptions());
+  FakeWorld w2(ex2);
+  w2.pitch_rad = -20 * kDeg;
+  w2.vo_fail_next = 1;
+  SubmitText(ex2, "vo on step 50 cm\nvo lost retry 2\ndrive 1 m\n");
+  w2.Run();
+  EXPECT_EQ(w2.Final().abort_reason, "vo_lost");
+  EXPECT_NE(w2.Final().detail.find("also after 2 more pairs"), std::string::npos) << w2.Final().detail;
+  EXPECT_EQ(w2.motions.size(), 1u);
+  EXPECT_EQ(CountPurpose(w2, "vo"), 3);
+  EXPECT_EQ(w2.steps.size(), 1u);  // one report for the step, after its retries
+}
+
+TEST(SequenceExecutor, WheelOdometryIsNoEvidenceOfProgressOnASlope) {
+  // VO off by the operator: on flat ground the check trusts wheel odometry; on a slope it
+  // cannot decide, so the steps count as no progress and the drive stops.
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.pitch_rad = -20 * kDeg;
+  w.slip = 1.2;  // sliding back; the wheels say 0 %
+  SubmitText(ex, "slip limit 40 % noprogress 10 % over 2 steps\ndrive 5 m\n");
+  w.Run();
+  EXPECT_EQ(w.Final().abort_reason, "progress");
+  EXPECT_NE(w.Final().detail.find("progress unknown"), std::string::npos) << w.Final().detail;
+  EXPECT_EQ(w.motions.size(), 2u);
+  // Without a progress check the operator drives blind, as asked.
+  SequenceExecutor ex2(FastOptions());
+  FakeWorld w2(ex2);
+  w2.pitch_rad = -20 * kDeg;
+  SubmitText(ex2, "drive 2 m\n");
+  w2.Run();
+  EXPECT_EQ(w2.Final().state, SequenceState::kCompleted);
+}
+
+// ---- predictive keep-out with drift ----
+
+TEST(SequenceExecutor, PredictiveKeepOutAllowsForTheDriftVoMeasured) {
+  // Wopmay: the rover slides 5 cm east per 25 cm step north, toward a rock east of its path.
+  // Each step's commanded path clears the zone; the drift VO measured does not.
+  const char* text = "keepout rock circle 2.5 m 1.3 m radius 0.3 m\ndrive 5 m\n";
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  w.drift_per_m = {0.0, 0.2};
+  SubmitText(ex, std::string("vo on step 25 cm\n") + text);
+  w.Run();
+  const SequenceStatus last = w.Final();
+  ASSERT_EQ(last.abort_reason, "keepout") << last.detail;
+  EXPECT_EQ(w.motions.size(), 9u);
+  EXPECT_FALSE(w.InZone(w.truth.x, w.truth.y));  // truth clearance > 0
+  // The refused query: its commanded half alone clears the zone; with the drift it does not.
+  const HazardQuery& q = w.queries.back();
+  const std::size_t half = w.queries.front().samples.size();  // no drift measured before step 0
+  ASSERT_EQ(q.samples.size(), 2 * half);
+  bool commanded_hits = false, drifted_hits = false;
+  for (std::size_t i = 0; i < q.samples.size(); ++i) {
+    (i < half ? commanded_hits : drifted_hits) |= w.InZone(q.samples[i].x, q.samples[i].y, q.margin_m);
+  }
+  EXPECT_FALSE(commanded_hits);
+  EXPECT_TRUE(drifted_hits);
+  EXPECT_NEAR(q.samples[half].x, q.samples[half - 1].x, 1e-9);         // the drifted end ...
+  EXPECT_NEAR(q.samples[half].y - q.samples[half - 1].y, 0.05, 1e-9);  // ... 5 cm east
+  EXPECT_NEAR(q.samples.back().y, q.samples.front().y, 1e-9);          // back at the start
+  // Margin: no spread (steady drift) plus 3 x 2 % of the 25 cm step (the pose sigma is 0).
+  EXPECT_NEAR(q.margin_m, 3 * 0.02 * 0.25, 1e-9);
+
+  // The same drive blind: wheel odometry sees no drift, every query passes, and the rover
+  // enters the zone.
+  SequenceExecutor ex2(FastOptions());
+  FakeWorld w2(ex2);
+  w2.drift_per_m = {0.0, 0.2};
+  SubmitText(ex2, std::string("vo off step 25 cm\n") + text);
+  bool entered = false;
+  w2.on_iteration = [&](SequenceExecutor&, int) { entered |= w2.InZone(w2.truth.x, w2.truth.y); };
+  w2.Run();
+  EXPECT_EQ(w2.Final().state, SequenceState::kCompleted);
+  EXPECT_TRUE(entered);
+  for (const auto& bq : w2.queries) {
+    for (const auto& sample : bq.samples) EXPECT_NEAR(sample.y, 0.0, 1e-12);  // no drift seen
+  }
 }

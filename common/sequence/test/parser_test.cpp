@@ -298,3 +298,34 @@ TEST(SequenceParserFuzz, ThousandsOfMutatedInputsReturnCleanly) {
   EXPECT_GT(ok, 50);
   EXPECT_GT(failed, 3000);
 }
+
+TEST(SequenceParser, VoLostPolicies) {
+  ParseResult r = ParseSequence("vo lost abort\nvo lost shorten slope 12 deg\n"
+                                "vo lost retry 2 slip 25 % slope 0.3 rad\n", "t.seq");
+  ASSERT_TRUE(r.ok()) << r.errors.front().ToString();
+  const auto& a = std::get<VoLostSetting>(r.sequence.commands[0].action);
+  EXPECT_EQ(a.action, VoLostAction::kAbort);
+  EXPECT_FALSE(a.slope_rad);
+  EXPECT_FALSE(a.slip_pct);
+  const auto& s = std::get<VoLostSetting>(r.sequence.commands[1].action);
+  EXPECT_EQ(s.action, VoLostAction::kShorten);
+  EXPECT_NEAR(*s.slope_rad, 12 * kDeg, 1e-12);
+  const auto& t = std::get<VoLostSetting>(r.sequence.commands[2].action);
+  EXPECT_EQ(t.action, VoLostAction::kRetry);
+  EXPECT_EQ(t.retries, 2);
+  EXPECT_DOUBLE_EQ(*t.slip_pct, 25.0);
+  EXPECT_DOUBLE_EQ(*t.slope_rad, 0.3);
+  EXPECT_FALSE(IsMotion(r.sequence.commands[0]));
+
+  ExpectError("vo lost\n", 1, 9, "missing VO lost action");
+  ExpectError("vo lost sometimes\n", 1, 9, "unknown VO lost action 'sometimes'");
+  ExpectError("vo lost retry\n", 1, 15, "missing number of retries");
+  ExpectError("vo lost retry 0\n", 1, 15, "number of retries 0 is out of range");
+  ExpectError("vo lost retry 11\n", 1, 15, "out of range");
+  ExpectError("vo lost abort slope 50 deg\n", 1, 21, "slip-prone slope 50 deg is out of range");
+  ExpectError("vo lost abort slope 10 m\n", 1, 24, "wrong unit 'm'");
+  ExpectError("vo lost abort slip 0 %\n", 1, 20, "out of range");
+  ExpectError("vo lost abort slope 10 deg slope 12 deg\n", 1, 28, "'slope' given twice");
+  ExpectError("vo lost shorten 3\n", 1, 17, "unknown vo lost option '3'");
+  ExpectError("vo maybe\n", 1, 4, "unknown VO mode 'maybe'");
+}

@@ -91,3 +91,52 @@ TEST(Stepping, SteerTowardTurnsThenDrivesAndStopsInsideTheDisc) {
   EXPECT_NEAR(d.step.distance_m, 0.4, 1e-9);  // min(step, remaining)
   EXPECT_TRUE(SteerToward({0.1, 4.8, 0}, goal, 0.3, 0.6, 18 * kDeg, 10 * kDeg).arrived);
 }
+
+TEST(Stepping, DriftOfAStepIsItsErrorPerMetreAgainstTheCommandedEnd) {
+  // 25 cm north commanded; the rover went 20 cm north and 5 cm east, turning 1 deg right.
+  const PlannedStep step{PlannedStep::Kind::kArc, 0.25, 0.0, 0.0};
+  const StepDrift d = DriftOfStep({1, 2, 0}, {1.20, 2.05, 1 * kDeg}, step);
+  EXPECT_NEAR(d.error_per_m.x(), -0.2, 1e-12);
+  EXPECT_NEAR(d.error_per_m.y(), 0.2, 1e-12);
+  EXPECT_NEAR(d.yaw_error_per_m, 4 * kDeg, 1e-12);
+  EXPECT_NEAR(d.along_pct, 20.0, 1e-9);
+  EXPECT_NEAR(d.cross_pct, 20.0, 1e-9);
+  // Facing east: 5 cm short and 5 cm to the left (north).
+  const StepDrift e = DriftOfStep({0, 0, 90 * kDeg}, {0.05, 0.20, 90 * kDeg}, step);
+  EXPECT_NEAR(e.along_pct, 20.0, 1e-9);
+  EXPECT_NEAR(e.cross_pct, 20.0, 1e-9);
+  // A turn has no drift.
+  EXPECT_EQ(DriftOfStep({0, 0, 0}, {1, 1, 0}, {PlannedStep::Kind::kTurn, 0, 0, 0.3}).error_per_m.norm(), 0.0);
+}
+
+TEST(Stepping, PredictedDriftShiftsAndOutlinesTheSweptPath) {
+  // Three steps drifting 5 cm per 25 cm toward +y, one of them 2 cm more.
+  std::vector<StepDrift> recent(3);
+  recent[0].error_per_m = {0.0, 0.20};
+  recent[1].error_per_m = {0.0, 0.20};
+  recent[2].error_per_m = {0.0, 0.32};
+  const DriftPrediction p = PredictDrift(recent, -0.5);  // a 50 cm step (backward)
+  EXPECT_NEAR(p.shift.x(), 0.0, 1e-12);
+  EXPECT_NEAR(p.shift.y(), 0.24 * 0.5, 1e-12);
+  EXPECT_NEAR(p.spread_m, 0.08 * 0.5, 1e-12);
+  EXPECT_TRUE(p.Any());
+  EXPECT_FALSE(PredictDrift({}, 0.5).Any());
+
+  const std::vector<PlanePose> commanded = {{0, 0, 0}, {0.25, 0, 0}, {0.5, 0, 0}};
+  const std::vector<PlanePose> path = PathWithDrift(commanded, p);
+  ASSERT_EQ(path.size(), 6u);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(path[i].y, 0.0);
+  EXPECT_NEAR(path[3].x, 0.5, 1e-12);   // the drifted end ...
+  EXPECT_NEAR(path[3].y, 0.12, 1e-12);
+  EXPECT_NEAR(path[4].y, 0.06, 1e-12);  // ... half-way ...
+  EXPECT_NEAR(path[5].y, 0.0, 1e-12);   // ... back to the start
+  EXPECT_EQ(PathWithDrift(commanded, DriftPrediction{}).size(), 3u);
+}
+
+TEST(Stepping, StepSigmaGrowthAndTilt) {
+  EXPECT_NEAR(StepSigmaGrowth(0.0, 0.6, 0.02), 0.012, 1e-12);
+  EXPECT_NEAR(StepSigmaGrowth(0.05, -0.6, 0.02), std::sqrt(0.05 * 0.05 + 0.012 * 0.012) - 0.05, 1e-12);
+  EXPECT_NEAR(TiltAngle(rover::geometry::RotationFromRpy(0, 20 * kDeg, 1.0)), 20 * kDeg, 1e-12);
+  EXPECT_NEAR(TiltAngle(rover::geometry::RotationFromRpy(-20 * kDeg, 0, -2.0)), 20 * kDeg, 1e-12);
+  EXPECT_NEAR(TiltAngle(rover::geometry::RotationFromRpy(0.3, 0.4, 0)), std::acos(std::cos(0.3) * std::cos(0.4)), 1e-12);
+}
