@@ -13,6 +13,7 @@
 #include "config/yaml_config.hpp"
 
 #include <cstdint>
+#include <cstdlib>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -108,38 +109,50 @@ inline Bus::Auth MakeBusAuth(const auth::Key& key, const std::string& sender,
   return a;
 }
 
-// The `auth:` section of a process's config:
+// Where a process finds the deployment's key: `key_flag` (its --key FILE), else the
+// `auth:` section of its config, else $ROVER_KEY_FILE.
 //   auth:
-//     key_file: /etc/rover/rover.key   # the deployment's key; relative paths are from the
-//                                      # working directory, like every path in a deployment
-//     required: true                   # refuse to start without a key_file
+//     key_file: /etc/rover/rover.key   # relative paths are from the working directory,
+//                                      # like every path in a deployment
+//     required: true                   # refuse to start without a key
+// A key named in any of these places must load: an unusable one is an error, never
+// "unsigned". Without a key, commands go unsigned and unchecked.
 struct AuthSettings {
-  std::optional<auth::Key> key;  // nullopt: commands go unsigned and unchecked
+  std::optional<auth::Key> key;
   bool required = false;
 };
 
-// Throws config::ConfigError with one line naming the file and key when the section is
-// malformed, required without a key_file, or the key file is unusable (auth::Key::LoadFile).
-inline AuthSettings LoadAuthSettings(const config::ConfigNode& root) {
+// Throws config::ConfigError with one line naming where the key was named and what is
+// wrong: a malformed section, required without a key, an unusable key file.
+inline AuthSettings LoadAuthSettings(const config::ConfigNode& root,
+                                     const std::optional<std::string>& key_flag = std::nullopt) {
   AuthSettings settings;
   const config::ConfigNode section = root["auth"];
-  if (section.IsNull()) return settings;
-  if (!section.IsMap()) section.Fail("expected a mapping with key_file and required");
-  section.CheckKeys({"key_file", "required"});
   std::string key_file;
-  section.Get("key_file", key_file);
-  section.Get("required", settings.required);
-  if (key_file.empty()) {
-    if (settings.required) {
-      section["key_file"].Fail(
-          "missing (auth.required is true: expected the deployment's key file)");
-    }
-    return settings;
+  if (!section.IsNull()) {
+    if (!section.IsMap()) section.Fail("expected a mapping with key_file and required");
+    section.CheckKeys({"key_file", "required"});
+    section.Get("key_file", key_file);
+    section.Get("required", settings.required);
   }
-  try {
-    settings.key = auth::Key::LoadFile(key_file);
-  } catch (const auth::KeyError& e) {
-    section["key_file"].Fail(e.what());
+  auto load = [&settings](const std::string& path, const std::string& where) {
+    try {
+      settings.key = auth::Key::LoadFile(path);
+    } catch (const auth::KeyError& e) {
+      throw config::ConfigError(where + e.what());
+    }
+  };
+  const char* env = std::getenv("ROVER_KEY_FILE");
+  if (key_flag) {
+    load(*key_flag, "argument --key: ");
+  } else if (!key_file.empty()) {
+    load(key_file, section.source() + ": auth.key_file: ");
+  } else if (env != nullptr && *env != '\0') {
+    load(env, "$ROVER_KEY_FILE: ");
+  } else if (settings.required) {
+    section["key_file"].Fail(
+        "missing, and no --key or $ROVER_KEY_FILE (auth.required is true: expected the "
+        "deployment's key file; ./rover seq keygen FILE makes one)");
   }
   return settings;
 }

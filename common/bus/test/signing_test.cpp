@@ -146,6 +146,7 @@ TEST(Signing, ConfiguredKeyFromTheAuthSection) {
   fs::create_directories(dir);
   const std::string key_path = (dir / "rover.key").string();
   rover::auth::GenerateKeyFile(key_path);
+  ::unsetenv("ROVER_KEY_FILE");  // the developer's own must not decide this test
 
   EXPECT_FALSE(rover::bus::LoadAuthSettings(ConfigNode::FromString("{}", "c.yaml")).key);
   EXPECT_FALSE(
@@ -156,22 +157,50 @@ TEST(Signing, ConfiguredKeyFromTheAuthSection) {
   EXPECT_EQ(settings.key->size(), 32u);
   EXPECT_TRUE(settings.required);
 
-  auto error_of = [](const std::string& yaml) -> std::string {
+  auto error_of = [](const std::string& yaml, std::optional<std::string> flag = std::nullopt) {
     try {
-      rover::bus::LoadAuthSettings(ConfigNode::FromString(yaml, "c.yaml"));
+      rover::bus::LoadAuthSettings(ConfigNode::FromString(yaml, "c.yaml"), flag);
     } catch (const ConfigError& e) {
-      return e.what();
+      return std::string(e.what());
     }
-    return "(no error)";
+    return std::string("(no error)");
   };
   EXPECT_EQ(error_of("auth: {required: true}"),
-            "c.yaml: auth.key_file: missing (auth.required is true: expected the deployment's key file)");
+            "c.yaml: auth.key_file: missing, and no --key or $ROVER_KEY_FILE (auth.required is "
+            "true: expected the deployment's key file; ./rover seq keygen FILE makes one)");
   EXPECT_NE(error_of("auth: {key_file: " + key_path + ", requird: true}").find("requird"), std::string::npos);
-  ::chmod(key_path.c_str(), 0644);
-  EXPECT_NE(error_of("auth: {key_file: " + key_path + "}").find("c.yaml: auth.key_file: " + key_path +
-                                                               ": mode 0644"),
-            std::string::npos);
   EXPECT_NE(error_of("auth: [1, 2]").find("expected a mapping"), std::string::npos);
+
+  // --key, then the config, then $ROVER_KEY_FILE; a named key that does not load is an error.
+  const std::string other_path = (dir / "other.key").string();
+  rover::auth::GenerateKeyFile(other_path);
+  auto tag_with = [](const rover::bus::AuthSettings& s) {
+    const std::string m = "m";
+    return rover::auth::ComputeTag(*s.key, reinterpret_cast<const std::uint8_t*>(m.data()), 1);
+  };
+  const auto from_config = rover::bus::LoadAuthSettings(
+      ConfigNode::FromString("auth: {key_file: " + key_path + "}", "c.yaml"));
+  const auto from_flag = rover::bus::LoadAuthSettings(
+      ConfigNode::FromString("auth: {key_file: " + key_path + "}", "c.yaml"), other_path);
+  ::setenv("ROVER_KEY_FILE", other_path.c_str(), 1);
+  const auto from_env = rover::bus::LoadAuthSettings(ConfigNode::FromString("{}", "c.yaml"));
+  const auto config_over_env = rover::bus::LoadAuthSettings(
+      ConfigNode::FromString("auth: {key_file: " + key_path + "}", "c.yaml"));
+  ::unsetenv("ROVER_KEY_FILE");
+  ASSERT_TRUE(from_config.key && from_flag.key && from_env.key && config_over_env.key);
+  EXPECT_EQ(tag_with(from_flag), tag_with(from_env));
+  EXPECT_NE(tag_with(from_flag), tag_with(from_config));
+  EXPECT_EQ(tag_with(config_over_env), tag_with(from_config));
+
+  ::chmod(key_path.c_str(), 0644);
+  EXPECT_EQ(error_of("auth: {key_file: " + key_path + "}"),
+            "c.yaml: auth.key_file: " + key_path + ": mode 0644 gives other users access to the key "
+            "(expected none: chmod o-rwx " + key_path + ")");
+  EXPECT_NE(error_of("{}", key_path).find("argument --key: " + key_path + ": mode 0644"), std::string::npos);
+  ::setenv("ROVER_KEY_FILE", (dir / "absent.key").c_str(), 1);
+  EXPECT_NE(error_of("{}").find("$ROVER_KEY_FILE: " + (dir / "absent.key").string() + ": cannot open"),
+            std::string::npos);
+  ::unsetenv("ROVER_KEY_FILE");
 }
 
 // The Bus with MakeBusAuth, on LCM's in-process provider: what it publishes is signed
