@@ -131,7 +131,7 @@ int main(int argc, char** argv) {
     for (int i = 1; i <= frames; ++i) {
       rover_msgs::capture_request_t req{};
       req.frame_id = i;
-      req.purpose = "benchmark";
+      req.purpose = "science";  // one of the purposes receivers accept
       const auto t0 = Clock::now();
       bus.Publish(rover::channels::kCaptureRequest, req);
       while (got_id != i && Clock::now() - t0 < std::chrono::seconds(5)) bus.Handle(5);
