@@ -67,8 +67,8 @@ std::string Image(const char* field, const rover_msgs::image_t& img) {
 }  // namespace
 
 std::string Problem(const rover_msgs::capture_request_t& m) {
-  if (m.purpose != "vo" && m.purpose != "vo_baseline" && m.purpose != "science")
-    return "purpose '" + m.purpose + "' is unknown (expected vo, vo_baseline or science)";
+  if (m.purpose != "vo" && m.purpose != "vo_baseline" && m.purpose != "science" && m.purpose != "periodic")
+    return "purpose '" + m.purpose + "' is unknown (expected vo, vo_baseline, science or periodic)";
   return "";
 }
 
