@@ -2,9 +2,8 @@
 // silent, as flight mobility software does. A commander that dies mid-step (a crash, a
 // kill -9, a packet that killed it) must not leave the wheels turning until the step ends.
 //
-// Evidence that the commander is alive: its heartbeat (once a wall second), its periodic
-// sequence status (once a wall second, at another phase, so one lost packet is not a
-// silence), and any mobility command. Time is the WALL clock in seconds (any monotonic
+// Evidence that the commander is alive: its heartbeat (once a wall second) and any
+// mobility command. Time is the WALL clock in seconds (any monotonic
 // origin): the guard is against a dead peer, and rover time may run 50x faster in
 // simulation or stand still while the simulator holds its clock.
 //
@@ -42,7 +41,7 @@ class Deadman {
 
   // A heartbeat from `process` at wall time `wall_s`; counts only from the commander.
   void OnHeartbeat(const std::string& process, double wall_s);
-  // Any other message from the commander: its sequence status, a mobility command.
+  // Any other message from the commander: a mobility command.
   void OnCommanderMessage(double wall_s);
 
   // Call every loop of the mobility process, before it advances the motion, with whether

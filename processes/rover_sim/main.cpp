@@ -3,7 +3,7 @@
 // Reads MOBILITY_COMMAND; writes ROVER_CLOCK, IMU, WHEEL_ODOMETRY, MOBILITY_STATUS and
 // SIM_TRUTH (truth: read only by tests and evaluation).
 // The dead-man (common/mobility/deadman.hpp): a motion stops by itself when the
-// sequence_executor's HEARTBEAT, SEQUENCE_STATUS and MOBILITY_COMMAND have all been silent
+// sequence_executor's HEARTBEAT and MOBILITY_COMMAND have both been silent
 // for mobility.deadman_s of WALL time.
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
@@ -18,7 +18,6 @@
 #include <rover_msgs/mobility_status_t.hpp>
 #include <rover_msgs/pose_t.hpp>
 #include <rover_msgs/rover_clock_t.hpp>
-#include <rover_msgs/sequence_status_t.hpp>
 #include <rover_msgs/sim_truth_t.hpp>
 #include <rover_msgs/wheel_odometry_t.hpp>
 
@@ -170,10 +169,6 @@ int main(int argc, char** argv) {
         channels::kHeartbeat, [&](const rover_msgs::heartbeat_t& hb) {
           waiting.erase(hb.process);
           deadman.OnHeartbeat(hb.process, proc.wall_seconds());
-        });
-    proc.bus().Subscribe<rover_msgs::sequence_status_t>(
-        channels::kSequenceStatus, [&](const rover_msgs::sequence_status_t&) {
-          deadman.OnCommanderMessage(proc.wall_seconds());
         });
     const auto hold_start = std::chrono::steady_clock::now();
     double next_hold_heartbeat_wall = 0;

@@ -1,9 +1,15 @@
 // sequence_executor: runs operator sequences step by step (common/sequence). This shell
 // translates messages into SequenceExecutor inputs and its outputs into messages.
+//
+// Restart: with a state file (executor.state_file or --state-file) it keeps the running
+// sequence's submission id, name and state on disk (common/sequence/run_state.hpp). A
+// restarted executor that finds a sequence running there commands STOP once, publishes
+// that submission ABORTED with reason "interrupted", and never resumes motion by itself.
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
 #include "sequence/executor.hpp"
+#include "sequence/run_state.hpp"
 
 #include <rover_msgs/capture_request_t.hpp>
 #include <rover_msgs/hazard_query_t.hpp>
@@ -24,6 +30,7 @@
 
 #include <chrono>
 #include <iostream>
+#include <optional>
 #include <type_traits>
 
 using namespace rover;
@@ -163,27 +170,87 @@ int main(int argc, char** argv) {
                       "HAZARD_STATUS, HAZARD_REPLY, STEREO_FRAME, HEARTBEAT; writes MOBILITY_COMMAND,\n"
                       "CAPTURE_REQUEST, HAZARD_QUERY, KEEPOUT_ZONES, NEW_SITE, SEQUENCE_STATUS, STEP_REPORT.\n"
                       "Config: the `executor:` section (see configs/rover.yaml).",
-                      argc, argv);
+                      argc, argv,
+                      {{"--state-file", "FILE",
+                        "where the running sequence is kept across restarts (overrides executor.state_file)"}});
     const auto options = seq::LoadExecutorOptions(proc.config());
+    std::string state_file = options.state_file;
+    if (auto f = proc.option("--state-file")) state_file = *f;
+
+    // What the previous executor left: a sequence it was running is reported interrupted
+    // once the rover clock is known (a STOP stamped 0 would look stale to its receivers).
+    std::optional<seq::RunState> interrupted;
+    bool stop_unknown = false;  // the file could not be read: stop, whatever was running
+    seq::RunState written;      // the record on disk
+    if (!state_file.empty()) {
+      try {
+        if (auto previous = seq::ReadRunStateFile(state_file)) {
+          written = *previous;
+          if (seq::WasInterrupted(*previous)) interrupted = previous;
+        }
+      } catch (const config::ConfigError& e) {
+        std::cerr << "sequence_executor: " << e.what()
+                  << "; cannot tell whether a sequence was running: commanding STOP\n";
+        stop_unknown = true;
+      }
+      // A place this process cannot write is a configuration mistake: say so at start.
+      try {
+        seq::WriteRunStateFile(state_file, written);
+      } catch (const std::runtime_error& e) {
+        throw config::ConfigError(std::string(e.what()) +
+                                  " (expected a writable path: executor.state_file or --state-file)");
+      }
+    }
     // Ids must never repeat across restarts of this process.
     const auto first_id = std::chrono::duration_cast<std::chrono::milliseconds>(
                               std::chrono::system_clock::now().time_since_epoch())
                               .count();
     seq::SequenceExecutor executor(options, first_id);
     OutputPublisher publisher(proc);
+    bool write_failing = false;
+    auto save_state = [&] {
+      if (state_file.empty() || interrupted) return;  // the old record stands until reported
+      const seq::RunState now = seq::RunStateOf(executor.CurrentStatus());
+      if (now == written) return;
+      try {
+        seq::WriteRunStateFile(state_file, now);
+        written = now;
+        write_failing = false;
+      } catch (const std::runtime_error& e) {
+        if (!write_failing) std::cerr << "sequence_executor: " << e.what() << "\n";
+        write_failing = true;
+      }
+    };
     auto flush = [&] {
-      for (const auto& out : executor.TakeOutputs()) std::visit(publisher, out);
+      auto outputs = executor.TakeOutputs();
+      save_state();  // on disk before the commands it leads to leave
+      for (const auto& out : outputs) std::visit(publisher, out);
+    };
+    auto report_interrupted = [&] {
+      if (!interrupted && !stop_unknown) return;
+      executor.Tick(proc.now(), proc.wall_seconds());
+      if (stop_unknown) executor.Abort("");  // nothing active: STOP only
+      stop_unknown = false;
+      if (interrupted) {
+        const seq::RunState previous = *interrupted;
+        interrupted.reset();
+        executor.RecordInterrupted(previous.submission_id, previous.sequence_name,
+                                   seq::InterruptedDetail(previous));
+      }
+      flush();
     };
 
     proc.bus().Subscribe<rover_msgs::sequence_submit_t>(
         channels::kSequenceSubmit, [&](const rover_msgs::sequence_submit_t& m) {
           std::cout << "received sequence " << m.name << " (" << m.text.size() << " bytes)\n"
                     << std::flush;
+          report_interrupted();
           executor.SubmitText(m.text, m.submission_id, m.name);
           flush();
         });
     proc.bus().Subscribe<rover_msgs::sequence_control_t>(
         channels::kSequenceControl, [&](const rover_msgs::sequence_control_t& m) {
+          report_interrupted();
           switch (m.action) {
             case rover_msgs::sequence_control_t::ACTION_ABORT: executor.Abort(m.reason); break;
             case rover_msgs::sequence_control_t::ACTION_PAUSE: executor.Pause(); break;
@@ -271,6 +338,7 @@ int main(int argc, char** argv) {
         [&] {
           executor.Tick(proc.now(), proc.wall_seconds());
           flush();
+          if (proc.now() > 0 || proc.wall_seconds() > 2.0) report_interrupted();
           proc.SetHealth(0, seq::ToString(executor.state()));
         },
         25);

@@ -25,14 +25,14 @@ TEST(Deadman, TripsOnlyAfterTheTimeoutOfSilenceDuringAMotion) {
   EXPECT_FALSE(d.Check(false, 11.6));  // stopped: nothing more to do
 }
 
-TEST(Deadman, TheCommandersHeartbeatAndStatusKeepTheMotionGoing) {
+TEST(Deadman, TheCommandersHeartbeatsAndCommandsKeepTheMotionGoing) {
   Deadman d;
   d.OnCommanderMessage(0.0);
   for (double t = 1.0; t <= 30.0; t += 1.0) {
     d.OnHeartbeat("sequence_executor", t);
     EXPECT_FALSE(d.Check(true, t + 0.99)) << t;
   }
-  // One heartbeat lost: the status, half a period later, still counts.
+  // A new command half a period later counts as well.
   d.OnCommanderMessage(30.5);
   EXPECT_FALSE(d.Check(true, 31.9));
   EXPECT_TRUE(d.Check(true, 32.1));
