@@ -1,5 +1,7 @@
 #include "sequence/parser.hpp"
 
+#include "config/file_read.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -822,16 +824,16 @@ Sequence ParseSequenceOrThrow(std::string_view text, const std::string& source_n
 }
 
 ParseResult ParseSequenceFile(const std::string& path, const LanguageLimits& limits) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
+  std::string text;
+  try {  // a regular file of at most 1 MiB: a FIFO or /dev/zero is refused, not read
+    text = config::ReadBoundedRegularFile(path, config::kMaxSequenceFileBytes, "sequence file");
+  } catch (const config::FileReadError& e) {
     ParseResult r;
     r.sequence.name = path;
-    r.errors.push_back({path, 1, 1, "cannot open file", "a readable sequence file"});
+    r.errors.push_back({path, 1, 1, e.problem(), e.expected()});
     return r;
   }
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ParseSequence(ss.str(), path, limits);
+  return ParseSequence(text, path, limits);
 }
 
 }  // namespace rover::sequence

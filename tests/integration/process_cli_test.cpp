@@ -8,11 +8,13 @@
 #include <rover_msgs/hazard_status_t.hpp>
 #include <rover_msgs/keepout_zones_t.hpp>
 
+#include <algorithm>
 #include <chrono>
 
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <sstream>
 
 namespace rover::test {
 namespace {
@@ -71,6 +73,64 @@ TEST(ProcessCli, BadConfigNamesFileKeyAndExpectation) {
   r = RunCommand(Bin("rover_sim") + " --config configs/rover.yaml --world configs/worlds/flat_rock_course.yaml --start 1,x,0");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.output, "rover_sim: argument --start: \"1,x,0\": expected 3 finite numbers separated by commas\n");
+}
+
+// The command line takes the YAML's ranges, and files that are not regular files (a
+// directory, a character device that never ends, a FIFO that never opens) or are too large
+// are refused with one line at once, never read.
+TEST(ProcessCli, CommandLineRangesAreTheConfigRanges) {
+  const auto r = RunCommand(Bin("rover_sim") + " --rate 1e12 --world configs/worlds/flat_rock_course.yaml");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, "rover_sim: argument --rate: \"1e12\": expected a number in [0.1, 10000]\n");
+  const std::string dir = OutDir("process_cli_rate");
+  std::ofstream(dir + "/rate.yaml") << "sim:\n  rate: 1e12\n";
+  const auto y = RunCommand(Bin("rover_sim") + " --config " + dir + "/rate.yaml --world configs/worlds/flat_rock_course.yaml");
+  EXPECT_EQ(y.exit_code, 2);
+  EXPECT_EQ(y.output, dir + "/rate.yaml: sim.rate: expected a number in [0.1, 10000], got \"1e12\"\n");
+  for (const char* ok : {"0.1", "10000"}) {
+    const auto b = RunCommand(Bin("rover_sim") + " --rate " + ok + " --world /nonexistent.yaml");
+    EXPECT_EQ(b.output, "/nonexistent.yaml: cannot open file (expected a readable YAML file)\n") << ok;
+  }
+}
+
+TEST(ProcessCli, ConfigThatIsNotARegularFileIsOneLineAtOnce) {
+  const std::string dir = OutDir("process_cli_files");
+  const std::string fifo = dir + "/fifo.yaml";
+  ASSERT_EQ(RunCommand("mkfifo '" + fifo + "'").exit_code, 0);
+  for (const char* p : kProcesses) {
+    for (const std::string& file : {std::string("/dev/zero"), std::string("/tmp"), fifo}) {
+      const auto start = std::chrono::steady_clock::now();
+      const auto r = RunCommand("timeout 10 " + Bin(p) + " --config " + file);
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      EXPECT_EQ(r.exit_code, 2) << p << " " << file;
+      EXPECT_EQ(r.output, file + ": not a regular file (expected a YAML file)\n") << p;
+      EXPECT_LT(s, 5.0) << p << " " << file;
+    }
+  }
+  const std::string big = dir + "/big.yaml";
+  std::ofstream(big) << std::string(2 << 20, '#');
+  const auto r = RunCommand(Bin("state_estimator") + " --config " + big);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, big + ": too large: 2097152 bytes (expected a YAML file of at most 1048576 bytes)\n");
+  const auto w = RunCommand(Bin("rover_sim") + " --world /dev/zero");
+  EXPECT_EQ(w.exit_code, 2);
+  EXPECT_EQ(w.output, "/dev/zero: not a regular file (expected a YAML file)\n");
+}
+
+TEST(SeqCheck, FifoDeviceDirectoryAndHugeFileAreErrorsAtOnce) {
+  const std::string dir = OutDir("seq_check_files");
+  const std::string fifo = dir + "/fifo.seq";
+  ASSERT_EQ(RunCommand("mkfifo '" + fifo + "'").exit_code, 0);
+  const std::string big = dir + "/big.seq";
+  std::ofstream(big) << std::string((1 << 20) + 1, '#');
+  const auto start = std::chrono::steady_clock::now();
+  const auto r = RunCommand("timeout 10 " + Bin("seq_check") + " " + fifo + " /dev/zero " + dir + " " + big);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, fifo + ":1:1: not a regular file (expected a sequence file)\n"
+                      "/dev/zero:1:1: not a regular file (expected a sequence file)\n" +
+                      dir + ":1:1: not a regular file (expected a sequence file)\n" +
+                      big + ":1:1: too large: 1048577 bytes (expected a sequence file of at most 1048576 bytes)\n");
 }
 
 TEST(ProcessCli, OperatorSubmitChecksTheFileFirst) {
@@ -161,6 +221,26 @@ TEST(Launcher, StopsEverythingCleanlyOnSigterm) {
   EXPECT_NE(r.output.find("launcher: all processes stopped"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("unexpectedly"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("killing it"), std::string::npos) << r.output;
+}
+
+// kill -9 of the launcher: it cannot stop its children, so the kernel does
+// (PR_SET_PDEATHSIG): every child exits within a few seconds.
+TEST(Launcher, ChildrenDieWithItEvenOnSigkill) {
+  const std::string dir = OutDir("launcher_sigkill");
+  const auto r = RunCommand(
+      "export ROVER_LCM_URL='" + PrivateUrl(7) + "'; " + Bin("launcher") + " configs/deploy/sim.yaml > " + dir +
+      "/launch.log 2>&1 & L=$!; sleep 2; C=$(pgrep -P $L | tr '\\n' ' '); echo \"children: $C\"; "
+      "kill -KILL $L; sleep 3; "
+      "for p in $C; do s=$(ps -o stat= -p $p); case \"$s\" in ''|Z*) ;; *) echo \"alive: $p $s\"; kill -KILL $p;; esac; done; "
+      "echo done");
+  const auto at = r.output.find("children: ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  std::istringstream pids(r.output.substr(at + 10, r.output.find('\n', at) - at - 10));
+  int children = 0;
+  for (std::string pid; pids >> pid;) ++children;
+  EXPECT_GE(children, 4) << r.output;  // the deployment's processes
+  EXPECT_EQ(r.output.find("alive:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("done"), std::string::npos) << r.output;
 }
 
 TEST(Launcher, BadDeploymentIsOneLine) {

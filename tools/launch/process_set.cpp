@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -78,9 +79,15 @@ void ProcessSet::Start(const ProcessSpec& spec, const std::vector<std::string>& 
   }
   int fds[2];
   if (pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error("pipe failed");
+  const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error("fork failed");
   if (pid == 0) {
+    // Die with the launcher, even when it is killed with SIGKILL and cannot stop us: the
+    // kernel sends SIGTERM (a clean exit: the executor commands STOP on its way out) when
+    // the thread that forked this child exits. The flag survives execv. If the parent died
+    // before the prctl took effect, no signal will come: leave now.
+    if (prctl(PR_SET_PDEATHSIG, SIGTERM) != 0 || getppid() != parent) _exit(1);
     dup2(fds[1], STDOUT_FILENO);
     dup2(fds[1], STDERR_FILENO);
     setpgid(0, 0);

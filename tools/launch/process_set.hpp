@@ -40,6 +40,9 @@ class ProcessSet {
   ProcessSet& operator=(const ProcessSet&) = delete;
 
   // Starts a child with extra environment entries ("KEY=VALUE"). Throws on failure.
+  // The child gets SIGTERM when the thread that called Start exits, however it exits
+  // (PR_SET_PDEATHSIG), so a launcher killed with SIGKILL leaves no process behind: call
+  // Start from the thread that lives as long as the set (the main thread).
   void Start(const ProcessSpec& spec, const std::vector<std::string>& env = {});
 
   // Forwards children's output and reaps exits; waits at most `timeout_ms`.
