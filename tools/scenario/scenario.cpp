@@ -16,6 +16,7 @@
 #include <rover_msgs/sequence_submit_t.hpp>
 #include <rover_msgs/sim_truth_t.hpp>
 #include <rover_msgs/step_report_t.hpp>
+#include <rover_msgs/vo_update_t.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -30,7 +31,8 @@ namespace rover::tools {
 ScenarioSpec LoadScenario(const std::string& path) {
   const auto root = config::ConfigNode::LoadFile(path);
   root.CheckKeys({"name", "description", "world", "sequence", "deployment", "rover_config",
-                  "start", "sim_rate", "timeout_s", "inject", "expect"});
+                  "start", "sim_rate", "timeout_s", "inject", "expect", "seeds", "dragged_wheel",
+                  "overrides", "world_overrides", "campaign"});
   ScenarioSpec s;
   s.source = path;
   s.name = path;
@@ -55,11 +57,67 @@ ScenarioSpec LoadScenario(const std::string& path) {
     s.kill_process = inject.RequireString("kill");
     inject.Get("after_steps", s.kill_after_steps, 0, 100000);
   }
+  // Seeds and the dragged wheel are overrides by another name; the maps come after them.
+  if (root.Has("seeds")) {
+    const auto seeds = root["seeds"];
+    seeds.CheckKeys({"world", "mobility", "render"});
+    std::uint64_t seed = 0;
+    if (seeds.Has("world")) {
+      seeds.Get("world", seed);
+      s.world_overrides.push_back({"seed", YAML::Node(seed)});
+    }
+    if (seeds.Has("mobility")) {
+      seeds.Get("mobility", seed);
+      s.overrides.push_back({"mobility.seed", YAML::Node(seed)});
+    }
+    if (seeds.Has("render")) {
+      seeds.Get("render", seed);
+      s.overrides.push_back({"capture.render.noise_seed", YAML::Node(seed)});
+    }
+  }
+  if (root.Has("campaign")) {
+    const auto c = root["campaign"];
+    c.CheckKeys({"start_jitter_m", "yaw_jitter_deg", "slope_jitter_deg"});
+    c.Get("start_jitter_m", s.campaign_start_jitter_m, 0.0, 10.0);
+    c.Get("yaw_jitter_deg", s.campaign_yaw_jitter_deg, 0.0, 180.0);
+    c.Get("slope_jitter_deg", s.campaign_slope_jitter_deg, 0.0, 10.0);
+  }
+  if (root.Has("dragged_wheel")) {
+    s.overrides.push_back({"mobility.slip.dragged_wheel.wheel", YAML::Node(root.RequireString("dragged_wheel"))});
+  }
+  for (auto& o : LoadOverrides(root["overrides"])) s.overrides.push_back(std::move(o));
+  for (auto& o : LoadOverrides(root["world_overrides"])) s.world_overrides.push_back(std::move(o));
   if (root.Has("expect")) {
     const auto expect = root["expect"];
-    expect.CheckKeys({"outcome", "abort_reason"});
+    expect.CheckKeys({"outcome", "abort_reason", "min_clearance_m", "max_position_error_pct",
+                      "max_false_updates"});
     expect.GetEnum("outcome", s.expect_outcome, {"completed", "aborted", "rejected"});
-    expect.Get("abort_reason", s.expect_abort_reason);
+    // One reason, or a list of acceptable ones.
+    const auto reason = expect["abort_reason"];
+    if (reason.IsSequence()) {
+      for (std::size_t i = 0; i < reason.size(); ++i) s.expect_abort_reasons.push_back(reason.at(i).AsString());
+      if (s.expect_abort_reasons.empty()) reason.Fail("expected an abort reason or a non-empty list of them");
+    } else if (!reason.IsNull()) {
+      s.expect_abort_reasons.push_back(reason.AsString());
+    }
+    for (const auto& r : s.expect_abort_reasons) {
+      s.expect_abort_reason += (s.expect_abort_reason.empty() ? "" : "|") + r;
+    }
+    if (expect.Has("min_clearance_m")) {
+      double v = 0;
+      expect.Get("min_clearance_m", v);
+      s.expect_min_clearance_m = v;
+    }
+    if (expect.Has("max_position_error_pct")) {
+      double v = 0;
+      expect.Get("max_position_error_pct", v, 0.0);
+      s.expect_max_position_error_pct = v;
+    }
+    if (expect.Has("max_false_updates")) {
+      int v = 0;
+      expect.Get("max_false_updates", v, 0);
+      s.expect_max_false_updates = v;
+    }
   }
   return s;
 }
@@ -93,6 +151,46 @@ const rover_msgs::sim_truth_t* TruthAt(const std::vector<rover_msgs::sim_truth_t
   return &*it;
 }
 
+// "; the log lost N CHANNEL messages" when the completeness check found losses on `channel`.
+std::string LostNote(const logcheck::LogReport& log, const std::string& channel) {
+  const auto it = log.channels.find(channel);
+  if (it == log.channels.end() || it->second.lost == 0) return "";
+  return "; the log lost " + std::to_string(it->second.lost) + " " + channel + " messages";
+}
+
+// Says why each figure the log could not give is absent (summary.json: KEY_reason).
+void ExplainMissing(ScenarioSummary& s, bool zones_defined) {
+  const std::string no_truth = "no SIM_TRUTH in the log (not a simulated run, or lost)" +
+                               LostNote(s.log, channels::kSimTruth);
+  if (!s.final_estimate) {
+    s.missing["final_estimate"] = "no POSE in the log" + LostNote(s.log, channels::kPose);
+  }
+  if (!s.final_truth) {
+    for (const char* key : {"final_truth", "distance_travelled_m", "rover_time_s"}) {
+      s.missing[key] = no_truth;
+    }
+  }
+  if (!s.final_estimate || !s.final_truth) {
+    const std::string why =
+        "needs the final estimate and truth: " +
+        (!s.final_estimate ? s.missing["final_estimate"] : s.missing["final_truth"]);
+    s.missing["position_error_m"] = s.missing["position_error_pct"] = why;
+  }
+  if (!s.min_keepout_clearance_m) {
+    s.missing["min_keepout_clearance_m"] =
+        !zones_defined    ? "no keep-out zone was defined"
+        : !s.final_truth ? no_truth
+                         : "no SIM_TRUTH sample while a keep-out zone was in force" +
+                               LostNote(s.log, channels::kSimTruth);
+  }
+  if (!s.nees_mean) {
+    s.missing["nees_mean"] = s.vo_updates_accepted == 0
+                                 ? "no accepted VO update" + LostNote(s.log, channels::kVoUpdate)
+                                 : "no truth for the accepted VO updates" +
+                                       LostNote(s.log, channels::kSimTruth);
+  }
+}
+
 }  // namespace
 
 ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footprint& footprint) {
@@ -101,6 +199,7 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
 
   std::vector<rover_msgs::sim_truth_t> truth;
   std::vector<rover_msgs::step_report_t> reports;
+  std::vector<rover_msgs::vo_update_t> vo_updates;
   std::optional<rover_msgs::pose_t> last_pose;
   std::optional<rover_msgs::sequence_status_t> final_status;
   std::map<int, std::pair<int, std::string>> command_text;  // index -> line, text
@@ -113,6 +212,9 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
     if (ch == channels::kSimTruth) {
       rover_msgs::sim_truth_t m;
       if (m.decode(ev->data, 0, ev->datalen) >= 0) truth.push_back(m);
+    } else if (ch == channels::kVoUpdate) {
+      rover_msgs::vo_update_t m;
+      if (m.decode(ev->data, 0, ev->datalen) >= 0) vo_updates.push_back(m);
     } else if (ch == channels::kStepReport) {
       rover_msgs::step_report_t m;
       if (m.decode(ev->data, 0, ev->datalen) >= 0) reports.push_back(m);
@@ -182,8 +284,34 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
     s.detail = "no final sequence status in the log";
   }
 
+  // Every VO update against truth; a step's is the last whose pair was taken during it.
+  std::vector<VoCheck> vo_checks;
+  double nees_sum = 0.0;
+  int nees_count = 0;
+  for (const auto& u : vo_updates) {
+    if (u.status == rover_msgs::vo_update_t::STATUS_BASELINE) continue;
+    vo_checks.push_back(CheckVoUpdate(u, truth));
+    const VoCheck& c = vo_checks.back();
+    ++s.vo_updates;
+    s.vo_updates_accepted += c.accepted;
+    s.false_updates += c.false_update();
+    if (c.nees) {
+      nees_sum += *c.nees;
+      ++nees_count;
+    }
+  }
+  if (nees_count > 0) s.nees_mean = nees_sum / nees_count;
+  auto step_vo = [&](const rover_msgs::step_report_t& r) -> std::optional<VoCheck> {
+    std::optional<VoCheck> found;
+    for (const auto& c : vo_checks) {
+      if (c.to_utime > r.utime_before && c.to_utime <= r.utime_after) found = c;
+    }
+    return found;
+  };
+
   for (const auto& r : reports) {
     StepSummary st;
+    st.vo = step_vo(r);
     st.command_index = r.command_index;
     st.step_index = r.step_index;
     st.commanded_distance_m = r.commanded_distance_m;
@@ -240,6 +368,8 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
       }
     }
   }
+  s.log = logcheck::CheckLog(log_path);
+  ExplainMissing(s, !zone_sets.empty());
   return s;
 }
 
@@ -254,6 +384,106 @@ void WritePose(JsonWriter& j, const std::string& key, const std::optional<Xyzrpy
   static const char* names[] = {"x", "y", "z", "roll", "pitch", "yaw"};
   j.BeginObject();
   for (int i = 0; i < 6; ++i) j.Field(names[i], p->v[i]);
+  j.EndObject();
+}
+
+// `KEY_reason` beside a null KEY, when the summary says why the figure is absent.
+void WriteReason(JsonWriter& j, const ScenarioSummary& s, const std::string& key) {
+  if (auto it = s.missing.find(key); it != s.missing.end()) j.Field(key + "_reason", it->second);
+}
+
+// A figure, or null and its reason when the log could not give it.
+void WriteFigure(JsonWriter& j, const ScenarioSummary& s, const std::string& key, double v) {
+  if (!s.missing.count(key)) {
+    j.Field(key, v);
+    return;
+  }
+  j.Key(key).Null();
+  WriteReason(j, s, key);
+}
+
+// Whether the log lost anything: the verdict, and count, lost and gaps per channel.
+void WriteLogCheck(JsonWriter& j, const logcheck::LogReport& log) {
+  j.Field("log_complete", log.complete);
+  if (!log.complete) j.Field("log_complete_reason", log.verdict_reason);
+  j.Field("log_messages", static_cast<long long>(log.messages));
+  j.Field("log_lost", static_cast<long long>(log.lost));
+  j.Key("log_channels").BeginObject();
+  for (const auto& [channel, c] : log.channels) {
+    j.Key(channel).BeginObject();
+    j.Field("count", static_cast<long long>(c.count)).Field("lost", static_cast<long long>(c.lost));
+    j.Key("gaps").BeginArray();
+    for (const auto& g : c.gaps) {
+      const auto name = log.publisher_names.find(g.publisher);
+      j.BeginObject();
+      j.Field("publisher", name == log.publisher_names.end() ? g.publisher : name->second);
+      j.Field("lost", static_cast<long long>(g.lost));
+      j.Field("count_before", static_cast<long long>(g.count_before));
+      j.Field("count_after", static_cast<long long>(g.count_after));
+      j.Field("utime_before", static_cast<long long>(g.utime_before));
+      j.Field("utime_after", static_cast<long long>(g.utime_after));
+      j.EndObject();
+    }
+    j.EndArray();
+    j.Field("restarts", static_cast<long long>(c.restarts.size()));
+    if (c.unchecked > 0) {
+      j.Field("unchecked", static_cast<long long>(c.unchecked));
+      j.Field("unchecked_reason", c.unchecked_reason);
+    }
+    j.EndObject();
+  }
+  j.EndObject();
+  j.Key("log_warnings").BeginArray();
+  for (const auto& w : log.warnings) j.Value(w);
+  j.EndArray();
+}
+
+// A step's VO update: status, VO's delta and covariance, the true delta, the NEES.
+void WriteVoCheck(JsonWriter& j, const std::string& key, const std::optional<VoCheck>& c) {
+  j.Key(key);
+  if (!c) {
+    j.Null();
+    return;
+  }
+  static const char* names[] = {"x", "y", "z", "roll", "pitch", "yaw"};
+  auto vector6 = [&](const std::string& k, const std::optional<Vector6>& v) {
+    j.Key(k);
+    if (!v) {
+      j.Null();
+      return;
+    }
+    j.BeginObject();
+    for (int i = 0; i < 6; ++i) j.Field(names[i], (*v)(i));
+    j.EndObject();
+  };
+  j.BeginObject();
+  j.Field("status", c->status).Field("reason", c->reason);
+  j.Field("from_frame_id", static_cast<long long>(c->from_frame_id));
+  j.Field("to_frame_id", static_cast<long long>(c->to_frame_id));
+  j.Field("from_utime", static_cast<long long>(c->from_utime));
+  j.Field("to_utime", static_cast<long long>(c->to_utime));
+  j.Field("accepted", c->accepted);
+  vector6("delta", c->accepted ? std::optional<Vector6>(c->delta) : std::nullopt);
+  j.Key("covariance");
+  if (c->accepted) {
+    j.BeginArray();  // 6 rows of 6: x y z roll pitch yaw
+    for (int r = 0; r < 6; ++r) {
+      j.BeginArray();
+      for (int k = 0; k < 6; ++k) j.Value(c->covariance(r, k));
+      j.EndArray();
+    }
+    j.EndArray();
+  } else {
+    j.Null();
+  }
+  vector6("true_delta", c->true_delta);
+  j.Key("nees");
+  if (c->nees) {
+    j.Value(*c->nees);
+  } else {
+    j.Null();
+  }
+  j.Field("false_update", c->false_update());
   j.EndObject();
 }
 
@@ -294,22 +524,37 @@ std::string SummaryJson(const ScenarioSummary& s) {
     j.Field("slip_pct", st.true_slip_pct);
     j.Field("estimated_slip_pct", st.estimated_slip_pct);
     j.Field("vo_status", st.vo_status);
+    WriteVoCheck(j, "vo", st.vo);
     j.EndObject();
   }
   j.EndArray();
   WritePose(j, "final_estimate", s.final_estimate);
+  WriteReason(j, s, "final_estimate");
   WritePose(j, "final_truth", s.final_truth);
-  j.Field("distance_travelled_m", s.distance_travelled_m);
-  j.Field("position_error_m", s.position_error_m);
-  j.Field("position_error_pct", s.position_error_pct);
+  WriteReason(j, s, "final_truth");
+  WriteFigure(j, s, "distance_travelled_m", s.distance_travelled_m);
+  WriteFigure(j, s, "position_error_m", s.position_error_m);
+  WriteFigure(j, s, "position_error_pct", s.position_error_pct);
   j.Key("min_keepout_clearance_m");
   if (s.min_keepout_clearance_m) {
     j.Value(*s.min_keepout_clearance_m);
   } else {
     j.Null();
   }
-  j.Field("rover_time_s", s.rover_time_s);
+  WriteReason(j, s, "min_keepout_clearance_m");
+  j.Field("vo_updates", s.vo_updates);
+  j.Field("vo_updates_accepted", s.vo_updates_accepted);
+  j.Field("false_updates", s.false_updates);
+  j.Key("nees_mean");
+  if (s.nees_mean) {
+    j.Value(*s.nees_mean);
+  } else {
+    j.Null();
+  }
+  WriteReason(j, s, "nees_mean");
+  WriteFigure(j, s, "rover_time_s", s.rover_time_s);
   j.Field("wall_time_s", s.wall_time_s);
+  WriteLogCheck(j, s.log);
   j.Key("process_events").BeginArray();
   for (const auto& e : s.process_events) j.Value(e);
   j.EndArray();
@@ -348,8 +593,59 @@ std::string SummaryText(const ScenarioSummary& s) {
   if (s.min_keepout_clearance_m) {
     os << "  closest approach to a keep-out zone (truth): " << *s.min_keepout_clearance_m << " m\n";
   }
+  if (s.vo_updates > 0) {
+    os << "  VO updates: " << s.vo_updates << ", accepted " << s.vo_updates_accepted
+       << ", false (NEES > " << kChi2Dof6ThreeSigma << ") " << s.false_updates;
+    if (s.nees_mean) os << ", NEES mean " << std::setprecision(2) << *s.nees_mean << std::setprecision(3);
+    os << "\n";
+  }
   for (const auto& e : s.process_events) os << "  " << e << "\n";
+  os << "  log: " << s.log.messages << " messages, " << s.log.lost << " lost; complete: "
+     << (s.log.complete ? "yes" : "no (" + s.log.verdict_reason + ")") << "\n";
+  for (const auto& w : s.log.warnings) os << "  log warning: " << w << "\n";
+  std::map<std::string, std::string> figures_by_reason;  // one line per reason
+  for (const auto& [key, why] : s.missing) {
+    if (key == "nees_mean" || why == "no keep-out zone was defined") continue;
+    auto& keys = figures_by_reason[why];
+    keys += (keys.empty() ? "" : ", ") + key;
+  }
+  for (const auto& [why, keys] : figures_by_reason) os << "  no " << keys << ": " << why << "\n";
   return os.str();
+}
+
+bool AsExpected(const ScenarioSpec& spec, const ScenarioSummary& s, std::string* why) {
+  std::ostringstream miss;
+  miss << std::setprecision(4);
+  if (!spec.expect_outcome.empty() && s.outcome != spec.expect_outcome) {
+    miss << "outcome " << s.outcome << ", expected " << spec.expect_outcome << "; ";
+  }
+  if (!spec.expect_abort_reasons.empty() &&
+      std::find(spec.expect_abort_reasons.begin(), spec.expect_abort_reasons.end(), s.abort_reason) ==
+          spec.expect_abort_reasons.end()) {
+    miss << "abort reason " << (s.abort_reason.empty() ? "none" : s.abort_reason) << ", expected "
+         << spec.expect_abort_reason << "; ";
+  }
+  if (spec.expect_min_clearance_m &&
+      (!s.min_keepout_clearance_m || *s.min_keepout_clearance_m < *spec.expect_min_clearance_m)) {
+    miss << "truth clearance ";
+    if (s.min_keepout_clearance_m) {
+      miss << *s.min_keepout_clearance_m << " m";
+    } else {
+      miss << "unknown (no zone)";
+    }
+    miss << ", expected >= " << *spec.expect_min_clearance_m << " m; ";
+  }
+  if (spec.expect_max_position_error_pct && !(s.position_error_pct <= *spec.expect_max_position_error_pct)) {
+    miss << "position error " << s.position_error_pct << " %, expected <= "
+         << *spec.expect_max_position_error_pct << " %; ";
+  }
+  if (spec.expect_max_false_updates && s.false_updates > *spec.expect_max_false_updates) {
+    miss << s.false_updates << " false VO updates, expected <= " << *spec.expect_max_false_updates << "; ";
+  }
+  std::string text = miss.str();
+  if (text.size() >= 2) text.resize(text.size() - 2);
+  if (why) *why = text;
+  return text.empty();
 }
 
 }  // namespace rover::tools

@@ -3,8 +3,12 @@
 #pragma once
 
 #include "hazards/keepout.hpp"
+#include "logcheck/log_check.hpp"
+#include "scenario/scenario_overrides.hpp"
+#include "scenario/vo_truth.hpp"
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,9 +29,23 @@ struct ScenarioSpec {
   // Fault injection: kill `kill_process` once `kill_after_steps` step reports were seen.
   std::string kill_process;
   int kill_after_steps = 0;
-  // What the catalogue expects (printed; asserted by tests).
+  // Overrides without copying files (scenario_overrides.hpp): `seeds: {world, mobility,
+  // render}` and `dragged_wheel: WHEEL` become the entries they stand for, ahead of the
+  // `overrides:` (rover config) and `world_overrides:` (world file) maps of dotted keys.
+  std::vector<ConfigOverride> overrides;
+  std::vector<ConfigOverride> world_overrides;
+  // How a campaign varies the scenario (`campaign:`): start position and heading by up to
+  // +/- these, and the world's first slope by up to +/- slope_jitter_deg.
+  double campaign_start_jitter_m = 0.2;
+  double campaign_yaw_jitter_deg = 3.0;
+  double campaign_slope_jitter_deg = 2.0;
+  // What the catalogue expects (printed; asserted by tests and campaigns).
   std::string expect_outcome;
-  std::string expect_abort_reason;
+  std::string expect_abort_reason;                 // as written: "progress" or "progress|vo_lost"
+  std::vector<std::string> expect_abort_reasons;   // any of these
+  std::optional<double> expect_min_clearance_m;    // truth clearance to every zone >= this
+  std::optional<double> expect_max_position_error_pct;
+  std::optional<int> expect_max_false_updates;
 };
 
 // Throws config::ConfigError naming the file and key.
@@ -52,6 +70,7 @@ struct StepSummary {
   double true_distance_m = 0, true_turn_rad = 0;
   double estimated_slip_pct = 0, true_slip_pct = 0;
   int vo_status = -1;
+  std::optional<VoCheck> vo;  // the step's VO update against truth (none: VO off)
 };
 
 struct ScenarioSummary {
@@ -66,9 +85,19 @@ struct ScenarioSummary {
   double position_error_m = 0;
   double position_error_pct = 0;
   std::optional<double> min_keepout_clearance_m;  // empty when no zone was defined
+  // Every VO update in the log against truth: accepted = status OK; a false update is an
+  // accepted one whose NEES exceeds kChi2Dof6ThreeSigma.
+  int vo_updates = 0;
+  int vo_updates_accepted = 0;
+  int false_updates = 0;
+  std::optional<double> nees_mean;
   double rover_time_s = 0;
   double wall_time_s = 0;
   std::vector<std::string> process_events;
+  // Why a figure is absent: summary.json writes null for KEY and a KEY_reason beside it.
+  std::map<std::string, std::string> missing;
+  // Whether the log lost anything (tools/logcheck): counts and gaps per channel.
+  logcheck::LogReport log;
 };
 
 // Reads an LCM log of a run and computes the summary. The footprint is used for the
@@ -76,6 +105,8 @@ struct ScenarioSummary {
 ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footprint& footprint);
 
 std::string SummaryJson(const ScenarioSummary& summary);
+// Whether the summary meets every `expect:` entry; `why` lists the ones it misses.
+bool AsExpected(const ScenarioSpec& spec, const ScenarioSummary& summary, std::string* why);
 std::string SummaryText(const ScenarioSummary& summary);
 
 }  // namespace rover::tools

@@ -2,8 +2,12 @@
 //
 // Runs one scenario on a fresh bus (the `rover` script puts it in a private network
 // namespace): starts the deployment's processes with the scenario's world and start pose,
-// records every channel with the real lcm-logger to DIR/log.lcm, submits the sequence,
-// follows it to the end, stops everything, and writes DIR/summary.json from the log.
+// records every channel with rover_recorder to DIR/log.lcm (lcm-logger 1.3.1 loses
+// messages at the default sim rate; tools/recorder says why), submits the sequence, follows
+// it to the end, stops everything, checks that the log lost nothing (tools/logcheck) and
+// writes DIR/summary.json from the log.
+// The scenario's seeds and overrides are applied to copies of the rover config and world
+// in DIR. Exit status 0 when the run ended as the scenario expects, 1 otherwise.
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
 #include "bus/process.hpp"
@@ -62,6 +66,15 @@ std::string PrivateUrl() {
 }
 
 
+// Points every `--config FILE` naming `from` at `to` (the scenario's overridden copy).
+void ReplaceConfig(std::vector<std::string>& args, const std::string& from, const std::string& to) {
+  if (from == to) return;
+  for (std::size_t i = 0; i + 1 < args.size(); ++i) {
+    std::error_code ec;
+    if (args[i] == "--config" && fs::equivalent(args[i + 1], from, ec)) args[i + 1] = to;
+  }
+}
+
 // Sets `flag value` in an argument list, replacing the deployment's own value.
 void SetOption(std::vector<std::string>& args, const std::string& flag, const std::string& value) {
   for (std::size_t i = 0; i + 1 < args.size(); ++i) {
@@ -85,7 +98,9 @@ int main(int argc, char** argv) {
       if (arg == "--help" || arg == "-h") {
         std::cout << "usage: scenario_runner SCENARIO.yaml --out DIR [--lcm-url URL] [--quiet]\n\n"
                      "Runs a scenario (configs/scenarios/) on a fresh bus, records DIR/log.lcm\n"
-                     "with lcm-logger and writes DIR/summary.json.\n";
+                     "with rover_recorder, checks that the log lost nothing and writes\n"
+                     "DIR/summary.json. Exit status 1 when the run did not end as the\n"
+                     "scenario's `expect:` says.\n";
         return 0;
       } else if (arg == "--out" && i + 1 < argc) {
         out_dir = argv[++i];
@@ -105,11 +120,19 @@ int main(int argc, char** argv) {
     const auto spec = rover::tools::LoadScenario(scenario_path);
     const auto deployment = rover::launch::LoadDeployment(spec.deployment);
     const std::string sequence_text = ReadFile(spec.sequence);
-    const auto rover_config = rover::config::ConfigNode::LoadFile(spec.rover_config);
+    fs::create_directories(out_dir);
+    // The scenario's seeds and overrides go into copies in DIR; the processes read those.
+    const auto configs = rover::tools::PrepareRunConfigs(spec.rover_config, spec.overrides, spec.world,
+                                                         spec.world_overrides, out_dir);
+    const auto rover_config = rover::config::ConfigNode::LoadFile(configs.rover_config);
     const auto footprint = rover::hazards::LoadHazardOptions(rover_config["hazards"], {"publish_hz"}).footprint;
-    // The start elevation comes from the same world the simulator builds.
-    const rover::terrain::World world(rover::terrain::WorldOptions::LoadFile(spec.world));
-    const double start_z = -world.Elevation(spec.start_x, spec.start_y);
+    // The estimator starts at the height of the ground under the start point, from the same
+    // world the simulator builds; a rock there is not the ground (the rover stands on its
+    // wheels). The rover origin sits mobility.geometry.origin_height_m above the contacts.
+    const rover::terrain::World world(rover::terrain::WorldOptions::LoadFile(configs.world));
+    double origin_height_m = 0.0;
+    rover_config["mobility"]["geometry"].Get("origin_height_m", origin_height_m);
+    const double start_z = -world.GroundElevation(spec.start_x, spec.start_y) - origin_height_m;
     if (url.empty()) url = PrivateUrl();
 
     fs::create_directories(out_dir);
@@ -123,6 +146,7 @@ int main(int argc, char** argv) {
     };
 
     rover::bus::Bus bus(url);
+    bus.set_publisher("scenario_runner");
     std::set<std::string> alive;
     std::optional<rover_msgs::sequence_status_t> final_status;
     int steps_seen = 0;
@@ -150,22 +174,37 @@ int main(int argc, char** argv) {
           }
         });
 
-    rover::launch::ProcessSet set(rover::launch::BinDir(), out_dir, false);
     const std::vector<std::string> env = {"ROVER_LCM_URL=" + url};
-    set.Start({"lcm-logger", "/usr/bin/lcm-logger", {"--lcm-url=" + url, "-q", "-f", log_path}}, env);
+    // The recorder first, and heard on the bus before any process starts, so that the log
+    // holds every publisher from its first message (the completeness check expects each
+    // count to start at 0). It stops last, after the processes, and flushes.
+    rover::launch::ProcessSet recorder(rover::launch::BinDir(), out_dir, false);
+    recorder.Start({"rover_recorder", "rover_recorder", {"--lcm-url", url, log_path}}, env);
+    while (!alive.count("rover_recorder") && !g_stop && wall() < 10) {
+      bus.Handle(50);
+      for (const auto& [name, how] : recorder.Poll(0)) {
+        throw std::runtime_error("rover_recorder " + how + " at start (see " + out_dir +
+                                 "/rover_recorder.log)");
+      }
+    }
+    if (!alive.count("rover_recorder")) {
+      throw std::runtime_error("rover_recorder sent no heartbeat within 10 s");
+    }
+    rover::launch::ProcessSet set(rover::launch::BinDir(), out_dir, false);
     std::string others;  // the simulator holds its clock until these are up
     for (const auto& p : deployment.processes)
       if (p.name != "rover_sim") others += (others.empty() ? "" : ",") + p.name;
     std::ofstream commands(out_dir + "/commands.txt");
     for (auto p : deployment.processes) {
+      ReplaceConfig(p.args, spec.rover_config, configs.rover_config);
       if (p.name == "rover_sim") {
-        SetOption(p.args, "--world", spec.world);
+        SetOption(p.args, "--world", configs.world);
         SetOption(p.args, "--start",
                   Num(spec.start_x) + "," + Num(spec.start_y) + "," + Num(spec.start_yaw_deg));
         SetOption(p.args, "--rate", Num(spec.sim_rate));
         SetOption(p.args, "--hold-for", others);
       } else if (p.name == "camera_capture") {
-        SetOption(p.args, "--world", spec.world);
+        SetOption(p.args, "--world", configs.world);
       } else if (p.name == "state_estimator") {
         SetOption(p.args, "--start", Num(spec.start_x) + "," + Num(spec.start_y) + "," +
                                          Num(start_z) + "," + Num(spec.start_yaw_deg));
@@ -221,6 +260,15 @@ int main(int argc, char** argv) {
     }
     if (!final_status) note("no final status within " + Num(spec.timeout_s) + " s");
     set.StopAll();
+    recorder.Signal("rover_recorder", SIGTERM);  // it writes what it holds, then exits
+    for (const double until = wall() + 10; recorder.Running("rover_recorder") && wall() < until;) {
+      for (const auto& [name, how] : recorder.Poll(50)) {
+        if (how != "exited with code 0") {
+          note(name + " " + how + " (see " + out_dir + "/rover_recorder.log)");
+        }
+      }
+    }
+    recorder.StopAll();
 
     auto summary = rover::tools::SummarizeLog(log_path, footprint);
     summary.scenario = spec.name;
@@ -228,15 +276,15 @@ int main(int argc, char** argv) {
     summary.process_events = partial.process_events;
     std::ofstream(out_dir + "/summary.json") << rover::tools::SummaryJson(summary);
     std::cout << "\n" << rover::tools::SummaryText(summary);
+    std::string missed;
+    const bool as_expected = rover::tools::AsExpected(spec, summary, &missed);
     if (!spec.expect_outcome.empty()) {
-      const bool match = summary.outcome == spec.expect_outcome &&
-                         (spec.expect_abort_reason.empty() ||
-                          summary.abort_reason == spec.expect_abort_reason);
       std::cout << "  expected: " << spec.expect_outcome
                 << (spec.expect_abort_reason.empty() ? "" : " (" + spec.expect_abort_reason + ")")
-                << (match ? " - as expected\n" : " - NOT as expected\n");
+                << (as_expected ? " - as expected\n" : " - NOT as expected: " + missed + "\n");
     }
     std::cout << "  wrote " << out_dir << "/summary.json and " << log_path << "\n";
-    return summary.outcome == "incomplete" ? 1 : 0;
+    // Exit 1 when the run did not end, or ended other than the scenario expects.
+    return summary.outcome == "incomplete" || !as_expected ? 1 : 0;
   });
 }

@@ -1,0 +1,335 @@
+// ./rover campaign SCENARIO.yaml --variants N [--out DIR] [--seed S] [--min-pass PCT]
+//
+// Runs N seeded variants of one scenario, one after the other, each through scenario_runner
+// on its own bus: new world, mobility-noise and render-noise seeds, the start pose moved by
+// up to the scenario's `campaign:` jitter, and the world's first slope changed by up to
+// +/- slope_jitter_deg. Prints a table with each variant's outcome and the pass rate (a
+// variant passes when scenario_runner says it ended as expected), and writes
+// DIR/campaign.json. Exit status 1 when the pass rate is below --min-pass or any variant
+// slid blind (see BlindSlide), 2 on a bad argument.
+#include "bus/process.hpp"
+#include "config/yaml_config.hpp"
+#include "launch/process_set.hpp"
+#include "report/json_writer.hpp"
+#include "scenario/scenario.hpp"
+
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <random>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using rover::config::ConfigError;
+
+namespace {
+
+struct Variant {
+  int index = 0;
+  std::uint64_t world_seed = 0, mobility_seed = 0, render_seed = 0;
+  double x = 0, y = 0, yaw_deg = 0;
+  std::optional<double> slope_deg;  // the world's first slope, when it has one
+  std::string dir;
+  // Results.
+  int exit_code = -1;
+  std::string outcome = "incomplete", abort_reason, detail;
+  std::optional<double> clearance_m;
+  double position_error_pct = 0;
+  int vo_accepted = 0, false_updates = 0, steps = 0;
+  std::string blind_slide;  // empty: none
+  bool passed() const { return exit_code == 0 && blind_slide.empty(); }
+};
+
+// The world's first slope angle after the scenario's own world overrides, if it has one.
+std::optional<double> FirstSlope(const rover::tools::ScenarioSpec& spec) {
+  YAML::Node world = YAML::LoadFile(spec.world);
+  rover::tools::ApplyOverrides(world, spec.world_overrides, spec.world);
+  const YAML::Node slopes = world["slopes"];
+  if (!slopes || !slopes.IsSequence() || slopes.size() == 0 || !slopes[0]["angle_deg"]) return std::nullopt;
+  return slopes[0]["angle_deg"].as<double>();
+}
+
+// Variant k of the campaign: everything drawn from (campaign seed, k), so a campaign is
+// reproducible and one variant can be run again alone from its scenario.yaml.
+Variant MakeVariant(const rover::tools::ScenarioSpec& spec, std::optional<double> slope, std::uint64_t seed,
+                    int k) {
+  std::mt19937_64 rng(seed * 1000003ULL + static_cast<std::uint64_t>(k));
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  Variant v;
+  v.index = k;
+  v.world_seed = 1 + rng() % 1000000;
+  v.mobility_seed = 1 + rng() % 1000000;
+  v.render_seed = 1 + rng() % 1000000;
+  v.x = spec.start_x + spec.campaign_start_jitter_m * unit(rng);
+  v.y = spec.start_y + spec.campaign_start_jitter_m * unit(rng);
+  v.yaw_deg = spec.start_yaw_deg + spec.campaign_yaw_jitter_deg * unit(rng);
+  if (slope) v.slope_deg = *slope + spec.campaign_slope_jitter_deg * unit(rng);
+  return v;
+}
+
+// The scenario file of a variant: the original with its seeds, start and slope replaced.
+void WriteVariantScenario(const rover::tools::ScenarioSpec& spec, const Variant& v, const std::string& path) {
+  YAML::Node root = YAML::LoadFile(spec.source);
+  root["name"] = spec.name + "_v" + std::to_string(v.index);
+  YAML::Node seeds(YAML::NodeType::Map);
+  seeds["world"] = v.world_seed;
+  seeds["mobility"] = v.mobility_seed;
+  seeds["render"] = v.render_seed;
+  root["seeds"] = seeds;
+  YAML::Node start(YAML::NodeType::Map);
+  start["x"] = v.x;
+  start["y"] = v.y;
+  start["yaw_deg"] = v.yaw_deg;
+  root["start"] = start;
+  if (v.slope_deg) {
+    if (!root["world_overrides"] || !root["world_overrides"].IsMap()) {
+      root["world_overrides"] = YAML::Node(YAML::NodeType::Map);
+    }
+    root["world_overrides"]["slopes.0.angle_deg"] = *v.slope_deg;
+  }
+  std::ofstream out(path);
+  out << "# Variant " << v.index << " of " << spec.source << " (scenario_campaign)\n" << YAML::Dump(root) << "\n";
+  if (!out) throw ConfigError(path + ": cannot write the variant scenario");
+}
+
+// Runs `argv` with stdout and stderr to `log_path`; returns its exit status (128 + signal).
+int RunLogged(const std::vector<std::string>& argv, const std::string& log_path) {
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid == 0) {
+    const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) {
+      dup2(fd, 1);
+      dup2(fd, 2);
+      close(fd);
+    }
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    execv(args[0], args.data());
+    _exit(127);
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// A blind slide: after `window` arc steps in a row whose true progress along the commanded
+// direction, summed, is below `fraction` of the commanded, the rover drove on (another
+// step), or its command ended completed. Empty when none, else where it happened.
+std::string BlindSlide(const YAML::Node& summary, int window, double fraction) {
+  const YAML::Node steps = summary["steps"];
+  if (!steps || !steps.IsSequence()) return "";
+  std::vector<std::pair<double, double>> arcs;  // commanded, true
+  std::vector<std::size_t> index;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const double commanded = steps[i]["commanded"]["distance_m"].as<double>();
+    if (std::abs(commanded) < 0.05) continue;
+    arcs.emplace_back(commanded, steps[i]["true"]["distance_m"].as<double>());
+    index.push_back(i);
+  }
+  const bool completed = summary["outcome"].as<std::string>() == "completed";
+  for (std::size_t end = static_cast<std::size_t>(window); end <= arcs.size(); ++end) {
+    double commanded = 0, moved = 0;
+    for (std::size_t i = end - window; i < end; ++i) {
+      commanded += std::abs(arcs[i].first);
+      moved += std::copysign(1.0, arcs[i].first) * arcs[i].second;
+    }
+    const bool drove_on = index[end - 1] + 1 < steps.size();
+    if (moved < fraction * commanded && (drove_on || completed)) {
+      std::ostringstream os;
+      os << std::fixed << std::setprecision(2) << "steps " << index[end - window] << "-" << index[end - 1]
+         << ": " << moved << " m of " << commanded << " m, then " << (drove_on ? "drove on" : "completed");
+      return os.str();
+    }
+  }
+  return "";
+}
+
+void ReadResults(Variant& v, int window, double fraction) {
+  const std::string path = v.dir + "/summary.json";
+  if (!fs::exists(path)) {
+    v.detail = "no summary.json (see " + v.dir + "/runner.log)";
+    return;
+  }
+  const YAML::Node s = YAML::LoadFile(path);
+  v.outcome = s["outcome"].as<std::string>();
+  v.abort_reason = s["abort_reason"].IsNull() ? "" : s["abort_reason"].as<std::string>();
+  v.detail = s["detail"].as<std::string>();
+  if (s["min_keepout_clearance_m"] && !s["min_keepout_clearance_m"].IsNull()) {
+    v.clearance_m = s["min_keepout_clearance_m"].as<double>();
+  }
+  v.position_error_pct = s["position_error_pct"].IsNull() ? 0.0 : s["position_error_pct"].as<double>();
+  if (s["vo_updates_accepted"]) v.vo_accepted = s["vo_updates_accepted"].as<int>();
+  if (s["false_updates"]) v.false_updates = s["false_updates"].as<int>();
+  v.steps = static_cast<int>(s["steps"].size());
+  v.blind_slide = BlindSlide(s, window, fraction);
+}
+
+std::string Fixed(double v, int digits) {
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(digits) << v;
+  return os.str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return rover::bus::RunMain("scenario_campaign", [&]() -> int {
+    std::string scenario_path, out_dir;
+    int variants = 0, window = 2;
+    std::uint64_t seed = 1;
+    double min_pass_pct = 95.0, slide_pct = 10.0;
+    auto number = [&](int& i, const std::string& flag) -> double {
+      if (i + 1 >= argc) throw ConfigError("scenario_campaign: " + flag + ": missing value");
+      const std::string v = argv[++i];
+      char* end = nullptr;
+      const double d = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end != '\0' || !std::isfinite(d)) {
+        throw ConfigError("scenario_campaign: argument " + flag + " \"" + v + "\": expected a number");
+      }
+      return d;
+    };
+    for (int i = 1; i < argc; ++i) {
+      const std::string arg = argv[i];
+      if (arg == "--help" || arg == "-h") {
+        std::cout << "usage: scenario_campaign SCENARIO.yaml --variants N [--out DIR] [--seed S]\n"
+                     "                         [--min-pass PCT] [--slide-window N] [--slide-progress PCT]\n\n"
+                     "Runs N seeded variants of a scenario (seeds, start pose, slope; the scenario's\n"
+                     "`campaign:` section sets the jitter), prints a table and the pass rate, and\n"
+                     "writes DIR/campaign.json (default DIR: out/campaign/NAME). Exit 1 when the\n"
+                     "pass rate is below --min-pass (default 95 %) or a variant slid blind: drove on\n"
+                     "after --slide-window (2) arc steps with true progress below --slide-progress\n"
+                     "(10 %) of the commanded.\n";
+        return 0;
+      } else if (arg == "--variants") {
+        const double n = number(i, arg);
+        if (n < 1 || n > 10000 || n != std::floor(n)) {
+          throw ConfigError("scenario_campaign: --variants " + Fixed(n, 2) + ": expected a whole number in [1, 10000]");
+        }
+        variants = static_cast<int>(n);
+      } else if (arg == "--out" && i + 1 < argc) {
+        out_dir = argv[++i];
+      } else if (arg == "--seed") {
+        const double s = number(i, arg);
+        if (s < 0 || s != std::floor(s)) throw ConfigError("scenario_campaign: --seed: expected a whole number >= 0");
+        seed = static_cast<std::uint64_t>(s);
+      } else if (arg == "--min-pass") {
+        min_pass_pct = number(i, arg);
+        if (min_pass_pct < 0 || min_pass_pct > 100) throw ConfigError("scenario_campaign: --min-pass: expected 0 to 100");
+      } else if (arg == "--slide-window") {
+        const double n = number(i, arg);
+        if (n < 1 || n > 100 || n != std::floor(n)) throw ConfigError("scenario_campaign: --slide-window: expected 1 to 100");
+        window = static_cast<int>(n);
+      } else if (arg == "--slide-progress") {
+        slide_pct = number(i, arg);
+      } else if (scenario_path.empty() && arg.rfind("--", 0) != 0) {
+        scenario_path = arg;
+      } else {
+        throw ConfigError("scenario_campaign: argument " + arg +
+                          ": unexpected (expected SCENARIO.yaml --variants N [--out DIR])");
+      }
+    }
+    if (scenario_path.empty()) throw ConfigError("scenario_campaign: missing SCENARIO.yaml");
+    if (variants == 0) throw ConfigError("scenario_campaign: missing --variants N");
+    const auto spec = rover::tools::LoadScenario(scenario_path);
+    if (out_dir.empty()) out_dir = "out/campaign/" + spec.name;
+    fs::create_directories(out_dir);
+    const std::optional<double> slope = FirstSlope(spec);
+    const std::string runner = rover::launch::BinDir() + "/scenario_runner";
+
+    std::cout << "campaign " << spec.name << ": " << variants << " variants (seed " << seed << "), start +/- "
+              << spec.campaign_start_jitter_m << " m, +/- " << spec.campaign_yaw_jitter_deg << " deg"
+              << (slope ? ", slope " + Fixed(*slope, 1) + " +/- " + Fixed(spec.campaign_slope_jitter_deg, 1) + " deg"
+                        : std::string(", no slope"))
+              << "; expected " << spec.expect_outcome
+              << (spec.expect_abort_reason.empty() ? "" : " (" + spec.expect_abort_reason + ")") << "\n";
+    std::cout << std::left << std::setw(4) << "var" << std::setw(22) << " seeds w/m/r" << std::setw(24)
+              << " start x, y, yaw" << std::setw(7) << " slope" << std::setw(11) << " outcome" << std::setw(20)
+              << " reason" << std::setw(10) << " clear m" << std::setw(8) << " err %" << std::setw(10)
+              << " VO ok/fls" << " result\n" << std::flush;
+
+    std::vector<Variant> results;
+    for (int k = 1; k <= variants; ++k) {
+      Variant v = MakeVariant(spec, slope, seed, k);
+      v.dir = out_dir + "/v" + std::to_string(k);
+      fs::create_directories(v.dir);
+      const std::string variant_yaml = v.dir + "/scenario.yaml";
+      WriteVariantScenario(spec, v, variant_yaml);
+      v.exit_code = RunLogged({runner, variant_yaml, "--out", v.dir, "--quiet"}, v.dir + "/runner.log");
+      ReadResults(v, window, slide_pct / 100.0);
+      std::ostringstream seeds, start;
+      seeds << v.world_seed << "/" << v.mobility_seed << "/" << v.render_seed;
+      start << Fixed(v.x, 2) << ", " << Fixed(v.y, 2) << ", " << Fixed(v.yaw_deg, 1);
+      std::cout << std::left << std::setw(4) << k << " " << std::setw(21) << seeds.str() << " " << std::setw(23)
+                << start.str() << " " << std::setw(6) << (v.slope_deg ? Fixed(*v.slope_deg, 1) : "-") << " "
+                << std::setw(10) << v.outcome << " " << std::setw(19) << (v.abort_reason.empty() ? "-" : v.abort_reason)
+                << " " << std::setw(9) << (v.clearance_m ? Fixed(*v.clearance_m, 3) : "-") << " " << std::setw(7)
+                << Fixed(v.position_error_pct, 2) << " " << std::setw(9)
+                << (std::to_string(v.vo_accepted) + "/" + std::to_string(v.false_updates)) << " "
+                << (v.passed() ? "pass" : v.exit_code == 0 ? "FAIL (blind slide: " + v.blind_slide + ")"
+                                                          : "FAIL (see " + v.dir + "/runner.log)")
+                << "\n" << std::flush;
+      results.push_back(v);
+    }
+
+    int passed = 0, slides = 0, accepted = 0, false_updates = 0;
+    for (const auto& v : results) {
+      passed += v.passed();
+      slides += !v.blind_slide.empty();
+      accepted += v.vo_accepted;
+      false_updates += v.false_updates;
+    }
+    const double pass_pct = 100.0 * passed / variants;
+    std::cout << "pass rate: " << passed << "/" << variants << " (" << Fixed(pass_pct, 1) << " %, threshold "
+              << Fixed(min_pass_pct, 1) << " %); blind slides: " << slides << "; false VO updates: " << false_updates
+              << " of " << accepted << " accepted"
+              << (accepted > 0 ? " (" + Fixed(100.0 * false_updates / accepted, 2) + " %)" : std::string()) << "\n";
+
+    rover::tools::JsonWriter j;
+    j.BeginObject();
+    j.Field("scenario", spec.source).Field("seed", static_cast<long long>(seed)).Field("variants", variants);
+    j.Field("passed", passed).Field("pass_rate_pct", pass_pct).Field("min_pass_pct", min_pass_pct);
+    j.Field("blind_slides", slides).Field("vo_updates_accepted", accepted).Field("false_updates", false_updates);
+    j.Key("runs").BeginArray();
+    for (const auto& v : results) {
+      j.BeginObject();
+      j.Field("variant", v.index).Field("dir", v.dir);
+      j.Field("world_seed", static_cast<long long>(v.world_seed));
+      j.Field("mobility_seed", static_cast<long long>(v.mobility_seed));
+      j.Field("render_seed", static_cast<long long>(v.render_seed));
+      j.Field("start_x", v.x).Field("start_y", v.y).Field("start_yaw_deg", v.yaw_deg);
+      j.Key("slope_deg");
+      if (v.slope_deg) {
+        j.Value(*v.slope_deg);
+      } else {
+        j.Null();
+      }
+      j.Field("outcome", v.outcome).Field("abort_reason", v.abort_reason).Field("detail", v.detail);
+      j.Key("min_keepout_clearance_m");
+      if (v.clearance_m) {
+        j.Value(*v.clearance_m);
+      } else {
+        j.Null();
+      }
+      j.Field("position_error_pct", v.position_error_pct).Field("steps", v.steps);
+      j.Field("vo_updates_accepted", v.vo_accepted).Field("false_updates", v.false_updates);
+      j.Field("blind_slide", v.blind_slide).Field("runner_exit", v.exit_code).Field("passed", v.passed());
+      j.EndObject();
+    }
+    j.EndArray();
+    j.EndObject();
+    std::ofstream(out_dir + "/campaign.json") << j.str();
+    std::cout << "wrote " << out_dir << "/campaign.json\n";
+    return pass_pct + 1e-9 >= min_pass_pct && slides == 0 ? 0 : 1;
+  });
+}
