@@ -2,16 +2,21 @@
 // Reads STEREO_FRAME, writes VO_UPDATE. The prior is the motion between the two
 // frames' on-board pose estimates (wheel odometry + IMU); a failure leaves it in force
 // (VO-10), which the update says with its status and reason.
+//
+// Every image is checked before it is decoded (common/imaging): encoding, sides against
+// the camera model in the same frame and `visual_odometry.max_image_pixels`, byte count,
+// and a PNG's own header. A bad frame gets a VO_UPDATE with STATUS_BAD_INPUT and the
+// reason, and is forgotten: the next good frame pairs with the last good one. If VO itself
+// fails on a frame, its chain starts again at the next good frame.
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
 #include "geometry/camera_model.hpp"
+#include "imaging/image_check.hpp"
 #include "vo/visual_odometry.hpp"
 
 #include <rover_msgs/stereo_frame_t.hpp>
 #include <rover_msgs/vo_update_t.hpp>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
 #include <iostream>
@@ -21,34 +26,32 @@ using namespace rover;
 
 namespace {
 
-// Decodes an image_t. Returns an error text naming what was wrong, or empty.
-std::string DecodeImage(const rover_msgs::image_t& img, cv::Mat& out) {
-  const std::size_t pixels = static_cast<std::size_t>(std::max(0, img.width)) *
-                             static_cast<std::size_t>(std::max(0, img.height));
-  switch (img.encoding) {
-    case rover_msgs::image_t::ENCODING_GRAY8:
-      if (img.data.size() != pixels) return "GRAY8 image holds " + std::to_string(img.data.size()) +
-                                            " bytes (expected width*height = " + std::to_string(pixels) + ")";
-      out = cv::Mat(img.height, img.width, CV_8UC1, const_cast<std::uint8_t*>(img.data.data())).clone();
-      return "";
-    case rover_msgs::image_t::ENCODING_GRAY16:
-      if (img.data.size() != 2 * pixels) return "GRAY16 image holds " + std::to_string(img.data.size()) +
-                                                " bytes (expected 2*width*height = " + std::to_string(2 * pixels) + ")";
-      out = cv::Mat(img.height, img.width, CV_16UC1, const_cast<std::uint8_t*>(img.data.data())).clone();
-      return "";
-    case rover_msgs::image_t::ENCODING_PNG:
-      out = cv::imdecode(img.data, cv::IMREAD_UNCHANGED);
-      if (out.empty()) return "PNG image does not decode (expected a valid PNG)";
-      if (out.channels() != 1) return "PNG image has " + std::to_string(out.channels()) +
-                                      " channels (expected 1, gray)";
-      if (out.cols != img.width || out.rows != img.height) {
-        return "PNG image is " + std::to_string(out.cols) + "x" + std::to_string(out.rows) +
-               " (expected " + std::to_string(img.width) + "x" + std::to_string(img.height) + ")";
-      }
-      return "";
-    default:
-      return "unknown image encoding " + std::to_string(img.encoding) + " (expected 0, 1 or 2)";
+imaging::ImageView ViewOf(const rover_msgs::image_t& img) {
+  imaging::ImageView v;
+  v.encoding = img.encoding;
+  v.width = img.width;
+  v.height = img.height;
+  v.declared_size = img.size;
+  v.data = img.data.data();
+  v.data_size = img.data.size();
+  return v;
+}
+
+// Checks both images of a frame against their camera models and the limits before
+// anything decodes them (common/imaging), then decodes them. Returns "" or why not.
+std::string DecodePair(const rover_msgs::stereo_frame_t& frame, const imaging::ImageLimits& limits,
+                       vo::StereoImages& images) {
+  if (std::string bad = imaging::DecodeCheckedImage(ViewOf(frame.left), frame.left_model.width,
+                                                    frame.left_model.height, limits, images.left);
+      !bad.empty()) {
+    return "left image: " + bad;
   }
+  if (std::string bad = imaging::DecodeCheckedImage(ViewOf(frame.right), frame.right_model.width,
+                                                    frame.right_model.height, limits, images.right);
+      !bad.empty()) {
+    return "right image: " + bad;
+  }
+  return "";
 }
 
 struct PriorOptions {
@@ -67,17 +70,24 @@ int main(int argc, char** argv) {
     bus::Process proc("visual_odometry",
                       "MER visual odometry between consecutive stereo frames.\n"
                       "Reads STEREO_FRAME; writes VO_UPDATE.\n"
-                      "Config: the `vo:` section (configs/vo.yaml) and `visual_odometry:` (prior).",
+                      "Config: the `vo:` section (configs/vo.yaml) and `visual_odometry:` (prior,\n"
+                      "image limits).",
                       argc, argv, {}, {"visual_odometry"});
     vo::VisualOdometry vo(vo::LoadVoOptions(proc.config()["vo"]));
     PriorOptions prior;
     const auto section = proc.config()["visual_odometry"];
     section.CheckKeys({"translation_sigma_fraction", "min_translation_sigma_m",
-                       "rotation_sigma_fraction", "min_rotation_sigma_deg"});
+                       "rotation_sigma_fraction", "min_rotation_sigma_deg", "max_image_pixels",
+                       "min_image_side"});
     section.Get("translation_sigma_fraction", prior.translation_sigma_fraction, 0.0, 10.0);
     section.Get("min_translation_sigma_m", prior.min_translation_sigma_m, 0.0, 10.0);
     section.Get("rotation_sigma_fraction", prior.rotation_sigma_fraction, 0.0, 10.0);
     section.Get("min_rotation_sigma_deg", prior.min_rotation_sigma_deg, 0.0, 90.0);
+    imaging::ImageLimits limits;
+    int max_image_pixels = static_cast<int>(limits.max_pixels);
+    section.Get("max_image_pixels", max_image_pixels, 1024, 1 << 28);  // up to a 16384^2 camera
+    limits.max_pixels = max_image_pixels;
+    section.Get("min_image_side", limits.min_side, 1, 4096);
 
     std::optional<rover_msgs::stereo_frame_t> previous;  // images dropped; pose and ids kept
     int failures = 0;
@@ -103,9 +113,7 @@ int main(int argc, char** argv) {
           vo::StereoImages images;
           images.utime = frame.utime;
           images.frame_id = frame.frame_id;
-          std::string error = DecodeImage(frame.left, images.left);
-          if (error.empty()) error = DecodeImage(frame.right, images.right);
-          if (!error.empty()) error = "frame " + std::to_string(frame.frame_id) + ": " + error;
+          std::string error = DecodePair(frame, limits, images);
           if (error.empty()) {
             try {
               images.rig.left = geometry::CameraModelFromParams(
@@ -115,9 +123,10 @@ int main(int argc, char** argv) {
                   frame.right_model.type, frame.right_model.width, frame.right_model.height,
                   frame.right_model.params);
             } catch (const std::exception& e) {
-              error = "frame " + std::to_string(frame.frame_id) + ": camera model: " + e.what();
+              error = std::string("camera model: ") + e.what();
             }
           }
+          if (!error.empty()) error = "frame " + std::to_string(frame.frame_id) + ": " + error;
           const geometry::Pose T_site_curr = bus::PoseFromMsg(frame.pose_at_capture);
           images.R_site_ref = T_site_curr.linear();
 
@@ -125,7 +134,7 @@ int main(int argc, char** argv) {
           if (!error.empty()) {
             result.status = vo::VoStatus::kBadInput;
             result.reason = error;
-            std::cerr << "visual_odometry: " << error << "\n";
+            proc.bus().Drop(channels::kStereoFrame, rover_msgs::stereo_frame_t::getTypeName(), error);
           } else {
             Eigen::Isometry3d prior_T = Eigen::Isometry3d::Identity();
             Eigen::Matrix<double, 6, 6> prior_cov = Eigen::Matrix<double, 6, 6>::Identity();
@@ -140,7 +149,17 @@ int main(int argc, char** argv) {
               prior_cov.diagonal() << t_sigma * t_sigma, t_sigma * t_sigma, t_sigma * t_sigma,
                   r_sigma * r_sigma, r_sigma * r_sigma, r_sigma * r_sigma;
             }
-            result = vo.Process(images, prior_T, prior_cov);
+            try {
+              result = vo.Process(images, prior_T, prior_cov);
+            } catch (const std::exception& e) {
+              // VO's state is unknown after a throw: its chain starts again.
+              result = vo::VoResult{};
+              result.status = vo::VoStatus::kBadInput;
+              result.reason = "frame " + std::to_string(frame.frame_id) + ": VO failed: " + e.what();
+              std::cerr << "visual_odometry: " << result.reason << " (the VO chain starts again)\n";
+              vo.Reset();
+              previous.reset();
+            }
           }
 
           out.status = static_cast<std::int8_t>(result.status);
