@@ -1,5 +1,6 @@
 #include "logcheck/log_check.hpp"
 
+#include "bus/bus.hpp"
 #include "bus/channels.hpp"
 
 #include <lcm/lcm-cpp.hpp>
@@ -151,14 +152,7 @@ const ChannelType* FindChannel(std::string_view channel) {
   return nullptr;
 }
 
-std::uint32_t PublisherId(std::string_view name) {
-  std::uint32_t h = 2166136261u;  // FNV-1a, 32 bits
-  for (const char c : name) {
-    h ^= static_cast<std::uint8_t>(c);
-    h *= 16777619u;
-  }
-  return h;
-}
+std::uint32_t PublisherId(std::string_view name) { return bus::PublisherId(std::string(name)); }
 
 StampRead ReadStamp(const ChannelType& type, const std::uint8_t* data, std::size_t size) {
   StampRead out;
@@ -374,8 +368,7 @@ LogReport CheckLog(const std::string& path, TrackerOptions options) {
 
   LossTracker tracker(options);
   ConsistencyCheck consistency;
-  LogReport report;
-  report.path = path;
+  std::string trailing;
   // LCM's reader skips, silently, bytes that do not start an event (it searches for the
   // next event's magic number) and stops at an event it cannot read whole. Both show in
   // the file offsets: an event must start where the previous one ended, and the last one
@@ -392,14 +385,22 @@ LogReport CheckLog(const std::string& path, TrackerOptions options) {
     end = event_end;
   }
   if (skipped > 0) {
-    report.trailing = std::to_string(skipped) + " bytes between events that are not events (corrupt)";
+    trailing = std::to_string(skipped) + " bytes between events that are not events (corrupt)";
   }
   if (end < st.st_size) {
-    report.trailing += std::string(report.trailing.empty() ? "" : "; ") +
+    trailing += std::string(trailing.empty() ? "" : "; ") +
                        std::to_string(st.st_size - end) +
                        " bytes after the last whole event at offset " + std::to_string(end) +
                        " (truncated or corrupt)";
   }
+  return Summarize(path, tracker, consistency, trailing);
+}
+
+LogReport Summarize(const std::string& path, const LossTracker& tracker,
+                    const ConsistencyCheck& consistency, const std::string& trailing) {
+  LogReport report;
+  report.path = path;
+  report.trailing = trailing;
   report.messages = tracker.messages();
   report.channels = tracker.channels();
   for (const auto& [name, c] : report.channels) {
@@ -419,7 +420,9 @@ LogReport CheckLog(const std::string& path, TrackerOptions options) {
                   (gaps == 1 ? " gap" : " gaps"));
   }
   if (report.unchecked > 0) {
-    why.push_back(std::to_string(report.unchecked) + " messages carry no readable count");
+    why.push_back(std::to_string(report.unchecked) +
+                  (report.unchecked == 1 ? " message carries" : " messages carry") +
+                  " no readable count");
   }
   if (!report.trailing.empty()) why.push_back(report.trailing);
   report.complete = why.empty();
@@ -473,7 +476,8 @@ std::string FormatReport(const LogReport& r) {
       os << "unchecked: " << channel << ": " << c.unchecked << " messages (" << c.unchecked_reason
          << ")\n";
     }
-    if (c.type_name.empty()) {
+    // LCM 1.3.1 sends LCM_SELF_TEST to itself when a bus opens: LCM's, not the rover's.
+    if (c.type_name.empty() && channel != "LCM_SELF_TEST") {
       os << "note: " << channel << " is not a rover channel; its " << c.count
          << " messages were not checked\n";
     }

@@ -44,7 +44,8 @@ struct ChannelType {
 std::span<const ChannelType> KnownChannels();
 const ChannelType* FindChannel(std::string_view channel);
 
-// The publisher id in pub_seq's high 32 bits: 32-bit FNV-1a of the process name.
+// The publisher id in pub_seq's high 32 bits: 32-bit FNV-1a of the process name
+// (bus::PublisherId, the one Bus::Publish stamps).
 std::uint32_t PublisherId(std::string_view process_name);
 
 // Where one message came from.
@@ -162,6 +163,11 @@ struct LogReport {
   bool complete = false;
   std::string verdict_reason;           // why not complete (empty when complete)
 };
+
+// The report of what `tracker` and `consistency` have seen (the recorder's, live).
+// `trailing` is the file's own defect, if any (see CheckLog).
+LogReport Summarize(const std::string& path, const LossTracker& tracker,
+                    const ConsistencyCheck& consistency, const std::string& trailing = "");
 
 // Reads an LCM log (lcm::LogFile). Throws std::runtime_error naming the file when it is not
 // a readable regular file.

@@ -1,0 +1,340 @@
+// rover_recorder [--lcm-url URL] OUTPUT.lcm: records every channel to a standard LCM log.
+//
+// Why not lcm-logger: LCM 1.3.1 drops a message for a subscription whose queue already
+// holds `queue capacity` undispatched messages (30 by default), and lcm-logger cannot set
+// that capacity from its command line. At the default 50x sim rate the bus carries a few
+// thousand messages a second, so a logger whose dispatch thread loses the CPU for ~10 ms on
+// a busy 2-core machine loses messages, with the kernel's receive errors at 0.
+// This recorder asks for a deep queue (100,000 messages), does nothing on LCM's dispatch
+// thread but copy each message into its own queue, writes from a second thread with
+// lcm::LogFile (the standard format: lcm-logplayer and every LCM tool read it), and checks
+// every message's publisher count as it goes, so it reports any loss it could not prevent.
+//
+// It publishes a heartbeat (process "rover_recorder") once a wall second, like the rover's
+// processes: `dropped` counts messages it had to drop, the detail says what it wrote and lost.
+// SIGINT or SIGTERM stops it: it dispatches what LCM already holds, writes everything queued,
+// flushes, prints counts per channel and exits 0 (1 if the log could not be written).
+#include "bus/bus.hpp"
+#include "bus/channels.hpp"
+#include "logcheck/log_check.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+#include <rover_msgs/heartbeat_t.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <cstdlib>
+#include <deque>
+#include <iostream>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <sys/stat.h>
+#include <thread>
+#include <vector>
+
+namespace {
+
+constexpr int kLcmQueueCapacity = 100000;          // messages LCM may hold for us
+constexpr std::size_t kMaxQueuedBytes = 1ull << 30;  // our own queue, in memory
+constexpr int kReportsPerSecond = 20;              // loss lines on stderr, then a count
+
+std::atomic<bool> g_stop{false};
+void OnSignal(int) { g_stop = true; }
+
+struct Event {
+  std::int64_t timestamp;  // receive time, us since the epoch (as lcm-logger records)
+  std::string channel;
+  std::vector<std::uint8_t> data;
+};
+
+// The hand-off between the receive thread and the writer: unbounded in count, bounded in
+// bytes (a message that would pass kMaxQueuedBytes is dropped and counted).
+class EventQueue {
+ public:
+  bool Push(Event&& e) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (bytes_ + e.data.size() > kMaxQueuedBytes) return false;
+    bytes_ += e.data.size();
+    max_bytes_ = std::max(max_bytes_, bytes_);
+    events_.push_back(std::move(e));
+    max_events_ = std::max(max_events_, events_.size());
+    ready_.notify_one();
+    return true;
+  }
+  // The next event; nullopt once closed and empty.
+  std::optional<Event> Pop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    ready_.wait(lock, [this] { return closed_ || !events_.empty(); });
+    if (events_.empty()) return std::nullopt;
+    Event e = std::move(events_.front());
+    events_.pop_front();
+    bytes_ -= e.data.size();
+    return e;
+  }
+  void Close() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    closed_ = true;
+    ready_.notify_all();
+  }
+  std::size_t max_events() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return max_events_;
+  }
+  std::size_t max_bytes() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return max_bytes_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::condition_variable ready_;
+  std::deque<Event> events_;
+  std::size_t bytes_ = 0, max_bytes_ = 0, max_events_ = 0;
+  bool closed_ = false;
+};
+
+// LCM's dispatch thread: copies each message into the queue and nothing else.
+class Receiver {
+ public:
+  Receiver(lcm::LCM& lcm, EventQueue& queue) : queue_(queue) {
+    lcm::Subscription* sub = lcm.subscribe(".*", &Receiver::OnMessage, this);
+    if (sub == nullptr) throw std::runtime_error("LCM subscribe to \".*\" failed");
+    sub->setQueueCapacity(kLcmQueueCapacity);
+  }
+  void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const auto* p = static_cast<const std::uint8_t*>(rbuf->data);
+    Event e{rbuf->recv_utime, channel, std::vector<std::uint8_t>(p, p + rbuf->data_size)};
+    if (!queue_.Push(std::move(e))) ++dropped_;
+  }
+  std::int64_t dropped() const { return dropped_; }
+
+ private:
+  EventQueue& queue_;
+  std::atomic<std::int64_t> dropped_{0};
+};
+
+// The writer thread: writes each event, follows the publishers' counts, reports losses.
+class Writer {
+ public:
+  Writer(const std::string& path, EventQueue& queue)
+      : path_(path), log_(path, "w"), queue_(queue),
+        tracker_(rover::logcheck::TrackerOptions{.from_start = false}) {
+    if (!log_.good()) throw std::runtime_error(path + ": cannot open for writing");
+  }
+
+  void Run() {
+    while (auto e = queue_.Pop()) {
+      lcm::LogEvent ev{};
+      ev.timestamp = e->timestamp;
+      ev.channel = e->channel;
+      ev.datalen = static_cast<std::int32_t>(e->data.size());
+      ev.data = e->data.data();
+      if (log_.writeEvent(&ev) != 0 && !write_failed_) {
+        write_failed_ = true;
+        std::cerr << "rover_recorder: " << path_ << ": write failed (disk full?); "
+                  << "messages from now on are not recorded\n";
+      }
+      if (!write_failed_) {
+        ++written_;
+        bytes_ += static_cast<std::int64_t>(e->data.size());
+      }
+      Check(*e);
+    }
+    std::fflush(log_.getFilePtr());
+  }
+
+  // For the heartbeat (read from another thread).
+  std::int64_t written() const { return written_; }
+  std::int64_t lost() const { return lost_; }
+  std::int64_t rover_utime() const { return rover_utime_; }
+  bool write_failed() const { return write_failed_; }
+  std::int64_t bytes() const { return bytes_; }
+  // Only after Run() has returned.
+  rover::logcheck::LogReport Report() const {
+    return rover::logcheck::Summarize(path_, tracker_, consistency_);
+  }
+
+ private:
+  void Check(const Event& e) {
+    std::optional<rover::logcheck::Restart> restart;
+    const auto gap = tracker_.Observe(e.channel, e.data.data(), e.data.size(), &restart);
+    consistency_.Observe(e.channel, e.data.data(), e.data.size());
+    if (e.channel == rover::channels::kClock && e.data.size() >= 16) {
+      std::int64_t utime = 0;
+      for (int i = 8; i < 16; ++i) utime = (utime << 8) | e.data[i];
+      rover_utime_ = utime;
+    }
+    if (gap) {
+      lost_ += gap->lost;
+      Tell("lost " + std::to_string(gap->lost) + " on " + gap->channel + " from " +
+             tracker_.PublisherName(gap->publisher) + " (count " +
+             std::to_string(gap->count_before) + " then " + std::to_string(gap->count_after) +
+             ") between utime " + std::to_string(gap->utime_before) + " and " +
+             std::to_string(gap->utime_after));
+    }
+    if (restart) {
+      Tell("restart: " + restart->channel + " from " + tracker_.PublisherName(restart->publisher) +
+             " at utime " + std::to_string(restart->utime) + " (count " +
+             std::to_string(restart->count_before) + " before)");
+    }
+  }
+
+  // One line per loss, at most kReportsPerSecond a second; the rest are counted.
+  void Tell(const std::string& line) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - window_start_ >= std::chrono::seconds(1)) {
+      if (suppressed_ > 0) {
+        std::cerr << "rover_recorder: " << suppressed_ << " more loss reports in the last second\n";
+      }
+      window_start_ = now;
+      in_window_ = 0;
+      suppressed_ = 0;
+    }
+    if (in_window_++ < kReportsPerSecond) {
+      std::cerr << "rover_recorder: " << line << "\n";
+    } else {
+      ++suppressed_;
+    }
+  }
+
+  std::string path_;
+  lcm::LogFile log_;
+  EventQueue& queue_;
+  rover::logcheck::LossTracker tracker_;
+  rover::logcheck::ConsistencyCheck consistency_;
+  std::atomic<std::int64_t> written_{0}, lost_{0}, rover_utime_{0}, bytes_{0};
+  std::atomic<bool> write_failed_{false};
+  std::chrono::steady_clock::time_point window_start_ = std::chrono::steady_clock::now();
+  int in_window_ = 0;
+  std::int64_t suppressed_ = 0;
+};
+
+void PublishHeartbeat(lcm::LCM& lcm, std::int64_t seq, const Writer& writer,
+                      const Receiver& receiver) {
+  rover_msgs::heartbeat_t hb{};
+  hb.utime = writer.rover_utime();
+  hb.process = "rover_recorder";
+  hb.seq = seq;
+  const bool lossy = writer.lost() > 0 || receiver.dropped() > 0 || writer.write_failed();
+  hb.state = writer.write_failed() ? rover_msgs::heartbeat_t::STATE_FAULT
+             : lossy              ? rover_msgs::heartbeat_t::STATE_DEGRADED
+                                  : rover_msgs::heartbeat_t::STATE_OK;
+  hb.detail = "wrote " + std::to_string(writer.written()) + " messages, " +
+              std::to_string(writer.lost()) + " lost upstream, " +
+              std::to_string(receiver.dropped()) + " dropped" +
+              (writer.write_failed() ? ", write failed" : "");
+  hb.dropped = receiver.dropped();
+  lcm.publish(rover::channels::kHeartbeat, &hb);
+}
+
+struct Args {
+  std::string url;
+  std::string output;
+};
+
+// Returns nullopt after printing help; throws std::invalid_argument on a bad argument.
+std::optional<Args> ParseArgs(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      std::cout << "usage: rover_recorder [--lcm-url URL] OUTPUT.lcm\n\n"
+                   "Records every LCM channel to OUTPUT.lcm in the standard LCM log format\n"
+                   "(lcm-logplayer reads it) without the losses of lcm-logger 1.3.1: a deep\n"
+                   "subscription queue, a receive thread that only copies, a writer thread.\n"
+                   "Reports every lost message it detects from the publishers' counts\n"
+                   "(pub_seq, heartbeat seq) on stderr, and counts per channel at exit.\n"
+                   "Stops on SIGINT or SIGTERM after writing everything received.\n\n"
+                   "  --lcm-url URL   the bus (default $ROVER_LCM_URL, else "
+                << rover::bus::kDefaultLcmUrl << ")\n";
+      return std::nullopt;
+    } else if (arg == "--lcm-url") {
+      if (i + 1 >= argc) throw std::invalid_argument("argument --lcm-url: missing URL");
+      a.url = argv[++i];
+    } else if (arg.rfind("--lcm-url=", 0) == 0) {
+      a.url = arg.substr(10);
+    } else if (a.output.empty() && arg.rfind("-", 0) != 0) {
+      a.output = arg;
+    } else {
+      throw std::invalid_argument("argument " + arg + ": unexpected (expected [--lcm-url URL] OUTPUT.lcm)");
+    }
+  }
+  if (a.output.empty()) throw std::invalid_argument("missing OUTPUT.lcm (expected [--lcm-url URL] OUTPUT.lcm)");
+  struct stat st {};
+  if (::stat(a.output.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    throw std::invalid_argument(a.output + ": exists and is not a regular file (expected a path for the log)");
+  }
+  if (a.url.empty()) {
+    const char* env = std::getenv("ROVER_LCM_URL");
+    a.url = env != nullptr && *env != '\0' ? env : rover::bus::kDefaultLcmUrl;
+  }
+  return a;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::optional<Args> args;
+  try {
+    args = ParseArgs(argc, argv);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "rover_recorder: " << e.what() << "\n";
+    return 2;
+  }
+  if (!args) return 0;
+  try {
+    lcm::LCM lcm(args->url);
+    if (!lcm.good()) throw std::runtime_error("cannot open the LCM bus " + args->url);
+    EventQueue queue;
+    Writer writer(args->output, queue);
+    Receiver receiver(lcm, queue);
+    std::signal(SIGINT, OnSignal);
+    std::signal(SIGTERM, OnSignal);
+
+    const auto start = std::chrono::steady_clock::now();
+    std::atomic<bool> receiving{true};
+    std::thread receive_thread([&] {
+      while (receiving) lcm.handleTimeout(100);
+      // Stopping: dispatch what LCM already holds (bounded, as a live bus never goes quiet).
+      const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+      while (lcm.handleTimeout(0) > 0 && std::chrono::steady_clock::now() < until) {
+      }
+    });
+    std::thread write_thread([&] { writer.Run(); });
+    std::cerr << "rover_recorder: recording " << args->url << " to " << args->output << "\n";
+
+    std::int64_t seq = 0;
+    auto next_heartbeat = std::chrono::steady_clock::now();
+    while (!g_stop) {
+      if (std::chrono::steady_clock::now() >= next_heartbeat) {
+        PublishHeartbeat(lcm, seq++, writer, receiver);
+        next_heartbeat += std::chrono::seconds(1);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    receiving = false;
+    receive_thread.join();
+    queue.Close();
+    write_thread.join();
+
+    const double wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const auto report = writer.Report();
+    std::ostringstream os;
+    os << "rover_recorder: wrote " << writer.written() << " messages ("
+       << writer.bytes() / 1048576.0 << " MB) to " << args->output << " in " << wall_s
+       << " s; lost upstream " << report.lost << ", dropped here " << receiver.dropped()
+       << "; deepest queue " << queue.max_events() << " messages, "
+       << queue.max_bytes() / 1048576.0 << " MB\n"
+       << rover::logcheck::FormatReport(report);
+    std::cerr << os.str();
+    return writer.write_failed() ? 1 : 0;
+  } catch (const std::exception& e) {
+    std::cerr << "rover_recorder: error: " << e.what() << "\n";
+    return 1;
+  }
+}
