@@ -1,5 +1,6 @@
 #include "geometry/kitti_calib.hpp"
 
+#include "config/file_read.hpp"
 #include "geometry/pinhole_camera.hpp"
 
 #include <array>
@@ -36,8 +37,13 @@ StereoRig LoadKittiCalib(const std::string& path, int image_width, int image_hei
     throw std::invalid_argument("LoadKittiCalib: image size " + std::to_string(image_width) +
                                 "x" + std::to_string(image_height) + " (expected both > 0)");
   }
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ":0: cannot open file (expected a KITTI calib.txt)");
+  std::string content;
+  try {  // a regular file of bounded size: a FIFO or a device is refused, not read
+    content = config::ReadBoundedRegularFile(path, config::kMaxDatasetTextBytes, "KITTI calib.txt");
+  } catch (const config::FileReadError& e) {
+    throw std::runtime_error(path + ":0: " + e.problem() + " (expected " + e.expected() + ")");
+  }
+  std::istringstream in(content);
   std::optional<Row> P[2];
   int line_of[2] = {0, 0};
   std::string text;

@@ -7,6 +7,7 @@
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
+#include "config/file_read.hpp"
 #include "geometry/camera_io.hpp"
 #include "geometry/kitti_calib.hpp"
 #include "imaging/image_check.hpp"
@@ -90,6 +91,7 @@ class SimulatedCameras : public ImageSource {
 // What a dataset image's PNG header says; throws ConfigError naming the file when it is
 // not a gray 8- or 16-bit PNG within the imaging limits.
 imaging::PngHeader DatasetPngHeader(const std::string& path) {
+  config::CheckRegularFile(path, config::kMaxImageFileBytes, "PNG image");  // not a FIFO
   std::ifstream in(path, std::ios::binary);
   std::uint8_t bytes[imaging::kPngHeaderBytes] = {};
   in.read(reinterpret_cast<char*>(bytes), sizeof(bytes));
@@ -142,6 +144,9 @@ class DatasetCameras : public ImageSource {
     const std::string& name = names_[next_ % names_.size()];
     ++next_;
     CapturedPair pair;
+    for (const char* side : {"/image_0/", "/image_1/"}) {
+      config::CheckRegularFile(dir_ + side + name, config::kMaxImageFileBytes, "PNG image");
+    }
     pair.left = cv::imread(dir_ + "/image_0/" + name, cv::IMREAD_UNCHANGED);
     pair.right = cv::imread(dir_ + "/image_1/" + name, cv::IMREAD_UNCHANGED);
     if (pair.left.empty() || pair.right.empty()) {

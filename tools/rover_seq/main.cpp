@@ -11,6 +11,7 @@
 #include "bus/channels.hpp"
 #include "bus/process.hpp"
 #include "bus/signing.hpp"
+#include "config/file_read.hpp"
 #include "sequence/executor.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
@@ -164,12 +165,11 @@ int main(int argc, char** argv) {
     }
     if (sub == "submit") {
       if (positional.size() != 2) throw ConfigError("rover_seq submit: expected exactly one FILE");
-      std::ifstream in(positional[1], std::ios::binary);
-      if (!in) throw ConfigError(positional[1] + ": cannot open file (expected a sequence file)");
-      std::stringstream ss;
-      ss << in.rdbuf();
+      // A FIFO, a device or a file over 1 MiB is refused, not read.
+      const std::string text = rover::config::ReadBoundedRegularFile(
+          positional[1], rover::config::kMaxSequenceFileBytes, "sequence file");
       // Check before anything goes on the bus: the executor checks again.
-      const auto check = rover::sequence::ParseSequence(ss.str(), positional[1]);
+      const auto check = rover::sequence::ParseSequence(text, positional[1]);
       if (!check.ok()) {
         std::cerr << check.errors.front().ToString() << "\n";
         return 1;
@@ -179,7 +179,7 @@ int main(int argc, char** argv) {
       rover_msgs::sequence_submit_t msg{};
       msg.submission_id = static_cast<std::int64_t>(Now() * 1e3);
       msg.name = positional[1];
-      msg.text = ss.str();
+      msg.text = text;
       bus->Publish(rover::channels::kSequenceSubmit, msg);
       std::cout << (key ? "submitted (signed) " : "submitted ") << positional[1] << " as "
                 << msg.submission_id << "\n";

@@ -1,5 +1,6 @@
 #include "vo_eval/kitti_sequence.hpp"
 
+#include "config/file_read.hpp"
 #include "geometry/kitti_calib.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -19,6 +20,15 @@ namespace {
 
 [[noreturn]] void Fail(const std::string& path, const std::string& message) {
   throw DatasetError(path + ": " + message);
+}
+
+// A FIFO or a device named like an image would block or never end in cv::imread.
+void CheckImageFile(const std::string& path) {
+  try {
+    config::CheckRegularFile(path, config::kMaxImageFileBytes, "PNG image");
+  } catch (const config::FileReadError& e) {
+    throw DatasetError(e.what());
+  }
 }
 
 std::vector<std::string> PngNames(const std::string& dir) {
@@ -62,8 +72,13 @@ std::string Trimmed(const std::string& s) {
 // says what a line holds, for the one-line error.
 std::vector<std::vector<double>> ReadNumberLines(const std::string& path, std::size_t count,
                                                  const std::string& what) {
-  std::ifstream in(path);
-  if (!in) Fail(path, "expected " + what + " a line, cannot open");
+  std::string content;
+  try {  // a regular file of bounded size: a FIFO or a device is refused, not read
+    content = config::ReadBoundedRegularFile(path, config::kMaxDatasetTextBytes, "text file");
+  } catch (const config::FileReadError& e) {
+    Fail(path, "expected " + what + " a line, " + e.problem());
+  }
+  std::istringstream in(content);
   std::vector<std::vector<double>> rows;
   std::string line;
   int line_no = 0;
@@ -150,6 +165,7 @@ KittiSequence OpenKittiSequence(const std::string& dir) {
                            std::to_string(seq.truth.size()));
     }
   }
+  CheckImageFile(seq.left_paths[0]);
   const cv::Mat first = cv::imread(seq.left_paths[0], cv::IMREAD_GRAYSCALE);
   if (first.empty()) Fail(seq.left_paths[0], "expected a readable PNG image, cannot decode");
   seq.width = first.cols;
@@ -166,6 +182,7 @@ KittiSequence OpenKittiSequence(const std::string& dir) {
 namespace {
 
 cv::Mat LoadGray(const std::string& path, int width, int height) {
+  CheckImageFile(path);
   const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
   if (raw.empty()) Fail(path, "expected a readable PNG image, cannot decode");
   if (raw.cols != width || raw.rows != height) {
