@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace rover::mobility {
@@ -14,41 +15,78 @@ constexpr double kDeg = M_PI / 180.0;
 const char* const kWheelNames[kNumWheels] = {"left_front",  "left_middle",  "left_rear",
                                              "right_front", "right_middle", "right_rear"};
 
-SoilSlip MakeSoil(std::vector<Eigen::Vector2d> table, double drift, double turn, double noise) {
+SoilSlip MakeSoil(std::vector<Eigen::Vector2d> slip, std::vector<Eigen::Vector2d> drift, double turn,
+                  double noise) {
   SoilSlip s;
-  s.slip_vs_pitch = std::move(table);
-  s.drift_per_deg = drift;
+  s.slip_vs_pitch = std::move(slip);
+  s.drift_vs_cross_slope = std::move(drift);
   s.turn_slip = turn;
   s.noise_std = noise;
   return s;
 }
 
+// A list of [x, y] pairs sorted by x, x in [x_lo, x_hi] and y in [y_lo, y_hi].
+std::vector<Eigen::Vector2d> LoadTable(const ConfigNode& t, const char* what, double x_lo, double x_hi,
+                                       double y_lo, double y_hi) {
+  if (!t.IsSequence() || t.size() < 1) {
+    t.Fail(std::string("expected a list of [") + what + "] pairs sorted by the first");
+  }
+  std::vector<Eigen::Vector2d> table;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    const ConfigNode pair = t.at(i);
+    const auto v = pair.AsVector(2);
+    if (v[0] < x_lo || v[0] > x_hi || v[1] < y_lo || v[1] > y_hi) {
+      char buf[160];
+      std::snprintf(buf, sizeof(buf), "expected [%s] with the first in [%g, %g] and the second in [%g, %g]",
+                    what, x_lo, x_hi, y_lo, y_hi);
+      pair.Fail(buf);
+    }
+    if (!table.empty() && v[0] <= table.back().x()) pair.Fail("expected the first numbers in increasing order");
+    table.emplace_back(v[0], v[1]);
+  }
+  return table;
+}
+
 void LoadSoilSlip(const ConfigNode& n, SoilSlip& s) {
   if (n.IsNull()) return;
-  n.CheckKeys({"slip_vs_pitch", "drift_per_deg", "turn_slip", "noise_std"});
+  n.CheckKeys({"slip_vs_pitch", "drift_vs_cross_slope", "drift_per_deg", "turn_slip", "noise_std"});
   if (n.Has("slip_vs_pitch")) {
-    const ConfigNode t = n["slip_vs_pitch"];
-    if (!t.IsSequence() || t.size() < 1) {
-      t.Fail("expected a list of [pitch_deg, slip] pairs sorted by pitch");
-    }
-    s.slip_vs_pitch.clear();
-    for (std::size_t i = 0; i < t.size(); ++i) {
-      const ConfigNode pair = t.at(i);
-      const auto v = pair.AsVector(2);
-      if (v[0] < -90.0 || v[0] > 90.0) pair.Fail("expected a pitch in [-90, 90] deg");
-      if (v[1] < -5.0 || v[1] > 5.0) pair.Fail("expected a slip fraction in [-5, 5]");
-      if (!s.slip_vs_pitch.empty() && v[0] <= s.slip_vs_pitch.back().x()) {
-        pair.Fail("expected pitches in increasing order");
-      }
-      s.slip_vs_pitch.emplace_back(v[0], v[1]);
-    }
+    s.slip_vs_pitch = LoadTable(n["slip_vs_pitch"], "pitch_deg, slip", -90.0, 90.0, -5.0, 5.0);
   }
-  n.Get("drift_per_deg", s.drift_per_deg, 0.0, 0.2);
+  if (n.Has("drift_vs_cross_slope") && n.Has("drift_per_deg")) {
+    n["drift_per_deg"].Fail("give either drift_vs_cross_slope or drift_per_deg, not both");
+  }
+  if (n.Has("drift_vs_cross_slope")) {
+    s.drift_vs_cross_slope =
+        LoadTable(n["drift_vs_cross_slope"], "cross_slope_deg, drift per m", 0.0, 90.0, 0.0, 5.0);
+  }
+  if (n.Has("drift_per_deg")) {
+    s.drift_vs_cross_slope.clear();  // the linear form replaces the default table
+    n.Get("drift_per_deg", s.drift_per_deg, 0.0, 0.2);
+  }
   n.Get("turn_slip", s.turn_slip, -0.5, 0.9);
   n.Get("noise_std", s.noise_std, 0.0, 1.0);
 }
 
 }  // namespace
+
+double Interpolate(const std::vector<Eigen::Vector2d>& table, double x) {
+  if (table.empty()) return 0.0;
+  if (x <= table.front().x()) return table.front().y();
+  if (x >= table.back().x()) return table.back().y();
+  for (std::size_t i = 1; i < table.size(); ++i) {
+    if (x <= table[i].x()) {
+      const double t = (x - table[i - 1].x()) / (table[i].x() - table[i - 1].x());
+      return table[i - 1].y() + t * (table[i].y() - table[i - 1].y());
+    }
+  }
+  return table.back().y();
+}
+
+double SoilSlip::DriftAt(double cross_slope_deg) const {
+  const double deg = std::abs(cross_slope_deg);
+  return drift_vs_cross_slope.empty() ? drift_per_deg * deg : Interpolate(drift_vs_cross_slope, deg);
+}
 
 const char* WheelName(int wheel) {
   if (wheel < 0 || wheel >= kNumWheels) return "none";
@@ -72,12 +110,16 @@ Eigen::Vector2d RoverGeometry::WheelPosition(int wheel) const {
 
 // Defaults follow the MER record: loose sand slips ~10-20 % at 10 deg and passes 100 %
 // above ~25 deg (Sol 206); a 20 deg outcrop was climbed with little slip (Sol 304);
-// sand downslope runs ahead of the wheels and drifts sideways (Wopmay).
+// sand downslope runs ahead of the wheels and drifts sideways (Wopmay). Sideways slip
+// grows steeply past 15 deg of cross slope on loose ground: Spirit on the Columbia Hills
+// (Sols 188 to 191) slid down and across the slope so far that it travelled 1.6 m more
+// than its wheels said over 19 m.
 SlipOptions::SlipOptions() {
-  For(terrain::Soil::kBedrock) =
-      MakeSoil({{-35, -0.06}, {0, 0.0}, {15, 0.02}, {25, 0.06}, {35, 0.15}}, 0.002, 0.02, 0.005);
-  For(terrain::Soil::kPackedSoil) = MakeSoil(
-      {{-35, -0.2}, {-15, -0.05}, {0, 0.03}, {10, 0.08}, {20, 0.25}, {30, 0.7}}, 0.006, 0.05, 0.02);
+  For(terrain::Soil::kBedrock) = MakeSoil({{-35, -0.06}, {0, 0.0}, {15, 0.02}, {25, 0.06}, {35, 0.15}},
+                                          {{0, 0.0}, {30, 0.06}}, 0.02, 0.005);
+  For(terrain::Soil::kPackedSoil) =
+      MakeSoil({{-35, -0.2}, {-15, -0.05}, {0, 0.02}, {10, 0.07}, {20, 0.25}, {30, 0.7}},
+               {{0, 0.0}, {10, 0.06}, {15, 0.15}, {20, 0.45}, {25, 0.75}, {30, 1.1}}, 0.05, 0.02);
   For(terrain::Soil::kSand) = MakeSoil({{-35, -0.5},
                                         {-20, -0.2},
                                         {-10, -0.05},
@@ -88,7 +130,8 @@ SlipOptions::SlipOptions() {
                                         {25, 1.0},
                                         {28, 1.3},
                                         {35, 2.0}},
-                                       0.012, 0.1, 0.04);
+                                       {{0, 0.0}, {10, 0.12}, {15, 0.18}, {20, 0.35}, {25, 0.7}, {30, 1.2}},
+                                       0.1, 0.04);
 }
 
 MobilityOptions MobilityOptions::LoadFile(const std::string& path) {
@@ -122,7 +165,7 @@ MobilityOptions MobilityOptions::Load(const ConfigNode& root) {
 
   if (m.Has("slip")) {
     const ConfigNode s = m["slip"];
-    s.CheckKeys({"soils", "noise_time_s", "rock_climb_slip", "dragged_wheel"});
+    s.CheckKeys({"soils", "noise_time_s", "rock_climb_grade", "rock_stall_slip", "dragged_wheel"});
     if (s.Has("soils")) {
       const ConfigNode soils = s["soils"];
       soils.CheckKeys({"bedrock", "packed_soil", "sand"});
@@ -132,7 +175,8 @@ MobilityOptions MobilityOptions::Load(const ConfigNode& root) {
       }
     }
     s.Get("noise_time_s", o.slip.noise_time_s, 0.01, 1e4);
-    s.Get("rock_climb_slip", o.slip.rock_climb_slip, 0.0, 2.0);
+    s.Get("rock_climb_grade", o.slip.rock_climb_grade, 0.0, 10.0);
+    s.Get("rock_stall_slip", o.slip.rock_stall_slip, 0.0, 1.0);
     if (s.Has("dragged_wheel")) {
       const ConfigNode d = s["dragged_wheel"];
       d.CheckKeys({"wheel", "encoder", "extra_slip", "yaw_per_m"});

@@ -50,6 +50,10 @@ struct RoverGeometry {
   Eigen::Vector2d WheelPosition(int wheel) const;
 };
 
+// Piecewise linear through (x, y) points sorted by x, constant beyond the ends; 0 when
+// empty. The slip tables below.
+double Interpolate(const std::vector<Eigen::Vector2d>& table, double x);
+
 // Slip on one soil. Longitudinal slip s = 1 - (true motion along the heading) / (wheel
 // rolled distance): 0 = no slip, 1 = wheels spin in place, > 1 = the rover slides back
 // while the wheels drive forward (Sol 206), < 0 = it runs ahead of its wheels downhill.
@@ -57,12 +61,19 @@ struct SoilSlip {
   // (pitch along the direction of travel in deg, + = uphill; slip) points, sorted by
   // pitch; linear in between, constant beyond the ends.
   std::vector<Eigen::Vector2d> slip_vs_pitch;
-  // Sideways drift downslope per metre rolled, per degree of cross slope.
+  // Sideways slip: drift downslope per metre rolled (the tangent of the crab angle) at a
+  // cross slope in deg. Either (cross slope deg, drift) points, sorted, linear in between
+  // and constant beyond the last (loose soil crabs more and more steeply toward its angle
+  // of repose), or, when the table is empty, drift_per_deg x the cross slope.
+  std::vector<Eigen::Vector2d> drift_vs_cross_slope;
   double drift_per_deg = 0.0;
   // Fraction of a commanded turn in place that is lost.
   double turn_slip = 0.0;
   // Standard deviation of the slowly varying slip noise (fraction).
   double noise_std = 0.0;
+
+  // Drift downslope per metre rolled at this cross slope (deg, either sign).
+  double DriftAt(double cross_slope_deg) const;
 };
 
 // One wheel that does not turn and is dragged (Spirit's right front wheel).
@@ -78,10 +89,15 @@ struct DraggedWheel {
 struct SlipOptions {
   std::array<SoilSlip, terrain::kNumSoils> soils;  // indexed by terrain::Soil
   double noise_time_s = 5.0;  // correlation time of the slip noise
-  // Extra slip of a wheel rolling over a rock, per unit of the rock face's grade along the
-  // heading (capped at grade 3), averaged over the wheels like the soil slip. A climbing
-  // wheel rolls a longer path and fights the others: the MER rock course reached 85 %.
-  double rock_climb_slip = 0.4;
+  // Rocks under the wheels. A wheel climbing a rock must be lifted by the traction of
+  // all six: its climb grade (the rise of the rock over one wheel radius ahead, capped at
+  // 3) x rock_climb_grade / 6 adds to the grade the rover drives up, and the slip is read
+  // from each wheel's soil table at that steeper grade. On loose sand two wheels on cobble
+  // faces stall the rover (the MER testbed rock course reached 85 %); on packed soil and
+  // rock the same cobbles cost little. Rocks stall the rover but never push it back: the
+  // slip they add stops at rock_stall_slip.
+  double rock_climb_grade = 0.8;
+  double rock_stall_slip = 0.95;
   DraggedWheel dragged;
   SlipOptions();  // MER-like defaults per soil (see mobility_options.cpp)
   const SoilSlip& For(terrain::Soil s) const { return soils[static_cast<int>(s)]; }

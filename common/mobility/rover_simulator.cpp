@@ -11,19 +11,6 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-double Interpolate(const std::vector<Eigen::Vector2d>& table, double x) {
-  if (table.empty()) return 0.0;
-  if (x <= table.front().x()) return table.front().y();
-  if (x >= table.back().x()) return table.back().y();
-  for (std::size_t i = 1; i < table.size(); ++i) {
-    if (x <= table[i].x()) {
-      const double t = (x - table[i - 1].x()) / (table[i].x() - table[i - 1].x());
-      return table[i - 1].y() + t * (table[i].y() - table[i - 1].y());
-    }
-  }
-  return table.back().y();
-}
-
 void RequireFinite(double v, const char* name, std::int64_t id) {
   if (!std::isfinite(v)) {
     std::ostringstream os;
@@ -234,13 +221,26 @@ MobilityStatus RoverSimulator::RunUntilIdle(double max_s, double dt_s) {
   return status_;
 }
 
-double RoverSimulator::LongitudinalSlip(double pitch_travel_deg) const {
+double RoverSimulator::SoilSlipAt(double pitch_travel_deg) const {
   double s = 0.0;
   for (int i = 0; i < kNumWheels; ++i) {
-    s += Interpolate(options_.slip.For(wheel_soil_[i]).slip_vs_pitch, pitch_travel_deg) +
-         options_.slip.rock_climb_slip * std::min(wheel_rock_grade_[i], 3.0);
+    s += Interpolate(options_.slip.For(wheel_soil_[i]).slip_vs_pitch, pitch_travel_deg);
   }
   return s / kNumWheels;
+}
+
+double RoverSimulator::LongitudinalSlip(double pitch_travel_deg) const {
+  const double on_ground = SoilSlipAt(pitch_travel_deg);
+  // Each climbing wheel's share of the weight must be lifted up its climb grade: to the
+  // traction of all six that is a steeper slope to drive up.
+  double climb = 0.0;
+  for (int i = 0; i < kNumWheels; ++i) climb += std::min(wheel_climb_grade_[i], 3.0);
+  if (climb <= 0.0) return on_ground;
+  const double grade = std::tan(pitch_travel_deg * kDeg) +
+                       options_.slip.rock_climb_grade * climb / kNumWheels;
+  const double with_rocks = SoilSlipAt(std::atan(grade) / kDeg);
+  // Rocks stall the rover (its wheels spin) but do not push it back downhill.
+  return std::max(on_ground, std::min(with_rocks, options_.slip.rock_stall_slip));
 }
 
 void RoverSimulator::AddWheelMotion(double amount, bool turning) {
@@ -278,15 +278,15 @@ void RoverSimulator::Advance(double dt) {
 
   double ds_fwd = 0.0, ds_lat = 0.0, dyaw = 0.0;
   Eigen::Vector2d extra_xy = Eigen::Vector2d::Zero();
+  // Cross slope: + when the right side is higher. Drift goes downslope.
+  const double cross_deg = std::atan(plane_slope_right_) / kDeg;
   double mean_noise = 0.0, mean_drift = 0.0, mean_turn_slip = 0.0;
   for (int i = 0; i < kNumWheels; ++i) {
     const SoilSlip& s = options_.slip.For(wheel_soil_[i]);
     mean_noise += s.noise_std / kNumWheels;
-    mean_drift += s.drift_per_deg / kNumWheels;
+    mean_drift += s.DriftAt(cross_deg) / kNumWheels;
     mean_turn_slip += s.turn_slip / kNumWheels;
   }
-  // Cross slope: + when the right side is higher. Drift goes downslope.
-  const double cross_deg = std::atan(plane_slope_right_) / kDeg;
 
   if (moving()) {
     const double step = std::min(rate_ * dt, target_ - progress_);
@@ -298,8 +298,7 @@ void RoverSimulator::Advance(double dt) {
           std::atan(plane_slope_fwd_) / kDeg * (command_.distance_m >= 0.0 ? 1.0 : -1.0);
       slip_ = LongitudinalSlip(pitch_travel_deg) + mean_noise * slip_noise_;
       if (dragged.wheel >= 0) slip_ += dragged.extra_slip;
-      lateral_slip_ = -std::copysign(mean_drift * std::abs(cross_deg), cross_deg) +
-                      0.5 * mean_noise * drift_noise_;
+      lateral_slip_ = -std::copysign(mean_drift, cross_deg) + 0.5 * mean_noise * drift_noise_;
       ds_fwd = ds_w * (1.0 - slip_);
       ds_lat = std::abs(ds_w) * lateral_slip_;
       dyaw = command_.curvature_per_m * ds_w;
@@ -320,7 +319,11 @@ void RoverSimulator::Advance(double dt) {
       const double gn = grad.norm();
       if (gn > 1e-9) {
         const double travel = std::abs(dtheta) * mean_wheel_arm_;
-        extra_xy = -grad / gn * travel * mean_drift * (std::atan(gn) / kDeg);
+        double creep = 0.0;  // per metre the wheels roll, at the full slope angle
+        for (int i = 0; i < kNumWheels; ++i) {
+          creep += options_.slip.For(wheel_soil_[i]).DriftAt(std::atan(gn) / kDeg) / kNumWheels;
+        }
+        extra_xy = -grad / gn * travel * creep;
       }
       AddWheelMotion(dtheta, true);
       status_.wheel_turn_rad = std::copysign(progress_, command_.turn_rad);
@@ -385,11 +388,24 @@ void RoverSimulator::CheckRocks(const Eigen::Vector3d& p_prev) {
   }
 }
 
+double RoverSimulator::ClimbGrade(double x, double y, double travel_x, double travel_y) const {
+  // Rock height = surface - ground; a wheel of radius r meets a rock's rise over r ahead.
+  const double r = options_.geometry.wheel_radius_m;
+  const double ax = x + r * travel_x, ay = y + r * travel_y;
+  const double here = world_.Elevation(x, y) - world_.GroundElevation(x, y);
+  const double ahead = world_.Elevation(ax, ay) - world_.GroundElevation(ax, ay);
+  return std::max(0.0, ahead - here) / r;
+}
+
 bool RoverSimulator::FollowTerrain() {
   // Fit elevation = a + b*u + c*v to the six wheel contacts, with (u, v) the horizontal
   // offsets along the heading and to its right. Using the projected offsets (not the
   // nominal wheel positions) keeps pitch equal to the slope on steep ground.
   const double cy = std::cos(yaw_), sy = std::sin(yaw_);
+  // The direction the wheels roll: backward on a reverse drive.
+  const double sign =
+      command_.type == MotionCommand::Type::kArc && command_.distance_m < 0.0 ? -1.0 : 1.0;
+  const double travel_x = sign * cy, travel_y = sign * sy;
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
   bool on_map = true;
@@ -399,12 +415,7 @@ bool RoverSimulator::FollowTerrain() {
     on_map = on_map && world_.Contains(wx, wy);
     const double h = world_.Elevation(wx, wy);
     wheel_soil_[i] = world_.SoilAt(wx, wy);
-    // Rock face grade under the wheel along the heading (rock height = surface - ground).
-    const double hs = world_.resolution();
-    const double fx = hs * cy, fy = hs * sy;
-    const double ahead = world_.Elevation(wx + fx, wy + fy) - world_.GroundElevation(wx + fx, wy + fy);
-    const double behind = world_.Elevation(wx - fx, wy - fy) - world_.GroundElevation(wx - fx, wy - fy);
-    wheel_rock_grade_[i] = std::abs(ahead - behind) / (2.0 * hs);
+    wheel_climb_grade_[i] = ClimbGrade(wx, wy, travel_x, travel_y);
     const Eigen::Vector3d row(1.0, cy * d.x() + sy * d.y(), -sy * d.x() + cy * d.y());
     A += row * row.transpose();
     rhs += row * h;

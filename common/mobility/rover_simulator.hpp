@@ -141,7 +141,11 @@ class RoverSimulator {
   void CheckRocks(const Eigen::Vector3d& p_prev);
   ImuSample MakeImuSample();
   void AddWheelMotion(double amount, bool turning);
-  double LongitudinalSlip(double pitch_travel_deg) const;
+  double SoilSlipAt(double pitch_travel_deg) const;  // mean of the wheels' soil tables
+  double LongitudinalSlip(double pitch_travel_deg) const;  // soil, slope and rocks
+  // Rise of the rocks over one wheel radius ahead of (x, y) along the travel direction,
+  // per metre (0 when level or descending).
+  double ClimbGrade(double x, double y, double travel_x, double travel_y) const;
 
   const terrain::World& world_;
   MobilityOptions options_;
@@ -155,7 +159,7 @@ class RoverSimulator {
   Eigen::Matrix3d R_ = Eigen::Matrix3d::Identity();
   double plane_slope_fwd_ = 0, plane_slope_right_ = 0;  // d elevation / d(fwd, right)
   std::array<terrain::Soil, kNumWheels> wheel_soil_{};
-  std::array<double, kNumWheels> wheel_rock_grade_{};  // |d rock height / d forward|
+  std::array<double, kNumWheels> wheel_climb_grade_{};  // ClimbGrade under each wheel
   double odometer_ = 0;
   double slip_ = 0, lateral_slip_ = 0;
   Eigen::Vector3d body_rate_ = Eigen::Vector3d::Zero();

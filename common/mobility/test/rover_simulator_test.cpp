@@ -154,6 +154,69 @@ TEST(RoverSimulator, CrossSlopeDriveDriftsDownslope) {
   EXPECT_GT(end.position.z(), start.position.z() + 0.05);  // lower
 }
 
+// Sideways slip follows the soil's table: on packed soil across a 20 deg slope the rover
+// crabs 0.45 m downslope per metre rolled, and travels further than its wheels roll.
+TEST(RoverSimulator, CrossSlopeCrabFollowsTheSoilTable) {
+  const World world(Plane(Soil::kPackedSoil, 20.0, 90.0));
+  MobilityOptions o = Quiet();
+  const double table = o.slip.For(Soil::kPackedSoil).DriftAt(20.0);
+  EXPECT_DOUBLE_EQ(table, 0.45);
+  EXPECT_DOUBLE_EQ(o.slip.For(Soil::kPackedSoil).DriftAt(-20.0), table);  // either side
+  EXPECT_NEAR(o.slip.For(Soil::kPackedSoil).DriftAt(17.5), 0.15 + 0.5 * 0.3, 1e-12);
+  RoverSimulator sim(world, o, 0.0, 0.0, 0.0);
+  const RoverTruth start = sim.Truth();
+  sim.Command(MotionCommand::Arc(1, 2.0));
+  sim.RunUntilIdle();
+  const RoverTruth end = sim.Truth();
+  // Downslope is west (-y); the drift is horizontal motion along the rover's Y axis.
+  EXPECT_NEAR(-(end.position.y() - start.position.y()) / std::cos(20.0 * kDeg), 2.0 * table, 0.02);
+  EXPECT_NEAR(end.position.x() - start.position.x(), 2.0 * (1.0 - 0.02), 0.01);  // flat-ground slip
+  EXPECT_GT(end.odometer_m, 2.0 * 1.05);  // true path longer than the wheels' 2 m
+  // drift_per_deg is the linear form of the same thing.
+  SoilSlip linear;
+  linear.drift_per_deg = 0.01;
+  EXPECT_DOUBLE_EQ(linear.DriftAt(-15.0), 0.15);
+}
+
+// A rock under a wheel: the climbing wheel's share of the weight makes the rover drive up
+// a steeper grade. On loose sand that can stall it, never push it back; on bedrock the
+// same rock costs little.
+TEST(RoverSimulator, RocksStallTheRoverOnSandButNotOnBedrock) {
+  auto slip_over_rocks = [](Soil soil, double incline_deg) {
+    WorldOptions w = Plane(soil, incline_deg, 0.0);
+    // Cobbles 18 cm tall in both wheel tracks, one under each wheel pair's path.
+    for (int k = 0; k < 3; ++k) {
+      for (double y : {-0.5, 0.5}) {
+        terrain::Rock r;
+        r.name = "cobble_" + std::to_string(k) + (y < 0 ? "l" : "r");
+        r.position = {0.9 + 0.35 * k + (y < 0 ? 0.0 : 0.17), y};
+        r.diameter_m = 0.36;
+        r.height_m = 0.18;
+        r.placed = true;
+        w.placed_rocks.push_back(r);
+      }
+    }
+    const World world(w);
+    RoverSimulator sim(world, Quiet(), 0.0, 0.0, 0.0);
+    double max_slip = 0.0;
+    for (int step = 0; step < 6; ++step) {
+      const RoverTruth a = sim.Truth();
+      sim.Command(MotionCommand::Arc(step, 0.35));
+      sim.RunUntilIdle();
+      max_slip = std::max(max_slip, MeasuredSlip(a, sim.Truth(), 0.35));
+    }
+    return max_slip;
+  };
+  const double sand = slip_over_rocks(Soil::kSand, 0.0), bedrock = slip_over_rocks(Soil::kBedrock, 0.0);
+  const double sand_up = slip_over_rocks(Soil::kSand, 10.0);
+  std::printf("cobbles in both tracks, 35 cm steps: max step slip %.0f %% on flat sand, %.0f %% on "
+              "flat bedrock, %.0f %% up 10 deg of sand\n", 100 * sand, 100 * bedrock, 100 * sand_up);
+  EXPECT_GT(sand, 0.3);
+  EXPECT_LT(bedrock, 0.1);
+  EXPECT_GT(sand_up, 0.75);  // sand alone slips 15 % there
+  EXPECT_LE(sand_up, MobilityOptions().slip.rock_stall_slip + 0.01);  // stalled, not pushed back
+}
+
 TEST(RoverSimulator, PitchEqualsSlopeDrivingStraightUp) {
   const World world(Plane(Soil::kBedrock, 20.0, 0.0));
   RoverSimulator sim(world, MobilityOptions(), 0.0, 0.0, 0.0);
@@ -413,6 +476,19 @@ TEST(MobilityOptions, LoadsRoverYamlAndNamesBadKeys) {
   EXPECT_THROW(load("mobility: {slip: {dragged_wheel: {wheel: left_back}}}\n"), ConfigError);
   EXPECT_THROW(load("mobility: {slip: {soils: {sand: {slip_vs_pitch: [[10, 0.1], [5, 0.2]]}}}}\n"),
                ConfigError);
+  EXPECT_THROW(load("mobility: {slip: {soils: {sand: {drift_vs_cross_slope: [[0, 0], [10, -0.1]]}}}}\n"),
+               ConfigError);
+  EXPECT_THROW(load("mobility: {slip: {soils: {sand: {drift_per_deg: 0.01, drift_vs_cross_slope: [[0, 0]]}}}}\n"),
+               ConfigError);
+  EXPECT_THROW(load("mobility: {slip: {rock_climb_slip: 0.4}}\n"), ConfigError);  // renamed
+  const MobilityOptions crab = load(
+      "mobility: {slip: {rock_climb_grade: 2, rock_stall_slip: 0.8, soils: {sand: {drift_vs_cross_slope: "
+      "[[0, 0], [10, 0.2]]}, bedrock: {drift_per_deg: 0.004}}}}\n");
+  EXPECT_DOUBLE_EQ(crab.slip.rock_climb_grade, 2.0);
+  EXPECT_DOUBLE_EQ(crab.slip.rock_stall_slip, 0.8);
+  EXPECT_DOUBLE_EQ(crab.slip.For(Soil::kSand).DriftAt(5.0), 0.1);
+  EXPECT_DOUBLE_EQ(crab.slip.For(Soil::kSand).DriftAt(20.0), 0.2);
+  EXPECT_DOUBLE_EQ(crab.slip.For(Soil::kBedrock).DriftAt(10.0), 0.04);  // replaces the table
   const MobilityOptions d = load(
       "mobility:\n  seed: 9\n  speed_mps: 0.05\n  slip:\n    dragged_wheel: {wheel: right_front,"
       " encoder: commanded}\nsensors: {imu: {rate_hz: 50}, navcam: {anything: 1}}\nother: 1\n");
