@@ -11,6 +11,7 @@
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
 #include "bus/process.hpp"
+#include "config/file_read.hpp"
 #include "config/yaml_config.hpp"
 #include "launch/process_set.hpp"
 #include "scenario/scenario.hpp"
@@ -44,12 +45,8 @@ namespace {
 volatile std::sig_atomic_t g_stop = 0;
 void OnSignal(int) { g_stop = 1; }
 
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError(path + ": cannot open file (expected a readable file)");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+std::string ReadSequenceFile(const std::string& path) {  // a FIFO or a device is refused
+  return rover::config::ReadBoundedRegularFile(path, rover::config::kMaxSequenceFileBytes, "sequence file");
 }
 
 std::string Num(double v) {
@@ -119,7 +116,7 @@ int main(int argc, char** argv) {
     if (out_dir.empty()) throw ConfigError("scenario_runner: missing --out DIR");
     const auto spec = rover::tools::LoadScenario(scenario_path);
     const auto deployment = rover::launch::LoadDeployment(spec.deployment);
-    const std::string sequence_text = ReadFile(spec.sequence);
+    const std::string sequence_text = ReadSequenceFile(spec.sequence);
     fs::create_directories(out_dir);
     // The scenario's seeds and overrides go into copies in DIR; the processes read those.
     const auto configs = rover::tools::PrepareRunConfigs(spec.rover_config, spec.overrides, spec.world,
@@ -138,6 +135,10 @@ int main(int argc, char** argv) {
     fs::create_directories(out_dir);
     const std::string log_path = out_dir + "/log.lcm";
     fs::remove(log_path);
+    // The executor keeps its running sequence here (a restart reports it interrupted); a
+    // new run starts with none.
+    const std::string state_path = out_dir + "/executor_state.yaml";
+    fs::remove(state_path);
     std::signal(SIGINT, OnSignal);
     std::signal(SIGTERM, OnSignal);
     const auto wall_start = std::chrono::steady_clock::now();
@@ -205,6 +206,8 @@ int main(int argc, char** argv) {
         SetOption(p.args, "--hold-for", others);
       } else if (p.name == "camera_capture") {
         SetOption(p.args, "--world", configs.world);
+      } else if (p.name == "sequence_executor") {
+        SetOption(p.args, "--state-file", state_path);
       } else if (p.name == "state_estimator") {
         SetOption(p.args, "--start", Num(spec.start_x) + "," + Num(spec.start_y) + "," +
                                          Num(start_z) + "," + Num(spec.start_yaw_deg));
