@@ -44,9 +44,9 @@ fi
 # ${VAR} is expanded from the environment file as systemd does (one word each).
 command_of() {
   sed -n 's/^ExecStart=//p' "$STAGE/etc/systemd/system/$1.service" |
-    sed "s|/opt/rover/|$STAGE/opt/rover/|g; s|/etc/rover/|$STAGE/etc/rover/|g; s|/var/log/rover/|$STAGE/var/log/rover/|g"
+    sed "s|/opt/rover/|$STAGE/opt/rover/|g; s|/etc/rover/|$STAGE/etc/rover/|g; s|/var/log/rover/|$STAGE/var/log/rover/|g; s|/var/lib/rover/|$STAGE/var/lib/rover/|g"
 }
-mkdir -p "$STAGE/var/log/rover"
+mkdir -p "$STAGE/var/log/rover" "$STAGE/var/lib/rover"
 
 # The environment file in the systemd syntax used here (KEY=VALUE, # comments) — read it
 # without a shell: the URL holds '&' and '?'.
