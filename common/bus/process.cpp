@@ -1,6 +1,7 @@
 #include "bus/process.hpp"
 
 #include "bus/channels.hpp"
+#include "bus/signing.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/rover_clock_t.hpp>
@@ -40,6 +41,7 @@ std::string Usage(const std::string& name, const std::string& summary,
   line("--config", "FILE", "YAML config (see configs/rover.yaml)");
   line("--lcm-url", "URL", std::string("LCM URL (default: $ROVER_LCM_URL, else ") +
                                kDefaultLcmUrl + ")");
+  line("--key", "FILE", "the deployment's key for signed commands (default: auth.key_file, else $ROVER_KEY_FILE)");
   for (const auto& o : options) line(o.flag, o.value_name, o.help);
   return os.str();
 }
@@ -65,7 +67,8 @@ std::map<std::string, std::string> ParseArgs(const std::string& name, const std:
     }
     const OptionSpec* spec = nullptr;
     static const std::vector<OptionSpec> builtin = {{"--config", "FILE", ""},
-                                                    {"--lcm-url", "URL", ""}};
+                                                    {"--lcm-url", "URL", ""},
+                                                    {"--key", "FILE", ""}};
     for (const auto& o : builtin)
       if (o.flag == arg) spec = &o;
     for (const auto& o : options)
@@ -126,6 +129,11 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
   }
   bus_.set_publisher(name_);
   bus_.clock().set_window(LoadTimeWindow(config_["bus"]));
+  // Commands this process publishes are signed, and those it receives checked, when it
+  // holds the deployment's key (bus/signing.hpp).
+  if (const AuthSettings auth = LoadAuthSettings(config_, option("--key"), name_); auth.key) {
+    bus_.set_auth(MakeBusAuth(*auth.key, name_));
+  }
   InstallSignalHandlers();
   bus_.Subscribe<rover_msgs::rover_clock_t>(
       channels::kClock, [this](const rover_msgs::rover_clock_t& msg) {

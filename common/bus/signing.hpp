@@ -122,10 +122,12 @@ struct AuthSettings {
   bool required = false;
 };
 
-// Throws config::ConfigError with one line naming where the key was named and what is
-// wrong: a malformed section, required without a key, an unusable key file.
+// Throws config::ConfigError with one line naming where the key was named (`program`'s
+// --key, the config file's auth.key_file, $ROVER_KEY_FILE) and what is wrong: a malformed
+// section, required without a key, an unusable key file.
 inline AuthSettings LoadAuthSettings(const config::ConfigNode& root,
-                                     const std::optional<std::string>& key_flag = std::nullopt) {
+                                     const std::optional<std::string>& key_flag = std::nullopt,
+                                     const std::string& program = "") {
   AuthSettings settings;
   const config::ConfigNode section = root["auth"];
   std::string key_file;
@@ -143,12 +145,13 @@ inline AuthSettings LoadAuthSettings(const config::ConfigNode& root,
     }
   };
   const char* env = std::getenv("ROVER_KEY_FILE");
+  const std::string who = program.empty() ? "" : program + ": ";
   if (key_flag) {
-    load(*key_flag, "argument --key: ");
+    load(*key_flag, who + "argument --key: ");
   } else if (!key_file.empty()) {
     load(key_file, section.source() + ": auth.key_file: ");
   } else if (env != nullptr && *env != '\0') {
-    load(env, "$ROVER_KEY_FILE: ");
+    load(env, who + "$ROVER_KEY_FILE: ");
   } else if (settings.required) {
     section["key_file"].Fail(
         "missing, and no --key or $ROVER_KEY_FILE (auth.required is true: expected the "
