@@ -11,6 +11,7 @@
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
 #include "bus/process.hpp"
+#include "bus/signing.hpp"
 #include "config/file_read.hpp"
 #include "config/yaml_config.hpp"
 #include "launch/process_set.hpp"
@@ -84,6 +85,24 @@ void SetOption(std::vector<std::string>& args, const std::string& flag, const st
   args.push_back(value);
 }
 
+// The key the deployment's executor holds (its --key, else its config's auth.key_file,
+// else $ROVER_KEY_FILE, bus/signing.hpp): the runner signs its submit with it, as an
+// operator's rover_seq --key does. None when the executor holds none.
+std::optional<rover::auth::Key> ExecutorKey(const rover::launch::Deployment& deployment) {
+  for (const auto& p : deployment.processes) {
+    if (p.name != "sequence_executor") continue;
+    std::optional<std::string> key_flag, config_path;
+    for (std::size_t i = 0; i + 1 < p.args.size(); ++i) {
+      if (p.args[i] == "--key") key_flag = p.args[i + 1];
+      if (p.args[i] == "--config") config_path = p.args[i + 1];
+    }
+    const auto config = config_path ? rover::config::ConfigNode::LoadFile(*config_path)
+                                    : rover::config::ConfigNode::FromString("{}", deployment.source);
+    return rover::bus::LoadAuthSettings(config, key_flag, "scenario_runner").key;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -148,6 +167,7 @@ int main(int argc, char** argv) {
 
     rover::bus::Bus bus(url);
     bus.set_publisher("scenario_runner");
+    if (const auto key = ExecutorKey(deployment)) bus.set_auth(rover::bus::MakeBusAuth(*key, "scenario_runner"));
     std::set<std::string> alive;
     std::optional<rover_msgs::sequence_status_t> final_status;
     int steps_seen = 0;
