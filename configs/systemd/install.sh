@@ -4,6 +4,8 @@
 #   configs   configs/rover.yaml, vo.yaml, rover.env, worlds/, cameras/ -> /etc/rover/ (never overwritten)
 #   units     configs/systemd/*.service, *.target -> /etc/systemd/system/ (always overwritten)
 #   account   rover.sysusers -> /etc/sysusers.d/rover.conf; sysctl 90-rover-lcm.conf -> /etc/sysctl.d/
+#   key       /etc/rover/rover.key, the deployment's key for signed commands: made when absent
+#             (32 random bytes as hex, mode 0640, group rover), never replaced
 # then enables the process units into their targets and runs daemon-reload. It does not
 # start anything, nor enable rover.target at boot.
 #
@@ -99,6 +101,22 @@ done
 install -m 0644 "$HERE/rover.sysusers" "$PREFIX/etc/sysusers.d/rover.conf"
 install -m 0644 "$HERE/90-rover-lcm.conf" "$PREFIX/etc/sysctl.d/90-rover-lcm.conf"
 
+# The deployment's key (README.md, "Bus security"): every process unit signs and checks
+# commands with it (--key). Made from the kernel's random source when absent, never
+# readable by others (the processes refuse a key that is); never replaced, because every
+# computer and operator of the rover must hold the same one.
+KEY="$ETC/rover.key"
+if [ -e "$KEY" ]; then
+  [ -f "$KEY" ] || die "${KEY#"$PREFIX"} exists but is not a regular file (expected the deployment's key)"
+  note "kept ${KEY#"$PREFIX"} (the deployment's key)"
+else
+  ( umask 077 && od -An -v -tx1 -N32 /dev/urandom | tr -d ' \n' > "$KEY.tmp" && echo >> "$KEY.tmp" ) ||
+    die "cannot write ${KEY#"$PREFIX"}.tmp"
+  [ "$(wc -c < "$KEY.tmp")" -eq 65 ] || { rm -f "$KEY.tmp"; die "could not read 32 random bytes from /dev/urandom"; }
+  chmod 0640 "$KEY.tmp" && mv "$KEY.tmp" "$KEY"
+  note "made a new key ${KEY#"$PREFIX"}: copy it (mode 0640 or stricter) to every other computer and operator of this rover"
+fi
+
 if [ -z "$PREFIX" ]; then
   for tool in /usr/sbin/ip /usr/bin/lcm-logger; do
     [ -x "$tool" ] || note "warning: $tool not found: the units need it (apt-get install iproute2 liblcm-bin)"
@@ -124,6 +142,12 @@ if [ -n "$PREFIX" ]; then
 fi
 
 command -v systemd-sysusers >/dev/null && systemd-sysusers /etc/sysusers.d/rover.conf
+# The units run as group rover: it reads the key; others get nothing.
+if getent group rover >/dev/null; then
+  chgrp rover "$KEY" && chmod g+r,g-wx,o-rwx "$KEY"
+else
+  note "warning: no group rover here: the units cannot read ${KEY} until it is group rover, mode 0640"
+fi
 command -v sysctl >/dev/null && sysctl -q -p /etc/sysctl.d/90-rover-lcm.conf
 if [ ! -d /run/systemd/system ]; then
   note "warning: systemd is not running here: files installed, daemon-reload and enable skipped"
