@@ -906,6 +906,11 @@ void SequenceExecutor::FinishStep() {
   }
   // 2. VO lost: the `vo lost` policy (abort, retries exhausted, or shorter steps).
   if (vo_lost && !OnVoLost(step_text, slip_likely)) return;
+  if (measured && lost_step_scale_ < 1.0) {
+    // `vo lost shorten`: each step VO measures doubles the step back toward the setting.
+    lost_step_scale_ = std::min(1.0, 2.0 * lost_step_scale_);
+    ResplitRemainingSteps();
+  }
   //    Progress / slip, from the VO-corrected motion against the commanded (MER: a 40 %
   //    limit stopped a drive at 44.5 % slip). Where slip is likely, wheel odometry is no
   //    evidence of progress: a step VO lost is left to `vo lost`, and a step driven with VO
@@ -1027,7 +1032,7 @@ bool SequenceExecutor::OnVoLost(const std::string& step_text, const std::string&
         return false;
       }
       lost_step_scale_ = std::max(0.5 * lost_step_scale_, shortest);
-      ShortenRemainingSteps();
+      ResplitRemainingSteps();
       if (vo_off_by_failures_) {
         vo_enabled_ = true;
         vo_off_by_failures_ = false;
@@ -1040,7 +1045,7 @@ bool SequenceExecutor::OnVoLost(const std::string& step_text, const std::string&
   return true;
 }
 
-void SequenceExecutor::ShortenRemainingSteps() {
+void SequenceExecutor::ResplitRemainingSteps() {
   if (is_goto_ || next_step_ >= steps_.size()) return;  // goto re-plans with StepLength()
   const PlannedStep kind = steps_[next_step_];
   double rest = 0.0;

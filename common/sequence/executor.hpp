@@ -334,7 +334,7 @@ class SequenceExecutor {
   bool StepMeasured() const;
   std::string SlipLikely(const PoseEstimate& before, const PoseEstimate& after) const;
   bool OnVoLost(const std::string& step_text, const std::string& why);
-  void ShortenRemainingSteps();
+  void ResplitRemainingSteps();
   void RecordStep(const StepMotion& motion, bool measured, const PoseEstimate& after);
   double StepLength() const { return step_m_ * lost_step_scale_; }
   double MaxTurn() const { return max_turn_rad_ * lost_step_scale_; }
@@ -417,7 +417,8 @@ class SequenceExecutor {
   double goto_start_distance_ = 0.0;
   double goto_distance_limit_ = 0.0;
   bool baseline_done_ = false;
-  double lost_step_scale_ = 1.0;  // `vo lost shorten` halves it, for the rest of the command
+  double lost_step_scale_ = 1.0;  // `vo lost shorten` halves it, a measured step doubles it
+                                  // back (up to 1), a new command starts at 1
 
   // The step in progress.
   PlannedStep step_;

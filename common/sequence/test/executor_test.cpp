@@ -876,16 +876,20 @@ TEST(SequenceExecutor, VoLostShortenHalvesTheStepsThenAbortsAtTheShortest) {
   EXPECT_NEAR(w.motions[0].distance_m, 0.6, 1e-12);
   EXPECT_NEAR(w.motions[1].distance_m, 0.3, 1e-12);   // 2.4 m left in 8 steps
   EXPECT_NEAR(w.motions[2].distance_m, 0.15, 1e-12);  // 2.1 m left in 14 steps
-  // When VO measures again, the drive goes on in the shorter steps to the end.
+  // When VO measures again, each measured step doubles the step back to the setting.
   SequenceExecutor ex2(FastOptions());
   FakeWorld w2(ex2);
   w2.pitch_rad = -20 * kDeg;
-  w2.vo_fail_next = 1;
+  w2.vo_fail_next = 2;
   SubmitText(ex2, "vo on step 60 cm\nvo lost shorten\ndrive 3 m\n");
   w2.Run();
   ASSERT_EQ(w2.Final().state, SequenceState::kCompleted) << w2.Final().detail;
-  ASSERT_EQ(w2.motions.size(), 9u);
-  for (std::size_t i = 1; i < w2.motions.size(); ++i) EXPECT_NEAR(w2.motions[i].distance_m, 0.3, 1e-12);
+  ASSERT_EQ(w2.motions.size(), 7u);
+  // Lost at 60 and 30 cm; measured at 15 cm, so the 1.95 m left go in 30 cm steps (7 of
+  // 27.9 cm); measured again, so the rest goes in 60 cm steps (3 of 55.7 cm).
+  const double rest = 1.95 - 1.95 / 7;
+  const double expected[] = {0.6, 0.3, 0.15, 1.95 / 7, rest / 3, rest / 3, rest / 3};
+  for (std::size_t i = 0; i < 7; ++i) EXPECT_NEAR(w2.motions[i].distance_m, expected[i], 1e-12) << i;
   EXPECT_NEAR(w2.truth.x, 3.0, 1e-9);
 }
 
