@@ -250,6 +250,18 @@ std::int64_t WallClockMicros() {
       .count();
 }
 
+std::string InstanceName(const std::string& program) {
+  char host[256] = {};
+  if (::gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+  std::string name = program + "@" + host;
+  for (char& c : name) {
+    if (c < 0x21 || c > 0x7e) c = '_';
+  }
+  const std::string pid = ":" + std::to_string(::getpid());
+  if (name.size() + pid.size() > kMaxSenderLength) name.resize(kMaxSenderLength - pid.size());
+  return name + pid;
+}
+
 std::string PrintableName(const std::string& name) {
   std::string out;
   for (char c : name.substr(0, kMaxSenderLength)) out += (c >= 0x20 && c <= 0x7e) ? c : '?';

@@ -130,6 +130,12 @@ class Verifier {
 // LAN within milliseconds): a receiver's `not_before` is its start time less this.
 inline constexpr std::int64_t kClockSkewAllowanceUs = 2'000'000;
 
+// `program` + "@" + host name + ":" + process id, cut to kMaxSenderLength: the sender
+// name of one running instance. Each instance then has counters of its own, so two
+// operators whose wall clocks disagree, or a process restarted after its clock stepped
+// back, are never refused as replays of each other.
+std::string InstanceName(const std::string& program);
+
 // A name for messages: printable ASCII, at most kMaxSenderLength characters; anything
 // else is replaced so that a hostile name cannot garble a log line.
 std::string PrintableName(const std::string& name);

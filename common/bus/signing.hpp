@@ -79,14 +79,14 @@ std::optional<std::string> VerifyMessage(const Msg& msg, auth::Verifier& verifie
                          a.tag.empty() ? nullptr : a.tag.data(), a.tag.size());
 }
 
-// The Bus's authentication for a process that signs as `sender` and holds `key`: its
-// counters start at the wall clock; it refuses counters from before it started (less
+// The Bus's authentication for a process `program` that holds `key`. It signs as
+// auth::InstanceName(program) ("rover_seq@host:pid"), with counters from the wall clock; it refuses counters from before it started (less
 // auth::kClockSkewAllowanceUs), so a command captured before a restart cannot be
 // replayed to the restarted process. `reject_unsigned`: a command with no tag is refused
 // too. Leave it true: false lets anyone on the LAN send unsigned commands that are obeyed.
-inline Bus::Auth MakeBusAuth(const auth::Key& key, const std::string& sender,
+inline Bus::Auth MakeBusAuth(const auth::Key& key, const std::string& program,
                              bool reject_unsigned = true) {
-  auto signer = std::make_shared<auth::Signer>(key, sender);
+  auto signer = std::make_shared<auth::Signer>(key, auth::InstanceName(program));
   auto verifier = std::make_shared<auth::Verifier>(
       key, auth::WallClockMicros() - auth::kClockSkewAllowanceUs);
   Bus::Auth a;

@@ -184,7 +184,7 @@ TEST(AuthenticatedCommands, ForgedAndReplayedSubmitsAreRefusedAndASignedOneRuns)
   ASSERT_EQ(submits.packets.size(), 3u) << "expected the two forgeries and the signed submit";
   sequence_submit_t captured;
   ASSERT_GT(captured.decode(submits.packets[2].data(), 0, static_cast<int>(submits.packets[2].size())), 0);
-  EXPECT_EQ(captured.auth.sender, "rover_seq");
+  EXPECT_EQ(captured.auth.sender.rfind("rover_seq@", 0), 0u) << captured.auth.sender;
   ASSERT_EQ(captured.auth.tag_size, 32);
   const std::int64_t signed_id = captured.submission_id;
   ASSERT_TRUE(statuses.count(signed_id));
@@ -231,7 +231,7 @@ TEST(AuthenticatedCommands, ForgedAndReplayedSubmitsAreRefusedAndASignedOneRuns)
       << executor_log;
   EXPECT_EQ(Count(executor_log, "rejected: wrong tag from \"rover_seq\""), 1) << executor_log;
   EXPECT_EQ(Count(executor_log, "rejected: replayed or old counter " + std::to_string(captured.auth.counter) +
-                                    " from \"rover_seq\""), 1) << executor_log;
+                                    " from \"" + captured.auth.sender + "\""), 1) << executor_log;
   EXPECT_EQ(Count(executor_log, "SEQUENCE_CONTROL: dropped a sequence_control_t: rejected: no authentication tag"), 1)
       << executor_log;
   EXPECT_GE(dropped["sequence_executor"], 4) << "the heartbeat counts the refused commands";

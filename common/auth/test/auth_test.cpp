@@ -132,6 +132,17 @@ TEST(Signer, RejectsMalformedSenderNames) {
   EXPECT_NO_THROW(Signer(TestKey(), std::string(64, 'x')));
 }
 
+TEST(Signer, InstanceNamesAreValidSenderNamesOfThisProcess) {
+  const std::string name = rover::auth::InstanceName("sequence_executor");
+  EXPECT_EQ(name.rfind("sequence_executor@", 0), 0u) << name;
+  EXPECT_NE(name.find(":" + std::to_string(::getpid())), std::string::npos) << name;
+  EXPECT_NO_THROW(Signer(TestKey(), name));
+  const std::string long_name = rover::auth::InstanceName(std::string(80, 'p'));
+  EXPECT_EQ(long_name.size(), rover::auth::kMaxSenderLength);
+  EXPECT_NE(long_name.find(":" + std::to_string(::getpid())), std::string::npos) << long_name;
+  EXPECT_NO_THROW(Signer(TestKey(), long_name));
+}
+
 TEST(Verifier, AcceptsSignedMessagesInCounterOrder) {
   Signer signer(TestKey(), "rover_seq");
   Verifier verifier(TestKey());

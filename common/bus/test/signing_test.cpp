@@ -218,7 +218,7 @@ TEST(Signing, BusSignsWhatItPublishesAndRefusesForgeriesAndReplays) {
   }
   ASSERT_EQ(received.size(), 1u);
   EXPECT_EQ(received[0].reason, "operator");
-  EXPECT_EQ(received[0].auth.sender, "rover_seq");
+  EXPECT_EQ(received[0].auth.sender, rover::auth::InstanceName("rover_seq"));
   EXPECT_EQ(received[0].auth.tag_size, 32);
   EXPECT_EQ(bus.dropped(), 0);
 
