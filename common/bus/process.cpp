@@ -177,7 +177,8 @@ void Process::Run(const std::function<void()>& on_tick, int tick_ms) {
     const auto now = Clock::now();
     if (now >= next_heartbeat) {
       PublishHeartbeat();
-      next_heartbeat = now + std::chrono::seconds(1);
+      next_heartbeat = now + std::chrono::duration_cast<Clock::duration>(
+                                 std::chrono::duration<double>(heartbeat_period_s_));
     }
     if (on_tick && now >= next_tick) {
       on_tick();

@@ -59,6 +59,9 @@ class Process {
   void Stop() { stop_requested_ = true; }
   bool stopping() const;
   void PublishHeartbeat();
+  // Wall seconds between heartbeats in Run (1 by default). The commander of a motion beats
+  // faster, so that a mobility dead-man of 1.5 s tolerates a stall of over a second.
+  void set_heartbeat_period(double seconds) { heartbeat_period_s_ = seconds; }
 
  private:
   std::string name_;
@@ -67,6 +70,7 @@ class Process {
   std::map<std::string, std::string> options_;
   Bus bus_;
   std::int64_t heartbeat_seq_ = 0;
+  double heartbeat_period_s_ = 1.0;
   std::int8_t health_state_ = 0;
   std::string health_detail_;
   std::atomic<bool> stop_requested_{false};

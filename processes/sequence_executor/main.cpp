@@ -334,6 +334,9 @@ int main(int argc, char** argv) {
                                                     executor.OnHeartbeat(m.process, proc.wall_seconds());
                                                     flush();
                                                   }, 100);
+    // rover_sim's dead-man stops a motion when this process is silent for
+    // mobility.deadman_s (1.5 s): beat four times a second so a busy moment is not silence.
+    proc.set_heartbeat_period(0.25);
     proc.Run(
         [&] {
           executor.Tick(proc.now(), proc.wall_seconds());
