@@ -171,9 +171,9 @@ void ExplainMissing(ScenarioSummary& s, bool zones_defined) {
     }
   }
   if (!s.final_estimate || !s.final_truth) {
-    const std::string why =
-        "needs the final estimate and truth: " +
-        (!s.final_estimate ? s.missing["final_estimate"] : s.missing["final_truth"]);
+    std::string why = "needs the final estimate and truth: ";
+    if (!s.final_estimate) why += s.missing["final_estimate"];
+    if (!s.final_truth) why += std::string(s.final_estimate ? "" : "; ") + s.missing["final_truth"];
     s.missing["position_error_m"] = s.missing["position_error_pct"] = why;
   }
   if (!s.min_keepout_clearance_m) {
