@@ -51,6 +51,11 @@ std::string DecodePair(const rover_msgs::stereo_frame_t& frame, const imaging::I
       !bad.empty()) {
     return "right image: " + bad;
   }
+  if (images.left.size() != images.right.size()) {
+    return "right image is " + std::to_string(images.right.cols) + "x" + std::to_string(images.right.rows) +
+           " but the left is " + std::to_string(images.left.cols) + "x" + std::to_string(images.left.rows) +
+           " (expected a pair of one size)";
+  }
   return "";
 }
 
@@ -151,12 +156,17 @@ int main(int argc, char** argv) {
             }
             try {
               result = vo.Process(images, prior_T, prior_cov);
+              if (result.status == vo::VoStatus::kBadInput) {  // VO's own input checks
+                result.reason = "frame " + std::to_string(frame.frame_id) + ": " + result.reason;
+                proc.bus().Drop(channels::kStereoFrame, rover_msgs::stereo_frame_t::getTypeName(), result.reason);
+              }
             } catch (const std::exception& e) {
               // VO's state is unknown after a throw: its chain starts again.
               result = vo::VoResult{};
               result.status = vo::VoStatus::kBadInput;
-              result.reason = "frame " + std::to_string(frame.frame_id) + ": VO failed: " + e.what();
-              std::cerr << "visual_odometry: " << result.reason << " (the VO chain starts again)\n";
+              result.reason = "frame " + std::to_string(frame.frame_id) +
+                              ": VO failed (its chain starts again): " + e.what();
+              proc.bus().Drop(channels::kStereoFrame, rover_msgs::stereo_frame_t::getTypeName(), result.reason);
               vo.Reset();
               previous.reset();
             }

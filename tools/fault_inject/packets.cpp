@@ -161,7 +161,7 @@ rover_msgs::camera_model_t PinholeModel(int w, int h, double baseline_m) {
   m.width = w;
   m.height = h;
   // fx fy cx cy tx ty tz qw qx qy qz (geometry::PinholeCamera::Params)
-  m.params = {50.0, 50.0, 0.5 * (w - 1), 0.5 * (h - 1), 0.0, baseline_m, 0.0, 1.0, 0.0, 0.0, 0.0};
+  m.params = {50.0, 50.0, 0.5 * (w - 1), 0.5 * (h - 1), baseline_m, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0};
   m.num_params = static_cast<std::int32_t>(m.params.size());
   return m;
 }
@@ -620,7 +620,7 @@ std::vector<Packet> Images(const PacketOptions& o) {
   f = base;
   f.right = PngImage(48, 48, 4);
   f.right_model = PinholeModel(48, 48, 0.2);
-  add("right 48x48 beside a 64x48 left, each as its model", f, "differ in size");
+  add("right 48x48 beside a 64x48 left, each as its model", f, "expected a pair of one size");
   f = base;
   f.left_model.type = "bogus";
   add("left model type 'bogus'", f, "camera model");

@@ -1,0 +1,138 @@
+// The fault-injection suite: the full sim_vo deployment on a private bus, driving, while
+//   - every channel gets hostile packets (tools/fault_inject: malformed, bad values, far
+//     times, bad images), after which no process may have died or gone silent and a new
+//     sequence must run to completion; or
+//   - one process is killed with kill -9 mid-drive, after which no other process may die,
+//     the rover must stop within a bound (2 s of wall time when the executor dies: the
+//     mobility dead-man), and once the process is back a new sequence must complete.
+// Each TEST is its own ctest entry (they run in parallel under ./rover test). Each prints
+// "fault counts: ..." and writes it to test-out/fault_counts/ (packets sent, deaths,
+// kills, safe stops). A death names the process, how it died and the packets sent last.
+#include "bus/guard.hpp"
+#include "fault/fault_rig.hpp"
+
+#include <gtest/gtest.h>
+
+namespace rover::test {
+namespace {
+
+using S = rover_msgs::sequence_status_t;
+// LCM's constants are declared in the class only: copies that tests may take by reference.
+constexpr int kCompleted = S::STATE_COMPLETED;
+constexpr int kAborted = S::STATE_ABORTED;
+
+std::string Lines(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& i : items) out += "\n  " + i;
+  return out;
+}
+
+std::string Describe(const std::optional<S>& s) {
+  if (!s) return "no final status";
+  return "state " + std::to_string(s->state) + (s->abort_reason.empty() ? "" : " (" + s->abort_reason + ")") +
+         ": " + s->detail;
+}
+
+std::string TestName() { return ::testing::UnitTest::GetInstance()->current_test_info()->name(); }
+
+// A new sequence runs to completion and the rover really moves.
+void ExpectNewSequenceCompletes(FaultRig& rig, const std::string& drive) {
+  const double odometer = rig.odometer();
+  const auto id = rig.Submit(DriveSequence(drive));
+  const auto final = rig.WaitFinal(id, 120);
+  ASSERT_TRUE(final.has_value()) << "the new sequence (" << drive << ") did not end within 120 s";
+  EXPECT_EQ(final->state, kCompleted) << "the new sequence (" << drive << "): " << Describe(final);
+  EXPECT_GT(rig.odometer() - odometer, 0.8) << "the rover rolled " << rig.odometer() - odometer << " m for " << drive;
+}
+
+// Sends one group of packets on every channel during a drive, then checks the stack.
+void RunPacketGroup(const std::string& group) {
+  FaultRig rig(TestName());
+  ASSERT_TRUE(rig.StartAll());
+  const auto drive = rig.Submit(DriveSequence("drive 2 m"));
+  ASSERT_TRUE(rig.WaitSteps(drive, 1, 90)) << "the drive did not take its first step";
+
+  fault::PacketOptions options;
+  options.now_utime = rig.now_utime();
+  options.max_payload_bytes = [](const std::string& channel) { return bus::MaxPayloadBytes(channel); };
+  for (const auto& channel : fault::AllChannels()) {
+    rig.Inject(fault::BuildPackets(group, channel.channel, options), 5);
+  }
+  rig.Note("sent " + std::to_string(rig.counts().packets) + " " + group + " packets");
+  rig.Pump(1.0);
+  if (!rig.Final(drive)) rig.Abort("fault test: the drive under fault ends here");
+  EXPECT_TRUE(rig.WaitFinal(drive, 30).has_value()) << "the drive under fault did not end after an abort";
+
+  EXPECT_TRUE(rig.deaths().empty()) << rig.deaths().size() << " processes died:" << Lines(rig.deaths());
+  rig.Pump(1.5);  // every live process heartbeats once a second
+  EXPECT_TRUE(rig.Silent(2.5).empty()) << "silent for 2.5 s (dead or wedged):" << Lines(rig.Silent(2.5));
+  ExpectNewSequenceCompletes(rig, "drive -1 m");
+  EXPECT_TRUE(rig.deaths().empty()) << "died later:" << Lines(rig.deaths());
+  rig.Report();
+}
+
+TEST(FaultInjection, MalformedPacketsOnEveryChannelKillNoProcess) { RunPacketGroup("malformed"); }
+TEST(FaultInjection, NanInfAndUnknownEnumsOnEveryChannelKillNoProcess) { RunPacketGroup("values"); }
+TEST(FaultInjection, FarFutureAndFarPastTimesLeaveTheStackAbleToRunASequence) { RunPacketGroup("times"); }
+TEST(FaultInjection, HostileImagesDuringADriveKillNoProcess) { RunPacketGroup("images"); }
+
+// Kills `process` with kill -9 while the rover drives; checks the stop, the others, and
+// that a new sequence completes once the process is back.
+void RunKill(const std::string& process) {
+  FaultRig rig(TestName());
+  ASSERT_TRUE(rig.StartAll());
+  const auto drive = rig.Submit(DriveSequence("drive 2 m"));
+  ASSERT_TRUE(rig.WaitSteps(drive, 1, 90)) << "the drive did not take its first step";
+  ASSERT_TRUE(rig.WaitMoving(60)) << "the rover was never seen moving after the first step";
+
+  const auto killed_at = Clock::now();
+  rig.Kill(process);
+  // The executor's death is caught by the mobility dead-man; any other by the executor,
+  // which hears its heartbeat stop (executor.heartbeat_timeout_s) and commands STOP.
+  const bool executor = process == "sequence_executor";
+  const double bound = executor ? 2.0 : rig.heartbeat_timeout_s() + 2.0;
+  const auto latency = rig.StopLatency(killed_at, bound + 1.5);
+  if (latency && *latency <= bound) ++rig.counts().safe_stops;
+  if (latency) {
+    rig.Note("the rover stopped " + std::to_string(*latency) + " s after the kill");
+    EXPECT_LE(*latency, bound) << "the rover stopped " << *latency << " s after kill -9 " << process
+                               << " (expected within " << bound << " s; " << rig.mobility_detail() << ")";
+  } else {
+    ADD_FAILURE() << "the rover still moved " << bound + 1.5 << " s after kill -9 " << process << " ("
+                  << rig.mobility_detail() << ")";
+  }
+  EXPECT_TRUE(rig.deaths().empty()) << "another process died:" << Lines(rig.deaths());
+  if (!executor) {
+    const auto final = rig.WaitFinal(drive, rig.heartbeat_timeout_s() + 10);
+    EXPECT_TRUE(final && final->state == kAborted)
+        << "the executor did not abort the drive after " << process << " died: " << Describe(final);
+  }
+
+  if (process == "rover_sim") {
+    // The simulator owns the rover clock: the rover starts again, and so does everything.
+    rig.StopAll();
+    ASSERT_TRUE(rig.StartAll());
+    ExpectNewSequenceCompletes(rig, "drive 1 m");
+  } else {
+    ASSERT_TRUE(rig.Restart(process)) << process << " did not come back";
+    if (executor) {
+      const auto final = rig.WaitFinal(drive, 10);
+      EXPECT_TRUE(final && final->state == kAborted && final->abort_reason == "interrupted")
+          << "the restarted executor did not report the drive it was running as interrupted: "
+          << Describe(final);
+    }
+    ExpectNewSequenceCompletes(rig, "drive -1 m");
+  }
+  EXPECT_TRUE(rig.deaths().empty()) << "died later:" << Lines(rig.deaths());
+  rig.Report();
+}
+
+TEST(FaultKill, SequenceExecutorMidDriveStopsTheRoverWithinTwoSeconds) { RunKill("sequence_executor"); }
+TEST(FaultKill, RoverSimMidDrive) { RunKill("rover_sim"); }
+TEST(FaultKill, StateEstimatorMidDrive) { RunKill("state_estimator"); }
+TEST(FaultKill, HazardMonitorMidDrive) { RunKill("hazard_monitor"); }
+TEST(FaultKill, CameraCaptureMidDrive) { RunKill("camera_capture"); }
+TEST(FaultKill, VisualOdometryMidDrive) { RunKill("visual_odometry"); }
+
+}  // namespace
+}  // namespace rover::test
