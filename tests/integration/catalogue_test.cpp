@@ -1,0 +1,259 @@
+// The scenario catalogue (configs/scenarios/README.md): the ten Mars episodes, each run
+// through the real process set on a private LCM bus by scenario_runner, and asserted
+// against truth: outcome, errors, clearance, and no false VO update (summary.json counts
+// an accepted update whose error against truth lies beyond the 99.7 % NEES bound).
+// ./rover test runs ctest inside a private network namespace.
+#include "integration/run_support.hpp"
+
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+namespace rover::test {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+// VO statuses in summary.json (vo_update_t STATUS_*).
+constexpr int kVoOk = 0;
+constexpr int kVoTooFewFeatures = 2;
+constexpr int kVoMotionTooLarge = 7;
+constexpr int kVoDegenerate = 9;
+
+// Runs configs/scenarios/NAME.yaml and returns its summary.json. The runner exits 0 only
+// when the run met every entry of the scenario's `expect:`.
+YAML::Node RunScenario(const std::string& name) {
+  const std::string out = OutDir("catalogue_" + name);
+  const auto result = RunCommand(Bin("scenario_runner") + " configs/scenarios/" + name +
+                                 ".yaml --out " + out + " --quiet");
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_TRUE(std::filesystem::exists(out + "/log.lcm")) << "no log written";
+  return YAML::LoadFile(out + "/summary.json");
+}
+
+std::string Detail(const YAML::Node& s) { return s["detail"].as<std::string>(""); }
+
+double Get(const YAML::Node& pose, const char* key) { return pose[key].as<double>(); }
+
+double Horizontal(const YAML::Node& a, const YAML::Node& b) {
+  return std::hypot(Get(a, "x") - Get(b, "x"), Get(a, "y") - Get(b, "y"));
+}
+
+// Steps that drove (not turns in place).
+bool IsDrive(const YAML::Node& step) {
+  return std::abs(step["commanded"]["distance_m"].as<double>()) > 1e-6;
+}
+
+double MaxTrueSlipPct(const YAML::Node& s) {
+  double m = -1e9;
+  for (const auto& st : s["steps"]) {
+    if (IsDrive(st)) m = std::max(m, st["slip_pct"].as<double>());
+  }
+  return m;
+}
+
+int CountVoStatus(const YAML::Node& s, int status) {
+  int n = 0;
+  for (const auto& st : s["steps"]) n += st["vo_status"].as<int>() == status;
+  return n;
+}
+
+void ExpectNoFalseUpdate(const YAML::Node& s) {
+  EXPECT_EQ(s["false_updates"].as<int>(), 0)
+      << s["vo_updates_accepted"].as<int>() << " accepted VO updates";
+}
+
+// Rock course: 2.45 m in 35 cm steps over cobbles on sand. Slip reaches 85 % and more;
+// VO measures every step and keeps the error under 1 % of the distance.
+TEST(Catalogue, RockCourseVoKeepsTheErrorUnderOnePercentWhileSlipPasses85Percent) {
+  const auto s = RunScenario("rock_course");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  ASSERT_EQ(s["steps"].size(), 7u);
+  EXPECT_GT(MaxTrueSlipPct(s), 80.0);
+  for (const auto& st : s["steps"]) {
+    EXPECT_EQ(st["vo_status"].as<int>(), kVoOk);
+    // VO saw each step's slip as it was.
+    EXPECT_NEAR(st["estimated_slip_pct"].as<double>(), st["slip_pct"].as<double>(), 5.0);
+  }
+  EXPECT_LT(s["position_error_pct"].as<double>(), 1.0);
+  ExpectNoFalseUpdate(s);
+}
+
+// The same course blind: wheel odometry passes 10 % error within 1.4 m (4 steps).
+TEST(Catalogue, RockCourseBlindWheelOdometryPassesTenPercentWithinOnePointFourMetres) {
+  const auto s = RunScenario("rock_course_blind");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  ASSERT_EQ(s["steps"].size(), 7u);
+  double estimated = 0, truth = 0;
+  for (std::size_t i = 0; i < 4; ++i) {
+    estimated += s["steps"][i]["estimated"]["distance_m"].as<double>();
+    truth += s["steps"][i]["true"]["distance_m"].as<double>();
+  }
+  EXPECT_GT((estimated - truth) / estimated, 0.10) << estimated << " m estimated, " << truth << " m true";
+  EXPECT_GT(MaxTrueSlipPct(s), 80.0);
+  EXPECT_GT(s["position_error_pct"].as<double>(), 10.0);
+}
+
+// Sol 304: 8.7 m across, then up, a 20 to 24 deg outcrop slope, ending in one sequence
+// within the arm's reach of the target (the stand-off point at x 3, y 5.7).
+TEST(Catalogue, Sol304ApproachEndsWithinReachOfTheTarget) {
+  const auto s = RunScenario("sol304_approach");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  for (const auto& c : s["commands"]) EXPECT_EQ(c["outcome"].as<std::string>(), "completed");
+  const double to_target = std::hypot(Get(s["final_truth"], "x") - 3.0, Get(s["final_truth"], "y") - 5.7);
+  EXPECT_LT(to_target, 0.5);                                       // the arm reaches it
+  EXPECT_GT(std::abs(Get(s["final_truth"], "pitch")), 18.0 * kDeg);  // on the slope, facing up
+  EXPECT_GT(s["distance_travelled_m"].as<double>(), 8.0);
+  EXPECT_LT(s["position_error_pct"].as<double>(), 2.0);
+  ExpectNoFalseUpdate(s);
+}
+
+// Wopmay with VO: the rover slides downslope toward the rock at every step; VO measures
+// it and the predictive keep-out check stops the drive before the zone.
+TEST(Catalogue, WopmayVoStopsBeforeTheZone) {
+  const auto s = RunScenario("wopmay");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "aborted") << Detail(s);
+  EXPECT_EQ(s["abort_reason"].as<std::string>(), "keepout") << Detail(s);
+  ASSERT_FALSE(s["min_keepout_clearance_m"].IsNull());
+  EXPECT_GT(s["min_keepout_clearance_m"].as<double>(), 0.0);
+  // It did drive, and it did slide: north (downslope), off its line x = 2.6.
+  EXPECT_GT(s["distance_travelled_m"].as<double>(), 1.0);
+  EXPECT_GT(Get(s["final_truth"], "x") - 2.6, 0.3);
+  EXPECT_LT(s["position_error_m"].as<double>(), 0.05);  // VO followed the slide
+  EXPECT_EQ(CountVoStatus(s, kVoOk), static_cast<int>(s["steps"].size()));
+  ExpectNoFalseUpdate(s);
+}
+
+// Wopmay blind: wheel odometry keeps the rover on its line, clear of the zone; in truth
+// it slides into the zone (and onto the rock).
+TEST(Catalogue, WopmayBlindEntersTheZone) {
+  const auto s = RunScenario("wopmay_blind");
+  ASSERT_FALSE(s["min_keepout_clearance_m"].IsNull());
+  EXPECT_LT(s["min_keepout_clearance_m"].as<double>(), 0.0) << Detail(s);
+  EXPECT_NEAR(Get(s["final_estimate"], "x"), 2.6, 0.1);  // it believes it held its line
+  EXPECT_GT(Get(s["final_truth"], "x") - 2.6, 0.5);
+  EXPECT_NE(s["abort_reason"].as<std::string>(""), "keepout");  // nothing saw it coming
+}
+
+// Sol 206: up a 28 deg loose-sand slope. Slip passes 100 %: the rover slides back, VO
+// measures it, and the progress check aborts.
+TEST(Catalogue, Sol206VoSeesTheSlideAndTheProgressCheckAborts) {
+  const auto s = RunScenario("progress_abort");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "aborted") << Detail(s);
+  EXPECT_EQ(s["abort_reason"].as<std::string>(), "progress") << Detail(s);
+  ASSERT_GE(s["steps"].size(), 1u);
+  const auto& last = s["steps"][s["steps"].size() - 1];
+  EXPECT_GT(last["slip_pct"].as<double>(), 100.0);
+  EXPECT_GT(last["estimated_slip_pct"].as<double>(), 100.0);
+  EXPECT_EQ(last["vo_status"].as<int>(), kVoOk);
+  EXPECT_LT(Get(s["final_truth"], "x"), 0.0);  // it went backward
+  EXPECT_LT(s["position_error_m"].as<double>(), 0.05);
+  ExpectNoFalseUpdate(s);
+}
+
+// Sols 188 to 191 with VO: 19.2 m up and across a 20 to 22 deg hillside; the rover slides
+// down and across the slope by metres, and VO follows it.
+TEST(Catalogue, Sol188To191VoFollowsTheSlideDownAndAcrossTheSlope) {
+  const auto s = RunScenario("sol188_191");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  EXPECT_GT(s["distance_travelled_m"].as<double>(), 19.2);  // further than the wheels rolled
+  EXPECT_LT(s["position_error_pct"].as<double>(), 2.0);
+  EXPECT_LT(std::abs(Get(s["final_estimate"], "z") - Get(s["final_truth"], "z")), 0.2);
+  const int ok = CountVoStatus(s, kVoOk);
+  EXPECT_GE(ok, static_cast<int>(s["steps"].size()) - 2);
+  ExpectNoFalseUpdate(s);
+}
+
+// Sols 188 to 191 blind: wheel odometry underestimates the distance (the rover slid down
+// and across the slope, so it travelled further than its wheels said), misses the
+// slip-induced descent, and ends metres from the truth.
+TEST(Catalogue, Sol188To191BlindUnderestimatesTheDistanceAndMissesTheDescent) {
+  const auto s = RunScenario("sol188_191_blind");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  double wheels = 0;
+  for (const auto& st : s["steps"]) wheels += st["estimated"]["distance_m"].as<double>();
+  const double truth = s["distance_travelled_m"].as<double>();
+  EXPECT_NEAR(wheels, 19.2, 0.1);
+  EXPECT_GT(truth - wheels, 0.8) << truth << " m true, " << wheels << " m by the wheels";  // Mars: 1.6 m
+  EXPECT_GT(Horizontal(s["final_estimate"], s["final_truth"]), 3.0);  // Mars: nearly 5 m
+  // Z down: wheel odometry says it climbed; in truth it slid down the slope.
+  EXPECT_LT(Get(s["final_estimate"], "z"), -0.3);
+  EXPECT_GT(Get(s["final_truth"], "z") - Get(s["final_estimate"], "z"), 1.0);
+}
+
+// Featureless sand: VO reports too few features at every pair; the prior (wheel
+// odometry) is kept and no update is made.
+TEST(Catalogue, FeaturelessSandVoReportsTooFewFeaturesAndKeepsThePrior) {
+  const auto s = RunScenario("featureless_sand");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  ASSERT_EQ(s["steps"].size(), 6u);
+  EXPECT_EQ(CountVoStatus(s, kVoTooFewFeatures), 6);
+  EXPECT_EQ(s["vo_updates_accepted"].as<int>(), 0);
+  ExpectNoFalseUpdate(s);
+  // The estimate is wheel odometry's: the 3 m the wheels rolled, a sand slip short in truth.
+  EXPECT_NEAR(Get(s["final_estimate"], "x"), 3.0, 0.05);
+  EXPECT_LT(s["position_error_pct"].as<double>(), 10.0);
+}
+
+// Rover shadow: the rover's own long shadow in view on bland sand moves with it; VO must
+// not take it for the scene.
+TEST(Catalogue, RoverShadowMakesNoFalseUpdate) {
+  const auto s = RunScenario("rover_shadow");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  ExpectNoFalseUpdate(s);
+  EXPECT_GT(Get(s["final_truth"], "x"), 2.5);  // it drove (a shadow-locked VO would say it stood still)
+  EXPECT_LT(s["position_error_pct"].as<double>(), 10.0);
+}
+
+// Clustered features: every corner lies on one small textured patch; the degenerate-
+// geometry check refuses the clustered inliers until the patch fills more of the view.
+TEST(Catalogue, ClusteredFeaturesMakeNoFalseUpdate) {
+  const auto s = RunScenario("clustered_features");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  EXPECT_GE(CountVoStatus(s, kVoDegenerate), 1);
+  ExpectNoFalseUpdate(s);
+  EXPECT_LT(s["position_error_pct"].as<double>(), 10.0);
+}
+
+// Large turn: 40 deg in place in one step with VO on. Too little overlap: VO re-initialises
+// tracking on the new pair (no update across the turn) and measures the next drive.
+TEST(Catalogue, LargeTurnReinitialisesTrackingWithoutAFalseUpdate) {
+  const auto s = RunScenario("large_turn");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  int turn = -1;
+  for (std::size_t i = 0; i < s["steps"].size(); ++i) {
+    if (std::abs(s["steps"][i]["commanded"]["turn_rad"].as<double>()) > 30.0 * kDeg) turn = static_cast<int>(i);
+  }
+  ASSERT_GE(turn, 0) << "no step turned 40 deg at once";
+  EXPECT_NEAR(s["steps"][turn]["commanded"]["turn_rad"].as<double>(), 40.0 * kDeg, 1e-6);
+  EXPECT_EQ(s["steps"][turn]["vo_status"].as<int>(), kVoMotionTooLarge);
+  ASSERT_GT(s["steps"].size(), static_cast<std::size_t>(turn + 1));
+  EXPECT_EQ(s["steps"][turn + 1]["vo_status"].as<int>(), kVoOk);  // tracking re-initialised
+  ExpectNoFalseUpdate(s);
+  EXPECT_NEAR(Get(s["final_truth"], "yaw"), 40.0 * kDeg, 4.0 * kDeg);
+  EXPECT_LT(s["position_error_pct"].as<double>(), 2.0);
+}
+
+// Wheel dragging: the right front wheel is dragged, so the wheels under-read and the
+// rover yaws toward it; VO keeps the position error bounded.
+TEST(Catalogue, WheelDraggingVoKeepsThePositionErrorBounded) {
+  const auto s = RunScenario("wheel_dragging");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  EXPECT_GT(Get(s["final_truth"], "yaw"), 3.0 * kDeg);  // pulled toward the dragged (right) side
+  double commanded = 0, truth = 0;
+  for (const auto& st : s["steps"]) {
+    commanded += st["commanded"]["distance_m"].as<double>();
+    truth += st["true"]["distance_m"].as<double>();
+    EXPECT_NEAR(st["estimated_slip_pct"].as<double>(), st["slip_pct"].as<double>(), 3.0);
+  }
+  EXPECT_LT(truth, 0.95 * commanded);  // the drag costs distance the wheels do not see
+  EXPECT_LT(s["position_error_pct"].as<double>(), 2.0);
+  ExpectNoFalseUpdate(s);
+}
+
+}  // namespace
+}  // namespace rover::test
