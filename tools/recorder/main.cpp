@@ -23,6 +23,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cerrno>
 #include <condition_variable>
 #include <csignal>
 #include <cstdlib>
@@ -298,7 +299,14 @@ int main(int argc, char** argv) {
     const auto start = std::chrono::steady_clock::now();
     std::atomic<bool> receiving{true};
     std::thread receive_thread([&] {
-      while (receiving) lcm.handleTimeout(100);
+      bool reported = false;
+      while (receiving) {
+        if (lcm.handleTimeout(100) < 0 && errno != EINTR) {
+          if (!reported) std::cerr << "rover_recorder: LCM handle failed on " << args->url << "\n";
+          reported = true;
+          std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        }
+      }
       // Stopping: dispatch what LCM already holds (bounded, as a live bus never goes quiet).
       const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
       while (lcm.handleTimeout(0) > 0 && std::chrono::steady_clock::now() < until) {
