@@ -219,7 +219,7 @@ TEST(AuthenticatedCommands, ForgedAndReplayedSubmitsAreRefusedAndASignedOneRuns)
   abort.action = rover_msgs::sequence_control_t::ACTION_ABORT;
   abort.reason = "spoofed";
   bus.Publish(channels::kSequenceControl, abort);
-  pump(2.0);
+  pump(3.0);  // the executor's next heartbeat (1 Hz) carries its drop count
   EXPECT_EQ(mobility_ids.count(777001), 0u) << "rover_sim obeyed an unsigned MOBILITY_COMMAND";
 
   // Every process is still up; each receiver said why it refused each one, in one line.
