@@ -13,8 +13,8 @@ namespace rover::render {
 
 // The rover's own body and mast as simple solids in the ROVER frame (X fwd, Y right,
 // Z down, origin on the ground between the wheels). They cast shadows only; they are not
-// drawn in the image. On Mars the rover's shadow in view fooled VO (OPERATIONS.md,
-// "Rover shadow"), so it must be there in simulation.
+// drawn in the image. On Mars the rover's shadow in view fooled VO (the "rover shadow"
+// episode, configs/scenarios/README.md), so it must be there in simulation.
 struct RoverShadowOptions {
   bool enabled = true;
   // Axis-aligned boxes {x_min, x_max, y_min, y_max, z_min, z_max}, metres, rover frame.

@@ -1,4 +1,4 @@
-// Scenario tests (OPERATIONS.md, "Scenario catalogue"): each runs the real process set on
+// Scenario tests (configs/scenarios/README.md): each runs the real process set on
 // a private LCM bus through scenario_runner and asserts the outcome against truth.
 // ./rover test runs ctest inside a private network namespace.
 #include "integration/run_support.hpp"
