@@ -60,10 +60,9 @@ inline const std::vector<std::string>& DeployedProcesses() {
 
 // A drive north over the demo's ground (4 steps of 50 cm, VO at each), long enough to be
 // under way while packets fly or a process dies.
-inline std::string DriveSequence(const std::string& drive) {
-  return "vo on step 50 cm maxturn 18 deg failures 10 then continue\n"
-         "limit time 900 s\n" +
-         drive + "\n";
+inline std::string DriveSequence(const std::string& drive, int step_cm = 50) {
+  return "vo on step " + std::to_string(step_cm) + " cm maxturn 18 deg failures 10 then continue\n" +
+         "limit time 900 s\n" + drive + "\n";
 }
 
 class FaultRig {
@@ -86,8 +85,9 @@ class FaultRig {
   const std::vector<std::string>& deaths() const { return deaths_; }
 
   // Starts every process of sim_vo on this rig's bus and waits for their heartbeats.
-  // The simulator holds its clock until the others are up (as the scenario runner does).
-  bool StartAll() {
+  // The simulator holds its clock until the others are up (as the scenario runner does)
+  // and runs at `rate` rover seconds per wall second (sim.rate is 50).
+  bool StartAll(double rate = 50) {
     set_ = std::make_unique<launch::ProcessSet>(std::string(ROVER_BINARY_DIR) + "/bin",
                                                 NewLogDir(), false);
     labels_.clear();
@@ -100,7 +100,9 @@ class FaultRig {
     for (const auto& p : DeployedProcesses()) {
       launch::ProcessSpec spec = Spec(p);
       if (p == "rover_sim") {
-        for (const char* a : {"--start", "0,0,0", "--rate", "50", "--hold-for"}) spec.args.push_back(a);
+        for (const char* a : {"--start", "0,0,0", "--rate"}) spec.args.push_back(a);
+        spec.args.push_back(std::to_string(rate));
+        spec.args.push_back("--hold-for");
         spec.args.push_back(others);
       }
       Start(spec);
