@@ -1,6 +1,7 @@
-// Replay (ARCHITECTURE.md, use 2): a drive recorded with the real lcm-logger is played back
-// with the real lcm-logplayer into a fresh state_estimator; its poses must equal those
-// recorded, message for message.
+// Replay: the demo drive, recorded by the scenario runner's rover_recorder (standard LCM
+// log format, nothing lost, checked by logcheck), is played back with the real
+// lcm-logplayer, at its default speed and at -s 5, into a fresh state_estimator; its poses
+// must equal those recorded, byte for byte, message for message.
 #include "bus/channels.hpp"
 #include "integration/run_support.hpp"
 #include "launch/process_set.hpp"
@@ -45,48 +46,74 @@ std::vector<std::string> EstimatorArgs(const std::string& commands_path) {
   return {};
 }
 
-TEST(Replay, StateEstimatorReproducesRecordedPosesFromLogplayer) {
-  // Record a blind drive at 10x real time (see the scenario file for why not 50x; the
-  // estimator's handling of VO updates is shown deterministic in its unit tests).
-  std::filesystem::current_path(SourceDir());  // the recorded arguments are relative to it
-  const std::string out = OutDir("replay");
-  const auto run = RunCommand(Bin("scenario_runner") +
-                              " configs/scenarios/replay_drive.yaml --quiet --out " + out);
-  ASSERT_EQ(run.exit_code, 0) << run.output;
-  const auto recorded = ReadChannel(out + "/log.lcm", channels::kPose);
-  ASSERT_GT(recorded.size(), 100u);
-
-  // Replay into a fresh estimator on a bus of its own, recording what it publishes.
-  const std::string url = PrivateUrl(11);
+// Plays the recorded inputs in `log` into a fresh state_estimator on a bus of its own, at
+// lcm-logplayer speed `speed`, and returns the poses it published (recorded by
+// rover_recorder, which loses nothing).
+std::vector<std::string> ReplayPoses(const std::string& out, const std::string& log, const std::string& speed,
+                                     int port_offset) {
+  const std::string url = PrivateUrl(port_offset);
   const std::vector<std::string> env = {"ROVER_LCM_URL=" + url};
-  const std::string replay_log = out + "/replayed_poses.lcm";
+  const std::string replay_log = out + "/replayed_x" + speed + ".lcm";
+  std::filesystem::remove(replay_log);
   launch::ProcessSet set(std::string(ROVER_BINARY_DIR) + "/bin", out, false);
-  set.Start({"lcm-logger", "/usr/bin/lcm-logger",
-             {"--lcm-url=" + url, "-q", "-f", "-c", channels::kPose, replay_log}}, env);
+  set.Start({"replay_recorder_x" + speed, "rover_recorder", {"--lcm-url", url, replay_log}}, env);
   auto args = EstimatorArgs(out + "/commands.txt");
-  ASSERT_FALSE(args.empty()) << "no state_estimator line in commands.txt";
-  set.Start({"replay_state_estimator", "state_estimator", args}, env);
-  std::this_thread::sleep_for(std::chrono::milliseconds(700));  // subscribed
-  set.Start({"lcm-logplayer", "/usr/bin/lcm-logplayer",
-             {"--lcm-url=" + url, "-e", "^(IMU|WHEEL_ODOMETRY|VO_UPDATE|NEW_SITE|ROVER_CLOCK)$",
-              out + "/log.lcm"}}, env);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (set.Running("lcm-logplayer") && std::chrono::steady_clock::now() < deadline) set.Poll(100);
-  ASSERT_FALSE(set.Running("lcm-logplayer")) << "lcm-logplayer did not finish";
-  std::this_thread::sleep_for(std::chrono::milliseconds(700));  // last poses reach the logger
+  EXPECT_FALSE(args.empty()) << "no state_estimator line in commands.txt";
+  if (args.empty()) return {};
+  set.Start({"replay_state_estimator_x" + speed, "state_estimator", args}, env);
+  // Subscribed before the first input is played: wait for the estimator's heartbeat.
+  {
+    lcm::LCM probe(url);
+    bool heard = false;
+    struct Listener {
+      bool* heard;
+      void On(const lcm::ReceiveBuffer*, const std::string&) { *heard = true; }
+    } listener{&heard};
+    probe.subscribe(channels::kHeartbeat, &Listener::On, &listener);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (!heard && std::chrono::steady_clock::now() < until) probe.handleTimeout(100);
+    EXPECT_TRUE(heard) << "the replay's state_estimator sent no heartbeat";
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  }
+  set.Start({"lcm-logplayer_x" + speed, "/usr/bin/lcm-logplayer",
+             {"--lcm-url=" + url, "-s", speed, "-e", "^(IMU|WHEEL_ODOMETRY|VO_UPDATE|NEW_SITE|ROVER_CLOCK)$", log}},
+            env);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(180);
+  while (set.Running("lcm-logplayer_x" + speed) && std::chrono::steady_clock::now() < deadline) set.Poll(100);
+  EXPECT_FALSE(set.Running("lcm-logplayer_x" + speed)) << "lcm-logplayer did not finish";
+  std::this_thread::sleep_for(std::chrono::milliseconds(1000));  // last poses reach the recorder
   set.StopAll();
+  return ReadChannel(replay_log, channels::kPose);
+}
 
-  const auto replayed = ReadChannel(replay_log, channels::kPose);
-  // The live estimator was stopped with the run, so the replay may add a few poses at the
-  // end from inputs it never processed; every recorded pose must be reproduced exactly.
-  ASSERT_GE(replayed.size(), recorded.size());
-  EXPECT_LE(replayed.size(), recorded.size() + 20);
+// Every recorded pose must be reproduced exactly, message for message; the live estimator
+// was stopped with the run, so a replay may add a few poses at the end from inputs it
+// never processed.
+void ExpectSamePoses(const std::vector<std::string>& recorded, const std::vector<std::string>& replayed,
+                     const std::string& what) {
+  ASSERT_GE(replayed.size(), recorded.size()) << what;
+  EXPECT_LE(replayed.size(), recorded.size() + 20) << what;
   std::size_t mismatches = 0, first_mismatch = 0;
   for (std::size_t i = 0; i < recorded.size(); ++i) {
     if (recorded[i] != replayed[i] && mismatches++ == 0) first_mismatch = i;
   }
-  EXPECT_EQ(mismatches, 0u) << "first differing pose: #" << first_mismatch << " of "
-                            << recorded.size();
+  EXPECT_EQ(mismatches, 0u) << what << ": " << mismatches << " differing poses, the first #" << first_mismatch
+                            << " of " << recorded.size();
+}
+
+TEST(Replay, DemoLogReplaysIntoAFreshEstimatorWithEveryPoseByteIdentical) {
+  // The demo (VO in the loop, the default 50x), recorded by the scenario runner.
+  std::filesystem::current_path(SourceDir());  // the recorded arguments are relative to it
+  const std::string out = OutDir("replay");
+  const auto run = RunCommand(Bin("scenario_runner") + " configs/scenarios/demo.yaml --quiet --out " + out);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto check = RunCommand(Bin("logcheck") + " " + out + "/log.lcm");
+  ASSERT_EQ(check.exit_code, 0) << "the demo's log lost messages:\n" << check.output;
+  const auto recorded = ReadChannel(out + "/log.lcm", channels::kPose);
+  ASSERT_GT(recorded.size(), 1000u);
+
+  ExpectSamePoses(recorded, ReplayPoses(out, out + "/log.lcm", "1", 11), "lcm-logplayer at its default speed");
+  ExpectSamePoses(recorded, ReplayPoses(out, out + "/log.lcm", "5", 12), "lcm-logplayer -s 5");
 }
 
 }  // namespace
