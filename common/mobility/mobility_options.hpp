@@ -97,7 +97,7 @@ struct SlipOptions {
   // rock the same cobbles cost little. Rocks stall the rover but never push it back: the
   // slip they add stops at rock_stall_slip.
   double rock_climb_grade = 0.8;
-  double rock_stall_slip = 0.95;
+  double rock_stall_slip = 0.85;
   DraggedWheel dragged;
   SlipOptions();  // MER-like defaults per soil (see mobility_options.cpp)
   const SoilSlip& For(terrain::Soil s) const { return soils[static_cast<int>(s)]; }

