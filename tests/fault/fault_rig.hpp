@@ -4,8 +4,10 @@
 // a failure says which packet killed which process.
 #pragma once
 
+#include "auth/auth.hpp"
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
+#include "bus/signing.hpp"
 #include "fault_inject/packets.hpp"
 #include "integration/run_support.hpp"
 #include "launch/process_set.hpp"
@@ -67,11 +69,19 @@ inline std::string DriveSequence(const std::string& drive, int step_cm = 50) {
 
 class FaultRig {
  public:
-  explicit FaultRig(const std::string& name)
+  // `keyed`: the deployment with authenticated commands (configs/deploy/sim_vo_auth.yaml)
+  // with a key made here; the rig signs what it submits, the injector never does.
+  explicit FaultRig(const std::string& name, bool keyed = false)
       : name_(name), out_(OutDir("fault_" + name)), url_(PrivateUrl(11)), bus_(url_), injector_(url_) {
     // Deployment paths are relative to the repository root.
     std::filesystem::current_path(SourceDir());
     bus_.set_publisher("fault_test");
+    if (keyed) {
+      key_ = out_ + "/rover.key";
+      auth::GenerateKeyFile(key_);
+      bus_.set_auth(bus::MakeBusAuth(auth::Key::LoadFile(key_), "fault_test"));
+    }
+    bus_.lcm().subscribe(channels::kMobilityCommand, &FaultRig::OnRawCommand, this);
     const YAML::Node rover = YAML::LoadFile(SourceDir() + "/configs/rover.yaml");
     heartbeat_timeout_s_ = rover["executor"]["heartbeat_timeout_s"].as<double>();
     Watch();
@@ -216,6 +226,7 @@ class FaultRig {
   // Publishes packets one at a time, `interval_ms` apart, reaping exits in between, so a
   // death names the packet that preceded it.
   void Inject(const std::vector<fault::Packet>& packets, int interval_ms) {
+    injecting_ = true;  // from here on, MOBILITY_COMMAND packets may be ours
     for (const auto& p : packets) {
       if (injector_.publish(p.channel, p.bytes.data(), static_cast<unsigned int>(p.bytes.size())) != 0) {
         ADD_FAILURE() << "LCM refused to send " << p.label << " (" << p.bytes.size() << " bytes)";
@@ -229,6 +240,17 @@ class FaultRig {
   }
 
   std::int64_t now_utime() const { return now_utime_; }
+
+  // The MOBILITY_COMMAND packets seen so far, byte for byte (to replay them).
+  std::vector<fault::Packet> CapturedCommands() const {
+    std::vector<fault::Packet> out;
+    for (std::size_t i = 0; i < commands_.size(); ++i) {
+      out.push_back({channels::kMobilityCommand,
+                     "MOBILITY_COMMAND replayed: command " + std::to_string(i + 1) + " as the executor sent it",
+                     commands_[i], ""});
+    }
+    return out;
+  }
 
   // One line per test for the lead: printed and kept in test-out/fault_counts/.
   void Report() const {
@@ -249,9 +271,12 @@ class FaultRig {
 
  private:
   launch::ProcessSpec Spec(const std::string& process) const {
-    const auto deployment = launch::LoadDeployment(SourceDir() + "/configs/deploy/sim_vo.yaml");
+    const auto deployment = launch::LoadDeployment(SourceDir() + "/configs/deploy/" +
+                                                   (key_.empty() ? "sim_vo.yaml" : "sim_vo_auth.yaml"));
     for (auto spec : deployment.processes) {
       if (spec.name != process) continue;
+      for (auto& a : spec.args)
+        if (a == "build/keys/rover.key") a = key_;  // the key this rig made
       if (process == "sequence_executor") {
         // A restarted executor reports the sequence it was running as interrupted.
         spec.args.push_back("--state-file");
@@ -305,6 +330,11 @@ class FaultRig {
     }
   }
 
+  void OnRawCommand(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    const auto* p = static_cast<const std::uint8_t*>(rbuf->data);
+    if (!injecting_) commands_.emplace_back(p, p + rbuf->data_size);
+  }
+
   static bool From(std::int64_t pub_seq, const char* process) {
     return static_cast<std::uint32_t>(static_cast<std::uint64_t>(pub_seq) >> 32) == bus::PublisherId(process);
   }
@@ -348,6 +378,7 @@ class FaultRig {
   std::string name_;
   std::string out_;
   std::string url_;
+  std::string key_;  // empty: no keys
   bus::Bus bus_;
   lcm::LCM injector_;
   double heartbeat_timeout_s_ = 3.0;
@@ -366,6 +397,8 @@ class FaultRig {
   std::int64_t now_utime_ = 0;
   std::int64_t submission_id_ = 0;
   std::deque<std::string> recent_;
+  std::vector<fault::Bytes> commands_;  // MOBILITY_COMMAND packets before any injection
+  bool injecting_ = false;
   std::vector<std::string> deaths_;
   FaultCounts counts_;
   Clock::time_point start_ = Clock::now();

@@ -32,7 +32,9 @@ const char* kUsage =
     "oversized, wrong fingerprint, random bytes), values (NaN, inf, unknown enums), times\n"
     "(utime at now +/- 1e12 us and the int64 extremes) and images (STEREO_FRAME: negative\n"
     "sides, a PNG claiming 65535x65535, a PNG bomb, sizes against the camera model).\n"
-    "Groups: malformed, values, times, images (default all). Channels: default all.\n"
+    "Groups: malformed, values, times, images, spoofed (default all; spoofed sends valid\n"
+    "commands, unsigned or with a made-up tag, which a deployment without keys obeys).\n"
+    "Channels: default all.\n"
     "`now` is the latest ROVER_CLOCK (waited for up to 2 s) unless --now-utime is given.\n"
     "--list prints the packets without sending. Use a private bus (./rover private).\n";
 

@@ -638,6 +638,78 @@ std::vector<Packet> Images(const PacketOptions& o) {
   return out;
 }
 
+// Commands that would change what the rover does, as anyone on the LAN could send them:
+// with no tag, and with a made-up tag under the executor's name. A deployment with keys
+// refuses every one; one without keys obeys them (that is what keys are for).
+template <class Msg>
+void AddSpoofed(std::vector<Packet>& out, const std::string& channel, const std::string& what, Msg m,
+                std::mt19937& rng, std::int64_t counter) {
+  m.auth.sender = "fault_inject";
+  m.auth.counter = counter;
+  m.auth.tag_size = 0;
+  m.auth.tag.clear();
+  out.push_back({channel, channel + " spoofed " + what + ", unsigned", Encode(m), ""});
+  m.auth.sender = "sequence_executor@rover:1";
+  m.auth.tag.resize(32);
+  for (auto& b : m.auth.tag) b = static_cast<std::uint8_t>(rng());
+  m.auth.tag_size = 32;
+  out.push_back({channel, channel + " spoofed " + what + ", a made-up tag in the executor's name", Encode(m), ""});
+}
+
+std::vector<Packet> Spoofed(const std::string& channel, const PacketOptions& o) {
+  using namespace rover_msgs;
+  std::vector<Packet> out;
+  std::mt19937 rng(o.seed);
+  // A counter far above any real one (they count wall-clock microseconds).
+  const std::int64_t counter = std::int64_t{1} << 62;
+  const std::int64_t now = o.now_utime;
+  if (channel == "SEQUENCE_SUBMIT") {
+    sequence_submit_t m{};
+    m.utime = now;
+    m.pub_seq = PubSeq(2);
+    m.submission_id = kFakeId + 1;
+    m.name = "spoofed.seq";
+    m.text = "drive 10 cm\n";
+    AddSpoofed(out, channel, "submit of 'drive 10 cm'", m, rng, counter);
+  } else if (channel == "SEQUENCE_CONTROL") {
+    sequence_control_t m{};
+    m.utime = now;
+    m.pub_seq = PubSeq(2);
+    m.action = sequence_control_t::ACTION_ABORT;
+    m.reason = "spoofed";
+    AddSpoofed(out, channel, "abort", m, rng, counter);
+  } else if (channel == "MOBILITY_COMMAND") {
+    mobility_command_t m{};
+    m.utime = now;
+    m.pub_seq = PubSeq(2);
+    m.command_id = kFakeId + 1;
+    m.type = mobility_command_t::TYPE_STOP;
+    AddSpoofed(out, channel, "STOP", m, rng, counter);
+    m.command_id = kFakeId + 2;
+    m.type = mobility_command_t::TYPE_TURN;
+    m.turn_rad = 1.0;
+    AddSpoofed(out, channel, "turn 1 rad", m, rng, counter + 1);
+  } else if (channel == "KEEPOUT_ZONES") {
+    keepout_zones_t m{};
+    m.utime = now;
+    m.pub_seq = PubSeq(2);
+    keepout_zone_t zone{};
+    zone.name = "spoofed";
+    zone.shape = keepout_zone_t::SHAPE_CIRCLE;
+    zone.radius_m = 50;  // around everything: every step would be refused
+    m.zones = {zone};
+    m.num_zones = 1;
+    AddSpoofed(out, channel, "a 50 m zone around the rover", m, rng, counter);
+  } else if (channel == "NEW_SITE") {
+    new_site_t m{};
+    m.utime = now;
+    m.pub_seq = PubSeq(2);
+    m.site_index = 7;
+    AddSpoofed(out, channel, "new site 7", m, rng, counter);
+  }
+  return out;
+}
+
 }  // namespace
 
 std::uint32_t InjectorPublisherId() {
@@ -671,7 +743,7 @@ const ChannelInfo& Channel(const std::string& channel) {
 }
 
 const std::vector<std::string>& Groups() {
-  static const std::vector<std::string> groups = {"malformed", "values", "times", "images"};
+  static const std::vector<std::string> groups = {"malformed", "values", "times", "images", "spoofed"};
   return groups;
 }
 
@@ -684,12 +756,14 @@ std::vector<Packet> BuildPackets(const std::string& group, const std::string& ch
                                  const PacketOptions& options) {
   const ChannelInfo& info = Channel(channel);
   if (group == "images") return channel == "STEREO_FRAME" ? Images(options) : std::vector<Packet>{};
+  if (group == "spoofed") return Spoofed(channel, options);
   const Bytes base = Sample(channel, options.now_utime);
   const Layout layout = Walk(Schema::Embedded(), info.type, base.data(), base.size());
   if (group == "malformed") return Malformed(channel, base, layout, options);
   if (group == "values") return Values(channel, base, layout);
   if (group == "times") return Times(channel, base, layout, options);
-  throw std::invalid_argument("unknown group " + group + " (expected malformed, values, times or images)");
+  throw std::invalid_argument("unknown group " + group +
+                              " (expected malformed, values, times, images or spoofed)");
 }
 
 }  // namespace rover::fault

@@ -12,6 +12,10 @@
 //              header claims 65535x65535, a PNG bomb, sizes that disagree with the camera
 //              model or the byte count, unknown encodings, colour, truncated PNGs, bad
 //              camera models
+//   spoofed    (command channels) commands that would change what the rover does: a
+//              STOP, a turn, an abort, a zone around the rover, a new site, a submit;
+//              unsigned, and with a made-up tag (a deployment with keys refuses them all;
+//              one without keys obeys them)
 // Labels name the channel, the field and the fault, so a death can be traced to a packet.
 #pragma once
 
@@ -52,13 +56,14 @@ struct PacketOptions {
   int bomb_side = 16384;
 };
 
-// The groups, in the order "all" runs them.
+// The groups, in the order "all" runs them: malformed, values, times, images, spoofed.
 const std::vector<std::string>& Groups();
 
 // The valid message a channel's packets start from, encoded.
 Bytes SampleMessage(const std::string& channel, const PacketOptions& options);
 
-// The packets of one group for one channel ("images" has packets only for STEREO_FRAME).
+// The packets of one group for one channel ("images" has packets only for STEREO_FRAME,
+// "spoofed" only for the five command channels).
 // Throws std::invalid_argument for an unknown group or channel.
 std::vector<Packet> BuildPackets(const std::string& group, const std::string& channel,
                                  const PacketOptions& options);

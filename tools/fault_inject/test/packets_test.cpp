@@ -165,6 +165,7 @@ TEST(FaultPackets, EveryGroupBuildsForEveryChannelWithUniqueLabels) {
   EXPECT_GE(per_group["times"], 20 * 4);
   EXPECT_GE(per_group["values"], 60);
   EXPECT_GE(per_group["images"], 20);
+  EXPECT_EQ(per_group["spoofed"], 12);  // two per command, a STOP and a turn on MOBILITY_COMMAND
   EXPECT_THROW(BuildPackets("nonsense", "IMU", Options()), std::invalid_argument);
   EXPECT_THROW(BuildPackets("values", "NOT_A_CHANNEL", Options()), std::invalid_argument);
 }
@@ -251,6 +252,30 @@ TEST(FaultPackets, ImagePacketsAreWellFormedFramesWithDistinctIds) {
     }
   }
   EXPECT_TRUE(BuildPackets("images", "IMU", Options()).empty());
+}
+
+TEST(FaultPackets, SpoofedCommandsAreWellFormedUnsignedOrWithAMadeUpTag) {
+  int tagged = 0, unsigned_ = 0;
+  for (const char* channel : {"SEQUENCE_SUBMIT", "SEQUENCE_CONTROL", "MOBILITY_COMMAND", "KEEPOUT_ZONES", "NEW_SITE"}) {
+    const auto packets = BuildPackets("spoofed", channel, Options());
+    ASSERT_FALSE(packets.empty()) << channel;
+    for (const auto& p : packets) {
+      Bytes again;
+      ASSERT_TRUE(Decodes(channel, p.bytes, &again)) << p.label;
+      EXPECT_EQ(again, p.bytes) << p.label;
+      if (p.label.find("unsigned") != std::string::npos) ++unsigned_;
+      if (p.label.find("made-up tag") != std::string::npos) ++tagged;
+    }
+  }
+  EXPECT_EQ(tagged, 6);
+  EXPECT_EQ(unsigned_, 6);
+  rover_msgs::sequence_control_t abort;
+  const auto control = BuildPackets("spoofed", "SEQUENCE_CONTROL", Options());
+  ASSERT_EQ(abort.decode(control[1].bytes.data(), 0, static_cast<int>(control[1].bytes.size())),
+            static_cast<int>(control[1].bytes.size()));
+  EXPECT_EQ(abort.action, int{rover_msgs::sequence_control_t::ACTION_ABORT});
+  EXPECT_EQ(abort.auth.tag_size, 32);
+  EXPECT_TRUE(BuildPackets("spoofed", "IMU", Options()).empty());
 }
 
 TEST(FaultPackets, SamePacketsForTheSameSeed) {
