@@ -493,6 +493,7 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   for (int i = 0; i < nprev; ++i) {
     if (!tracked_ok[i]) continue;
     corr.push_back(tracked[i]);
+    res.tracks.push_back({prev->features[i].left, tracked[i].left, false});
     fixed.push_back(tracked_fixed[i]);
   }
   res.num_tracked = static_cast<int>(corr.size());
@@ -576,6 +577,7 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   }
   res.iterations = iterations;
   res.num_inliers = static_cast<int>(inliers.size());
+  for (int k : inliers) res.tracks[k].inlier = true;
   res.times.ml_ms = Ms(t, Clock::now());
   if (!ml.converged) {
     return finish(VoStatus::kNoConvergence,

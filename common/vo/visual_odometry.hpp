@@ -16,6 +16,7 @@
 
 #include "config/yaml_config.hpp"
 #include "geometry/camera_model.hpp"
+#include "vo/tracked_feature.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -25,6 +26,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace rover::vo {
 
@@ -219,6 +221,9 @@ struct VoResult {
   int num_inliers = 0;   // used by the ML estimate
   int iterations = 0;    // ML iterations
   StageTimes times;
+  // The features tracked from the previous pair (VO-6), in the order of the
+  // correspondences, with the ones the ML motion used marked (tracked_feature.hpp).
+  std::vector<TrackedFeature> tracks;
 };
 
 class VisualOdometry {
