@@ -188,5 +188,23 @@ TEST(FaultKill, HazardMonitorMidDrive) { RunKill("hazard_monitor"); }
 TEST(FaultKill, CameraCaptureMidDrive) { RunKill("camera_capture"); }
 TEST(FaultKill, VisualOdometryMidDrive) { RunKill("visual_odometry"); }
 
+// The tool by hand: sends what it lists, says how many, and refuses an unknown group.
+TEST(FaultInjectTool, SendsTheGroupsItIsGivenAndCountsThem) {
+  const std::string env = "ROVER_LCM_URL='" + PrivateUrl(37) + "' ";
+  const auto listed = RunCommand(Bin("fault_inject") + " --list --group malformed --channel IMU,POSE");
+  ASSERT_EQ(listed.exit_code, 0) << listed.output;
+  long lines = 0;
+  for (char c : listed.output) lines += c == '\n';
+  const auto sent = RunCommand(env + Bin("fault_inject") +
+                               " --group malformed --channel IMU,POSE --now-utime 1 --interval-ms 0 --quiet");
+  ASSERT_EQ(sent.exit_code, 0) << sent.output;
+  EXPECT_NE(sent.output.find("fault_inject: sent " + std::to_string(lines) + " packets"), std::string::npos)
+      << sent.output << " (listed " << lines << ")";
+  const auto bad = RunCommand(env + Bin("fault_inject") + " --group nonsense");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_EQ(bad.output,
+            "fault_inject: group \"nonsense\" is unknown (expected all or malformed, values, times, images, spoofed)\n");
+}
+
 }  // namespace
 }  // namespace rover::test

@@ -47,7 +47,11 @@ std::vector<std::string> SplitList(const std::string& text, const std::vector<st
   while (std::getline(ss, item, ',')) {
     bool known = false;
     for (const auto& a : all) known = known || a == item;
-    if (!known) throw ConfigError("fault_inject: " + what + " \"" + item + "\" is unknown");
+    if (!known) {
+      std::string expected;
+      for (const auto& a : all) expected += (expected.empty() ? "" : ", ") + a;
+      throw ConfigError("fault_inject: " + what + " \"" + item + "\" is unknown (expected all or " + expected + ")");
+    }
     out.push_back(item);
   }
   return out;
