@@ -24,6 +24,7 @@
 #include <rover_msgs/sequence_submit_t.hpp>
 #include <rover_msgs/step_report_t.hpp>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -103,20 +104,39 @@ std::optional<rover::auth::Key> ExecutorKey(const rover::launch::Deployment& dep
   return std::nullopt;
 }
 
+// The run's pictures (tools/plot: traverse, error, slip, vo_steps) in DIR. A failure is
+// one line and leaves the scenario's exit status alone.
+void RunPlot(const std::string& out_dir) {
+  std::cout << std::flush;
+  const std::string bin = rover::launch::BinDir() + "/rover_plot";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl(bin.c_str(), bin.c_str(), out_dir.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  int status = 0;
+  if (pid < 0 || waitpid(pid, &status, 0) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::cout << "  plot: failed (" << bin << " " << out_dir << "; exit "
+              << (pid > 0 && WIFEXITED(status) ? std::to_string(WEXITSTATUS(status)) : "abnormal")
+              << "); the scenario's result stands\n";
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   return rover::bus::RunMain("scenario_runner", [&]() -> int {
     std::string scenario_path, out_dir, url;
-    bool quiet = false;
+    bool quiet = false, plot = true;
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
       if (arg == "--help" || arg == "-h") {
-        std::cout << "usage: scenario_runner SCENARIO.yaml --out DIR [--lcm-url URL] [--quiet]\n\n"
+        std::cout << "usage: scenario_runner SCENARIO.yaml --out DIR [--lcm-url URL] [--quiet] [--no-plot]\n\n"
                      "Runs a scenario (configs/scenarios/) on a fresh bus, records DIR/log.lcm\n"
                      "with rover_recorder, checks that the log lost nothing and writes\n"
                      "DIR/summary.json. Exit status 1 when the run did not end as the\n"
-                     "scenario's `expect:` says.\n";
+                     "scenario's `expect:` says. Then draws the run's pictures in DIR with\n"
+                     "rover_plot (traverse.png, error.png, slip.png, vo_steps/) unless --no-plot.\n";
         return 0;
       } else if (arg == "--out" && i + 1 < argc) {
         out_dir = argv[++i];
@@ -124,6 +144,8 @@ int main(int argc, char** argv) {
         url = argv[++i];
       } else if (arg == "--quiet") {
         quiet = true;
+      } else if (arg == "--no-plot") {
+        plot = false;
       } else if (scenario_path.empty() && arg.rfind("--", 0) != 0) {
         scenario_path = arg;
       } else {
@@ -307,6 +329,7 @@ int main(int argc, char** argv) {
                 << (as_expected ? " - as expected\n" : " - NOT as expected: " + missed + "\n");
     }
     std::cout << "  wrote " << out_dir << "/summary.json and " << log_path << "\n";
+    if (plot) RunPlot(out_dir);
     // Exit 1 when the run did not end, or ended other than the scenario expects.
     return summary.outcome == "incomplete" || !as_expected ? 1 : 0;
   });
