@@ -1082,6 +1082,7 @@ void SequenceExecutor::Finish(SequenceState state, const std::string& reason, co
   state_ = state;
   abort_reason_ = reason;
   detail_ = detail;
+  end_utime_ = now_utime_;
   command_active_ = false;
   pause_requested_ = false;
   EnterPhase(Phase::kFinished);
@@ -1142,7 +1143,8 @@ SequenceStatus SequenceExecutor::CurrentStatus() const {
   s.detail = detail_;
   if (pose_) XyzRpy(*pose_, s.pose);
   s.distance_m = distance_m_;
-  s.elapsed_s = started_ ? (now_utime_ - start_utime_) * 1e-6 : 0.0;
+  const int64_t until = phase_ == Phase::kFinished ? end_utime_ : now_utime_;  // the clock stops at the end
+  s.elapsed_s = started_ ? (until - start_utime_) * 1e-6 : 0.0;
   s.vo_failures = vo_failures_total_;
   return s;
 }

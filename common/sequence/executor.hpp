@@ -378,6 +378,7 @@ class SequenceExecutor {
   int command_index_ = -1;
   int step_index_ = 0;
   int64_t start_utime_ = 0;
+  int64_t end_utime_ = 0;  // when it finished: its elapsed time stops there
   double distance_m_ = 0.0;
   bool started_ = false;
   bool sequence_uses_vo_ = false;

@@ -38,17 +38,34 @@ bool Terminal(int s) {
          s == sequence_status_t::STATE_REJECTED;
 }
 
+// Whether a command drives (its steps mean something); settings and images have none.
+bool IsMotionText(const std::string& text) {
+  const auto parsed = rover::sequence::ParseSequence(text, "status");
+  return parsed.ok() && parsed.sequence.commands.size() == 1 &&
+         rover::sequence::IsMotion(parsed.sequence.commands.front());
+}
+
+// One line per status. The position (command, and step of a motion) only while a command
+// runs, or where an abort happened; the command's text once (the detail often holds it).
 void Print(const sequence_status_t& st) {
   const auto state = static_cast<rover::sequence::SequenceState>(st.state);
   std::cout << std::fixed << std::setprecision(1) << "[" << rover::sequence::ToString(state) << " t=" << st.elapsed_s
             << " s] " << st.sequence_name;
-  if (st.command_index >= 0) {
-    std::cout << " command " << st.command_index + 1 << "/" << st.num_commands << " (line "
-              << st.command_line << ": " << st.command_text << ") step " << st.step_index + 1;
+  const bool at_command = st.command_index >= 0 && st.command_index < st.num_commands &&
+                          (st.state == sequence_status_t::STATE_RUNNING ||
+                           st.state == sequence_status_t::STATE_PAUSED ||
+                           st.state == sequence_status_t::STATE_ABORTED);
+  std::string what = st.detail;
+  if (at_command) {
+    std::cout << " command " << st.command_index + 1 << "/" << st.num_commands;
+    if (IsMotionText(st.command_text)) std::cout << " step " << st.step_index + 1;
+    if (!st.command_text.empty() && what.find(st.command_text) == std::string::npos) {
+      what = "line " + std::to_string(st.command_line) + ": " + st.command_text + (what.empty() ? "" : " - " + what);
+    }
   }
   std::cout << std::setprecision(2) << " pose " << st.pose[0] << "," << st.pose[1] << " m";
   if (!st.abort_reason.empty()) std::cout << " abort_reason=" << st.abort_reason;
-  if (!st.detail.empty()) std::cout << " - " << st.detail;
+  if (!what.empty()) std::cout << " - " << what;
   std::cout << "\n" << std::flush;
 }
 
