@@ -44,6 +44,13 @@ int main(int argc, char** argv) {
   double scale = -1;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::cout << "usage: vo_kitti_check [DATASET_DIR] [vo.yaml] [--scale S]\n\n"
+                   "Test-only driver: VO over a KITTI-layout sequence with a constant-velocity\n"
+                   "prior; prints the average translational error and ms per frame. The project's\n"
+                   "evaluator is vo_eval (./rover vo-eval).\n";
+      return 0;
+    }
     if (a == "--scale" && i + 1 < argc) scale = std::stod(argv[++i]);
     else if (a.size() > 5 && a.substr(a.size() - 5) == ".yaml") yaml = a;
     else dir = a;
