@@ -309,7 +309,7 @@ PlotOutcome WriteSlipPlot(const DriveLog& log, const PlotPlace& place) {
      << "set grid\nset key below horizontal maxrows 2\nset xrange [0.5:" << rows.size() << ".5]\n"
      << "set offsets 0, 0, graph 0.05, graph 0.05\n"
      << "set xtics 1\n" << (rows.size() > 30 ? "set xtics 5\n" : "")
-     << "set xlabel 'step (in order)'\n"
+     << "unset xlabel\n"
      << "set ylabel 'progress along the commanded direction, m'\n"
      << "plot 'slip.dat' using 1:4 with points pt 5 ps 1.2 lc rgb '#555555' title 'commanded', \\\n"
      << "     'slip.dat' using 1:($10 == 1 ? $5 : 1/0) with points pt 7 ps 1.2 lc rgb '" << kVoColour
@@ -318,7 +318,7 @@ PlotOutcome WriteSlipPlot(const DriveLog& log, const PlotPlace& place) {
      << "' title 'measured (blind: wheel odometry)'";
   if (any_truth) gp << ", \\\n     'slip.dat' using 1:6 with points pt 2 ps 1.4 lw 2 lc rgb '#000000' title 'true'";
   gp << "\n"
-     << "set ylabel 'slip, %'\n";
+     << "set xlabel 'step (in order)'\nset ylabel 'slip, %'\n";
   std::vector<std::string> slip_plots;
   if (any_slip) {
     slip_plots.push_back(std::string("'slip.dat' using 1:($10 == 1 ? $7 : 1/0) with linespoints pt 7 lc rgb '") +

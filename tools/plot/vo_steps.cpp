@@ -194,7 +194,7 @@ VoStepsOutcome WriteVoSteps(const DriveLog& log, const std::string& vo_config, i
     const int outliers = static_cast<int>(r.tracks.size()) - inliers;
     std::ostringstream title;
     title << place.title << ": step " << c.number << " (command " << c.step.command_index + 1 << ", step "
-          << c.step.step_index + 1 << "), frames " << c.update.from_frame_id << " -> " << c.update.to_frame_id
+          << c.step.step_index + 1 << ")\nframes " << c.update.from_frame_id << " -> " << c.update.to_frame_id
           << "\nlogged: " << c.update.num_tracked << " tracked, " << c.update.num_inliers
           << " inliers; recomputed: " << r.tracks.size() << " tracked, " << inliers << " inliers ("
           << vo::ToString(r.status) << ")";
