@@ -1,14 +1,53 @@
 #include "vo_eval/trajectory_plot.hpp"
 
-#include <opencv2/imgproc.hpp>
+#include "plot/gnuplot.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
 namespace rover::vo_eval {
+namespace {
+
+// A scratch folder for the data, the script and the picture, removed afterwards.
+class ScratchDir {
+ public:
+  ScratchDir() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "vo_eval_plot.XXXXXX").string();
+    if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("DrawTopView: cannot make a scratch folder in /tmp");
+    path_ = pattern;
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+// Writes the finite points, one "x y" per line; false when there are none.
+bool WritePoints(const std::string& path, const std::vector<Eigen::Vector2d>& pts) {
+  std::ofstream out(path);
+  int n = 0;
+  for (const auto& p : pts) {
+    if (!p.allFinite()) continue;
+    out << plot::Num(p.x()) << " " << plot::Num(p.y()) << "\n";
+    ++n;
+  }
+  return n > 0;
+}
+
+}  // namespace
 
 double GridSpacing(double range, int target_lines) {
   if (!(range > 0.0) || target_lines < 1) return 1.0;
@@ -48,68 +87,50 @@ cv::Mat DrawTopView(const PoseList& truth, const PoseList& estimate,
   // Equal scale: a square window around the data, at least 2 m wide.
   const Eigen::Vector2d centre = 0.5 * (lo + hi);
   const double span = std::max({hi.x() - lo.x(), hi.y() - lo.y(), 2.0}) * 1.1;
-  const int S = std::max(200, options.size_px);
-  const int margin_left = 70, margin_bottom = 50, margin_top = 40, margin_right = 20;
-  const int plot = S - std::max(margin_left + margin_right, margin_top + margin_bottom);
-  const double scale = plot / span;
   const double x0 = centre.x() - 0.5 * span, y0 = centre.y() - 0.5 * span;
-  auto px = [&](const Eigen::Vector2d& p) {
-    return cv::Point(static_cast<int>(std::lround(margin_left + (p.x() - x0) * scale)),
-                     static_cast<int>(std::lround(margin_top + plot - (p.y() - y0) * scale)));
-  };
-
-  cv::Mat img(S, S, CV_8UC3, cv::Scalar(255, 255, 255));
-  const cv::Scalar grid(225, 225, 225), axis(60, 60, 60), text(30, 30, 30);
-  const cv::Scalar truth_colour(40, 150, 40), est_colour(30, 30, 220);
   const double spacing = GridSpacing(span);
-  char label[64];
-  for (double g = std::ceil(x0 / spacing) * spacing; g <= x0 + span; g += spacing) {
-    const int x = px({g, y0}).x;
-    cv::line(img, {x, margin_top}, {x, margin_top + plot}, grid, 1);
-    std::snprintf(label, sizeof(label), "%g", std::abs(g) < 1e-9 ? 0.0 : g);
-    cv::putText(img, label, {x - 12, margin_top + plot + 18}, cv::FONT_HERSHEY_SIMPLEX, 0.4, text, 1,
-                cv::LINE_AA);
-  }
-  for (double g = std::ceil(y0 / spacing) * spacing; g <= y0 + span; g += spacing) {
-    const int y = px({x0, g}).y;
-    cv::line(img, {margin_left, y}, {margin_left + plot, y}, grid, 1);
-    std::snprintf(label, sizeof(label), "%g", std::abs(g) < 1e-9 ? 0.0 : g);
-    cv::putText(img, label, {8, y + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, text, 1, cv::LINE_AA);
-  }
-  cv::rectangle(img, {margin_left, margin_top}, {margin_left + plot, margin_top + plot}, axis, 1);
-  cv::putText(img, "right of start heading (m)", {margin_left + plot / 2 - 100, S - 12},
-              cv::FONT_HERSHEY_SIMPLEX, 0.45, text, 1, cv::LINE_AA);
-  cv::putText(img, "forward (m)", {8, margin_top - 10}, cv::FONT_HERSHEY_SIMPLEX, 0.45, text, 1,
-              cv::LINE_AA);
-  if (!options.title.empty()) {
-    cv::putText(img, options.title, {margin_left + 100, margin_top - 12}, cv::FONT_HERSHEY_SIMPLEX,
-                0.5, text, 1, cv::LINE_AA);
-  }
 
-  auto polyline = [&](const std::vector<Eigen::Vector2d>& pts, const cv::Scalar& colour, int width) {
-    std::vector<cv::Point> cv_pts;
-    for (const auto& p : pts) {
-      if (p.allFinite()) cv_pts.push_back(px(p));
-    }
-    if (cv_pts.size() >= 2) cv::polylines(img, cv_pts, false, colour, width, cv::LINE_AA);
-    if (!cv_pts.empty()) cv::circle(img, cv_pts.front(), 5, colour, 2, cv::LINE_AA);
-  };
-  // The truth is drawn wider, underneath, so that it stays visible where the two agree.
-  polyline(pt, truth_colour, 5);
-  polyline(pe, est_colour, 2);
-
-  // Legend, top left inside the plot.
-  const int lx = margin_left + 12, ly = margin_top + 20;
-  cv::rectangle(img, {lx - 6, ly - 14}, {lx + 150, ly + (truth.empty() ? 10 : 30)},
-                cv::Scalar(255, 255, 255), cv::FILLED);
-  cv::rectangle(img, {lx - 6, ly - 14}, {lx + 150, ly + (truth.empty() ? 10 : 30)}, axis, 1);
-  cv::line(img, {lx, ly - 4}, {lx + 30, ly - 4}, est_colour, 2, cv::LINE_AA);
-  cv::putText(img, "VO estimate", {lx + 38, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.45, text, 1, cv::LINE_AA);
-  if (!truth.empty()) {
-    cv::line(img, {lx, ly + 16}, {lx + 30, ly + 16}, truth_colour, 2, cv::LINE_AA);
-    cv::putText(img, "ground truth", {lx + 38, ly + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.45, text, 1,
-                cv::LINE_AA);
+  // gnuplot draws it (Debian gnuplot-nox): the data and a script in a scratch folder.
+  const std::string terminal = plot::PngTerminal();
+  if (terminal.empty()) {
+    throw std::runtime_error("DrawTopView: gnuplot cannot be run (install gnuplot-nox; ./rover setup does)");
   }
+  const ScratchDir dir;
+  const bool has_truth = WritePoints(dir.path() + "/truth.dat", pt);
+  const bool has_estimate = WritePoints(dir.path() + "/estimate.dat", pe);
+  std::vector<std::string> plots;
+  // Truth wider and first (underneath), so it stays visible where the two agree; a circle
+  // at each start.
+  if (has_truth) {
+    plots.push_back("'truth.dat' using 1:2 with lines lw 5 lc rgb '#289628' title 'ground truth'");
+    plots.push_back("'truth.dat' every ::0::0 using 1:2 with points pt 6 ps 2 lw 2 lc rgb '#289628' notitle");
+  }
+  if (has_estimate) {
+    plots.push_back("'estimate.dat' using 1:2 with lines lw 3 lc rgb '#dc1e1e' title 'VO estimate'");
+    plots.push_back("'estimate.dat' every ::0::0 using 1:2 with points pt 6 ps 2 lw 2 lc rgb '#dc1e1e' notitle");
+  }
+  if (plots.empty()) plots.push_back("1/0 notitle");  // axes and grid only
+  const int size = std::max(200, options.size_px);
+  std::ostringstream gp;
+  gp << "set terminal " << terminal << " size " << size << "," << size << " noenhanced\n"
+     << "set output 'top.png'\n"
+     << "set title " << plot::Quoted(options.title) << "\n"
+     << "set xlabel 'right of start heading, m'\nset ylabel 'forward, m'\n"
+     << "set size ratio -1\n"
+     << "set xrange [" << plot::Num(x0) << ":" << plot::Num(x0 + span) << "]\n"
+     << "set yrange [" << plot::Num(y0) << ":" << plot::Num(y0 + span) << "]\n"
+     << "set xtics " << plot::Num(spacing) << "\nset ytics " << plot::Num(spacing) << "\n"
+     << "set grid lt 1 lc rgb '#dddddd'\n"
+     << "set key below horizontal\n"
+     << "plot ";
+  for (std::size_t i = 0; i < plots.size(); ++i) gp << (i ? ", \\\n     " : "") << plots[i];
+  gp << "\n";
+  std::ofstream(dir.path() + "/top.gp") << gp.str();
+  if (const std::string error = plot::RunGnuplot(dir.path(), "top.gp"); !error.empty()) {
+    throw std::runtime_error("DrawTopView: " + error);
+  }
+  cv::Mat img = cv::imread(dir.path() + "/top.png", cv::IMREAD_COLOR);
+  if (img.empty()) throw std::runtime_error("DrawTopView: gnuplot wrote no readable picture");
   return img;
 }
 

@@ -1,4 +1,5 @@
-// The estimated and true trajectories seen from above, drawn with OpenCV.
+// The estimated and true trajectories seen from above, drawn by gnuplot (Debian
+// gnuplot-nox, as for ./rover plot) and returned as an image.
 #pragma once
 
 #include "vo_eval/trajectory_metrics.hpp"
@@ -19,8 +20,9 @@ struct TopViewOptions {
   std::string title;
 };
 
-// Truth may be empty. Equal scale on both axes, a metre grid with labels, a legend.
-// Throws std::invalid_argument if down and forward are parallel.
+// Truth may be empty. Equal scale on both axes, a grid with labels, a legend below.
+// Throws std::invalid_argument if down and forward are parallel, std::runtime_error when
+// gnuplot cannot be run or fails.
 cv::Mat DrawTopView(const PoseList& truth, const PoseList& estimate,
                     const TopViewOptions& options = {});
 

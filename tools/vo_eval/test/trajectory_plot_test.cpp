@@ -1,5 +1,7 @@
 #include "vo_eval/trajectory_plot.hpp"
 
+#include "plot/gnuplot.hpp"
+
 #include <gtest/gtest.h>
 
 namespace rover::vo_eval {
@@ -21,6 +23,7 @@ TEST(TrajectoryPlot, GridSpacingIsNice) {
 }
 
 TEST(TrajectoryPlot, DrawsBothPathsWhereTheyAre) {
+  if (plot::PngTerminal().empty()) GTEST_SKIP() << "gnuplot is not installed (Debian gnuplot-nox; ./rover setup installs it)";
   PoseList truth, estimate;
   for (int k = 0; k < 50; ++k) {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
