@@ -214,6 +214,15 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
   const double margin = 0.5;
   double e0 = std::floor(b.min_e - margin), e1 = std::ceil(b.max_e + margin);
   double n0 = std::floor(b.min_n - margin), n1 = std::ceil(b.max_n + margin);
+  // A square window (the picture is square): the narrower side grows about its middle.
+  const double side = std::max(e1 - e0, n1 - n0);
+  const auto widen = [side](double& lo, double& hi) {
+    const double grow = side - (hi - lo);
+    lo -= std::floor(grow / 2);
+    hi += grow - std::floor(grow / 2);
+  };
+  widen(e0, e1);
+  widen(n0, n1);
   const TicSpacing tics = TicsFor(std::max(e1 - e0, n1 - n0));
   std::ostringstream gp;
   gp << Header(place, "traverse.png", 900, 950);
@@ -283,7 +292,15 @@ PlotOutcome WriteSlipPlot(const DriveLog& log, const PlotPlace& place) {
   out.file = place.out_dir + "/slip.png";
   const auto rows = SlipRows(log);
   if (rows.empty()) {
-    out.note = "slip.png: not written: no STEP_REPORT in the log (no step was driven)";
+    // The picture is still there (every run leaves one), and says why it is empty.
+    std::ostringstream gp;
+    gp << Header(place, "slip.png", 900, 400)
+       << "set title " << Quoted(place.title + ": progress and slip per step, " + OutcomeText(log)) << "\n"
+       << "set xrange [0:1]\nset yrange [0:1]\nunset xtics\nunset ytics\n"
+       << "set label 'no step was driven (no STEP_REPORT in the log)' at graph 0.5, 0.5 center\n"
+       << "plot 1/0 notitle\n";
+    out = Finish(place, "slip.png", gp.str());
+    if (out.written) out.note = "no step was driven: the picture says so";
     return out;
   }
   bool any_limit = false, any_truth = false, any_slip = false, any_true_slip = false;

@@ -289,6 +289,14 @@ TEST(Plots, WithoutTruthErrorPngIsSkippedWithAReason) {
   EXPECT_NE(error.note.find("no SIM_TRUTH"), std::string::npos) << error.note;
   EXPECT_TRUE(WriteTraversePlot(log, place).written);
   EXPECT_TRUE(WriteSlipPlot(log, place).written);
+  // No step at all (a rejected sequence): slip.png is still written and says why.
+  log.steps.clear();
+  const auto slip = WriteSlipPlot(log, place);
+  EXPECT_TRUE(slip.written) << slip.note;
+  EXPECT_TRUE(IsPng(slip.file));
+  std::ifstream script(dir + "/plot/slip.gp");
+  const std::string text((std::istreambuf_iterator<char>(script)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("no step was driven"), std::string::npos) << text;
 }
 
 }  // namespace
