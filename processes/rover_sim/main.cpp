@@ -9,6 +9,7 @@
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
 #include "mobility/deadman.hpp"
+#include "mobility/lockstep.hpp"
 #include "mobility/rover_simulator.hpp"
 #include "terrain/world.hpp"
 
@@ -42,8 +43,9 @@ struct SimOptions {
   double clock_hz = 50.0;    // ROVER_CLOCK
   double status_hz = 4.0;    // periodic MOBILITY_STATUS (changes are sent at once)
   std::int64_t start_utime = 1000000;
-  // Lockstep with the estimator: the clock runs at most max_lead_s of rover time ahead of
-  // the latest POSE, waiting up to lead_wait_s of wall time for it. Faster than real time,
+  // Lockstep with the estimator (common/mobility/lockstep.hpp): the clock runs at most
+  // max_lead_s of rover time ahead of the latest POSE of a live estimator, waiting up to
+  // lead_wait_s of wall time for it. Faster than real time,
   // a lagging consumer would otherwise see its inputs age by (lag x rate) and trip the
   // staleness checks; a dead one is still caught, by heartbeats and by those checks.
   double max_lead_s = 0.5;
@@ -165,10 +167,12 @@ int main(int argc, char** argv) {
       for (std::string n; std::getline(ss, n, ',');)
         if (!n.empty()) waiting.insert(n);
     }
+    mobility::EstimatorLockstep lockstep(options.max_lead_s, /*alive_s=*/2.0);
     proc.bus().Subscribe<rover_msgs::heartbeat_t>(
         channels::kHeartbeat, [&](const rover_msgs::heartbeat_t& hb) {
           waiting.erase(hb.process);
           deadman.OnHeartbeat(hb.process, proc.wall_seconds());
+          lockstep.OnHeartbeat(hb.process, hb.seq, proc.wall_seconds());
         });
     const auto hold_start = std::chrono::steady_clock::now();
     double next_hold_heartbeat_wall = 0;
@@ -193,21 +197,21 @@ int main(int argc, char** argv) {
     const std::int64_t rover_start = sim->utime();
     double next_heartbeat_wall = 0;
 
-    std::int64_t last_pose_utime = sim->utime();
     proc.bus().Subscribe<rover_msgs::pose_t>(channels::kPose, [&](const rover_msgs::pose_t& m) {
-      last_pose_utime = std::max(last_pose_utime, m.utime);
+      lockstep.OnPose(m.utime);
     }, 1000);
 
     while (!proc.stopping()) {
       while (proc.bus().Handle(0)) {
       }
-      if (options.max_lead_s > 0 && sim->utime() - last_pose_utime > options.max_lead_s * 1e6) {
-        const auto wait_start = std::chrono::steady_clock::now();
-        while (sim->utime() - last_pose_utime > options.max_lead_s * 1e6 && !proc.stopping() &&
-               std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count() <
-                   options.lead_wait_s) {
-          proc.bus().Handle(2);
+      const double wait_start = proc.wall_seconds();
+      while (lockstep.ShouldWait(sim->utime(), proc.wall_seconds()) && !proc.stopping() &&
+             proc.wall_seconds() - wait_start < options.lead_wait_s) {
+        if (proc.wall_seconds() >= next_heartbeat_wall) {  // alive while it waits
+          proc.PublishHeartbeat();
+          next_heartbeat_wall = proc.wall_seconds() + 1.0;
         }
+        proc.bus().Handle(2);
       }
       if (const auto why = deadman.Check(sim->moving(), proc.wall_seconds())) {
         std::cerr << "rover_sim: command " << sim->status().command_id << ": " << *why << "\n";
@@ -268,9 +272,9 @@ int main(int argc, char** argv) {
       }
       // Pace rover time at `rate` times the wall clock.
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-      if (wall >= next_heartbeat_wall) {
+      if (proc.wall_seconds() >= next_heartbeat_wall) {
         proc.PublishHeartbeat();
-        next_heartbeat_wall = wall + 1.0;
+        next_heartbeat_wall = proc.wall_seconds() + 1.0;
       }
       const double ahead_s = (now - rover_start) * 1e-6 / options.rate - wall;
       if (ahead_s > 0) {
