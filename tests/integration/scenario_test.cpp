@@ -19,6 +19,10 @@ YAML::Node RunScenario(const std::string& name) {
                                  ".yaml --out " + out + " --quiet");
   EXPECT_EQ(result.exit_code, 0) << result.output;
   EXPECT_TRUE(std::filesystem::exists(out + "/log.lcm")) << "no log written";
+  // Every run leaves its pictures (rover_plot, run by scenario_runner).
+  for (const char* picture : {"traverse.png", "error.png", "slip.png", "vo_steps/README.txt"}) {
+    EXPECT_TRUE(std::filesystem::exists(out + "/" + picture)) << picture << " not drawn:\n" << result.output;
+  }
   return YAML::LoadFile(out + "/summary.json");
 }
 
