@@ -1,4 +1,4 @@
-// Every LCM channel name, in one place. Channels are in CAPS (ARCHITECTURE.md).
+// Every LCM channel name, in one place. Channels are in CAPS.
 #pragma once
 
 namespace rover::channels {

@@ -48,7 +48,7 @@ class Process {
   void ObserveTime(std::int64_t utime) {
     bus_.clock().Observe(utime, std::chrono::steady_clock::now());
   }
-  // Seconds of wall time since start (for dead-peer guards only; ARCHITECTURE.md "Time").
+  // Seconds of wall time since start (for dead-peer guards only: rover time comes from messages).
   double wall_seconds() const;
 
   void SetHealth(std::int8_t state, std::string detail);

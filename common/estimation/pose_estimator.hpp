@@ -45,7 +45,7 @@ namespace rover::estimation {
 enum class PoseSource : int8_t { kWheelImu = 0, kVo = 1 };
 
 // Why an input message was or was not used. Inputs never throw: a process callback must
-// not throw (STYLE.md), so bad data is reported and counted instead.
+// not throw, so bad data is reported and counted instead.
 enum class InputResult {
   kAccepted,
   kOutOfOrder,  // utime older than the latest input: ignored

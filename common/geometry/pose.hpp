@@ -1,4 +1,4 @@
-// Frames and rotations, written down once (ARCHITECTURE.md, "Frames follow MER").
+// Frames and rotations, written down once (MER frames: README.md, "Layout").
 //
 //   site frame:  X north, Y east,  Z down   (right-handed)
 //   rover frame: X forward, Y right, Z down
