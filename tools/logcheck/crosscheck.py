@@ -36,7 +36,7 @@ def key_and_count(channel, msg):
         (seq,) = struct.unpack_from(">q", msg, 20 + slen)
         return (channel, name), seq
     (pub_seq,) = struct.unpack_from(">q", msg, 16)
-    return (channel, pub_seq >> 32), pub_seq & 0xFFFFFFFF
+    return (channel, (pub_seq >> 32) & 0xFFFFFFFF), pub_seq & 0xFFFFFFFF
 
 
 def main():
