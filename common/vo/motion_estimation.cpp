@@ -185,6 +185,8 @@ MlOutcome MaximumLikelihoodMotion(const std::vector<Correspondence>& c,
   }
   linearise(&H, &g, &cost);
   out.cost = cost;
+  out.redundancy = 3 * static_cast<int>(indices.size()) - 6;
+  out.variance_factor = out.redundancy > 0 ? cost / out.redundancy : 0.0;
   out.T_prev_curr = geometry::PoseFromXyzRpy(t.x(), t.y(), t.z(), rpy[0], rpy[1], rpy[2]);
   Eigen::FullPivLU<Matrix6d> lu(H);
   if (lu.isInvertible()) {
@@ -193,6 +195,83 @@ MlOutcome MaximumLikelihoodMotion(const std::vector<Correspondence>& c,
   } else {
     out.converged = false;
   }
+  return out;
+}
+
+MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c,
+                                            const std::vector<int>& indices,
+                                            const Eigen::Isometry3d& T_prev_curr,
+                                            const std::vector<int>& cluster, int num_clusters,
+                                            const SharedErrors& shared) {
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  constexpr int kModes = 5;  // shift x, shift y, rotation, scale, disparity
+  MotionUncertainty out;
+  const Eigen::Vector3d t = T_prev_curr.translation();
+  Eigen::Matrix3d R, dR[3];
+  geometry::RotationFromRpyDerivatives(geometry::RpyFromRotation(T_prev_curr.linear()), &R, dR);
+  const Eigen::Matrix3d Rcp = R.transpose();
+  const double unit = 1.0 / std::max(1e-9, shared.half_size_px);
+  const bool clustered = num_clusters >= 2 && cluster.size() == c.size();
+  std::vector<Matrix6d> H_g(clustered ? num_clusters : 0, Matrix6d::Zero());
+  std::vector<Vector6d> s_g(clustered ? num_clusters : 0, Vector6d::Zero());
+  Matrix6d H = Matrix6d::Zero();
+  Eigen::Matrix<double, 6, kModes> B = Eigen::Matrix<double, 6, kModes>::Zero();
+  double cost = 0;
+  for (int k : indices) {
+    const Correspondence& x = c[k];
+    const Eigen::Vector3d d = x.P_prev - t;
+    const Eigen::Vector3d r = x.P_curr - Rcp * d;
+    const Eigen::Matrix3d W = (x.Sigma_curr + Rcp * x.Sigma_prev * R).inverse();
+    Eigen::Matrix<double, 3, 6> J;
+    J.leftCols<3>() = Rcp;
+    for (int i = 0; i < 3; ++i) J.col(3 + i) = -dR[i].transpose() * d;
+    const Eigen::Matrix<double, 6, 3> JtW = J.transpose() * W;
+    const Matrix6d Hj = JtW * J;
+    H += Hj;
+    cost += r.dot(W * r);
+    if (clustered) {
+      H_g[cluster[k]] += Hj;
+      s_g[cluster[k]] += JtW * r;
+    }
+    // r = P_c - R^T (P_p - t): the field moves P_c; the disparity offset moves both.
+    const Eigen::Vector2d p = (x.left - shared.centre_px) * unit;  // the mode shapes
+    Eigen::Matrix<double, 3, kModes> D;
+    D.col(0) = x.dPcurr_dshift.col(0);
+    D.col(1) = x.dPcurr_dshift.col(1);
+    D.col(2) = x.dPcurr_dshift * Eigen::Vector2d(-p.y(), p.x());
+    D.col(3) = x.dPcurr_dshift * p;
+    D.col(4) = x.dPcurr_ddisparity - Rcp * x.dPprev_ddisparity;
+    B += JtW * D;
+  }
+  out.redundancy = 3 * static_cast<int>(indices.size()) - 6;
+  if (out.redundancy <= 0) return out;
+  Eigen::FullPivLU<Matrix6d> lu(H);
+  if (!lu.isInvertible()) return out;
+  const Matrix6d Hinv = lu.inverse();
+  out.inverse_normal = 0.5 * (Hinv + Hinv.transpose());
+  out.variance_factor = cost / out.redundancy;
+  if (clustered) {
+    Matrix6d S = Matrix6d::Zero();
+    double expected = 6.0;  // E tr(H^-1 S) / k for independent errors: 6 - sum tr((H^-1 H_g)^2)
+    for (int g = 0; g < num_clusters; ++g) {
+      if (H_g[g].isZero(0)) continue;
+      ++out.clusters;
+      S += s_g[g] * s_g[g].transpose();
+      const Matrix6d A = out.inverse_normal * H_g[g];
+      expected -= (A * A).trace();
+    }
+    // With most of the information in one cluster the estimate means nothing: keep s0^2.
+    if (out.clusters >= 2 && expected > 1.0) out.cluster_factor = (out.inverse_normal * S).trace() / expected;
+  }
+  const Eigen::Matrix<double, 6, kModes> G = out.inverse_normal * B;
+  const double f2 = shared.field_sigma_px * shared.field_sigma_px;
+  Eigen::Matrix<double, kModes, 1> var;
+  var << f2, f2, f2, f2, shared.disparity_sigma_px * shared.disparity_sigma_px;
+  out.shared = G * var.asDiagonal() * G.transpose();
+  out.shared = 0.5 * (out.shared + out.shared.transpose()).eval();
+  out.covariance = std::max(out.variance_factor, out.cluster_factor) * out.inverse_normal + out.shared;
+  out.ok = true;
   return out;
 }
 

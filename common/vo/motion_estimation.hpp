@@ -22,6 +22,12 @@ struct Correspondence {
   Eigen::Matrix3d Sigma_curr = Eigen::Matrix3d::Identity();
   // Where the feature was observed in the current pair (for the RANSAC image gap).
   Eigen::Vector2d left = Eigen::Vector2d::Zero(), right = Eigen::Vector2d::Zero();
+  // Sensitivities to the errors every feature shares (VO-13, SharedErrorCovariance):
+  // dP_curr / d(shift of the current pair's match in x, in y), dP_curr / d(disparity
+  // offset) and dP_prev / d(disparity offset). Zero: the feature carries no shared error.
+  Eigen::Matrix<double, 3, 2> dPcurr_dshift = Eigen::Matrix<double, 3, 2>::Zero();
+  Eigen::Vector3d dPcurr_ddisparity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d dPprev_ddisparity = Eigen::Vector3d::Zero();
 };
 
 // Closed-form weighted least squares (eq. 12-14), weights w_j = 1/(det Sp_j + det Sc_j):
@@ -61,6 +67,12 @@ struct MlOutcome {
   // x y z roll pitch yaw of T_prev_curr.
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
   double cost = 0;  // sum r^T W r at the solution
+  // Degrees of freedom of the residuals: 3 per correspondence minus the 6 estimated.
+  int redundancy = 0;
+  // A-posteriori variance factor sigma0^2 = cost / redundancy: how large the residuals
+  // are against the covariances that weighted them (1 when those covariances are right).
+  // `covariance` is NOT scaled by it; the caller decides (VisualOdometry does).
+  double variance_factor = 0;
 };
 
 // VO-8: Gauss-Newton on (x, y, z, roll, pitch, yaw) of T_prev_curr, minimising
@@ -70,6 +82,54 @@ MlOutcome MaximumLikelihoodMotion(const std::vector<Correspondence>& c,
                                   const std::vector<int>& indices,
                                   const Eigen::Isometry3d& initial_T_prev_curr,
                                   int max_iterations, double tolerance);
+
+// VO-13: errors that every feature of a pair shares. The ML fit absorbs them into the
+// motion, so its residuals cannot show them.
+struct SharedErrors {
+  // A smooth error field over the current pair's matches (sub-pixel peak bias, which
+  // depends on the sub-pixel phase that features moving alike share; residual lens
+  // distortion; templates matched across a change of viewpoint), by its first-order
+  // modes: a shift in x and in y, a rotation and a scale about the image centre, each
+  // with this one-sigma in pixels (the rotation and the scale at `half_size_px` from the
+  // centre). The matched point moves in both images: its bearing changes, not its range.
+  double field_sigma_px = 0;
+  Eigen::Vector2d centre_px = Eigen::Vector2d::Zero();
+  double half_size_px = 1;
+  // One disparity offset for both pairs (the rig's calibration), pixels.
+  double disparity_sigma_px = 0;
+};
+
+// VO-13: the covariance of an ML motion from what the data shows. At the solution, with
+// J_j = dr_j / d(x y z roll pitch yaw), W_j the weight and H = sum J_j^T W_j J_j:
+//   - the a-posteriori variance factor s0^2 = sum r_j^T W_j r_j / (3n - 6): the residuals
+//     against the covariances that weighted them;
+//   - the cluster variance factor: the same, but from the scores s_g = sum_{j in g}
+//     J_j^T W_j r_j summed over clusters g of neighbouring features (cells of a grid over
+//     the image), k = tr(H^-1 sum_g s_g s_g^T) / (6 - sum_g tr((H^-1 H_g)^2)). Both have
+//     expectation 1 when the features' errors are independent and their covariances
+//     right; the cluster factor also grows when neighbours share their errors;
+//   - the shared errors (SharedErrors), which the fit absorbs and no residual shows:
+//     d theta = H^-1 sum_j J_j^T W_j D_j dc with D_j = dr_j / dc, so their covariance is
+//     G diag(sigma^2) G^T with G = H^-1 sum_j J_j^T W_j D_j.
+// covariance = max(s0^2, k) H^-1 + G diag(sigma^2) G^T.
+struct MotionUncertainty {
+  bool ok = false;                 // H invertible
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 6> inverse_normal = Eigen::Matrix<double, 6, 6>::Zero();  // H^-1
+  Eigen::Matrix<double, 6, 6> shared = Eigen::Matrix<double, 6, 6>::Zero();  // G diag G^T
+  double variance_factor = 0;      // s0^2
+  double cluster_factor = 0;       // k (0 with fewer than two clusters)
+  int redundancy = 0;              // 3n - 6
+  int clusters = 0;                // clusters holding features
+};
+
+// `cluster` gives each correspondence's cluster, in [0, num_clusters) (indexed like `c`);
+// empty or num_clusters < 2: no cluster factor.
+MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c,
+                                            const std::vector<int>& indices,
+                                            const Eigen::Isometry3d& T_prev_curr,
+                                            const std::vector<int>& cluster, int num_clusters,
+                                            const SharedErrors& shared);
 
 // r_j^T W_j r_j of one correspondence under T_prev_curr.
 double MahalanobisSquared(const Correspondence& c, const Eigen::Isometry3d& T_prev_curr);

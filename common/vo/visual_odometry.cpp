@@ -33,6 +33,7 @@ struct Feature {
   Eigen::Vector2d left;  // working-resolution pixel (integer for a fresh corner)
   Eigen::Vector3d P;
   Eigen::Matrix3d Sigma;
+  Eigen::Vector3d dP_ddisparity;  // dP / d(right x): a disparity offset (VO-13)
 };
 
 // One stereo pair at the working resolution.
@@ -285,10 +286,11 @@ void VisualOdometry::State::StereoMatchFresh(Pair* pair, const std::vector<Corne
       continue;
     }
     StereoPoint sp;
-    if (!TriangulateStereo(pair->rig, left, self.covariance, right, Sigma_right, limits, &sp)) {
+    Eigen::Matrix<double, 3, 4> J;
+    if (!TriangulateStereo(pair->rig, left, self.covariance, right, Sigma_right, limits, &sp, &J)) {
       continue;
     }
-    found[i] = {left, sp.P, sp.Sigma};
+    found[i] = {left, sp.P, sp.Sigma, J.col(2)};
     ok[i] = 1;
   }
   for (std::size_t i = 0; i < corners.size(); ++i) {
@@ -471,7 +473,8 @@ VoResult VisualOdometry::Process(const StereoImages& images,
     stereo_ms += Ms(t_s, Clock::now());
     if (!matched) continue;
     StereoPoint sp;
-    if (!TriangulateStereo(c.rig, m.position, m.covariance, right, Sigma_right, limits, &sp)) {
+    Eigen::Matrix<double, 3, 4> J;
+    if (!TriangulateStereo(c.rig, m.position, m.covariance, right, Sigma_right, limits, &sp, &J)) {
       continue;
     }
     // Drop features whose 3-D positions disagree beyond their uncertainty (VO-6).
@@ -485,6 +488,12 @@ VoResult VisualOdometry::Process(const StereoImages& images,
     x.Sigma_curr = sp.Sigma;
     x.left = m.position;
     x.right = right;
+    // The right match follows the left one (its template is cut at the left match), so a
+    // shift of the match moves both; a disparity offset moves the right one only.
+    x.dPcurr_dshift.col(0) = J.col(0) + J.col(2);
+    x.dPcurr_dshift.col(1) = J.col(1) + J.col(3);
+    x.dPcurr_ddisparity = J.col(2);
+    x.dPprev_ddisparity = f.dP_ddisparity;
     tracked[fi] = x;
     tracked_ok[fi] = 1;
     tracked_fixed[fi] = (m.position - f.left).norm() < o.shadow_fixed_px &&
@@ -585,7 +594,34 @@ VoResult VisualOdometry::Process(const StereoImages& images,
                          o.ml_max_iterations));
   }
   res.T_prev_curr = ml.T_prev_curr;
-  res.covariance = ml.covariance;
+
+  // ---- VO-13: the covariance from what the data shows ----
+  {
+    const int grid = o.covariance_cluster_grid;
+    std::vector<int> cluster;
+    if (grid >= 2) {
+      cluster.assign(corr.size(), 0);
+      for (int k : inliers) {
+        const int gx = std::clamp(static_cast<int>(corr[k].left.x() * grid / c.width), 0, grid - 1);
+        const int gy = std::clamp(static_cast<int>(corr[k].left.y() * grid / c.height), 0, grid - 1);
+        cluster[k] = gy * grid + gx;
+      }
+    }
+    SharedErrors shared;
+    shared.field_sigma_px = o.covariance_field_sigma_px;
+    shared.disparity_sigma_px = o.covariance_disparity_sigma_px;
+    shared.centre_px = Eigen::Vector2d(0.5 * (c.width - 1), 0.5 * (c.height - 1));
+    shared.half_size_px = 0.5 * std::max(c.width, c.height);
+    const MotionUncertainty u =
+        EstimateMotionUncertainty(corr, inliers, ml.T_prev_curr, cluster, grid * grid, shared);
+    if (!u.ok) {
+      res.T_prev_curr = Eigen::Isometry3d::Identity();
+      return finish(VoStatus::kDegenerate, "motion undetermined: the normal matrix is singular");
+    }
+    res.covariance = u.covariance;
+    res.variance_factor = u.variance_factor;
+    res.cluster_factor = u.cluster_factor;
+  }
 
   // ---- VO-10 on the estimate, VO-9 sanity ----
   const Eigen::Vector3d dt = ml.T_prev_curr.translation();
@@ -659,8 +695,8 @@ VoResult VisualOdometry::Process(const StereoImages& images,
                     Format("inliers clustered: spread %.3f of the image (need %.3f)", spread,
                            o.degenerate_min_spread));
     }
-    const double sigma_t = std::sqrt(ml.covariance.topLeftCorner<3, 3>().trace());
-    const double sigma_r = std::sqrt(ml.covariance.bottomRightCorner<3, 3>().trace());
+    const double sigma_t = std::sqrt(res.covariance.topLeftCorner<3, 3>().trace());
+    const double sigma_r = std::sqrt(res.covariance.bottomRightCorner<3, 3>().trace());
     if (o.degenerate_max_translation_sigma_m > 0 && sigma_t > o.degenerate_max_translation_sigma_m) {
       return reject(VoStatus::kDegenerate, Format("translation poorly determined: sigma %.3f m "
                                                   "(limit %.3f m)",

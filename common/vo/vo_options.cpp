@@ -54,7 +54,9 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "motion_min_overlap", "motion_max_translation_m", "motion_max_rotation_deg",
                   "shadow_check", "shadow_fixed_px", "shadow_min_predicted_px",
                   "degenerate_min_spread", "degenerate_max_translation_sigma_m",
-                  "degenerate_max_rotation_sigma_deg"});
+                  "degenerate_max_rotation_sigma_deg",
+                  "covariance_cluster_grid", "covariance_field_sigma_px",
+                  "covariance_disparity_sigma_px"});
   node.Get("working_scale", o.working_scale, 0.0625, 1.0);
   node.Get("feature_harris_k", o.feature_harris_k, 0.0, 0.25);
   node.Get("feature_harris_block", o.feature_harris_block, 3, 31);
@@ -111,6 +113,9 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   node.Get("degenerate_min_spread", o.degenerate_min_spread, 0.0, 1.0);
   node.Get("degenerate_max_translation_sigma_m", o.degenerate_max_translation_sigma_m, 0.0, kInf);
   node.Get("degenerate_max_rotation_sigma_deg", o.degenerate_max_rotation_sigma_deg, 0.0, 180.0);
+  node.Get("covariance_cluster_grid", o.covariance_cluster_grid, 0, 16);
+  node.Get("covariance_field_sigma_px", o.covariance_field_sigma_px, 0.0, 10.0);
+  node.Get("covariance_disparity_sigma_px", o.covariance_disparity_sigma_px, 0.0, 10.0);
   try {
     ValidateVoOptions(o);
   } catch (const std::invalid_argument& e) {

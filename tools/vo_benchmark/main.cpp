@@ -1,5 +1,5 @@
 // vo_benchmark: median milliseconds per stereo pair, split by VO stage, on one core
-// (VO_ALGORITHM.md "How it is judged": 1024x1024, 512x512 and KITTI size). Images are
+// (common/vo/README.md "How it is judged": 1024x1024, 512x512 and KITTI size). Images are
 // decoded or rendered before timing; only the VO call is timed.
 #include "vo_eval/vo_evaluation.hpp"
 

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <random>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -76,6 +77,10 @@ std::string DefaultVoConfigPath() {
     if (fs::is_regular_file(p, ec)) return p.string();
   }
   return "";
+}
+
+std::string SourcePath(const std::string& relative) {
+  return (std::filesystem::path(ROVER_SOURCE_DIR) / relative).string();
 }
 
 double Median(std::vector<double> values) {
@@ -142,6 +147,24 @@ EvalInput SyntheticInput(const SyntheticTerrainSequence& sequence, int num_frame
   return in;
 }
 
+EvalInput RenderedInput(const RenderedDriveSequence& sequence) {
+  EvalInput in;
+  const RenderedDriveOptions& o = sequence.options();
+  in.name = "rendered world " + sequence.world_name() + " " + std::to_string(sequence.rig().left->width()) +
+            "x" + std::to_string(sequence.rig().left->height()) + " seed " + std::to_string(o.seed);
+  in.num_frames = sequence.size();
+  in.rig = sequence.rig();
+  for (int k = 0; k < in.num_frames; ++k) {
+    in.times_s.push_back(10.0 * k);
+    in.truth.push_back(sequence.SitePose(k));
+  }
+  in.truth_is_exact = true;
+  in.view.down = Eigen::Vector3d(0, 0, 1);  // site frame: Z down
+  in.view.forward = sequence.SitePose(0).linear().col(0);
+  in.load = [&sequence](int k, cv::Mat* left, cv::Mat* right) { sequence.Render(k, left, right); };
+  return in;
+}
+
 EvalReport RunEvaluation(const EvalInput& input, const EvalOptions& options, std::ostream* progress) {
   if (input.num_frames < 2) {
     throw std::invalid_argument("RunEvaluation: " + input.name + ": need at least 2 frames, got " +
@@ -151,8 +174,13 @@ EvalReport RunEvaluation(const EvalInput& input, const EvalOptions& options, std
   EvalReport report;
   report.has_truth = static_cast<int>(input.truth.size()) == input.num_frames;
 
+  if (options.odometry_prior && !report.has_truth) {
+    throw std::invalid_argument("RunEvaluation: " + input.name + ": an odometry prior needs truth");
+  }
   Eigen::Isometry3d velocity = Eigen::Isometry3d::Identity();  // last motion, prev->curr
   bool have_velocity = false;
+  std::mt19937_64 odometry_rng(options.odometry_seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
   std::vector<double> nees_values;
   std::vector<Eigen::Matrix<double, 6, 1>> normalised;
 
@@ -163,9 +191,19 @@ EvalReport RunEvaluation(const EvalInput& input, const EvalOptions& options, std
     images.frame_id = k;
     images.utime = static_cast<std::int64_t>(std::llround(input.times_s[static_cast<std::size_t>(k)] * 1e6));
 
-    const Eigen::Matrix<double, 6, 6> prior_cov =
+    Eigen::Matrix<double, 6, 6> prior_cov =
         have_velocity ? PriorCovariance(options.prior_sigma_m, options.prior_sigma_deg)
                       : PriorCovariance(options.initial_prior_sigma_m, options.initial_prior_sigma_deg);
+    if (options.odometry_prior && k > 0) {
+      const Eigen::Isometry3d truth_motion =
+          input.truth[static_cast<std::size_t>(k - 1)].inverse() * input.truth[static_cast<std::size_t>(k)];
+      const double s = options.odometry_noise_fraction * truth_motion.translation().norm();
+      const double r = options.odometry_noise_deg * kDeg;
+      velocity = truth_motion * geometry::PoseFromXyzRpy(s * gauss(odometry_rng), s * gauss(odometry_rng),
+                                                         s * gauss(odometry_rng), r * gauss(odometry_rng),
+                                                         r * gauss(odometry_rng), r * gauss(odometry_rng));
+      prior_cov = PriorCovariance(options.prior_sigma_m, options.prior_sigma_deg);
+    }
     const double cpu0 = ThreadCpuMs();
     const auto t0 = std::chrono::steady_clock::now();
     vo::VoResult result = odometry.Process(images, velocity, prior_cov);
@@ -183,7 +221,7 @@ EvalReport RunEvaluation(const EvalInput& input, const EvalOptions& options, std
       ++report.pairs;
       if (rec.accepted) {
         ++report.converged;
-        velocity = result.T_prev_curr;
+        if (!options.odometry_prior) velocity = result.T_prev_curr;
         have_velocity = true;
         if (report.has_truth) {
           const Eigen::Isometry3d truth_motion =
@@ -244,7 +282,7 @@ void WriteEvaluation(const std::string& out_dir, const EvalInput& input, const E
            "iterations,detect_ms,stereo_ms,track_ms,ransac_ms,ml_ms,total_ms,wall_ms,cpu_ms,"
            "x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,"
            "sigma_x_m,sigma_y_m,sigma_z_m,sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg,"
-           "err_x_m,err_y_m,err_z_m,err_roll_deg,err_pitch_deg,err_yaw_deg,nees\n";
+           "err_x_m,err_y_m,err_z_m,err_roll_deg,err_pitch_deg,err_yaw_deg,nees,variance_factor,cluster_factor\n";
     for (const FrameRecord& f : report.frames) {
       const vo::VoResult& r = f.result;
       const geometry::Vector6d m = geometry::XyzRpyFromPose(f.motion);
@@ -275,6 +313,10 @@ void WriteEvaluation(const std::string& out_dir, const EvalInput& input, const E
         csv << ",";
       }
       if (f.nees >= 0.0) csv << JsonNumber(f.nees);
+      csv << ",";
+      if (f.accepted) csv << JsonNumber(r.variance_factor);
+      csv << ",";
+      if (f.accepted) csv << JsonNumber(r.cluster_factor);
       csv << "\n";
     }
     if (!csv) throw std::runtime_error(csv_path + ": write failed");
@@ -291,7 +333,7 @@ void WriteEvaluation(const std::string& out_dir, const EvalInput& input, const E
     j << "  \"dataset\": " << JsonString(input.name) << ",\n";
     j << "  \"frames\": " << report.frames.size() << ",\n";
     j << "  \"working_scale\": " << JsonNumber(options.vo.working_scale) << ",\n";
-    j << "  \"prior\": {\"kind\": \"constant velocity\", \"sigma_m\": " << JsonNumber(options.prior_sigma_m)
+    j << "  \"prior\": {\"kind\": " << (options.odometry_prior ? "\"odometry (truth with noise)\"" : "\"constant velocity\"") << ", \"sigma_m\": " << JsonNumber(options.prior_sigma_m)
       << ", \"sigma_deg\": " << JsonNumber(options.prior_sigma_deg) << "},\n";
     j << "  \"convergence\": {\"pairs\": " << report.pairs << ", \"converged\": " << report.converged
       << ", \"rate\": " << JsonNumber(report.convergence_rate) << ", \"status_counts\": {";

@@ -1,10 +1,11 @@
-// Runs the VO pair by pair over a stereo sequence and judges it (VO_ALGORITHM.md, "How it
+// Runs the VO pair by pair over a stereo sequence and judges it (common/vo/README.md, "How it
 // is judged"): accuracy against truth, convergence, stage times, and the honesty of the
 // reported covariance (VO-13).
 #pragma once
 
 #include "vo/visual_odometry.hpp"
 #include "vo_eval/kitti_sequence.hpp"
+#include "vo_eval/rendered_drive.hpp"
 #include "vo_eval/synthetic_terrain.hpp"
 #include "vo_eval/trajectory_metrics.hpp"
 #include "vo_eval/trajectory_plot.hpp"
@@ -33,6 +34,8 @@ struct EvalInput {
 EvalInput KittiInput(const KittiSequence& sequence, int max_frames = 0);
 // The sequence must outlive the input (the loader renders from it).
 EvalInput SyntheticInput(const SyntheticTerrainSequence& sequence, int num_frames);
+// A drive over a rendered world; the sequence must outlive the input.
+EvalInput RenderedInput(const RenderedDriveSequence& sequence);
 
 struct EvalOptions {
   vo::VoOptions vo;
@@ -44,6 +47,14 @@ struct EvalOptions {
   // The first pair has no previous motion: the prior is "no motion", wider still.
   double initial_prior_sigma_m = 1.0;
   double initial_prior_sigma_deg = 10.0;
+  // Instead, an odometry-like prior (needs truth; the rendered drives use it, since the
+  // rover has wheel odometry and an IMU): the true motion perturbed by seeded Gaussian
+  // noise, odometry_noise_fraction of the step per axis and odometry_noise_deg per angle,
+  // with the covariance above (prior_sigma_m, prior_sigma_deg).
+  bool odometry_prior = false;
+  double odometry_noise_fraction = 0.02;
+  double odometry_noise_deg = 0.3;
+  std::uint64_t odometry_seed = 1;
 };
 
 struct FrameRecord {
@@ -95,5 +106,7 @@ double Median(std::vector<double> values);
 vo::VoOptions LoadVoConfig(const std::string& path);
 // configs/vo.yaml of the source tree this program was built from, or "" if it is absent.
 std::string DefaultVoConfigPath();
+// A file of the source tree this program was built from (no check that it exists).
+std::string SourcePath(const std::string& relative);
 
 }  // namespace rover::vo_eval

@@ -115,7 +115,7 @@ TEST(VisualOdometry, VO10_MotionTooLargeReinitialisesTracking) {
   const PlaneScene scene;
   VisualOdometry vo(VoOptions{});
   vo.Process(scene.Render(Eigen::Isometry3d::Identity(), 0), Eigen::Isometry3d::Identity(), WidePrior());
-  const Eigen::Isometry3d turn = geometry::PoseFromXyzRpy(0, 0, 0, 0, 0.4, 0);  // 23 deg
+  const Eigen::Isometry3d turn = geometry::PoseFromXyzRpy(0, 0, 0, 0, 0.6, 0);  // 34 deg
   const VoResult big = vo.Process(scene.Render(Eigen::Isometry3d::Identity(), 1), turn, WidePrior());
   EXPECT_EQ(big.status, VoStatus::kMotionTooLarge);
   EXPECT_FALSE(big.reason.empty());
@@ -125,6 +125,21 @@ TEST(VisualOdometry, VO10_MotionTooLargeReinitialisesTracking) {
   const VoResult next = vo.Process(scene.Render(step, 2), step, WidePrior());
   ASSERT_EQ(next.status, VoStatus::kOk) << next.reason;
   EXPECT_LT((next.T_prev_curr.translation() - step.translation()).norm(), 0.005);
+}
+
+TEST(VisualOdometry, VO10_TurnAtTheExecutorsLimitPlusSlipIsMeasured) {
+  // The executor turns at most 18 deg per step; with slip the prior reads a little more.
+  // VO must measure such a turn, not refuse it for its size (its limit is 27 deg).
+  const PlaneScene scene;
+  VisualOdometry vo(VoOptions{});
+  vo.Process(scene.Render(Eigen::Isometry3d::Identity(), 0), Eigen::Isometry3d::Identity(), WidePrior());
+  const Eigen::Isometry3d turn = geometry::PoseFromXyzRpy(0, 0, 0.05, 0, 20.0 * M_PI / 180, 0);
+  const Eigen::Isometry3d prior = geometry::PoseFromXyzRpy(0, 0, 0.05, 0, 19.0 * M_PI / 180, 0);
+  const VoResult r = vo.Process(scene.Render(turn, 1), prior, WidePrior());
+  ASSERT_EQ(r.status, VoStatus::kOk) << r.reason;
+  const double dr = Eigen::AngleAxisd(r.T_prev_curr.linear().transpose() * turn.linear()).angle();
+  EXPECT_LT(dr, 0.05 * M_PI / 180);
+  EXPECT_LT((r.T_prev_curr.translation() - turn.translation()).norm(), 0.005);
 }
 
 TEST(VisualOdometry, VO10_TexturelessPairGivesNoUpdate) {

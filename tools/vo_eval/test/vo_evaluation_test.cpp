@@ -105,6 +105,45 @@ TEST(VoEvaluation, SyntheticTerrainIsAccurateAndHonest) {
             << ", false positives " << report.nees.false_positives << "\n";
 }
 
+TEST(VoEvaluation, VO13_RenderedWorldNotTunedOnIsHonest) {
+  // tilt_slope took no part in choosing the VO-13 constants (README: how they were
+  // learned). A 20-frame drive over it through the simulator's renderer, with exact truth.
+  RenderedDriveOptions drive;
+  drive.world_path = std::string(ROVER_SOURCE_DIR) + "/configs/worlds/tilt_slope.yaml";
+  drive.rig_path = std::string(ROVER_SOURCE_DIR) + "/configs/cameras/navcam_pinhole.yaml";
+  drive.frames = 20;
+  drive.seed = 3;
+  const RenderedDriveSequence seq(drive);
+  const EvalInput input = RenderedInput(seq);
+  EvalOptions options = ProjectOptions();
+  options.odometry_prior = true;
+  options.odometry_seed = drive.seed;
+  const EvalReport report = RunEvaluation(input, options);
+  EXPECT_GE(report.converged, report.pairs * 8 / 10);
+  ASSERT_GT(report.nees.count, 10);
+  EXPECT_GT(report.nees.mean, 3.0);
+  EXPECT_LT(report.nees.mean, 12.0);
+  EXPECT_LE(report.nees.false_positives, 1);
+  EXPECT_LT(report.accuracy.final_position_error_percent, 2.0);
+  std::cout << "tilt_slope rendered: converged " << report.converged << "/" << report.pairs
+            << ", NEES mean " << report.nees.mean << ", false positives "
+            << report.nees.false_positives << ", final "
+            << report.accuracy.final_position_error_percent << " %\n";
+}
+
+TEST(VoEvaluation, RenderedDriveThatLeavesTheMapIsRefusedNamingTheFrame) {
+  RenderedDriveOptions drive;
+  drive.world_path = std::string(ROVER_SOURCE_DIR) + "/configs/worlds/tilt_slope.yaml";
+  drive.rig_path = std::string(ROVER_SOURCE_DIR) + "/configs/cameras/navcam_pinhole.yaml";
+  drive.frames = 2000;
+  try {
+    const RenderedDriveSequence seq(drive);
+    FAIL() << "a 800 m drive fitted on the map";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("leaves the map at frame"), std::string::npos) << e.what();
+  }
+}
+
 int RunEvaluator(const std::string& args, std::string* stderr_text) {
   const fs::path err = FreshDir("vo_eval_stderr.txt");
   const std::string cmd = std::string(ROVER_BINARY_DIR) + "/bin/vo_eval " + args + " >/dev/null 2>" + err.string();

@@ -1,0 +1,215 @@
+// VO-13: the motion covariance against Monte Carlo truth. Stereo matches of known 3-D
+// points are drawn with known pixel noise, triangulated (VO-4, VO-5) and fitted (VO-8);
+// the reported covariance must agree with the spread of the estimates.
+#include "geometry/pose.hpp"
+#include "test_rig.hpp"
+#include "vo/motion_estimation.hpp"
+#include "vo/triangulation.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+
+namespace rover::vo {
+namespace {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+const Eigen::Isometry3d kMotion = geometry::PoseFromXyzRpy(0.05, -0.02, 0.6, 0.01, -0.03, 0.02);
+
+// What is injected into the pixel observations of one trial.
+struct Noise {
+  double sigma_px = 0.2;        // independent, per pixel coordinate of every match
+  double model_sigma_px = 0.2;  // what the matcher reports (the match covariance)
+  double cell_sigma_px = 0;     // one offset per image cell, shared by its features
+  double shift_sigma_px = 0;    // one shift of every current match (left and right)
+  double disparity_sigma_px = 0;  // one right-image x offset for both pairs
+};
+
+struct Trial {
+  std::vector<Correspondence> c;
+  std::vector<int> all, cluster;
+};
+
+constexpr int kGrid = 4;
+
+// Points on the ground ahead of a 640x480 rig (f 500, baseline 0.3 m) seen from both
+// poses; each observed in left and right with the noise, triangulated, its covariance
+// from the reported match covariance.
+Trial MakeTrial(const geometry::StereoRig& rig, const Noise& n, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0, 1);
+  std::normal_distribution<double> g(0, 1);
+  const Eigen::Isometry3d T_curr_prev = kMotion.inverse();
+  const Eigen::Matrix2d S = n.model_sigma_px * n.model_sigma_px * Eigen::Matrix2d::Identity();
+  TriangulationLimits limits;
+  limits.max_gap_rad = 1.0;  // the noise is the test's; do not gate it
+  std::vector<Eigen::Vector2d> cell_offset(kGrid * kGrid);
+  for (auto& o : cell_offset) o = n.cell_sigma_px * Eigen::Vector2d(g(rng), g(rng));
+  const Eigen::Vector2d shift = n.shift_sigma_px * Eigen::Vector2d(g(rng), g(rng));
+  const double disparity = n.disparity_sigma_px * g(rng);
+  Trial t;
+  while (t.c.size() < 120) {
+    const double z = 3 + 12 * u(rng);
+    const Eigen::Vector3d P(z * (u(rng) - 0.5) * 1.1, 1.2 + 0.3 * g(rng), z);
+    const Eigen::Vector3d Pc = T_curr_prev * P;
+    Eigen::Vector2d pl = Eigen::Vector2d::Zero(), pr = pl, cl = pl, cr = pl;
+    if (!rig.left->Project(P, &pl) || !rig.right->Project(P, &pr) ||
+        !rig.left->Project(Pc, &cl) || !rig.right->Project(Pc, &cr)) {
+      continue;
+    }
+    auto inside = [&](const Eigen::Vector2d& p) {
+      return p.x() > 5 && p.y() > 5 && p.x() < rig.left->width() - 6 && p.y() < rig.left->height() - 6;
+    };
+    if (!inside(pl) || !inside(pr) || !inside(cl) || !inside(cr)) continue;
+    const int cell = std::min(kGrid - 1, static_cast<int>(cl.x() * kGrid / rig.left->width())) +
+                     kGrid * std::min(kGrid - 1, static_cast<int>(cl.y() * kGrid / rig.left->height()));
+    auto noisy = [&](const Eigen::Vector2d& p) -> Eigen::Vector2d {
+      return p + n.sigma_px * Eigen::Vector2d(g(rng), g(rng));
+    };
+    // Previous pair: the left feature defines the point; its right match carries noise.
+    const Eigen::Vector2d pl_obs = noisy(pl), pr_obs = noisy(pr) + Eigen::Vector2d(disparity, 0);
+    // Current pair: the tracked left match and the right match follow the shared field.
+    const Eigen::Vector2d common = shift + cell_offset[cell];
+    const Eigen::Vector2d cl_obs = noisy(cl) + common;
+    const Eigen::Vector2d cr_obs = noisy(cr) + common + Eigen::Vector2d(disparity, 0);
+    StereoPoint sp, sc;
+    Eigen::Matrix<double, 3, 4> Jp, Jc;
+    if (!TriangulateStereo(rig, pl_obs, S, pr_obs, S, limits, &sp, &Jp) ||
+        !TriangulateStereo(rig, cl_obs, S, cr_obs, S, limits, &sc, &Jc)) {
+      continue;
+    }
+    Correspondence x;
+    x.P_prev = sp.P;
+    x.Sigma_prev = sp.Sigma;
+    x.P_curr = sc.P;
+    x.Sigma_curr = sc.Sigma;
+    x.left = cl_obs;
+    x.right = cr_obs;
+    x.dPcurr_dshift.col(0) = Jc.col(0) + Jc.col(2);
+    x.dPcurr_dshift.col(1) = Jc.col(1) + Jc.col(3);
+    x.dPcurr_ddisparity = Jc.col(2);
+    x.dPprev_ddisparity = Jp.col(2);
+    t.all.push_back(static_cast<int>(t.c.size()));
+    t.cluster.push_back(cell);
+    t.c.push_back(x);
+  }
+  return t;
+}
+
+Vector6d Error(const Eigen::Isometry3d& estimate) {
+  Vector6d e;
+  e.head<3>() = estimate.translation() - kMotion.translation();
+  e.tail<3>() = geometry::RpyFromRotation(estimate.linear()) - geometry::RpyFromRotation(kMotion.linear());
+  return e;
+}
+
+struct MonteCarlo {
+  double nees_mean = 0;             // with the covariance EstimateMotionUncertainty reports
+  double nees_unscaled_mean = 0;    // with H^-1 alone (no variance factor, no shared errors)
+  double variance_factor = 0;       // mean s0^2
+  double cluster_factor = 0;        // mean k
+  Matrix6d empirical = Matrix6d::Zero();  // covariance of the estimates about the truth
+  Matrix6d reported = Matrix6d::Zero();   // mean reported covariance
+  int beyond = 0;                   // NEES over 20.06 (the 99.73 % bound)
+};
+
+// `model` says what the estimator is told about the shared errors.
+MonteCarlo RunMonteCarlo(const Noise& noise, const SharedErrors& model, int trials, unsigned seed) {
+  const geometry::StereoRig rig = test::MakeRig(640, 480, 500, 319.5, 239.5, 0.3);
+  std::mt19937 rng(seed);
+  MonteCarlo mc;
+  for (int k = 0; k < trials; ++k) {
+    const Trial t = MakeTrial(rig, noise, rng);
+    const MlOutcome ml = MaximumLikelihoodMotion(t.c, t.all, kMotion, 20, 1e-10);
+    EXPECT_TRUE(ml.converged);
+    SharedErrors m = model;
+    m.centre_px = Eigen::Vector2d(319.5, 239.5);
+    m.half_size_px = 320;
+    const MotionUncertainty u =
+        EstimateMotionUncertainty(t.c, t.all, ml.T_prev_curr, t.cluster, kGrid * kGrid, m);
+    EXPECT_TRUE(u.ok);
+    const Vector6d e = Error(ml.T_prev_curr);
+    const double nees = e.dot(u.covariance.ldlt().solve(e));
+    mc.nees_mean += nees / trials;
+    mc.nees_unscaled_mean += e.dot(u.inverse_normal.ldlt().solve(e)) / trials;
+    mc.variance_factor += u.variance_factor / trials;
+    mc.cluster_factor += u.cluster_factor / trials;
+    mc.empirical += e * e.transpose() / trials;
+    mc.reported += u.covariance / trials;
+    mc.beyond += nees > 20.06;
+  }
+  std::printf("NEES %.2f (H^-1 alone %.2f), s0^2 %.3f, k %.3f, %d/%d beyond 20.06\n", mc.nees_mean,
+              mc.nees_unscaled_mean, mc.variance_factor, mc.cluster_factor, mc.beyond, trials);
+  return mc;
+}
+
+TEST(MotionUncertainty, VO13_ReportedCovarianceMatchesTheSpreadOfEstimates) {
+  Noise noise;  // 0.2 px, reported as 0.2 px
+  const MonteCarlo mc = RunMonteCarlo(noise, SharedErrors{}, 300, 1);
+  // chi-square(6) has mean 6; 300 trials put the mean within about +-0.4 of it.
+  EXPECT_GT(mc.nees_mean, 5.0);
+  EXPECT_LT(mc.nees_mean, 7.0);
+  EXPECT_NEAR(mc.variance_factor, 1.0, 0.1);
+  EXPECT_NEAR(mc.cluster_factor, 1.0, 0.2);
+  EXPECT_LE(mc.beyond, 5);  // 0.27 % expected: 0.8 of 300
+  // Component by component: the empirical variance within 25 % of the reported one.
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_NEAR(mc.empirical(i, i) / mc.reported(i, i), 1.0, 0.25) << "component " << i;
+  }
+}
+
+TEST(MotionUncertainty, VO13_VarianceFactorGrowsWithInjectedNoise) {
+  // The matcher keeps reporting 0.2 px while the real noise is half, equal, double.
+  double previous = 0;
+  for (const double sigma : {0.1, 0.2, 0.4}) {
+    Noise noise;
+    noise.sigma_px = sigma;
+    const MonteCarlo mc = RunMonteCarlo(noise, SharedErrors{}, 120, 2);
+    const double expected = (sigma / noise.model_sigma_px) * (sigma / noise.model_sigma_px);
+    EXPECT_NEAR(mc.variance_factor / expected, 1.0, 0.15) << "sigma " << sigma;
+    EXPECT_GT(mc.variance_factor, 2.5 * previous);
+    previous = mc.variance_factor;
+    // Scaled by it, the covariance stays honest; H^-1 alone is off by the factor.
+    EXPECT_GT(mc.nees_mean, 4.5) << "sigma " << sigma;
+    EXPECT_LT(mc.nees_mean, 7.5) << "sigma " << sigma;
+    EXPECT_NEAR(mc.nees_unscaled_mean / mc.nees_mean, expected, 0.3 * expected);
+  }
+}
+
+TEST(MotionUncertainty, VO13_ClusterFactorSeesErrorsThatNeighboursShare) {
+  // Every feature of an image cell shares an offset as large as its own noise: the
+  // residuals within a cell agree, so s0^2 barely moves, but the motion errs more.
+  Noise noise;
+  noise.cell_sigma_px = 0.2;
+  const MonteCarlo mc = RunMonteCarlo(noise, SharedErrors{}, 200, 3);
+  EXPECT_GT(mc.cluster_factor, 1.8 * mc.variance_factor);
+  EXPECT_GT(mc.nees_unscaled_mean, 2.0 * mc.nees_mean);
+  EXPECT_GT(mc.nees_mean, 4.0);
+  EXPECT_LT(mc.nees_mean, 9.0);
+}
+
+TEST(MotionUncertainty, VO13_SharedErrorsNoResidualShowsArePropagated) {
+  // A shift of every current match and one disparity offset for both pairs, as large as
+  // the model says: the fit absorbs them (s0^2 stays 1), and only their propagation
+  // through the normal equations accounts for the extra error.
+  Noise noise;
+  noise.sigma_px = 0.1;
+  noise.model_sigma_px = 0.1;
+  noise.shift_sigma_px = 0.1;
+  noise.disparity_sigma_px = 0.2;
+  SharedErrors told;
+  told.field_sigma_px = 0.1;
+  told.disparity_sigma_px = 0.2;
+  const MonteCarlo with = RunMonteCarlo(noise, told, 300, 4);
+  EXPECT_NEAR(with.variance_factor, 1.0, 0.1);
+  EXPECT_GT(with.nees_mean, 3.0);  // the rotation and scale modes were not injected
+  EXPECT_LT(with.nees_mean, 7.0);
+  EXPECT_LE(with.beyond, 6);
+  const MonteCarlo without = RunMonteCarlo(noise, SharedErrors{}, 300, 4);
+  EXPECT_GT(without.nees_mean, 3.0 * with.nees_mean);
+}
+
+}  // namespace
+}  // namespace rover::vo
