@@ -595,8 +595,9 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   }
   res.T_prev_curr = ml.T_prev_curr;
 
-  // ---- VO-13: the covariance from what the data shows ----
+  // ---- VO-13: the covariance from what the data shows (timed with the ML) ----
   {
+    const auto t_u = Clock::now();
     const int grid = o.covariance_cluster_grid;
     std::vector<int> cluster;
     if (grid >= 2) {
@@ -621,6 +622,7 @@ VoResult VisualOdometry::Process(const StereoImages& images,
     res.covariance = u.covariance;
     res.variance_factor = u.variance_factor;
     res.cluster_factor = u.cluster_factor;
+    res.times.ml_ms += Ms(t_u, Clock::now());
   }
 
   // ---- VO-10 on the estimate, VO-9 sanity ----
