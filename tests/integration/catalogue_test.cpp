@@ -63,9 +63,32 @@ int CountVoStatus(const YAML::Node& s, int status) {
   return n;
 }
 
+// The most updates beyond the 99.7 % NEES bound that an honest VO shows, among n correct
+// ones, with probability over 99 %: each lands beyond it with p = 0.0027, so a count of 1
+// in 40 is chance (10 %), while the false updates Mars showed (the rover's shadow,
+// features clustered on one patch) come many at once.
+int FalseUpdatesAllowed(int n) {
+  const double p = 0.0027;
+  double tail = 1.0, term = std::pow(1.0 - p, n);  // P(X > k) with X ~ Binomial(n, p)
+  for (int k = 0; k <= n; ++k) {
+    tail -= term;
+    if (tail < 0.01) return k;
+    term *= p / (1.0 - p) * (n - k) / (k + 1.0);
+  }
+  return n;
+}
+
 void ExpectNoFalseUpdate(const YAML::Node& s) {
-  EXPECT_EQ(s["false_updates"].as<int>(), 0)
-      << s["vo_updates_accepted"].as<int>() << " accepted VO updates";
+  const int accepted = s["vo_updates_accepted"].as<int>();
+  EXPECT_LE(s["false_updates"].as<int>(), FalseUpdatesAllowed(accepted))
+      << s["false_updates"].as<int>() << " of " << accepted << " accepted VO updates beyond the 99.7 % NEES bound";
+}
+
+TEST(Catalogue, FalseUpdateAllowanceIsWhatChanceGivesAnHonestVo) {
+  EXPECT_EQ(FalseUpdatesAllowed(0), 0);
+  EXPECT_EQ(FalseUpdatesAllowed(3), 0);   // P(any) = 0.8 %
+  EXPECT_EQ(FalseUpdatesAllowed(40), 1);  // P(> 1) = 0.5 %
+  EXPECT_EQ(FalseUpdatesAllowed(200), 3);
 }
 
 // Rock course: 2.45 m in 35 cm steps over cobbles on sand. Slip reaches 85 %;
