@@ -11,8 +11,9 @@
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
-#include "geometry/camera_model.hpp"
+#include "bus/stereo_frame_convert.hpp"
 #include "imaging/image_check.hpp"
+#include "vo/motion_prior.hpp"
 #include "vo/visual_odometry.hpp"
 
 #include <rover_msgs/stereo_frame_t.hpp>
@@ -24,52 +25,6 @@
 
 using namespace rover;
 
-namespace {
-
-imaging::ImageView ViewOf(const rover_msgs::image_t& img) {
-  imaging::ImageView v;
-  v.encoding = img.encoding;
-  v.width = img.width;
-  v.height = img.height;
-  v.declared_size = img.size;
-  v.data = img.data.data();
-  v.data_size = img.data.size();
-  return v;
-}
-
-// Checks both images of a frame against their camera models and the limits before
-// anything decodes them (common/imaging), then decodes them. Returns "" or why not.
-std::string DecodePair(const rover_msgs::stereo_frame_t& frame, const imaging::ImageLimits& limits,
-                       vo::StereoImages& images) {
-  if (std::string bad = imaging::DecodeCheckedImage(ViewOf(frame.left), frame.left_model.width,
-                                                    frame.left_model.height, limits, images.left);
-      !bad.empty()) {
-    return "left image: " + bad;
-  }
-  if (std::string bad = imaging::DecodeCheckedImage(ViewOf(frame.right), frame.right_model.width,
-                                                    frame.right_model.height, limits, images.right);
-      !bad.empty()) {
-    return "right image: " + bad;
-  }
-  if (images.left.size() != images.right.size()) {
-    return "right image is " + std::to_string(images.right.cols) + "x" + std::to_string(images.right.rows) +
-           " but the left is " + std::to_string(images.left.cols) + "x" + std::to_string(images.left.rows) +
-           " (expected a pair of one size)";
-  }
-  return "";
-}
-
-struct PriorOptions {
-  // The prior's uncertainty: wheel odometry can be wrong by more than 100 % on loose sand
-  // (Sol 206), so the search must allow it.
-  double translation_sigma_fraction = 0.6;
-  double min_translation_sigma_m = 0.05;
-  double rotation_sigma_fraction = 0.3;
-  double min_rotation_sigma_deg = 2.0;
-};
-
-}  // namespace
-
 int main(int argc, char** argv) {
   return bus::RunMain("visual_odometry", [&]() -> int {
     bus::Process proc("visual_odometry",
@@ -79,15 +34,11 @@ int main(int argc, char** argv) {
                       "image limits).",
                       argc, argv, {}, {"visual_odometry"});
     vo::VisualOdometry vo(vo::LoadVoOptions(proc.config()["vo"]));
-    PriorOptions prior;
     const auto section = proc.config()["visual_odometry"];
     section.CheckKeys({"translation_sigma_fraction", "min_translation_sigma_m",
                        "rotation_sigma_fraction", "min_rotation_sigma_deg", "max_image_pixels",
                        "min_image_side"});
-    section.Get("translation_sigma_fraction", prior.translation_sigma_fraction, 0.0, 10.0);
-    section.Get("min_translation_sigma_m", prior.min_translation_sigma_m, 0.0, 10.0);
-    section.Get("rotation_sigma_fraction", prior.rotation_sigma_fraction, 0.0, 10.0);
-    section.Get("min_rotation_sigma_deg", prior.min_rotation_sigma_deg, 0.0, 90.0);
+    const vo::MotionPriorOptions prior = vo::LoadMotionPriorOptions(section);
     imaging::ImageLimits limits;
     int max_image_pixels = static_cast<int>(limits.max_pixels);
     section.Get("max_image_pixels", max_image_pixels, 1024, 1 << 28);  // up to a 16384^2 camera
@@ -116,24 +67,9 @@ int main(int argc, char** argv) {
           out.delta_orientation[0] = 1.0;
 
           vo::StereoImages images;
-          images.utime = frame.utime;
-          images.frame_id = frame.frame_id;
-          std::string error = DecodePair(frame, limits, images);
-          if (error.empty()) {
-            try {
-              images.rig.left = geometry::CameraModelFromParams(
-                  frame.left_model.type, frame.left_model.width, frame.left_model.height,
-                  frame.left_model.params);
-              images.rig.right = geometry::CameraModelFromParams(
-                  frame.right_model.type, frame.right_model.width, frame.right_model.height,
-                  frame.right_model.params);
-            } catch (const std::exception& e) {
-              error = std::string("camera model: ") + e.what();
-            }
-          }
+          std::string error = bus::ToStereoImages(frame, limits, images);
           if (!error.empty()) error = "frame " + std::to_string(frame.frame_id) + ": " + error;
           const geometry::Pose T_site_curr = bus::PoseFromMsg(frame.pose_at_capture);
-          images.R_site_ref = T_site_curr.linear();
 
           vo::VoResult result;
           if (!error.empty()) {
@@ -145,14 +81,7 @@ int main(int argc, char** argv) {
             Eigen::Matrix<double, 6, 6> prior_cov = Eigen::Matrix<double, 6, 6>::Identity();
             if (previous) {
               prior_T = bus::PoseFromMsg(previous->pose_at_capture).inverse() * T_site_curr;
-              const double t_sigma = std::max(prior.min_translation_sigma_m,
-                                              prior.translation_sigma_fraction * prior_T.translation().norm());
-              const double r_sigma = std::max(prior.min_rotation_sigma_deg * M_PI / 180.0,
-                                              prior.rotation_sigma_fraction *
-                                                  Eigen::AngleAxisd(prior_T.linear()).angle());
-              prior_cov.setZero();
-              prior_cov.diagonal() << t_sigma * t_sigma, t_sigma * t_sigma, t_sigma * t_sigma,
-                  r_sigma * r_sigma, r_sigma * r_sigma, r_sigma * r_sigma;
+              prior_cov = vo::MotionPriorCovariance(prior_T, prior);
             }
             try {
               result = vo.Process(images, prior_T, prior_cov);

@@ -1,6 +1,7 @@
 #include "fault_inject/packets.hpp"
 
 #include "fault_inject/lcm_schema.hpp"
+#include "imaging/hostile_png.hpp"
 
 #include <rover_msgs/capture_request_t.hpp>
 #include <rover_msgs/hazard_query_t.hpp>
@@ -25,7 +26,6 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <zlib.h>
 
 #include <cmath>
 #include <cstring>
@@ -91,65 +91,20 @@ cv::Mat Texture(int w, int h, std::uint32_t seed) {
   return m;
 }
 
-void PutBigEndian32(std::uint8_t* p, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (24 - 8 * i));
-}
-
 // Rewrites a PNG's IHDR size; with `fix_crc` the CRC too, so only a size check rejects it.
 Bytes PatchIhdr(Bytes png, std::uint32_t w, std::uint32_t h, bool fix_crc) {
-  PutBigEndian32(&png[16], w);
-  PutBigEndian32(&png[20], h);
-  if (fix_crc) PutBigEndian32(&png[29], static_cast<std::uint32_t>(crc32(0L, &png[12], 17)));
+  imaging::PatchPngHeader(png, w, h, -1, fix_crc);
   return png;
 }
 
-void AppendChunk(Bytes& png, const char* type, const Bytes& data) {
-  std::uint8_t head[8];
-  PutBigEndian32(head, static_cast<std::uint32_t>(data.size()));
-  std::memcpy(head + 4, type, 4);
-  png.insert(png.end(), head, head + 8);
-  png.insert(png.end(), data.begin(), data.end());
-  uLong crc = crc32(0L, head + 4, 4);
-  crc = crc32(crc, data.data(), static_cast<uInt>(data.size()));
-  std::uint8_t tail[4];
-  PutBigEndian32(tail, static_cast<std::uint32_t>(crc));
-  png.insert(png.end(), tail, tail + 4);
-}
-
-// A PNG bomb: a gray 8-bit header of header_w x header_h over `rows` rows of `cols` zeros,
-// deflated at level 9 (about 1000:1), streamed so the raw image never exists. Built once
-// per shape: deflating hundreds of MB takes a second.
+// A PNG bomb (imaging::PngBomb), built once per shape: deflating hundreds of MB takes a
+// second.
 const Bytes& PngBomb(std::uint32_t header_w, std::uint32_t header_h, int rows, int cols) {
   static std::mutex mutex;
   static std::map<std::tuple<std::uint32_t, std::uint32_t, int, int>, Bytes> cache;
   std::lock_guard<std::mutex> lock(mutex);
   Bytes& png = cache[{header_w, header_h, rows, cols}];
-  if (!png.empty()) return png;
-  png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-  Bytes ihdr(13, 0);
-  PutBigEndian32(&ihdr[0], header_w);
-  PutBigEndian32(&ihdr[4], header_h);
-  ihdr[8] = 8;
-  AppendChunk(png, "IHDR", ihdr);
-  z_stream z{};
-  if (deflateInit(&z, 9) != Z_OK) throw std::runtime_error("zlib deflateInit failed");
-  const Bytes row(static_cast<std::size_t>(cols) + 1, 0);
-  Bytes idat;
-  std::vector<std::uint8_t> buf(1 << 16);
-  for (int r = 0; r <= rows; ++r) {
-    const bool last = r == rows;
-    z.next_in = const_cast<Bytef*>(row.data());
-    z.avail_in = last ? 0 : static_cast<uInt>(row.size());
-    do {
-      z.next_out = buf.data();
-      z.avail_out = static_cast<uInt>(buf.size());
-      deflate(&z, last ? Z_FINISH : Z_NO_FLUSH);
-      idat.insert(idat.end(), buf.data(), buf.data() + (buf.size() - z.avail_out));
-    } while (z.avail_out == 0);
-  }
-  deflateEnd(&z);
-  AppendChunk(png, "IDAT", idat);
-  AppendChunk(png, "IEND", {});
+  if (png.empty()) png = imaging::PngBomb(header_w, header_h, rows, cols);
   return png;
 }
 

@@ -1,11 +1,13 @@
 #include "plot/vo_steps.hpp"
 
 #include "bus/convert.hpp"
+#include "bus/stereo_frame_convert.hpp"
 #include "config/yaml_config.hpp"
 #include "geometry/camera_model.hpp"
 #include "imaging/image_check.hpp"
 #include "plot/gnuplot.hpp"
 #include "plot/plot_series.hpp"
+#include "vo/motion_prior.hpp"
 #include "vo/visual_odometry.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -21,65 +23,7 @@ namespace fs = std::filesystem;
 namespace rover::plot {
 namespace {
 
-// The prior of processes/visual_odometry: the motion between the two frames' on-board
-// poses, with a spread wide enough for slip past 100 % (section `visual_odometry:`).
-struct PriorOptions {
-  double translation_sigma_fraction = 0.6;
-  double min_translation_sigma_m = 0.05;
-  double rotation_sigma_fraction = 0.3;
-  double min_rotation_sigma_deg = 2.0;
-};
-
-PriorOptions LoadPrior(const config::ConfigNode& root) {
-  PriorOptions p;
-  if (!root.Has("visual_odometry")) return p;
-  const auto s = root["visual_odometry"];
-  s.Get("translation_sigma_fraction", p.translation_sigma_fraction, 0.0, 10.0);
-  s.Get("min_translation_sigma_m", p.min_translation_sigma_m, 0.0, 10.0);
-  s.Get("rotation_sigma_fraction", p.rotation_sigma_fraction, 0.0, 10.0);
-  s.Get("min_rotation_sigma_deg", p.min_rotation_sigma_deg, 0.0, 90.0);
-  return p;
-}
-
-imaging::ImageView ViewOf(const rover_msgs::image_t& img) {
-  imaging::ImageView v;
-  v.encoding = img.encoding;
-  v.width = img.width;
-  v.height = img.height;
-  v.declared_size = img.size;
-  v.data = img.data.data();
-  v.data_size = img.data.size();
-  return v;
-}
-
-// The frame as VO takes it; "" or why it cannot be used.
-std::string ToStereoImages(const rover_msgs::stereo_frame_t& f, vo::StereoImages& out) {
-  const imaging::ImageLimits limits;
-  if (auto bad = imaging::DecodeCheckedImage(ViewOf(f.left), f.left_model.width, f.left_model.height,
-                                             limits, out.left);
-      !bad.empty()) {
-    return "frame " + std::to_string(f.frame_id) + ": left image: " + bad;
-  }
-  if (auto bad = imaging::DecodeCheckedImage(ViewOf(f.right), f.right_model.width, f.right_model.height,
-                                             limits, out.right);
-      !bad.empty()) {
-    return "frame " + std::to_string(f.frame_id) + ": right image: " + bad;
-  }
-  try {
-    out.rig.left = geometry::CameraModelFromParams(f.left_model.type, f.left_model.width,
-                                                   f.left_model.height, f.left_model.params);
-    out.rig.right = geometry::CameraModelFromParams(f.right_model.type, f.right_model.width,
-                                                    f.right_model.height, f.right_model.params);
-  } catch (const std::exception& e) {
-    return "frame " + std::to_string(f.frame_id) + ": camera model: " + e.what();
-  }
-  out.utime = f.utime;
-  out.frame_id = f.frame_id;
-  out.R_site_ref = bus::PoseFromMsg(f.pose_at_capture).linear();
-  return "";
-}
-
-vo::VoResult Recompute(const vo::VoOptions& options, const PriorOptions& prior,
+vo::VoResult Recompute(const vo::VoOptions& options, const vo::MotionPriorOptions& prior,
                        const vo::StereoImages& prev, const rover_msgs::stereo_frame_t& prev_frame,
                        const vo::StereoImages& curr, const rover_msgs::stereo_frame_t& curr_frame) {
   vo::VisualOdometry vo(options);
@@ -87,13 +31,7 @@ vo::VoResult Recompute(const vo::VoOptions& options, const PriorOptions& prior,
   vo.Process(prev, Eigen::Isometry3d::Identity(), unit);
   const Eigen::Isometry3d T = bus::PoseFromMsg(prev_frame.pose_at_capture).inverse() *
                               bus::PoseFromMsg(curr_frame.pose_at_capture);
-  const double t_sigma = std::max(prior.min_translation_sigma_m,
-                                  prior.translation_sigma_fraction * T.translation().norm());
-  const double r_sigma = std::max(prior.min_rotation_sigma_deg * M_PI / 180.0,
-                                  prior.rotation_sigma_fraction * Eigen::AngleAxisd(T.linear()).angle());
-  Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Zero();
-  cov.diagonal() << t_sigma * t_sigma, t_sigma * t_sigma, t_sigma * t_sigma, r_sigma * r_sigma,
-      r_sigma * r_sigma, r_sigma * r_sigma;
+  const Eigen::Matrix<double, 6, 6> cov = vo::MotionPriorCovariance(T, prior);
   return vo.Process(curr, T, cov);
 }
 
@@ -134,11 +72,11 @@ VoStepsOutcome WriteVoSteps(const DriveLog& log, const std::string& vo_config, i
     return out;
   }
   vo::VoOptions options;
-  PriorOptions prior;
+  vo::MotionPriorOptions prior;
   try {
     const auto root = config::ConfigNode::LoadFile(vo_config);
     options = vo::LoadVoOptions(root["vo"]);
-    prior = LoadPrior(root);
+    prior = vo::LoadMotionPriorOptions(root["visual_odometry"]);
   } catch (const std::exception& e) {
     out.failed = true;
     out.note = std::string("vo_steps/: no picture: ") + e.what();
@@ -163,8 +101,13 @@ VoStepsOutcome WriteVoSteps(const DriveLog& log, const std::string& vo_config, i
       continue;
     }
     vo::StereoImages prev, curr;
-    std::string bad = ToStereoImages(from->second, prev);
-    if (bad.empty()) bad = ToStereoImages(to->second, curr);
+    const imaging::ImageLimits limits;
+    std::string bad = bus::ToStereoImages(from->second, limits, prev);
+    if (!bad.empty()) bad = "frame " + std::to_string(from->second.frame_id) + ": " + bad;
+    if (bad.empty()) {
+      bad = bus::ToStereoImages(to->second, limits, curr);
+      if (!bad.empty()) bad = "frame " + std::to_string(to->second.frame_id) + ": " + bad;
+    }
     if (!bad.empty()) {
       problems.push_back(name + ": " + bad);
       continue;

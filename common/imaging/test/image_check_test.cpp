@@ -2,6 +2,7 @@
 // (a header claiming 65535x65535, a bomb of zeros, corrupt or truncated headers, sizes
 // that disagree with the camera model or the byte count) are rejected with one line, and
 // the rejection comes from the header, before cv::imdecode runs.
+#include "imaging/hostile_png.hpp"
 #include "imaging/image_check.hpp"
 
 #include <gtest/gtest.h>
@@ -46,65 +47,8 @@ ImageView View(int encoding, std::int64_t w, std::int64_t h, const Bytes& data) 
   return v;
 }
 
-void PutBigEndian32(std::uint8_t* p, std::uint32_t v) {
-  p[0] = static_cast<std::uint8_t>(v >> 24);
-  p[1] = static_cast<std::uint8_t>(v >> 16);
-  p[2] = static_cast<std::uint8_t>(v >> 8);
-  p[3] = static_cast<std::uint8_t>(v);
-}
-
-// Rewrites the IHDR's fields and, unless told not to, its CRC, so that only the check of
-// the values (not the CRC) can reject it.
 void PatchIhdr(Bytes& png, std::uint32_t w, std::uint32_t h, int bit_depth = -1, bool fix_crc = true) {
-  PutBigEndian32(&png[16], w);
-  PutBigEndian32(&png[20], h);
-  if (bit_depth >= 0) png[24] = static_cast<std::uint8_t>(bit_depth);
-  if (fix_crc) PutBigEndian32(&png[29], static_cast<std::uint32_t>(crc32(0L, &png[12], 17)));
-}
-
-void AppendChunk(Bytes& png, const char* type, const Bytes& data) {
-  std::uint8_t head[8];
-  PutBigEndian32(head, static_cast<std::uint32_t>(data.size()));
-  std::memcpy(head + 4, type, 4);
-  png.insert(png.end(), head, head + 8);
-  png.insert(png.end(), data.begin(), data.end());
-  uLong crc = crc32(0L, head + 4, 4);
-  crc = crc32(crc, data.data(), static_cast<uInt>(data.size()));
-  std::uint8_t tail[4];
-  PutBigEndian32(tail, static_cast<std::uint32_t>(crc));
-  png.insert(png.end(), tail, tail + 4);
-}
-
-// A PNG bomb, built as an attacker would: a gray 8-bit header of `header_w` x `header_h`
-// and an IDAT of `rows` x `cols` zero bytes (each row a filter byte and zeros), deflated
-// at level 9 (about 1000:1). Streamed row by row, so the test never holds the raw image.
-Bytes PngBomb(std::uint32_t header_w, std::uint32_t header_h, int rows, int cols) {
-  Bytes png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-  Bytes ihdr(13, 0);
-  PutBigEndian32(&ihdr[0], header_w);
-  PutBigEndian32(&ihdr[4], header_h);
-  ihdr[8] = 8;  // bit depth
-  AppendChunk(png, "IHDR", ihdr);
-  z_stream z{};
-  EXPECT_EQ(deflateInit(&z, 9), Z_OK);
-  const Bytes row(static_cast<std::size_t>(cols) + 1, 0);
-  Bytes idat;
-  std::uint8_t buf[1 << 16];
-  for (int r = 0; r <= rows; ++r) {
-    const bool last = r == rows;
-    z.next_in = const_cast<Bytef*>(row.data());
-    z.avail_in = last ? 0 : static_cast<uInt>(row.size());
-    do {
-      z.next_out = buf;
-      z.avail_out = sizeof(buf);
-      deflate(&z, last ? Z_FINISH : Z_NO_FLUSH);
-      idat.insert(idat.end(), buf, buf + (sizeof(buf) - z.avail_out));
-    } while (z.avail_out == 0);
-  }
-  deflateEnd(&z);
-  AppendChunk(png, "IDAT", idat);
-  AppendChunk(png, "IEND", {});
-  return png;
+  rover::imaging::PatchPngHeader(png, w, h, bit_depth, fix_crc);
 }
 
 TEST(ImageCheck, RealPngsFromOpenCvPassAndDecodeToTheSamePixels) {
@@ -216,7 +160,7 @@ TEST(ImageCheck, PngHeaderClaiming65535SquareIsRejectedFromTheHeader) {
 
 TEST(ImageCheck, PngBombIsRejectedWithoutDecoding) {
   // 8192 x 8192 zeros (64 MiB decoded) deflate to about 65 kB.
-  const Bytes bomb = PngBomb(8192, 8192, 8192, 8192);
+  const Bytes bomb = rover::imaging::PngBomb(8192, 8192, 8192, 8192);
   EXPECT_LT(bomb.size(), 200u * 1024);
   cv::Mat out;
   // The reasons are the header's: DecodeCheckedImage returns them before cv::imdecode.
@@ -232,7 +176,7 @@ TEST(ImageCheck, PngBombIsRejectedWithoutDecoding) {
 TEST(ImageCheck, PngWhoseDataInflatesPastItsHeaderDecodesOnlyItsHeader) {
   // The header says 64x64 (the camera's size) but the IDAT holds 4096 rows of 4096 zeros:
   // libpng reads only the rows the header promises, so nothing larger is ever allocated.
-  const Bytes png = PngBomb(64, 64, 4096, 4096);
+  const Bytes png = rover::imaging::PngBomb(64, 64, 4096, 4096);
   cv::Mat out;
   const std::string reason = DecodeCheckedImage(View(kPng, 64, 64, png), 64, 64, {}, out);
   if (reason.empty()) {
