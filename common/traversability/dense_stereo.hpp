@@ -1,0 +1,51 @@
+// Dense stereo for the traversability map: rectify a NAVCAM pair through its camera
+// models, match it with OpenCV's StereoSGBM and triangulate into the rover frame.
+//
+// Rectification, as JPL's tools do for CAHVOR: both images are resampled into a pair of
+// ideal pinhole (linear, CAHV-equivalent) cameras with parallel optical axes, the same
+// focal length and principal point, the x axes along the baseline, centred on the
+// original camera centres and looking along the mean of the two original axes. Each
+// rectified pixel's ray is projected through the original model (CAHV, CAHVOR, pinhole
+// with distortion, ...) to get the cv::remap maps, cached per rig. A disparity d then gives
+// depth z = f B / d along the common axis, and the point follows from the rectified left
+// camera's ray.
+#pragma once
+
+#include "geometry/camera_model.hpp"
+#include "traversability/traversability_map.hpp"
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+namespace rover::traversability {
+
+struct StereoPoints {
+  std::vector<Eigen::Vector3d> points_rover;  // rover frame (X forward, Y right, Z down)
+  std::vector<double> sigma_height_m;         // stereo-only height (Z) sigma per point
+};
+
+// The rectified pair's geometry at the matching scale.
+struct RectifiedRig {
+  int width = 0, height = 0;
+  double f = 0, cx = 0, cy = 0;   // pixels
+  double baseline_m = 0;
+  Eigen::Matrix3d R_rover_rect = Eigen::Matrix3d::Identity();  // rectified optical frame
+  Eigen::Vector3d left_centre = Eigen::Vector3d::Zero();       // rover frame
+  cv::Mat map_lx, map_ly, map_rx, map_ry;  // CV_32FC1: rectified pixel -> source pixel
+};
+
+// Builds the rectification for `rig` with images scaled by `scale`. Throws
+// std::invalid_argument on a degenerate rig (zero baseline, axes far from parallel).
+RectifiedRig Rectify(const geometry::StereoRig& rig, double scale);
+
+// Rectifies, matches and triangulates one pair. Throws std::invalid_argument with a
+// one-line message when an image is empty, not 8-bit grey, or not the models' size.
+// `stats` (optional) gets the rectify and match times. Caches the rectification of the
+// last rig seen (per thread).
+StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
+                         const geometry::StereoRig& rig, const MapOptions& options,
+                         UpdateStats* stats = nullptr);
+
+}  // namespace rover::traversability

@@ -1,0 +1,312 @@
+#include "traversability/traversability_map.hpp"
+
+#include "traversability/dense_stereo.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace rover::traversability {
+
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+[[noreturn]] void Bad(const std::string& what) {
+  throw std::invalid_argument("traversability map: " + what);
+}
+
+}  // namespace
+
+const char* CellStateName(CellState state) {
+  switch (state) {
+    case CellState::kUnknown: return "unknown";
+    case CellState::kSafe: return "safe";
+    case CellState::kCaution: return "caution";
+    case CellState::kUnsafe: return "unsafe";
+  }
+  return "?";
+}
+
+TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(options) {
+  const MapOptions& o = options_;
+  auto positive = [](double v) { return std::isfinite(v) && v > 0; };
+  if (!positive(o.cell_size_m)) Bad("cell_size_m must be > 0");
+  if (!positive(o.extent_m) || o.extent_m / o.cell_size_m > 2000)
+    Bad("extent_m must be > 0 and at most 2000 cells");
+  if (!std::isfinite(o.footprint_radius_m) || o.footprint_radius_m < 0 ||
+      o.footprint_radius_m > o.extent_m / 2)
+    Bad("footprint_radius_m must be in [0, extent_m / 2]");
+  if (!positive(o.max_step_m) || !positive(o.max_tilt_deg) || o.max_tilt_deg >= 90 ||
+      !positive(o.max_roughness_m))
+    Bad("max_step_m, max_tilt_deg (< 90) and max_roughness_m must be > 0");
+  if (!positive(o.max_range_m)) Bad("max_range_m must be > 0");
+  if (o.min_points < 1) Bad("min_points must be >= 1");
+  if (!(o.caution_fraction > 0 && o.caution_fraction <= 1)) Bad("caution_fraction must be in (0, 1]");
+  if (!(o.min_patch_fraction > 0 && o.min_patch_fraction <= 1))
+    Bad("min_patch_fraction must be in (0, 1]");
+  if (!(o.stereo_scale > 0 && o.stereo_scale <= 1)) Bad("stereo_scale must be in (0, 1]");
+  if (o.num_disparities < 16 || o.num_disparities > 512) Bad("num_disparities must be in [16, 512]");
+  if (o.block_size < 1 || o.block_size > 21 || o.block_size % 2 == 0)
+    Bad("block_size must be odd, in [1, 21]");
+  if (o.uniqueness_ratio < 0 || o.uniqueness_ratio > 100) Bad("uniqueness_ratio must be in [0, 100]");
+  if (o.speckle_window < 0 || o.speckle_range < 0) Bad("speckle_window and speckle_range must be >= 0");
+  if (!positive(o.disparity_sigma_px)) Bad("disparity_sigma_px must be > 0");
+  if (o.subsample < 1 || o.subsample > 16) Bad("subsample must be in [1, 16]");
+  if (!std::isfinite(o.min_range_m) || o.min_range_m < 0 || o.min_range_m >= o.max_range_m)
+    Bad("min_range_m must be in [0, max_range_m)");
+  n_ = std::max(1, static_cast<int>(std::lround(o.extent_m / o.cell_size_m)));
+  acc_.assign(static_cast<std::size_t>(n_) * n_, Accumulator{});
+  Recentre(0, 0);
+}
+
+void TraversabilityMap::Clear() {
+  std::fill(acc_.begin(), acc_.end(), Accumulator{});
+  dirty_ = true;
+}
+
+void TraversabilityMap::Recentre(double x, double y) {
+  if (!std::isfinite(x) || !std::isfinite(y)) Bad("Recentre: expected a finite position");
+  const double cell = options_.cell_size_m;
+  // Snap the origin to whole cells so that re-centring never resamples.
+  const long ox = std::lround(x / cell) - n_ / 2;
+  const long oy = std::lround(y / cell) - n_ / 2;
+  const long old_x = std::lround(origin_x_ / cell);
+  const long old_y = std::lround(origin_y_ / cell);
+  if (!acc_.empty() && ox == old_x && oy == old_y) return;
+  std::vector<Accumulator> moved(acc_.size());
+  const long di = ox - old_x, dj = oy - old_y;
+  for (int i = 0; i < n_; ++i) {
+    const long si = i + di;
+    if (si < 0 || si >= n_) continue;
+    for (int j = 0; j < n_; ++j) {
+      const long sj = j + dj;
+      if (sj < 0 || sj >= n_) continue;
+      moved[static_cast<std::size_t>(i) * n_ + j] = acc_[static_cast<std::size_t>(si) * n_ + sj];
+    }
+  }
+  acc_ = std::move(moved);
+  origin_x_ = ox * cell;
+  origin_y_ = oy * cell;
+  dirty_ = true;
+}
+
+void TraversabilityMap::AddPoints(const std::vector<Eigen::Vector3d>& points_site,
+                                  const std::vector<double>& sigma_m) {
+  if (points_site.size() != sigma_m.size()) {
+    std::ostringstream s;
+    s << "AddPoints: " << points_site.size() << " points but " << sigma_m.size() << " sigmas";
+    Bad(s.str());
+  }
+  const double inv_cell = 1.0 / options_.cell_size_m;
+  for (std::size_t k = 0; k < points_site.size(); ++k) {
+    const Eigen::Vector3d& p = points_site[k];
+    const double s = sigma_m[k];
+    if (!p.allFinite() || !std::isfinite(s) || s <= 0) continue;
+    const long i = static_cast<long>(std::floor((p.x() - origin_x_) * inv_cell));
+    const long j = static_cast<long>(std::floor((p.y() - origin_y_) * inv_cell));
+    if (i < 0 || j < 0 || i >= n_ || j >= n_) continue;
+    Accumulator& a = acc_[static_cast<std::size_t>(i) * n_ + j];
+    const double w = 1.0 / (s * s);
+    const double h = -p.z();
+    a.n += 1;
+    a.sw += static_cast<float>(w);
+    a.sh += static_cast<float>(w * h);
+    a.shh += static_cast<float>(w * h * h);
+  }
+  dirty_ = true;
+}
+
+void TraversabilityMap::AddStereoPair(const cv::Mat& left, const cv::Mat& right,
+                                      const geometry::StereoRig& rig,
+                                      const geometry::Pose& T_site_rover,
+                                      const geometry::Matrix6d& pose_cov) {
+  if (!T_site_rover.matrix().allFinite()) Bad("AddStereoPair: the pose is not finite");
+  if (!pose_cov.allFinite()) Bad("AddStereoPair: the pose covariance is not finite");
+  for (int k = 0; k < 6; ++k)
+    if (pose_cov(k, k) < 0) Bad("AddStereoPair: the pose covariance has a negative variance");
+  stats_ = UpdateStats{};
+  StereoPoints sp = DenseStereo(left, right, rig, options_, &stats_);
+  const auto t0 = std::chrono::steady_clock::now();
+  // Height sigma: stereo (from the triangulation) plus the pose. Position: z variance.
+  // Attitude: a roll or pitch error dtheta moves a point at horizontal distance d by
+  // ~d * dtheta vertically; take the larger of the two tilt variances for every direction.
+  const double var_z = pose_cov(2, 2);
+  const double var_tilt = std::max(pose_cov(3, 3), pose_cov(4, 4));
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<double> sig;
+  pts.reserve(sp.points_rover.size());
+  sig.reserve(sp.points_rover.size());
+  for (std::size_t k = 0; k < sp.points_rover.size(); ++k) {
+    const Eigen::Vector3d& pr = sp.points_rover[k];
+    const double d2 = pr.x() * pr.x() + pr.y() * pr.y();
+    if (d2 > options_.max_range_m * options_.max_range_m) continue;
+    const double s2 = sp.sigma_height_m[k] * sp.sigma_height_m[k] + var_z + d2 * var_tilt;
+    pts.push_back(T_site_rover * pr);
+    sig.push_back(std::sqrt(s2));
+  }
+  AddPoints(pts, sig);
+  stats_.points = static_cast<int>(pts.size());
+  Rate();
+  stats_.seconds_grid = SecondsSince(t0);
+}
+
+Cell TraversabilityMap::At(double x, double y) const {
+  const double inv_cell = 1.0 / options_.cell_size_m;
+  const double fi = std::floor((x - origin_x_) * inv_cell);
+  const double fj = std::floor((y - origin_y_) * inv_cell);
+  if (!(fi >= 0 && fj >= 0 && fi < n_ && fj < n_)) return Cell{};
+  return cells()[static_cast<std::size_t>(fi) * n_ + static_cast<std::size_t>(fj)];
+}
+
+const std::vector<Cell>& TraversabilityMap::cells() const {
+  if (dirty_) Rate();
+  return cells_;
+}
+
+void TraversabilityMap::Rate() const {
+  const MapOptions& o = options_;
+  const std::size_t count = static_cast<std::size_t>(n_) * n_;
+  cells_.assign(count, Cell{});
+  // Cell heights (weighted means) and sigmas.
+  std::vector<float> h(count, 0.0f), s(count, 0.0f);
+  std::vector<char> known(count, 0);
+  for (std::size_t k = 0; k < count; ++k) {
+    const Accumulator& a = acc_[k];
+    if (a.n < o.min_points || a.sw <= 0) continue;
+    known[k] = 1;
+    h[k] = a.sh / a.sw;
+    s[k] = std::sqrt(a.n / a.sw);
+  }
+  // The patch: cell offsets within the footprint radius.
+  const double cell = o.cell_size_m;
+  const int r = static_cast<int>(std::floor(o.footprint_radius_m / cell + 1e-9));
+  std::vector<std::pair<int, int>> patch;
+  for (int di = -r; di <= r; ++di)
+    for (int dj = -r; dj <= r; ++dj)
+      if ((di * di + dj * dj) * cell * cell <= o.footprint_radius_m * o.footprint_radius_m + 1e-12)
+        patch.emplace_back(di, dj);
+  const std::size_t min_known =
+      std::max<std::size_t>(3, static_cast<std::size_t>(std::ceil(o.min_patch_fraction * patch.size())));
+  const double tan_max_tilt = std::tan(o.max_tilt_deg * M_PI / 180.0);
+  const double max_tilt_rad = o.max_tilt_deg * M_PI / 180.0;
+  std::vector<Eigen::Vector3d> xs;  // (dx, dy, h)
+  std::vector<float> ss;
+  std::vector<char> inlier;
+  xs.reserve(patch.size());
+  for (int i = 0; i < n_; ++i) {
+    for (int j = 0; j < n_; ++j) {
+      xs.clear();
+      ss.clear();
+      for (const auto& [di, dj] : patch) {
+        const int a = i + di, b = j + dj;
+        if (a < 0 || b < 0 || a >= n_ || b >= n_) continue;
+        const std::size_t k = static_cast<std::size_t>(a) * n_ + b;
+        if (!known[k]) continue;
+        xs.emplace_back(di * cell, dj * cell, h[k]);
+        ss.push_back(s[k]);
+      }
+      if (xs.size() < min_known) continue;
+      // Plane h = c0 + c1 dx + c2 dy by least squares over the known cells, then once more
+      // without the cells more than half a step limit off it (rocks), so that the plane
+      // follows the ground and a rock shows as a step rather than a tilt.
+      inlier.assign(xs.size(), 1);
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (int pass = 0; pass < 2; ++pass) {
+        Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d Atb = Eigen::Vector3d::Zero();
+        int used = 0;
+        for (std::size_t k = 0; k < xs.size(); ++k) {
+          if (!inlier[k]) continue;
+          const Eigen::Vector3d row(1.0, xs[k].x(), xs[k].y());
+          AtA += row * row.transpose();
+          Atb += row * xs[k].z();
+          ++used;
+        }
+        if (used < 3) break;
+        const Eigen::Vector3d c_new = AtA.ldlt().solve(Atb);
+        if (!c_new.allFinite()) break;
+        c = c_new;
+        if (pass == 0) {
+          std::size_t kept = 0;
+          std::vector<char> next(xs.size(), 0);
+          for (std::size_t k = 0; k < xs.size(); ++k) {
+            const double res = xs[k].z() - (c[0] + c[1] * xs[k].x() + c[2] * xs[k].y());
+            if (std::abs(res) <= 0.5 * o.max_step_m) { next[k] = 1; ++kept; }
+          }
+          if (kept * 2 < xs.size() || kept < 3) break;  // no ground majority: keep the first fit
+          inlier = std::move(next);
+        }
+      }
+      double lo = 0, hi = 0, sum2 = 0, sig2 = 0;
+      for (std::size_t k = 0; k < xs.size(); ++k) {
+        const double res = xs[k].z() - (c[0] + c[1] * xs[k].x() + c[2] * xs[k].y());
+        lo = std::min(lo, res);
+        hi = std::max(hi, res);
+        sum2 += res * res;
+        sig2 += static_cast<double>(ss[k]) * ss[k];
+      }
+      Cell& out = cells_[static_cast<std::size_t>(i) * n_ + j];
+      out.step_m = static_cast<float>(hi - lo);
+      const double grad = std::hypot(c[1], c[2]);
+      out.tilt_rad = static_cast<float>(std::atan(grad));
+      out.roughness_m = static_cast<float>(std::sqrt(sum2 / xs.size()));
+      const std::size_t centre = static_cast<std::size_t>(i) * n_ + j;
+      out.sigma_m = known[centre] ? s[centre] : static_cast<float>(std::sqrt(sig2 / xs.size()));
+      const double worst = std::max({out.step_m / o.max_step_m, grad / tan_max_tilt,
+                                     out.roughness_m / o.max_roughness_m});
+      (void)max_tilt_rad;
+      out.goodness = static_cast<float>(std::clamp(1.0 - worst, 0.0, 1.0));
+      out.state = worst >= 1.0                  ? CellState::kUnsafe
+                  : worst >= o.caution_fraction ? CellState::kCaution
+                                                : CellState::kSafe;
+    }
+  }
+  dirty_ = false;
+}
+
+MapOptions LoadMapOptions(const config::ConfigNode& node) {
+  MapOptions o;
+  if (node.IsNull()) return o;
+  if (!node.IsMap()) node.Fail("expected a map of traversability options");
+  node.CheckKeys({"cell_size_m", "extent_m", "footprint_radius_m", "max_step_m", "max_tilt_deg",
+                  "max_roughness_m", "max_range_m", "min_points", "caution_fraction",
+                  "min_patch_fraction", "stereo_scale", "num_disparities", "block_size",
+                  "uniqueness_ratio", "speckle_window", "speckle_range", "disparity_sigma_px",
+                  "subsample", "min_range_m"});
+  node.Get("cell_size_m", o.cell_size_m, 0.01, 10.0);
+  node.Get("extent_m", o.extent_m, 0.1, 200.0);
+  node.Get("footprint_radius_m", o.footprint_radius_m, 0.0, 10.0);
+  node.Get("max_step_m", o.max_step_m, 1e-3, 10.0);
+  node.Get("max_tilt_deg", o.max_tilt_deg, 0.1, 89.0);
+  node.Get("max_roughness_m", o.max_roughness_m, 1e-4, 10.0);
+  node.Get("max_range_m", o.max_range_m, 0.1, 100.0);
+  node.Get("min_points", o.min_points, 1, 100000);
+  node.Get("caution_fraction", o.caution_fraction, 0.01, 1.0);
+  node.Get("min_patch_fraction", o.min_patch_fraction, 0.01, 1.0);
+  node.Get("stereo_scale", o.stereo_scale, 0.05, 1.0);
+  node.Get("num_disparities", o.num_disparities, 16, 512);
+  node.Get("block_size", o.block_size, 1, 21);
+  if (o.block_size % 2 == 0) node.Fail("block_size: expected an odd number, got " + std::to_string(o.block_size));
+  node.Get("uniqueness_ratio", o.uniqueness_ratio, 0, 100);
+  node.Get("speckle_window", o.speckle_window, 0, 10000);
+  node.Get("speckle_range", o.speckle_range, 0, 100);
+  node.Get("disparity_sigma_px", o.disparity_sigma_px, 1e-3, 10.0);
+  node.Get("subsample", o.subsample, 1, 16);
+  node.Get("min_range_m", o.min_range_m, 0.0, 100.0);
+  if (o.min_range_m >= o.max_range_m)
+    node.Fail("min_range_m: expected less than max_range_m");
+  if (o.footprint_radius_m > o.extent_m / 2)
+    node.Fail("footprint_radius_m: expected at most extent_m / 2");
+  return o;
+}
+
+MapOptions LoadMapOptions(const YAML::Node& node, const std::string& where) {
+  return LoadMapOptions(config::ConfigNode(node, where, ""));
+}
+
+}  // namespace rover::traversability

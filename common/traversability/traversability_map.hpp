@@ -1,0 +1,139 @@
+// A GESTALT-style traversability map (Goldberg, Maimone & Matthies 2002): the rover rates
+// the ground it sees for itself, from its own NAVCAM stereo pairs.
+//
+// Each stereo pair is rectified through the rig's camera models, matched densely (OpenCV
+// StereoSGBM) and triangulated into the rover frame, then into the site frame at the
+// capture pose. The points land in a square grid in the site frame (X north, Y east, Z
+// down; heights below are elevations, up) that follows the rover (Recentre). Every cell
+// keeps the weighted moments of its points, so pairs accumulate. A cell is rated from a
+// plane fitted (Eigen) over the rover-footprint patch around it:
+//   step      the highest cell above the plane minus the lowest cell below it (m),
+//   tilt      the angle between the plane's normal and the vertical (rad),
+//   roughness the RMS residual of the cells about the plane (m),
+// each against its limit. A cell is unknown when it, or its patch, has too little data.
+// sigma_m is the height uncertainty of the cell's points: stereo range error (grows with
+// range squared) and the pose's position and attitude uncertainty (grows with range).
+//
+// Knows nothing of LCM. Determinism: no randomness.
+#pragma once
+
+#include "config/yaml_config.hpp"
+#include "geometry/camera_model.hpp"
+#include "geometry/pose.hpp"
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace rover::traversability {
+
+enum class CellState : std::uint8_t { kUnknown = 0, kSafe = 1, kCaution = 2, kUnsafe = 3 };
+const char* CellStateName(CellState state);  // "unknown", "safe", "caution", "unsafe"
+
+struct Cell {
+  CellState state = CellState::kUnknown;
+  float step_m = 0;       // largest step height in the rover-footprint patch
+  float tilt_rad = 0;     // tilt of the plane fitted over the patch
+  float roughness_m = 0;  // residual of the plane fit
+  float goodness = 0;     // 0 (unsafe) .. 1 (ideal); meaningful when state != kUnknown
+  float sigma_m = 0;      // height uncertainty (grows with range and pose uncertainty)
+};
+
+struct MapOptions {           // read from YAML by LoadMapOptions (key names = field names)
+  double cell_size_m = 0.2;
+  double extent_m = 10.0;     // square grid extent, centred on the rover, moves with it
+  double footprint_radius_m = 0.6;  // patch over which each cell's plane is fitted
+  double max_step_m = 0.2;    // limits: from the rover config (rock step limit)
+  double max_tilt_deg = 20.0;
+  double max_roughness_m = 0.05;
+  double max_range_m = 6.0;   // stereo points beyond are ignored
+  int min_points = 3;         // per cell; fewer -> unknown
+  // A cell is kCaution when step, tilt or roughness exceeds this fraction of its limit.
+  double caution_fraction = 0.6;
+  // A patch needs at least this fraction of its cells known to be rated.
+  double min_patch_fraction = 0.3;
+
+  // Dense stereo. Images are matched at `stereo_scale` of their size (0.5: 1024 -> 512).
+  double stereo_scale = 0.5;
+  int num_disparities = 64;     // at the matching scale; rounded up to a multiple of 16
+  int block_size = 5;           // SGBM block, odd
+  int uniqueness_ratio = 10;
+  int speckle_window = 100;     // 0 disables the speckle filter
+  int speckle_range = 2;
+  double disparity_sigma_px = 0.3;  // matching error at the matching scale
+  int subsample = 2;            // triangulate every n-th pixel of the matching scale
+  double min_range_m = 0.5;     // points nearer than this are ignored
+};
+
+// Per update, for the log and the benchmark.
+struct UpdateStats {
+  int points = 0;            // points added to the grid
+  double seconds_rectify = 0;
+  double seconds_match = 0;
+  double seconds_grid = 0;   // triangulating, binning and rating
+};
+
+class TraversabilityMap {
+ public:
+  // Throws std::invalid_argument with a one-line message on an option out of range.
+  explicit TraversabilityMap(const MapOptions& options);
+
+  // One stereo pair (8-bit grey, same size as the models), the rig's models in the rover
+  // frame, and the rover pose in the site frame at capture with its 6x6 covariance
+  // (x y z roll pitch yaw). Throws std::invalid_argument with a one-line message on bad input.
+  void AddStereoPair(const cv::Mat& left, const cv::Mat& right,
+                     const geometry::StereoRig& rig_in_rover_frame,
+                     const geometry::Pose& T_site_rover, const geometry::Matrix6d& pose_cov);
+  // Points already in the site frame (x north, y east, z down), each with its height
+  // sigma (m): for tests and for other range sensors. Sizes must agree.
+  void AddPoints(const std::vector<Eigen::Vector3d>& points_site,
+                 const std::vector<double>& sigma_m);
+
+  // Centres the grid at (x, y) in the site frame; cells that leave the grid are forgotten.
+  void Recentre(double x, double y);
+  // The cell holding site point (x, y); an unknown cell when outside the grid.
+  Cell At(double x, double y) const;
+  // Grid geometry for publishing/plotting: cell (i, j) covers
+  // x in [origin_x + i*cell, +cell), y in [origin_y + j*cell, +cell); row-major i*cols + j.
+  double origin_x() const { return origin_x_; }
+  double origin_y() const { return origin_y_; }
+  double cell_size() const { return options_.cell_size_m; }
+  int rows() const { return n_; }
+  int cols() const { return n_; }
+  const std::vector<Cell>& cells() const;
+
+  const MapOptions& options() const { return options_; }
+  const UpdateStats& last_update() const { return stats_; }
+  // Forgets every point.
+  void Clear();
+
+  // The moments of one cell's points (weights 1/sigma^2), kept across pairs.
+  struct Accumulator {
+    float n = 0;         // point count
+    float sw = 0;        // sum of weights
+    float sh = 0;        // weighted sum of elevation (m, up)
+    float shh = 0;       // weighted sum of elevation^2
+  };
+
+ private:
+  void Rate() const;  // recomputes cells_ from acc_ when dirty
+
+  MapOptions options_;
+  int n_ = 0;  // cells per side
+  double origin_x_ = 0, origin_y_ = 0;
+  std::vector<Accumulator> acc_;
+  mutable std::vector<Cell> cells_;
+  mutable bool dirty_ = true;
+  UpdateStats stats_;
+};
+
+// Reads every MapOptions field (key names = field names); unknown keys are errors.
+// Throws config::ConfigError "<where>: <key>: expected ..." on a bad value.
+MapOptions LoadMapOptions(const config::ConfigNode& node);
+MapOptions LoadMapOptions(const YAML::Node& node, const std::string& where);
+
+}  // namespace rover::traversability
