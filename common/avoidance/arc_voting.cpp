@@ -1,0 +1,148 @@
+#include "avoidance/arc_voting.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace rover::avoidance {
+
+namespace {
+
+std::string Fixed(double v, int digits = 2) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+double MinDistanceTo(const std::vector<Pose2>& path, double gx, double gy) {
+  double d = 1e300;
+  for (const Pose2& p : path) d = std::min(d, std::hypot(gx - p.x, gy - p.y));
+  return d;
+}
+
+// Judges one candidate: `step` is the motion driven, `look` the motion judged (step first).
+void Judge(const Grid& grid, const Pose2& pose, double gx, double gy, const VoteOptions& o,
+           const std::vector<Pose2>& step, const std::vector<Pose2>& look, Candidate* c) {
+  c->step_sweep = SweepFootprint(grid, o.footprint, step, pose, o.blind_margin_m);
+  const Sweep& s = c->step_sweep;
+  if (s.unsafe > 0) {
+    c->vetoed = true;
+    c->why = "step " + Fixed(s.worst_step_m) + " m at " + Fixed(s.worst_x) + "," + Fixed(s.worst_y);
+  } else if (s.UnknownFraction() > o.max_unknown_fraction) {
+    c->vetoed = true;
+    c->why = Fixed(100.0 * s.UnknownFraction(), 0) + " % of the cells crossed are unknown";
+  }
+  // The look-ahead: how far it runs clear of unsafe cells (a fraction of its length), and
+  // the worst cell met before that.
+  const Sweep la = SweepFootprint(grid, o.footprint, look, pose, o.blind_margin_m);
+  const std::size_t clear_end = la.first_unsafe_pose < 0 ? look.size() : static_cast<std::size_t>(la.first_unsafe_pose);
+  double total = 0.0, clear = 0.0;
+  for (std::size_t i = 1; i < look.size(); ++i) {
+    const double d = std::hypot(look[i].x - look[i - 1].x, look[i].y - look[i - 1].y);
+    total += d;
+    if (i < clear_end) clear += d;
+  }
+  double good = la.clear_min_goodness;
+  if (la.clear_unknown > 0) good = std::min(good, o.unknown_goodness);
+  c->goodness = total > 0.0 ? good * clear / total : (la.unsafe > 0 ? 0.0 : good);
+  const std::vector<Pose2> reached(look.begin(), look.begin() + std::max<std::size_t>(1, clear_end));
+  const double d0 = std::hypot(gx - pose.x, gy - pose.y);
+  const double progress = std::clamp((d0 - MinDistanceTo(reached, gx, gy)) / o.lookahead_m, -1.0, 1.0);
+  c->goal = 0.5 * (1.0 + progress);
+  c->vote = o.goodness_weight * c->goodness + o.goal_weight * c->goal -
+            (c->kind == Candidate::Kind::kTurn ? o.turn_penalty : 0.0);
+}
+
+}  // namespace
+
+void VoteOptions::Validate() const {
+  auto positive = [](double v, const char* name) {
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw std::invalid_argument(std::string("avoidance: ") + name + " " + std::to_string(v) + " must be > 0");
+  };
+  positive(footprint.length_m, "footprint length_m");
+  positive(footprint.width_m, "footprint width_m");
+  positive(max_curvature_per_m, "max_curvature_per_m");
+  positive(lookahead_m, "lookahead_m");
+  positive(step_m, "step_m");
+  positive(max_turn_rad, "max_turn_rad");
+  if (num_arcs < 1 || num_arcs > 101) throw std::invalid_argument("avoidance: num_arcs must be 1 to 101");
+  if (!(blind_margin_m >= 0.0) || !(backup_m >= 0.0) || !(max_unknown_fraction >= 0.0) ||
+      !(max_unknown_fraction <= 1.0) || !(unknown_goodness >= 0.0) || !(unknown_goodness <= 1.0) ||
+      !(goodness_weight >= 0.0) || !(goal_weight >= 0.0) || !(turn_penalty >= 0.0))
+    throw std::invalid_argument("avoidance: margins, fractions and weights must be finite and >= 0 (fractions <= 1)");
+}
+
+const char* ToString(Candidate::Kind kind) {
+  switch (kind) {
+    case Candidate::Kind::kArc: return "arc";
+    case Candidate::Kind::kTurn: return "turn";
+    case Candidate::Kind::kBackup: return "backup";
+  }
+  return "?";
+}
+
+Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const VoteOptions& o) {
+  o.Validate();
+  if (const std::string p = grid.Problem(); !p.empty()) throw std::invalid_argument("avoidance: grid: " + p);
+  Choice choice;
+  const double remaining = std::hypot(gx - pose.x, gy - pose.y);
+  // Arcs.
+  for (int a = 0; a < o.num_arcs; ++a) {
+    Candidate c;
+    c.kind = Candidate::Kind::kArc;
+    c.curvature_per_m = o.num_arcs == 1 ? 0.0 : o.max_curvature_per_m * (2.0 * a / (o.num_arcs - 1) - 1.0);
+    if (std::abs(c.curvature_per_m) < 1e-9) c.curvature_per_m = 0.0;
+    double s = std::min(o.step_m, std::max(remaining, 0.05));
+    if (c.curvature_per_m != 0.0) s = std::min(s, o.max_turn_rad / std::abs(c.curvature_per_m));
+    c.distance_m = s;
+    const auto step = SamplePath(pose, 0.0, s, c.curvature_per_m);
+    const auto look = SamplePath(pose, 0.0, std::max(s, o.lookahead_m), c.curvature_per_m);
+    Judge(grid, pose, gx, gy, o, step, look, &c);
+    choice.candidates.push_back(c);
+  }
+  // Turns in place, then straight ahead in the new heading.
+  const double bearing = std::remainder(std::atan2(gy - pose.y, gx - pose.x) - pose.yaw, 2.0 * M_PI);
+  std::vector<double> turns = {-o.max_turn_rad, o.max_turn_rad};
+  if (std::abs(bearing) > 1e-3 && std::abs(bearing) < o.max_turn_rad) turns.push_back(bearing);
+  for (double t : turns) {
+    Candidate c;
+    c.kind = Candidate::Kind::kTurn;
+    c.turn_rad = t;
+    const auto step = SamplePath(pose, t, 0.0, 0.0);
+    const auto look = SamplePath(pose, t, o.lookahead_m, 0.0);
+    Judge(grid, pose, gx, gy, o, step, look, &c);
+    choice.candidates.push_back(c);
+  }
+  const Candidate* best = nullptr;
+  for (const Candidate& c : choice.candidates) {
+    if (c.vetoed) continue;
+    if (!best || c.vote > best->vote + 1e-9 ||
+        (std::abs(c.vote - best->vote) <= 1e-9 && std::abs(c.curvature_per_m) < std::abs(best->curvature_per_m)))
+      best = &c;
+  }
+  if (!best && o.backup_m > 0.0) {
+    Candidate c;
+    c.kind = Candidate::Kind::kBackup;
+    c.distance_m = -o.backup_m;
+    const auto step = SamplePath(pose, 0.0, -o.backup_m, 0.0);
+    Judge(grid, pose, gx, gy, o, step, step, &c);
+    choice.candidates.push_back(c);
+    if (!choice.candidates.back().vetoed) best = &choice.candidates.back();
+  }
+  if (best) {
+    choice.found = true;
+    choice.best = *best;
+    return choice;
+  }
+  // Nothing allowed: name the worst hazard met by any step.
+  const Candidate* worst = nullptr;
+  for (const Candidate& c : choice.candidates)
+    if (c.step_sweep.unsafe > 0 && (!worst || c.step_sweep.worst_step_m > worst->step_sweep.worst_step_m)) worst = &c;
+  choice.detail = "no safe step among " + std::to_string(choice.candidates.size()) + " candidates" +
+                  (worst ? ": " + worst->why : ": " + choice.candidates.front().why);
+  return choice;
+}
+
+}  // namespace rover::avoidance

@@ -1,0 +1,71 @@
+// GESTALT-style arc voting (MER's Grid-based Estimation of Surface Traversability Applied to
+// Local Terrain; Goldberg, Maimone and Matthies 2002): candidate motions are each judged by
+// the worst cell its swept footprint crosses on the traversability grid (the goodness
+// vote) and by how much closer it brings the rover to the goal (the goal vote); the best
+// weighted sum becomes the next step. Candidates: arcs of about 20 curvatures from hard left
+// to hard right (straight included), judged over a look-ahead longer than the step but
+// driven one step at a time; turns in place left and right (then straight ahead); and,
+// when nothing else is allowed, backing up.
+//
+// A candidate is vetoed when the step itself (not the look-ahead) crosses an unsafe cell,
+// or when more than max_unknown_fraction of the new cells it crosses are unknown (outside
+// the blind ring round the rover, see grid.hpp). A look-ahead that meets an unsafe cell
+// leaves the candidate allowed, but its goodness is the worst cell met before that times
+// the fraction of the look-ahead that is clear, and its goal vote counts only the clear
+// part: arcs that run further through open ground win before the rover is close to an
+// obstacle.
+#pragma once
+
+#include "avoidance/grid.hpp"
+
+#include <string>
+#include <vector>
+
+namespace rover::avoidance {
+
+struct VoteOptions {
+  Footprint footprint;
+  int num_arcs = 21;                   // curvatures evenly from -max to +max (odd: straight included)
+  double max_curvature_per_m = 1.0;    // tightest arc (1 m radius)
+  double lookahead_m = 3.0;            // arcs are judged over this length ...
+  double step_m = 0.6;                 // ... and driven this far (less at the goal)
+  double max_turn_rad = 18.0 * 3.14159265358979323846 / 180.0;  // per step, arcs and turns
+  double blind_margin_m = 0.5;
+  double max_unknown_fraction = 0.2;   // of the step's new cells beyond the blind ring
+  double unknown_goodness = 0.5;       // what an unknown cell in the look-ahead is worth
+  double goodness_weight = 1.0;
+  double goal_weight = 1.0;
+  double turn_penalty = 0.05;          // a turn in place makes no progress by itself
+  double backup_m = 0.3;               // 0: never back up
+
+  // Throws std::invalid_argument naming the field.
+  void Validate() const;
+};
+
+struct Candidate {
+  enum class Kind { kArc, kTurn, kBackup };
+  Kind kind = Kind::kArc;
+  double turn_rad = 0.0;         // kTurn
+  double distance_m = 0.0;       // kArc, kBackup (signed)
+  double curvature_per_m = 0.0;  // kArc (+ right)
+  bool vetoed = false;
+  std::string why;               // veto reason
+  double goodness = 0.0;         // 0..1: worst cell before an unsafe one x clear fraction
+  double goal = 0.0;             // 0..1: (1 + progress over the clear part / look-ahead) / 2
+  double vote = 0.0;
+  Sweep step_sweep;              // the step alone
+};
+
+struct Choice {
+  bool found = false;
+  Candidate best;
+  std::vector<Candidate> candidates;
+  std::string detail;  // when !found: why nothing is allowed (the worst unsafe cell met)
+};
+
+// The next step from `pose` toward (goal_x, goal_y). The caller checks arrival first.
+Choice VoteArcs(const Grid& grid, const Pose2& pose, double goal_x, double goal_y, const VoteOptions& options);
+
+const char* ToString(Candidate::Kind kind);
+
+}  // namespace rover::avoidance

@@ -1,0 +1,158 @@
+#include "avoidance/grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+#include <utility>
+
+namespace rover::avoidance {
+
+std::string Grid::Problem() const {
+  if (!(cell_m > 0.0) || !std::isfinite(cell_m)) return "cell size " + std::to_string(cell_m) + " m must be > 0";
+  if (!std::isfinite(origin_x) || !std::isfinite(origin_y)) return "origin is not finite";
+  if (rows < 0 || cols < 0 || rows > 4096 || cols > 4096)
+    return "size " + std::to_string(rows) + "x" + std::to_string(cols) + " is out of range (expected 0 to 4096)";
+  const std::size_t n = static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols);
+  if (state.size() != n || goodness.size() != n || step_m.size() != n)
+    return "cell arrays hold " + std::to_string(state.size()) + "/" + std::to_string(goodness.size()) + "/" +
+           std::to_string(step_m.size()) + " values (expected " + std::to_string(n) + ")";
+  for (std::size_t k = 0; k < n; ++k) {
+    if (static_cast<int>(state[k]) > 3) return "cell " + std::to_string(k) + " has an unknown state";
+    if (!std::isfinite(goodness[k]) || !std::isfinite(step_m[k])) return "cell " + std::to_string(k) + " is not finite";
+  }
+  return "";
+}
+
+int Grid::IndexAt(double x, double y) const {
+  const double fi = std::floor((x - origin_x) / cell_m), fj = std::floor((y - origin_y) / cell_m);
+  if (!(fi >= 0 && fi < rows && fj >= 0 && fj < cols)) return -1;
+  return static_cast<int>(fi) * cols + static_cast<int>(fj);
+}
+
+Grid Grid::Filled(double origin_x, double origin_y, double cell_m, int rows, int cols, CellClass s, float g) {
+  Grid grid;
+  grid.origin_x = origin_x;
+  grid.origin_y = origin_y;
+  grid.cell_m = cell_m;
+  grid.rows = rows;
+  grid.cols = cols;
+  const std::size_t n = static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols);
+  grid.state.assign(n, s);
+  grid.goodness.assign(n, g);
+  grid.step_m.assign(n, 0.0f);
+  return grid;
+}
+
+void Grid::Paint(double x, double y, double radius_m, CellClass s, float g, float step) {
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < cols; ++j)
+      if (std::hypot(CellCentreX(i) - x, CellCentreY(j) - y) <= radius_m) {
+        const std::size_t k = static_cast<std::size_t>(i) * cols + j;
+        state[k] = s;
+        goodness[k] = g;
+        step_m[k] = step;
+      }
+}
+
+bool Footprint::Contains(const Pose2& p, double x, double y, double grow_m) const {
+  const double c = std::cos(p.yaw), s = std::sin(p.yaw);
+  const double cx = p.x + center_forward_m * c, cy = p.y + center_forward_m * s;
+  const double dx = x - cx, dy = y - cy;
+  const double u = c * dx + s * dy;   // forward
+  const double v = -s * dx + c * dy;  // right
+  return std::abs(u) <= 0.5 * length_m + grow_m && std::abs(v) <= 0.5 * width_m + grow_m;
+}
+
+std::vector<Pose2> SamplePath(const Pose2& start, double turn_rad, double distance_m, double k,
+                              double spacing_m, double angle_rad) {
+  if (!std::isfinite(turn_rad) || !std::isfinite(distance_m) || !std::isfinite(k) || !(spacing_m > 0.0) ||
+      !(angle_rad > 0.0)) {
+    throw std::invalid_argument("SamplePath: non-finite motion or non-positive spacing");
+  }
+  std::vector<Pose2> out{start};
+  Pose2 p = start;
+  const int nt = static_cast<int>(std::ceil(std::abs(turn_rad) / angle_rad));
+  for (int t = 1; t <= nt; ++t) out.push_back({p.x, p.y, start.yaw + turn_rad * t / nt});
+  p.yaw = start.yaw + turn_rad;
+  const int ns = std::max(static_cast<int>(std::ceil(std::abs(distance_m) / spacing_m)),
+                          static_cast<int>(std::ceil(std::abs(distance_m * k) / angle_rad)));
+  for (int t = 1; t <= ns; ++t) {
+    const double s = distance_m * t / ns;
+    double fx, fy;  // rover-frame chord
+    if (std::abs(k * s) < 1e-9) {
+      fx = s;
+      fy = 0.5 * k * s * s;
+    } else {
+      fx = std::sin(k * s) / k;
+      fy = (1.0 - std::cos(k * s)) / k;
+    }
+    const double c = std::cos(p.yaw), sn = std::sin(p.yaw);
+    out.push_back({p.x + c * fx - sn * fy, p.y + sn * fx + c * fy, p.yaw + k * s});
+  }
+  return out;
+}
+
+Sweep SweepFootprint(const Grid& grid, const Footprint& fp, const std::vector<Pose2>& path,
+                     const Pose2& standing, double blind_margin_m) {
+  Sweep sw;
+  const double cell = grid.cell_m;
+  const double grow = 0.5 * cell;
+  const double reach = std::hypot(0.5 * fp.length_m + std::abs(fp.center_forward_m), 0.5 * fp.width_m) + cell;
+  std::vector<char> seen(static_cast<std::size_t>(grid.rows) * grid.cols, 0);
+  std::set<std::pair<long, long>> seen_outside;
+  for (std::size_t n = 0; n < path.size(); ++n) {
+    const Pose2& p = path[n];
+    const long i0 = static_cast<long>(std::floor((p.x - reach - grid.origin_x) / cell));
+    const long i1 = static_cast<long>(std::floor((p.x + reach - grid.origin_x) / cell));
+    const long j0 = static_cast<long>(std::floor((p.y - reach - grid.origin_y) / cell));
+    const long j1 = static_cast<long>(std::floor((p.y + reach - grid.origin_y) / cell));
+    for (long i = i0; i <= i1; ++i) {
+      for (long j = j0; j <= j1; ++j) {
+        const double x = grid.origin_x + (i + 0.5) * cell, y = grid.origin_y + (j + 0.5) * cell;
+        if (!fp.Contains(p, x, y, grow)) continue;
+        const bool inside = i >= 0 && i < grid.rows && j >= 0 && j < grid.cols;
+        if (inside) {
+          char& s = seen[static_cast<std::size_t>(i) * grid.cols + j];
+          if (s) continue;
+          s = 1;
+        } else if (!seen_outside.insert({i, j}).second) {
+          continue;
+        }
+        if (fp.Contains(standing, x, y, grow)) continue;  // the rover stands on it
+        ++sw.cells;
+        const bool blind = fp.Contains(standing, x, y, blind_margin_m);
+        if (!inside) {
+          ++sw.outside;
+          blind ? ++sw.blind_unknown : ++sw.unknown;
+          if (!blind && sw.first_unsafe_pose < 0) ++sw.clear_unknown;
+          continue;
+        }
+        const std::size_t k = static_cast<std::size_t>(i) * grid.cols + j;
+        switch (grid.state[k]) {
+          case CellClass::kUnknown:
+            blind ? ++sw.blind_unknown : ++sw.unknown;
+            if (!blind && sw.first_unsafe_pose < 0) ++sw.clear_unknown;
+            break;
+          case CellClass::kUnsafe:
+            ++sw.unsafe;
+            sw.min_goodness = 0.0;
+            if (sw.first_unsafe_pose < 0) sw.first_unsafe_pose = static_cast<int>(n);
+            if (sw.unsafe == 1 || grid.step_m[k] > sw.worst_step_m) {
+              sw.worst_step_m = grid.step_m[k];
+              sw.worst_x = x;
+              sw.worst_y = y;
+            }
+            break;
+          default:
+            sw.min_goodness = std::min(sw.min_goodness, static_cast<double>(grid.goodness[k]));
+            if (sw.first_unsafe_pose < 0)
+              sw.clear_min_goodness = std::min(sw.clear_min_goodness, static_cast<double>(grid.goodness[k]));
+        }
+      }
+    }
+  }
+  return sw;
+}
+
+}  // namespace rover::avoidance

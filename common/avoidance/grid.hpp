@@ -1,0 +1,83 @@
+// A traversability grid as arc voting and the hazard checks see it, and the cells a rover
+// footprint crosses along a path. Site frame plane: x north, y east, yaw 0 north and +yaw
+// clockwise from above; the rover's forward axis is (cos yaw, sin yaw), its right axis
+// (-sin yaw, cos yaw). Knows nothing of LCM or of how the grid was made (stereo, a test).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace rover::avoidance {
+
+// Mirrors traversability::CellState and traversability_map_t.STATE_*.
+enum class CellClass : std::uint8_t { kUnknown = 0, kSafe = 1, kCaution = 2, kUnsafe = 3 };
+
+struct Pose2 {
+  double x = 0.0, y = 0.0, yaw = 0.0;
+};
+
+// Cell (i, j) covers x in [origin_x + i*cell, +cell), y in [origin_y + j*cell, +cell);
+// row-major, index i*cols + j.
+struct Grid {
+  double origin_x = 0.0, origin_y = 0.0, cell_m = 0.2;
+  int rows = 0, cols = 0;
+  std::vector<CellClass> state;  // rows*cols
+  std::vector<float> goodness;   // 0 (unsafe) .. 1 (ideal)
+  std::vector<float> step_m;     // largest step height in the cell's patch
+
+  // "" when the sizes agree and the numbers are finite; otherwise what is wrong.
+  std::string Problem() const;
+  // Index of the cell holding (x, y), or -1 outside the grid.
+  int IndexAt(double x, double y) const;
+  double CellCentreX(int i) const { return origin_x + (i + 0.5) * cell_m; }
+  double CellCentreY(int j) const { return origin_y + (j + 0.5) * cell_m; }
+  // A grid of `state`/`goodness` everywhere, for tests.
+  static Grid Filled(double origin_x, double origin_y, double cell_m, int rows, int cols,
+                     CellClass state, float goodness);
+  // Sets the cells whose centre lies within radius_m of (x, y).
+  void Paint(double x, double y, double radius_m, CellClass state, float goodness, float step_m);
+};
+
+// The rover body: a length x width rectangle whose centre is center_forward_m ahead of
+// the rover origin (the hazard monitor's `footprint`).
+struct Footprint {
+  double length_m = 1.6;
+  double width_m = 1.4;
+  double center_forward_m = 0.0;
+  // Whether site point (x, y) is inside the rectangle at pose p, grown by `grow_m`.
+  bool Contains(const Pose2& p, double x, double y, double grow_m = 0.0) const;
+};
+
+// Poses along a turn in place by turn_rad and then an arc of signed length distance_m and
+// curvature k (+ right), start and end included, at most spacing_m / angle_rad apart.
+std::vector<Pose2> SamplePath(const Pose2& start, double turn_rad, double distance_m,
+                              double curvature_per_m, double spacing_m = 0.05,
+                              double angle_rad = 0.035);
+
+// The cells a footprint swept along a path crosses (each once, by its centre inside the
+// rectangle grown by half a cell, so a cell partly under the body counts), except those
+// under the footprint at `standing` (where the rover stands: it is on them). Unknown cells within blind_margin_m of the standing footprint
+// are not counted as unknown: NAVCAM on the mast cannot see that ring from where the rover
+// stands (see common/hazards/README.md).
+struct Sweep {
+  int cells = 0;          // counted cells (outside the standing footprint)
+  int unknown = 0;        // unknown among them, outside the blind ring
+  int blind_unknown = 0;  // unknown inside the blind ring
+  int unsafe = 0;
+  int outside = 0;        // swept points outside the grid (counted as unknown)
+  double min_goodness = 1.0;  // over known counted cells (unsafe = 0)
+  // The worst unsafe cell: the highest step (or the first met if steps are equal).
+  double worst_step_m = 0.0;
+  double worst_x = 0.0, worst_y = 0.0;
+  // The first path pose whose footprint meets an unsafe cell (-1: none), and what was met
+  // before it: the lowest goodness of known cells and the unknown cells beyond the ring.
+  int first_unsafe_pose = -1;
+  double clear_min_goodness = 1.0;
+  int clear_unknown = 0;
+  double UnknownFraction() const { return cells > 0 ? static_cast<double>(unknown) / cells : 0.0; }
+};
+Sweep SweepFootprint(const Grid& grid, const Footprint& footprint, const std::vector<Pose2>& path,
+                     const Pose2& standing, double blind_margin_m);
+
+}  // namespace rover::avoidance

@@ -1,0 +1,173 @@
+// Arc voting on synthetic grids with known answers.
+#include "avoidance/arc_voting.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace rover::avoidance {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+// A 12 m x 12 m grid of safe cells (goodness 0.9) centred on the origin, 0.2 m cells.
+Grid Open() { return Grid::Filled(-6.0, -6.0, 0.2, 60, 60, CellClass::kSafe, 0.9f); }
+
+// A wall of unsafe cells across x = wall_x, from y = y0 to y1.
+void Wall(Grid* g, double wall_x, double y0, double y1) {
+  for (double y = y0; y <= y1; y += 0.1) g->Paint(wall_x, y, 0.25, CellClass::kUnsafe, 0.0f, 0.4f);
+}
+
+TEST(Sweep, CountsCellsOutsideTheStandingFootprint) {
+  const Grid g = Open();
+  Footprint fp;  // 1.6 x 1.4
+  const Pose2 p{0, 0, 0};
+  // Standing still: every cell under the body is exempt, nothing is counted.
+  EXPECT_EQ(SweepFootprint(g, fp, {p}, p, 0.5).cells, 0);
+  // 0.6 m ahead: the new strip is 0.6 m (3 cells) plus the half-cell border, 1.4 m wide.
+  const auto path = SamplePath(p, 0.0, 0.6, 0.0);
+  const Sweep s = SweepFootprint(g, fp, path, p, 0.5);
+  EXPECT_GE(s.cells, 3 * 7);
+  EXPECT_LE(s.cells, 5 * 9 + 2 * 5);
+  EXPECT_EQ(s.unsafe, 0);
+  EXPECT_NEAR(s.min_goodness, 0.9, 1e-6);
+}
+
+TEST(Sweep, FindsTheWorstUnsafeCellAndTheBlindRing) {
+  Grid g = Open();
+  g.Paint(1.2, 0.0, 0.15, CellClass::kUnsafe, 0.0f, 0.35f);
+  g.Paint(1.2, 0.4, 0.15, CellClass::kUnsafe, 0.0f, 0.45f);
+  Footprint fp;
+  const Pose2 p{0, 0, 0};
+  const Sweep s = SweepFootprint(g, fp, SamplePath(p, 0.0, 0.6, 0.0), p, 0.5);
+  EXPECT_GT(s.unsafe, 0);
+  EXPECT_NEAR(s.worst_step_m, 0.45, 1e-6);
+  EXPECT_NEAR(s.worst_x, 1.2, 0.15);
+  EXPECT_NEAR(s.worst_y, 0.4, 0.15);
+  EXPECT_GE(s.first_unsafe_pose, 0);
+  // Unknown ahead: inside the 0.5 m blind ring it is not counted as unknown, beyond it is.
+  Grid u = Grid::Filled(-6.0, -6.0, 0.2, 60, 60, CellClass::kUnknown, 0.0f);
+  const Sweep near = SweepFootprint(u, fp, SamplePath(p, 0.0, 0.3, 0.0), p, 0.5);
+  EXPECT_EQ(near.unknown, 0);
+  EXPECT_GT(near.blind_unknown, 0);
+  const Sweep far = SweepFootprint(u, fp, SamplePath(p, 0.0, 0.9, 0.0), p, 0.5);
+  EXPECT_GT(far.unknown, 0);
+  // Off the grid counts as unknown.
+  const Pose2 edge{5.5, 0, 0};
+  EXPECT_GT(SweepFootprint(Open(), fp, SamplePath(edge, 0.0, 0.6, 0.0), edge, 0.0).outside, 0);
+}
+
+TEST(ArcVoting, OpenGroundDrivesStraightAtTheGoal) {
+  const Choice c = VoteArcs(Open(), {0, 0, 0}, 4.0, 0.0, VoteOptions{});
+  ASSERT_TRUE(c.found);
+  EXPECT_EQ(c.best.kind, Candidate::Kind::kArc);
+  EXPECT_DOUBLE_EQ(c.best.curvature_per_m, 0.0);
+  EXPECT_DOUBLE_EQ(c.best.distance_m, 0.6);
+  EXPECT_GE(c.candidates.size(), 23u);  // 21 arcs and 2 turns
+}
+
+TEST(ArcVoting, GoalToTheRightCurvesOrTurnsRight) {
+  const Choice c = VoteArcs(Open(), {0, 0, 0}, 2.0, 2.0, VoteOptions{});
+  ASSERT_TRUE(c.found);
+  const double heading_change = c.best.kind == Candidate::Kind::kTurn ? c.best.turn_rad
+                                                                      : c.best.curvature_per_m * c.best.distance_m;
+  EXPECT_GT(heading_change, 5 * kDeg);
+}
+
+TEST(ArcVoting, ShortStepAtTheGoal) {
+  const Choice c = VoteArcs(Open(), {0, 0, 0}, 0.4, 0.0, VoteOptions{});
+  ASSERT_TRUE(c.found);
+  EXPECT_NEAR(c.best.distance_m, 0.4, 1e-9);
+}
+
+TEST(ArcVoting, RockInTheStepVetoesStraightAndNamesIt) {
+  Grid g = Open();
+  g.Paint(1.3, 0.0, 0.3, CellClass::kUnsafe, 0.0f, 0.38f);
+  const Choice c = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, VoteOptions{});
+  const Candidate* straight = nullptr;
+  for (const auto& k : c.candidates)
+    if (k.kind == Candidate::Kind::kArc && k.curvature_per_m == 0.0) straight = &k;
+  ASSERT_NE(straight, nullptr);
+  EXPECT_TRUE(straight->vetoed);
+  EXPECT_NE(straight->why.find("step 0.38 m at 1."), std::string::npos) << straight->why;
+  ASSERT_TRUE(c.found);
+  EXPECT_FALSE(c.best.kind == Candidate::Kind::kArc && c.best.curvature_per_m == 0.0);
+  EXPECT_EQ(c.best.step_sweep.unsafe, 0);
+}
+
+TEST(ArcVoting, WallWithAGapToTheLeftSteersLeft) {
+  Grid g = Open();
+  // Wall across x = 2.5 from y = -0.2 to +5; the gap is west of it (the look-ahead of an
+  // arc toward it runs clear, straight ahead and right do not).
+  Wall(&g, 2.5, -0.2, 5.0);
+  const Choice c = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, VoteOptions{});
+  ASSERT_TRUE(c.found);
+  const double heading_change = c.best.kind == Candidate::Kind::kTurn ? c.best.turn_rad
+                                                                      : c.best.curvature_per_m * c.best.distance_m;
+  EXPECT_LT(heading_change, -2 * kDeg) << ToString(c.best.kind) << " k " << c.best.curvature_per_m;
+  // The mirror image steers right.
+  Grid m = Open();
+  Wall(&m, 2.5, -5.0, 0.2);
+  const Choice r = VoteArcs(m, {0, 0, 0}, 5.0, 0.0, VoteOptions{});
+  ASSERT_TRUE(r.found);
+  const double right = r.best.kind == Candidate::Kind::kTurn ? r.best.turn_rad : r.best.curvature_per_m * r.best.distance_m;
+  EXPECT_GT(right, 2 * kDeg);
+}
+
+TEST(ArcVoting, BoxedInBacksUpOrStopsWithTheHazard) {
+  Grid g = Open();
+  // Unsafe all round except the rover's own footprint and a lane behind it.
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j) {
+      const double x = g.CellCentreX(i), y = g.CellCentreY(j);
+      const bool under = std::abs(x) < 0.9 && std::abs(y) < 0.8;
+      const bool lane = x < 0 && x > -2.0 && std::abs(y) < 0.8;
+      if (!under && !lane) {
+        const std::size_t k = static_cast<std::size_t>(i) * g.cols + j;
+        g.state[k] = CellClass::kUnsafe;
+        g.goodness[k] = 0.0f;
+        g.step_m[k] = 0.5f;
+      }
+    }
+  const Choice c = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, VoteOptions{});
+  ASSERT_TRUE(c.found);
+  EXPECT_EQ(c.best.kind, Candidate::Kind::kBackup);
+  EXPECT_LT(c.best.distance_m, 0.0);
+  VoteOptions no_backup;
+  no_backup.backup_m = 0.0;
+  const Choice s = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, no_backup);
+  EXPECT_FALSE(s.found);
+  EXPECT_NE(s.detail.find("step 0.50 m at"), std::string::npos) << s.detail;
+}
+
+TEST(ArcVoting, UnknownAheadAllowsOnlyTheBlindRing) {
+  // Unknown everywhere: a full step straight ahead is vetoed; whatever is allowed stays
+  // inside the ring the mast cameras cannot see from where the rover stands.
+  const Grid u = Grid::Filled(-6.0, -6.0, 0.2, 60, 60, CellClass::kUnknown, 0.0f);
+  const Choice c = VoteArcs(u, {0, 0, 0}, 5.0, 0.0, VoteOptions{});
+  int vetoed = 0;
+  for (const auto& k : c.candidates) {
+    if (k.kind == Candidate::Kind::kArc && k.curvature_per_m == 0.0) {
+      EXPECT_TRUE(k.vetoed);
+      EXPECT_NE(k.why.find("% of the cells crossed are unknown"), std::string::npos) << k.why;
+    }
+    if (k.vetoed) {
+      ++vetoed;
+    } else {
+      EXPECT_LE(k.step_sweep.UnknownFraction(), 0.2);
+    }
+  }
+  EXPECT_GT(vetoed, 10);
+}
+
+TEST(ArcVoting, BadInputThrowsOneLine) {
+  Grid g = Open();
+  g.goodness.pop_back();
+  EXPECT_THROW(VoteArcs(g, {0, 0, 0}, 1, 0, VoteOptions{}), std::invalid_argument);
+  VoteOptions o;
+  o.lookahead_m = -1;
+  EXPECT_THROW(VoteArcs(Open(), {0, 0, 0}, 1, 0, o), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rover::avoidance
