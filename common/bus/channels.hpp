@@ -18,6 +18,7 @@ inline constexpr const char* kKeepOutZones = "KEEPOUT_ZONES";        // keepout_
 inline constexpr const char* kHazardStatus = "HAZARD_STATUS";        // hazard_status_t
 inline constexpr const char* kHazardQuery = "HAZARD_QUERY";          // hazard_query_t
 inline constexpr const char* kHazardReply = "HAZARD_REPLY";          // hazard_reply_t
+inline constexpr const char* kTraversabilityMap = "TRAVERSABILITY_MAP";  // traversability_map_t (hazard_monitor)
 inline constexpr const char* kSequenceSubmit = "SEQUENCE_SUBMIT";    // sequence_submit_t
 inline constexpr const char* kSequenceControl = "SEQUENCE_CONTROL";  // sequence_control_t
 inline constexpr const char* kSequenceStatus = "SEQUENCE_STATUS";    // sequence_status_t

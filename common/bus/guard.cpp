@@ -54,6 +54,8 @@ std::size_t MaxPayloadBytes(const std::string& channel) {
   if (channel == channels::kSequenceSubmit || channel == channels::kSequenceStatus ||
       channel == channels::kKeepOutZones || channel == channels::kHazardQuery)
     return 2 * kMiB;
+  // A traversability map: 9 bytes a cell, up to 400x400 cells (common/traversability).
+  if (channel == channels::kTraversabilityMap) return 2 * kMiB;
   return 64 * kKiB;
 }
 

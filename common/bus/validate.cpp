@@ -81,6 +81,24 @@ std::string Problem(const rover_msgs::hazard_query_t& m) {
 
 std::string Problem(const rover_msgs::hazard_reply_t& m) { return Enum("verdict", m.verdict, 0, 2); }
 
+std::string Problem(const rover_msgs::traversability_map_t& m) {
+  if (m.rows < 0 || m.cols < 0 || m.rows > 400 || m.cols > 400)
+    return "size " + std::to_string(m.rows) + "x" + std::to_string(m.cols) + " is out of range (expected 0 to 400 a side)";
+  if (m.num_cells != m.rows * m.cols)
+    return "num_cells " + std::to_string(m.num_cells) + " is not rows x cols (" + std::to_string(m.rows * m.cols) + ")";
+  if (!(m.cell_m > 0) || !std::isfinite(m.cell_m)) return "cell_m is not a finite value > 0";
+  for (int k = 0; k < m.num_cells; ++k) {
+    if (auto p = Enum("state", m.state[k], 0, 3); !p.empty()) return "cell " + std::to_string(k) + ": " + p;
+    if (!std::isfinite(m.goodness[k]) || !std::isfinite(m.step_m[k])) return "cell " + std::to_string(k) + " is not finite";
+  }
+  return First({Finite("origin_x", m.origin_x), Finite("origin_y", m.origin_y),
+                Finite("footprint_length_m", m.footprint_length_m), Finite("footprint_width_m", m.footprint_width_m),
+                Finite("footprint_center_forward_m", m.footprint_center_forward_m),
+                Finite("blind_margin_m", m.blind_margin_m), NonNegative("blind_margin_m", m.blind_margin_m),
+                Finite("max_unknown_fraction", m.max_unknown_fraction),
+                NonNegative("max_unknown_fraction", m.max_unknown_fraction)});
+}
+
 std::string Problem(const rover_msgs::hazard_status_t& m) {
   return First({Enum("state", m.state, 0, 2), Finite("roll_rad", m.roll_rad), Finite("pitch_rad", m.pitch_rad)});
 }

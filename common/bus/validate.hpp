@@ -9,6 +9,7 @@
 #include <rover_msgs/capture_request_t.hpp>
 #include <rover_msgs/hazard_query_t.hpp>
 #include <rover_msgs/hazard_reply_t.hpp>
+#include <rover_msgs/traversability_map_t.hpp>
 #include <rover_msgs/hazard_status_t.hpp>
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/imu_t.hpp>
@@ -34,6 +35,7 @@ namespace rover::bus {
 std::string Problem(const rover_msgs::capture_request_t& m);
 std::string Problem(const rover_msgs::hazard_query_t& m);
 std::string Problem(const rover_msgs::hazard_reply_t& m);
+std::string Problem(const rover_msgs::traversability_map_t& m);
 std::string Problem(const rover_msgs::hazard_status_t& m);
 std::string Problem(const rover_msgs::heartbeat_t& m);
 std::string Problem(const rover_msgs::imu_t& m);

@@ -143,8 +143,9 @@ HazardOptions LoadHazardOptions(const config::ConfigNode& section,
                                 const std::vector<std::string>& extra_keys) {
   HazardOptions o;
   if (section.IsNull()) return o;
+  // `map` (the traversability map) is read by LoadMapCheckOptions (map_check.hpp).
   std::vector<std::string> keys = {"footprint",      "sigma_multiplier", "roll_limit_deg",
-                                   "pitch_limit_deg", "max_pose_age_s",  "zones"};
+                                   "pitch_limit_deg", "max_pose_age_s",  "zones", "map"};
   keys.insert(keys.end(), extra_keys.begin(), extra_keys.end());
   section.CheckKeys(keys);
   const config::ConfigNode fp = section["footprint"];

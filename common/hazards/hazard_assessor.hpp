@@ -51,6 +51,7 @@ struct HazardOptions {
 // Reads the `hazards:` section:
 //   footprint: {length_m, width_m, margin_m, center_forward_m}
 //   sigma_multiplier, roll_limit_deg, pitch_limit_deg, max_pose_age_s
+//   map: the traversability map (read by LoadMapCheckOptions, map_check.hpp)
 //   zones: list of {name, circle: {center: [x, y], radius_m}} or
 //                  {name, polygon: [[x, y], [x, y], [x, y], ...]}
 // `extra_keys` are keys the process shell reads itself. Throws config::ConfigError naming

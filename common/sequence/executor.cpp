@@ -81,6 +81,12 @@ void ValidateExecutorOptions(const ExecutorOptions& o) {
   positive(o.blind_slip_pct, "blind_slip_pct");
   positive(o.lost_min_step_m, "lost_min_step_m");
   positive(o.margin_sigma_multiplier, "margin_sigma_multiplier");
+  positive(o.map_wait_s, "map_wait_s");
+  positive(o.avoid_lookahead_m, "avoid_lookahead_m");
+  positive(o.avoid_max_curvature_per_m, "avoid_max_curvature_per_m");
+  if (o.avoid_num_arcs < 1 || !(o.avoid_backup_m >= 0.0)) {
+    throw std::invalid_argument("executor options avoid_num_arcs must be >= 1 and avoid_backup_m >= 0");
+  }
   if (o.recent_steps < 1) {
     throw std::invalid_argument("executor option recent_steps must be >= 1, got " +
                                 std::to_string(o.recent_steps));
@@ -112,7 +118,8 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "predictive_hazard_check", "reactive_hazard_abort", "path_sample_spacing_m",
                "path_sample_turn_deg", "slip_min_step_m", "status_period_s", "blind_slope_deg",
                "blind_slip_pct", "recent_steps", "lost_min_step_m", "step_sigma_growth_pct",
-               "margin_sigma_multiplier", "state_file"});
+               "margin_sigma_multiplier", "state_file", "map_wait_s", "avoid_lookahead_m",
+               "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m"});
   auto names = [&](const char* key, std::vector<std::string>& out) {
     if (!n.Has(key)) return;
     const config::ConfigNode list = n[key];
@@ -158,6 +165,11 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("step_sigma_growth_pct", o.step_sigma_growth_pct, 0.0, 100.0);
   n.Get("margin_sigma_multiplier", o.margin_sigma_multiplier, 0.1, 10.0);
   n.Get("state_file", o.state_file);
+  n.Get("map_wait_s", o.map_wait_s, 1e-3, kInf);
+  n.Get("avoid_lookahead_m", o.avoid_lookahead_m, 0.1, 20.0);
+  n.Get("avoid_max_curvature_per_m", o.avoid_max_curvature_per_m, 0.01, 10.0);
+  n.Get("avoid_num_arcs", o.avoid_num_arcs, 1, 101);
+  n.Get("avoid_backup_m", o.avoid_backup_m, 0.0, 0.75);
   return o;
 }
 
@@ -487,6 +499,10 @@ void SequenceExecutor::Poll() {
         const HazardReply r = *hazard_reply_;
         if (r.verdict == HazardVerdict::kSafe) {
           CommandStep();
+        } else if (r.verdict == HazardVerdict::kUnsafe && r.zone_name == abort_reason::kHazardMap) {
+          AbortWith(abort_reason::kHazardMap, r.detail + "; not commanded");
+        } else if (r.verdict == HazardVerdict::kUnknown && ImagesForMap(r)) {
+          return;
         } else if (r.verdict == HazardVerdict::kUnsafe) {
           AbortWith(abort_reason::kKeepout, "the next step would enter zone '" + r.zone_name +
                                                 "' (clearance " + Fixed(r.min_clearance_m) +
@@ -707,7 +723,14 @@ bool SequenceExecutor::NextStepOfCommand() {
     return true;
   }
   PlannedStep step;
-  if (is_goto_) {
+  if (is_goto_ && goto_.avoid) {
+    switch (AvoidStep(&step)) {
+      case AvoidOutcome::kStep: break;
+      case AvoidOutcome::kWait: return true;
+      case AvoidOutcome::kDone: return false;
+      case AvoidOutcome::kAborted: return true;
+    }
+  } else if (is_goto_) {
     const GotoDecision d = SteerToward(CurrentPlanePose(), goto_.target, goto_.tolerance_m, StepLength(),
                                        MaxTurn(), options_.goto_turn_threshold_deg * kDeg);
     if (d.arrived) {
@@ -805,6 +828,8 @@ void SequenceExecutor::CommandStep() {
     expected_s = std::abs(step_.distance_m) / options_.speed_mps;
   }
   outputs_.push_back(cmd);
+  pair_here_id_ = -1;  // the rover moves: no pair is where it will stand
+  map_images_taken_ = false;
   mobility_deadline_utime_ =
       now_utime_ + static_cast<int64_t>((expected_s * options_.mobility_timeout_factor +
                                          options_.mobility_timeout_margin_s) * 1e6);
@@ -832,6 +857,7 @@ void SequenceExecutor::AfterMotion() {
 
 void SequenceExecutor::StartCapture(const std::string& purpose) {
   frame_id_ = NewId();
+  pair_here_id_ = frame_id_;
   if (purpose != "science") last_vo_frame_ = frame_id_;
   vo_update_.reset();
   outputs_.push_back(CaptureRequest{now_utime_, frame_id_, purpose});

@@ -8,6 +8,7 @@
 // the waits for hazard replies, VO updates, poses and mobility.
 #pragma once
 
+#include "avoidance/grid.hpp"
 #include "config/yaml_config.hpp"
 #include "geometry/pose.hpp"
 #include "sequence/parser.hpp"
@@ -86,6 +87,16 @@ struct ExecutorOptions {
   double margin_sigma_multiplier = 3.0;
   double status_period_s = 1.0;         // wall: periodic status
 
+  // `goto ... avoid on` (avoid_step.cpp, common/avoidance): arc voting on the hazard
+  // monitor's traversability map. Before each step a pair is taken where the rover stands
+  // (VO's pair when VO is on) and the executor waits up to map_wait_s (wall) for a map
+  // that includes it, then votes on what it has.
+  double map_wait_s = 5.0;
+  double avoid_lookahead_m = 3.0;        // arcs are judged over this length, driven one step
+  double avoid_max_curvature_per_m = 1.0;
+  int avoid_num_arcs = 21;
+  double avoid_backup_m = 0.3;           // 0: never back up
+
   // The running sequence's submission id, name and state, kept on disk (run_state.hpp)
   // so that a restarted executor reports it interrupted. Empty = off. Used by the shell.
   std::string state_file;
@@ -142,6 +153,15 @@ struct HazardStatus {  // hazard_status_t
 };
 
 enum class HazardVerdict : int8_t { kSafe = 0, kUnsafe = 1, kUnknown = 2 };
+struct TraversabilityMap {  // traversability_map_t (hazard_monitor)
+  int64_t utime = 0;
+  int64_t last_frame_id = -1;  // the newest stereo frame in the map
+  avoidance::Grid grid;
+  avoidance::Footprint footprint;  // what the monitor sweeps along a step
+  double blind_margin_m = 0.5;
+  double max_unknown_fraction = 0.2;
+};
+
 struct HazardReply {  // hazard_reply_t
   int64_t utime = 0;
   int64_t query_id = -1;
@@ -239,6 +259,7 @@ inline constexpr const char* kGotoTimeLimit = "goto_time_limit";
 inline constexpr const char* kGotoDistanceLimit = "goto_distance_limit";
 inline constexpr const char* kProcessLost = "process_lost";
 inline constexpr const char* kHazardUnknown = "hazard_unknown";
+inline constexpr const char* kHazardMap = "hazard_map";  // an unsafe cell on the traversability map
 inline constexpr const char* kOperator = "operator";
 inline constexpr const char* kMobilityFault = "mobility_fault";
 inline constexpr const char* kTimeout = "timeout";
@@ -278,6 +299,7 @@ class SequenceExecutor {
   void OnVoUpdate(const VoUpdate& update);
   void OnHazardStatus(const HazardStatus& status);
   void OnHazardReply(const HazardReply& reply);
+  void OnTraversabilityMap(const TraversabilityMap& map);
   void OnStereoFrame(int64_t frame_id);  // optional: confirms a science capture
   void OnHeartbeat(const std::string& process, double wall_s);
 
@@ -335,6 +357,13 @@ class SequenceExecutor {
   std::string SlipLikely(const PoseEstimate& before, const PoseEstimate& after) const;
   bool OnVoLost(const std::string& step_text, const std::string& why);
   void ResplitRemainingSteps();
+  // `goto ... avoid on` (avoid_step.cpp). kStep fills `step`; kWait waits for a pair or the
+  // map (a phase may have been entered); kDone: inside the disc; kAborted: nothing is allowed.
+  enum class AvoidOutcome { kStep, kWait, kDone, kAborted };
+  AvoidOutcome AvoidStep(PlannedStep* step);
+  // An UNKNOWN map verdict on a step with no pair taken where the rover stands: take one
+  // (MER: image, map, then drive) and ask again. False: the reply stands.
+  bool ImagesForMap(const HazardReply& reply);
   void RecordStep(const StepMotion& motion, bool measured, const PoseEstimate& after);
   double StepLength() const { return step_m_ * lost_step_scale_; }
   double MaxTurn() const { return max_turn_rad_ * lost_step_scale_; }
@@ -440,6 +469,11 @@ class SequenceExecutor {
   PoseEstimate pose_before_;
   int wait_site_index_ = 0;
   bool science_frame_seen_ = false;
+
+  // The traversability map and the pairs taken where the rover stands (avoid_step.cpp).
+  std::optional<TraversabilityMap> map_;
+  int64_t pair_here_id_ = -1;    // the last pair taken since the rover last moved, or -1
+  bool map_images_taken_ = false;  // ImagesForMap took its pair for the step in hand
 };
 
 }  // namespace rover::sequence

@@ -446,11 +446,15 @@ class SequenceParser {
     p.Expect("within", "after the goto target");
     g.tolerance_m = p.Quantity(Dimension::kLength, "goto tolerance", &col);
     p.Range(g.tolerance_m, col, "goto tolerance", 0.0, limits_.max_goto_tolerance_m, true, 1.0, "m");
-    bool seen_time = false, seen_distance = false;
+    bool seen_time = false, seen_distance = false, seen_avoid = false;
     while (!p.AtEnd()) {
       const int opt_col = p.Peek().col;
-      const std::size_t which = p.Choice({"time", "distance"}, "goto option");
-      if (which == 0) {
+      const std::size_t which = p.Choice({"time", "distance", "avoid"}, "goto option");
+      if (which == 2) {
+        if (seen_avoid) p.Fail(opt_col, "'avoid' given twice", "each goto option at most once");
+        seen_avoid = true;
+        g.avoid = p.Choice({"on", "off"}, "goto avoid mode") == 0;
+      } else if (which == 0) {
         if (seen_time) p.Fail(opt_col, "'time' given twice", "each goto option at most once");
         seen_time = true;
         g.time_limit_s = p.Quantity(Dimension::kTime, "goto time limit", &col);

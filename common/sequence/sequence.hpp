@@ -41,6 +41,10 @@ struct Goto {
   double tolerance_m = 0.0;                          // radius of the goal disc
   std::optional<double> time_limit_s;                // rover time from the goto's start
   std::optional<double> distance_limit_m;            // distance driven by this goto
+  // `avoid on`: each step is chosen by arc voting on the hazard monitor's traversability
+  // map (common/avoidance) instead of steering straight at the target. Either way every
+  // step passes the monitor's predictive check, map included.
+  bool avoid = false;
 };
 
 // ---- settings (apply from their line to the rest of the sequence) ----

@@ -1,5 +1,8 @@
 // hazard_monitor: keep-out zones against the footprint plus the position uncertainty, and
-// tilt limits (common/hazards). Publishes HAZARD_STATUS at a steady rate and answers the
+// tilt limits (common/hazards); with `hazards.map.enabled`, the traversability map
+// (common/traversability) built from every STEREO_FRAME at the pose the frame carries, which
+// every step's swept footprint must also pass (common/hazards/map_check.hpp), published on
+// TRAVERSABILITY_MAP after each pair and once a second. Publishes HAZARD_STATUS at a steady rate and answers the
 // executor's HAZARD_QUERY ("would this step's swept footprint enter a zone?"), with the
 // query's own margin (the drift VO measured, the uncertainty the step adds) on top of the
 // footprint grown by k sigma.
@@ -9,7 +12,11 @@
 #include "bus/convert.hpp"
 #include "bus/keepout_convert.hpp"
 #include "bus/process.hpp"
+#include "bus/stereo_frame_convert.hpp"
+#include "bus/traversability_convert.hpp"
 #include "hazards/hazard_assessor.hpp"
+#include "hazards/map_check.hpp"
+#include "traversability/traversability_map.hpp"
 
 #include <rover_msgs/hazard_query_t.hpp>
 #include <rover_msgs/hazard_reply_t.hpp>
@@ -20,6 +27,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <memory>
 #include <stdexcept>
 
 using namespace rover;
@@ -27,14 +35,54 @@ using namespace rover;
 int main(int argc, char** argv) {
   return bus::RunMain("hazard_monitor", [&]() -> int {
     bus::Process proc("hazard_monitor",
-                      "Keep-out and tilt checks. Reads POSE, IMU, KEEPOUT_ZONES, HAZARD_QUERY;\n"
-                      "writes HAZARD_STATUS (steady rate) and HAZARD_REPLY.\n"
+                      "Keep-out, tilt and traversability-map checks. Reads POSE, IMU, KEEPOUT_ZONES,\n"
+                      "HAZARD_QUERY, STEREO_FRAME (with hazards.map.enabled); writes HAZARD_STATUS\n"
+                      "(steady rate), HAZARD_REPLY and TRAVERSABILITY_MAP.\n"
                       "Config: the `hazards:` section (see configs/rover.yaml).",
                       argc, argv);
     const auto section = proc.config()["hazards"];
     const auto options = hazards::LoadHazardOptions(section, {"publish_hz"});
     double publish_hz = 10.0;
     section.Get("publish_hz", publish_hz, 1.0, 100.0);
+    // The traversability map: off unless hazards.map.enabled (a deployment without cameras
+    // would otherwise never see the ground, and every step would be undecidable).
+    hazards::MapCheckOptions map_check;
+    map_check.enabled = false;
+    std::unique_ptr<traversability::TraversabilityMap> map;
+    if (section.Has("map")) {
+      const auto map_section = section["map"];
+      map_check = hazards::LoadMapCheckOptions(map_section, {"traversability"});
+      if (map_check.enabled) {
+        map = std::make_unique<traversability::TraversabilityMap>(
+            traversability::LoadMapOptions(map_section["traversability"]));
+      }
+    }
+    bus::MapRules rules;
+    rules.footprint = hazards::GridFootprint(options.footprint);
+    rules.blind_margin_m = map_check.blind_margin_m;
+    rules.max_unknown_fraction = map_check.max_unknown_fraction;
+    avoidance::Grid grid;  // the map as the checks see it, rebuilt after each pair
+    int64_t last_frame_id = -1;
+    auto rebuild_grid = [&] {
+      grid.origin_x = map->origin_x();
+      grid.origin_y = map->origin_y();
+      grid.cell_m = map->cell_size();
+      grid.rows = map->rows();
+      grid.cols = map->cols();
+      const auto& cells = map->cells();
+      grid.state.resize(cells.size());
+      grid.goodness.resize(cells.size());
+      grid.step_m.resize(cells.size());
+      for (std::size_t k = 0; k < cells.size(); ++k) {
+        grid.state[k] = static_cast<avoidance::CellClass>(cells[k].state);
+        grid.goodness[k] = cells[k].goodness;
+        grid.step_m[k] = cells[k].step_m;
+      }
+    };
+    auto publish_map = [&] {
+      if (map) proc.bus().Publish(channels::kTraversabilityMap, bus::MapToMsg(grid, rules, proc.now(), last_frame_id));
+    };
+    if (map) rebuild_grid();
     hazards::HazardAssessor assessor(options);
     const std::vector<hazards::KeepOutZone> config_zones = options.zones;
     std::string zone_error;  // non-empty: the last zone set was invalid -> UNKNOWN
@@ -74,6 +122,34 @@ int main(int argc, char** argv) {
           }
           assessor.SetZones(zones);
         });
+    if (map) {
+      proc.bus().Subscribe<rover_msgs::stereo_frame_t>(
+          channels::kStereoFrame, [&](const rover_msgs::stereo_frame_t& frame) {
+            proc.ObserveTime(frame.utime);
+            vo::StereoImages images;
+            if (const std::string bad = bus::ToStereoImages(frame, imaging::ImageLimits{}, images); !bad.empty()) {
+              std::cerr << "hazard_monitor: STEREO_FRAME " << frame.frame_id << ": " << bad << " (not mapped)\n";
+              return;
+            }
+            if (images.left.depth() != CV_8U) {
+              images.left.convertTo(images.left, CV_8U, 1.0 / 256.0);
+              images.right.convertTo(images.right, CV_8U, 1.0 / 256.0);
+            }
+            const auto T = bus::PoseFromMsg(frame.pose_at_capture);
+            try {
+              map->Recentre(T.translation().x(), T.translation().y());
+              map->AddStereoPair(images.left, images.right, images.rig, T,
+                                 bus::CovarianceFromArray(frame.pose_at_capture.covariance));
+            } catch (const std::invalid_argument& e) {
+              std::cerr << "hazard_monitor: STEREO_FRAME " << frame.frame_id << ": " << e.what() << " (not mapped)\n";
+              return;
+            }
+            last_frame_id = std::max(last_frame_id, frame.frame_id);
+            rebuild_grid();
+            publish_map();
+          },
+          4);
+    }
     proc.bus().Subscribe<rover_msgs::hazard_query_t>(
         channels::kHazardQuery, [&](const rover_msgs::hazard_query_t& q) {
           rover_msgs::hazard_reply_t r{};
@@ -93,7 +169,16 @@ int main(int argc, char** argv) {
             r.detail = "invalid keep-out zones: " + zone_error;
           } else {
             // A non-finite or negative margin makes the check UNKNOWN (CheckSweptPath).
-            const auto check = assessor.CheckStep(path, proc.now(), q.margin_m);
+            auto check = assessor.CheckStep(path, proc.now(), q.margin_m);
+            if (map && check.verdict != hazards::Verdict::kUnsafe) {
+              // The map judges the same swept path; an unsafe cell outranks an undecided
+              // keep-out check, and either stops the step.
+              const auto on_map = hazards::CheckPathOnMap(grid, rules.footprint, path, map_check);
+              if (on_map.verdict == hazards::Verdict::kUnsafe ||
+                  (on_map.verdict == hazards::Verdict::kUnknown && check.verdict == hazards::Verdict::kSafe)) {
+                check = on_map;
+              }
+            }
             r.verdict = static_cast<std::int8_t>(check.verdict);
             r.zone_name = check.zone_name;
             r.min_clearance_m = std::isfinite(check.min_clearance_m) ? check.min_clearance_m : 1e9;
@@ -102,6 +187,7 @@ int main(int argc, char** argv) {
           proc.bus().Publish(channels::kHazardReply, r);
         });
 
+    int ticks = 0;
     proc.Run(
         [&] {
           const auto st = assessor.Assess(proc.now());
@@ -122,6 +208,7 @@ int main(int argc, char** argv) {
             m.detail = "invalid keep-out zones: " + zone_error;
           }
           proc.bus().Publish(channels::kHazardStatus, m);
+          if (++ticks % static_cast<int>(std::max(1.0, publish_hz)) == 0) publish_map();
         },
         static_cast<int>(1000.0 / publish_hz));
     return 0;

@@ -8,6 +8,7 @@
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
+#include "bus/traversability_convert.hpp"
 #include "sequence/executor.hpp"
 #include "sequence/run_state.hpp"
 
@@ -167,7 +168,7 @@ int main(int argc, char** argv) {
                       "mobility, asks for captures and VO, checks hazards, progress and limits,\n"
                       "and aborts when one fails.\n"
                       "Reads SEQUENCE_SUBMIT, SEQUENCE_CONTROL, POSE, MOBILITY_STATUS, VO_UPDATE,\n"
-                      "HAZARD_STATUS, HAZARD_REPLY, STEREO_FRAME, HEARTBEAT; writes MOBILITY_COMMAND,\n"
+                      "HAZARD_STATUS, HAZARD_REPLY, STEREO_FRAME, TRAVERSABILITY_MAP, HEARTBEAT; writes MOBILITY_COMMAND,\n"
                       "CAPTURE_REQUEST, HAZARD_QUERY, KEEPOUT_ZONES, NEW_SITE, SEQUENCE_STATUS, STEP_REPORT.\n"
                       "Config: the `executor:` section (see configs/rover.yaml).",
                       argc, argv,
@@ -324,6 +325,19 @@ int main(int argc, char** argv) {
           executor.OnHazardReply(r);
           flush();
         });
+    proc.bus().Subscribe<rover_msgs::traversability_map_t>(
+        channels::kTraversabilityMap, [&](const rover_msgs::traversability_map_t& m) {
+          seq::TraversabilityMap t;  // for `goto ... avoid on`
+          bus::MapRules rules;
+          t.utime = m.utime;
+          t.last_frame_id = m.last_frame_id;
+          t.grid = bus::GridFromMsg(m, &rules);
+          t.footprint = rules.footprint;
+          t.blind_margin_m = rules.blind_margin_m;
+          t.max_unknown_fraction = rules.max_unknown_fraction;
+          executor.OnTraversabilityMap(t);
+          flush();
+        }, 4);
     proc.bus().Subscribe<rover_msgs::stereo_frame_t>(
         channels::kStereoFrame, [&](const rover_msgs::stereo_frame_t& m) {
           executor.OnStereoFrame(m.frame_id);

@@ -170,6 +170,10 @@ DriveLog ReadDriveLog(const std::string& log_path) {
       rover_msgs::sequence_status_t m{};
       if (!Decode(*ev, m, out)) continue;
       if (IsFinal(m) && !out.final_status) out.final_status = m;
+      if (m.command_index >= 0 && m.command_text.rfind("goto", 0) == 0 &&
+          m.command_text.find("avoid on") != std::string::npos) {
+        out.avoid_commands.insert(m.command_index);
+      }
     }
   }
   std::sort(out.truth.begin(), out.truth.end(),

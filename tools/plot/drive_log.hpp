@@ -61,6 +61,8 @@ struct DriveLog {
   // The slip limit in force for each command (command index -> percent), from the
   // submitted sequence's `slip limit` lines; absent where slip checks are off.
   std::map<int, double> slip_limit_pct;
+  // Commands that drive with hazard avoidance (`goto ... avoid on`), by index.
+  std::set<int> avoid_commands;
   // Messages that did not decode (by channel): the pictures leave them out.
   std::map<std::string, int> undecodable;
 };

@@ -18,6 +18,7 @@ constexpr const char* kVoColour = "#0072b2";
 constexpr const char* kWheelColour = "#777777";
 constexpr const char* kTruthColour = "#000000";
 constexpr const char* kZoneColour = "#e69f00";
+constexpr const char* kAvoidColour = "#cc79a7";
 
 // Site x is north and y east: a map puts east across and north up.
 std::string MapRow(const Eigen::Vector3d& p) { return Num(p.x()) + " " + Num(p.y()); }
@@ -188,6 +189,23 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
                     (vo ? "on-board estimate: VO-corrected steps"
                         : "on-board estimate: blind steps (wheel odometry + IMU)") +
                     "'");
+  }
+  // Steps chosen by hazard avoidance (arc voting, `goto ... avoid on`): their own colour
+  // over the estimate, from each step's start to its end.
+  {
+    std::ofstream f(dir + "traverse_avoid.dat");
+    int n = 0;
+    for (const auto& s : log.steps) {
+      if (!log.avoid_commands.count(s.command_index)) continue;
+      f << Num(s.pose_before[0]) << " " << Num(s.pose_before[1]) << "\n"
+        << Num(s.pose_after[0]) << " " << Num(s.pose_after[1]) << "\n\n";
+      b.Add(s.pose_after[0], s.pose_after[1]);
+      ++n;
+    }
+    if (n > 0) {
+      plots.push_back(std::string("'traverse_avoid.dat' using 2:1 with lines lw 4 lc rgb '") + kAvoidColour +
+                      "' title 'hazard-avoidance steps (arc voting)'");
+    }
   }
   if (!log.estimate.empty()) {
     std::ofstream(dir + "traverse_start.dat") << MapRow(log.estimate.front().p) << "\n";

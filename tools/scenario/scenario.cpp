@@ -354,6 +354,7 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
         s.distance_travelled_m > 1e-6 ? 100.0 * s.position_error_m / s.distance_travelled_m : 0.0;
   }
 
+  for (const auto& t : truth) s.truth_track.push_back({t.position[0], t.position[1], t.rpy[2]});
   // Truth clearance: the closest the true footprint came to any zone in force.
   std::size_t set_index = 0;
   for (const auto& t : truth) {
@@ -371,6 +372,29 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
   s.log = logcheck::CheckLog(log_path);
   ExplainMissing(s, !zone_sets.empty());
   return s;
+}
+
+void AddRockClearance(const std::vector<RockDisc>& rocks, const hazards::Footprint& footprint,
+                      ScenarioSummary* s) {
+  s->rocks_over_limit = static_cast<int>(rocks.size());
+  s->min_rock_clearance_m.reset();
+  s->min_rock_clearance_rock.clear();
+  s->missing.erase("min_rock_clearance_m");
+  if (rocks.empty() || s->truth_track.empty()) {
+    s->missing["min_rock_clearance_m"] = rocks.empty() ? "no rock in the world is taller than the step limit"
+                                                       : "no SIM_TRUTH in the log";
+    return;
+  }
+  for (const RockDisc& r : rocks) {
+    const auto zone = hazards::KeepOutZone::Circle(r.name.empty() ? "rock" : r.name, r.x, r.y, r.radius_m);
+    for (const auto& t : s->truth_track) {
+      const double c = hazards::Clearance(zone, footprint, t);
+      if (!s->min_rock_clearance_m || c < *s->min_rock_clearance_m) {
+        s->min_rock_clearance_m = c;
+        s->min_rock_clearance_rock = r.name;
+      }
+    }
+  }
 }
 
 namespace {
@@ -542,6 +566,17 @@ std::string SummaryJson(const ScenarioSummary& s) {
     j.Null();
   }
   WriteReason(j, s, "min_keepout_clearance_m");
+  j.Key("min_rock_clearance_m");
+  if (s.min_rock_clearance_m) {
+    j.Value(*s.min_rock_clearance_m);
+  } else {
+    j.Null();
+  }
+  WriteReason(j, s, "min_rock_clearance_m");
+  j.Key("min_rock_clearance_rock");
+  j.Value(s.min_rock_clearance_rock);
+  j.Key("rocks_over_limit");
+  j.Value(s.rocks_over_limit);
   j.Field("vo_updates", s.vo_updates);
   j.Field("vo_updates_accepted", s.vo_updates_accepted);
   j.Field("false_updates", s.false_updates);
@@ -592,6 +627,10 @@ std::string SummaryText(const ScenarioSummary& s) {
      << s.position_error_pct << " % of distance)\n" << std::setprecision(3);
   if (s.min_keepout_clearance_m) {
     os << "  closest approach to a keep-out zone (truth): " << *s.min_keepout_clearance_m << " m\n";
+  }
+  if (s.min_rock_clearance_m) {
+    os << "  closest approach to a rock over the step limit (truth): " << *s.min_rock_clearance_m << " m ("
+       << s.min_rock_clearance_rock << ", " << s.rocks_over_limit << " such rocks)\n";
   }
   if (s.vo_updates > 0) {
     os << "  VO updates: " << s.vo_updates << ", accepted " << s.vo_updates_accepted

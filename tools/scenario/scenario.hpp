@@ -85,6 +85,14 @@ struct ScenarioSummary {
   double position_error_m = 0;
   double position_error_pct = 0;
   std::optional<double> min_keepout_clearance_m;  // empty when no zone was defined
+  // The closest the true footprint came to a rock taller than the rover's step limit
+  // (mobility.rock_collision.max_height_m), and that rock; empty when the world has none
+  // (AddRockClearance; the runner knows the world, the log does not).
+  std::optional<double> min_rock_clearance_m;
+  std::string min_rock_clearance_rock;
+  int rocks_over_limit = 0;
+  // The true plane pose at every SIM_TRUTH (not written to summary.json).
+  std::vector<hazards::Pose2> truth_track;
   // Every VO update in the log against truth: accepted = status OK; a false update is an
   // accepted one whose NEES exceeds kChi2Dof6ThreeSigma.
   int vo_updates = 0;
@@ -103,6 +111,15 @@ struct ScenarioSummary {
 // Reads an LCM log of a run and computes the summary. The footprint is used for the
 // truth clearance to keep-out zones.
 ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footprint& footprint);
+
+// A rock as the truth clearance sees it: a disc in the site plane.
+struct RockDisc {
+  std::string name;
+  double x = 0, y = 0, radius_m = 0;
+};
+// Fills min_rock_clearance_m from the truth track against `rocks` (those over the limit).
+void AddRockClearance(const std::vector<RockDisc>& rocks, const hazards::Footprint& footprint,
+                      ScenarioSummary* summary);
 
 std::string SummaryJson(const ScenarioSummary& summary);
 // Whether the summary meets every `expect:` entry; `why` lists the ones it misses.

@@ -316,6 +316,16 @@ int main(int argc, char** argv) {
     recorder.StopAll();
 
     auto summary = rover::tools::SummarizeLog(log_path, footprint);
+    {
+      // Truth clearance to the rocks the rover cannot drive over (the simulator faults on them).
+      double max_height_m = 0.3;
+      rover_config["mobility"]["rock_collision"].Get("max_height_m", max_height_m);
+      std::vector<rover::tools::RockDisc> rocks;
+      for (const auto& r : world.rocks()) {
+        if (r.height_m > max_height_m) rocks.push_back({r.name, r.position.x(), r.position.y(), 0.5 * r.diameter_m});
+      }
+      rover::tools::AddRockClearance(rocks, footprint, &summary);
+    }
     summary.scenario = spec.name;
     summary.wall_time_s = wall();
     summary.process_events = partial.process_events;

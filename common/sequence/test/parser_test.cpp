@@ -329,3 +329,19 @@ TEST(SequenceParser, VoLostPolicies) {
   ExpectError("vo lost shorten 3\n", 1, 17, "unknown vo lost option '3'");
   ExpectError("vo maybe\n", 1, 4, "unknown VO mode 'maybe'");
 }
+
+TEST(SequenceParser, GotoAvoid) {
+  ParseResult r = ParseSequence("goto 6 m 1 m within 0.3 m avoid on\n"
+                                "goto 6 m 1 m within 0.3 m time 60 s avoid off distance 9 m\n"
+                                "goto 6 m 1 m within 0.3 m\n",
+                                "t.seq");
+  ASSERT_TRUE(r.ok()) << r.errors.front().ToString();
+  EXPECT_TRUE(std::get<Goto>(r.sequence.commands[0].action).avoid);
+  const Goto& off = std::get<Goto>(r.sequence.commands[1].action);
+  EXPECT_FALSE(off.avoid);
+  EXPECT_DOUBLE_EQ(*off.distance_limit_m, 9.0);
+  EXPECT_FALSE(std::get<Goto>(r.sequence.commands[2].action).avoid);
+  ExpectError("goto 1 m 2 m within 1 m avoid\n", 1, 30, "missing goto avoid mode");
+  ExpectError("goto 1 m 2 m within 1 m avoid maybe\n", 1, 31, "unknown goto avoid mode");
+  ExpectError("goto 1 m 2 m within 1 m avoid on avoid off\n", 1, 34, "'avoid' given twice");
+}

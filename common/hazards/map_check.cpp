@@ -1,0 +1,82 @@
+#include "hazards/map_check.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace rover::hazards {
+
+namespace {
+std::string Fixed(double v, int digits = 2) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+}  // namespace
+
+void MapCheckOptions::Validate() const {
+  if (!(blind_margin_m >= 0.0) || !std::isfinite(blind_margin_m) || blind_margin_m > 5.0)
+    throw std::invalid_argument("hazards.map.blind_margin_m " + std::to_string(blind_margin_m) +
+                                " must be 0 to 5 m");
+  if (!(max_unknown_fraction >= 0.0) || !(max_unknown_fraction <= 1.0))
+    throw std::invalid_argument("hazards.map.max_unknown_fraction " + std::to_string(max_unknown_fraction) +
+                                " must be 0 to 1");
+}
+
+MapCheckOptions LoadMapCheckOptions(const config::ConfigNode& node, const std::vector<std::string>& extra_keys) {
+  MapCheckOptions o;
+  std::vector<std::string> keys = {"enabled", "blind_margin_m", "max_unknown_fraction"};
+  keys.insert(keys.end(), extra_keys.begin(), extra_keys.end());
+  node.CheckKeys(keys);
+  node.Get("enabled", o.enabled);
+  node.Get("blind_margin_m", o.blind_margin_m, 0.0, 5.0);
+  node.Get("max_unknown_fraction", o.max_unknown_fraction, 0.0, 1.0);
+  return o;
+}
+
+avoidance::Footprint GridFootprint(const Footprint& f) {
+  avoidance::Footprint g;
+  g.length_m = f.length_m + 2.0 * f.margin_m;
+  g.width_m = f.width_m + 2.0 * f.margin_m;
+  g.center_forward_m = f.center_forward_m;
+  return g;
+}
+
+SweptCheck CheckPathOnMap(const avoidance::Grid& grid, const avoidance::Footprint& footprint,
+                          const std::vector<Pose2>& path, const MapCheckOptions& options) {
+  SweptCheck c;
+  c.zone_name = kMapZoneName;
+  bool finite = !path.empty();
+  std::vector<avoidance::Pose2> p;
+  for (const Pose2& q : path) {
+    finite = finite && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.yaw);
+    p.push_back({q.x, q.y, q.yaw});
+  }
+  if (!finite) {
+    c.verdict = Verdict::kUnknown;
+    c.detail = std::string(kMapZoneName) + ": empty or non-finite path";
+    return c;
+  }
+  if (const std::string bad = grid.Problem(); !bad.empty()) {
+    c.verdict = Verdict::kUnknown;
+    c.detail = std::string(kMapZoneName) + ": the map is invalid: " + bad;
+    return c;
+  }
+  const avoidance::Sweep s = avoidance::SweepFootprint(grid, footprint, p, p.front(), options.blind_margin_m);
+  if (s.unsafe > 0) {
+    c.verdict = Verdict::kUnsafe;
+    c.min_clearance_m = 0.0;
+    c.worst_pose_index = s.first_unsafe_pose < 0 ? 0 : static_cast<std::size_t>(s.first_unsafe_pose);
+    c.worst_pose = path[c.worst_pose_index];
+    c.detail = std::string(kMapZoneName) + ": step " + Fixed(s.worst_step_m) + " m at " + Fixed(s.worst_x) + "," +
+               Fixed(s.worst_y);
+  } else if (s.UnknownFraction() > options.max_unknown_fraction) {
+    c.verdict = Verdict::kUnknown;
+    c.detail = std::string(kMapZoneName) + ": unknown: " + Fixed(100.0 * s.UnknownFraction(), 0) +
+               " % of the cells the step crosses are unknown (limit " +
+               Fixed(100.0 * options.max_unknown_fraction, 0) + " %)";
+  }
+  return c;
+}
+
+}  // namespace rover::hazards

@@ -1,0 +1,51 @@
+// The predictive check of a step against the traversability map (common/traversability,
+// built by the hazard monitor from the NAVCAM pairs): the rover footprint swept along the
+// step's path must cross no unsafe cell (a step, tilt or roughness over its limit: a rock
+// taller than the step limit is unsafe), and not too many unknown cells.
+//
+// Unknown cells: a check that cannot decide stops the rover, so a step whose new cells
+// are more than max_unknown_fraction unknown is UNKNOWN, and the executor aborts with
+// hazard_unknown -- after taking a pair where the rover stands, once (MER: image, map,
+// then drive). Two kinds of cell are not counted: those under the rover where it stands
+// (it is on them), and unknown cells in a ring of blind_margin_m round it, which the mast
+// cameras cannot see from where the rover stands (the NAVCAM pair sees the ground from
+// 1.3 m ahead of the rover origin; the body ends 0.8 m ahead). That ring was in view from
+// the previous stops, and a rock taller than the step limit is wider than the ring
+// (MER-like rocks are 2.5 times as wide as they are tall), so part of it is seen.
+#pragma once
+
+#include "avoidance/grid.hpp"
+#include "config/yaml_config.hpp"
+#include "hazards/keepout.hpp"
+
+#include <string>
+#include <vector>
+
+namespace rover::hazards {
+
+struct MapCheckOptions {
+  bool enabled = true;
+  double blind_margin_m = 0.5;
+  double max_unknown_fraction = 0.2;
+  // Throws std::invalid_argument naming the field.
+  void Validate() const;
+};
+
+// Reads `enabled`, `blind_margin_m`, `max_unknown_fraction` of a `hazards.map` section;
+// `extra_keys` are keys the caller reads itself (the grid's own options).
+MapCheckOptions LoadMapCheckOptions(const config::ConfigNode& node, const std::vector<std::string>& extra_keys = {});
+
+// The zone name a map verdict carries in hazard_reply_t, and the prefix of its detail.
+inline constexpr const char* kMapZoneName = "hazard_map";
+
+// Judges the swept path (first pose: where the rover stands) on `grid`: UNSAFE with detail
+// "hazard_map: step 0.35 m at 4.10,0.30" (the worst unsafe cell), UNKNOWN with detail
+// "hazard_map: unknown: 45 % of the cells the step crosses are unknown (limit 20 %)",
+// otherwise SAFE. An empty or non-finite path, or a bad grid, is UNKNOWN.
+SweptCheck CheckPathOnMap(const avoidance::Grid& grid, const avoidance::Footprint& footprint,
+                          const std::vector<Pose2>& path, const MapCheckOptions& options);
+
+// The rover footprint rectangle of the keep-out checks, as arc voting sees it.
+avoidance::Footprint GridFootprint(const Footprint& footprint);
+
+}  // namespace rover::hazards

@@ -1,0 +1,105 @@
+// `goto ... avoid on`: the executor's use of arc voting (common/avoidance) on the hazard
+// monitor's traversability map, and the pair taken before a step the map cannot judge.
+// MER drove this way under autonomous navigation: image, map, then drive one step.
+#include "avoidance/arc_voting.hpp"
+#include "sequence/executor.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace rover::sequence {
+
+namespace {
+std::string Fixed2(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.2f", v);
+  return buf;
+}
+}  // namespace
+
+void SequenceExecutor::OnTraversabilityMap(const TraversabilityMap& map) {
+  map_ = map;
+  Advance();
+}
+
+SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
+  const PlanePose p = CurrentPlanePose();
+  const double remaining = (goto_.target - Eigen::Vector2d(p.x, p.y)).norm();
+  if (remaining <= goto_.tolerance_m) {
+    detail_ = "goto reached the disc: " + Fixed2(remaining) + " m from the target";
+    return AvoidOutcome::kDone;
+  }
+  // 1. A pair where the rover stands. With VO on, NextStepOfCommand takes VO's baseline
+  //    pair before the first step and VO takes one after every step; otherwise a science pair.
+  if (pair_here_id_ < 0) {
+    if (VoActive() && !vo_frame_valid_) {
+      step->kind = PlannedStep::Kind::kTurn;  // placeholder: the baseline pair comes first
+      step->turn_rad = 0.0;
+      return AvoidOutcome::kStep;
+    }
+    StartCapture("science");
+    science_frame_seen_ = false;
+    EnterPhase(Phase::kImages);
+    return AvoidOutcome::kWait;
+  }
+  // 2. The map that includes it (the monitor maps a pair before it answers anything after).
+  if (!map_ || map_->last_frame_id < pair_here_id_) {
+    if (PhaseAge() <= options_.map_wait_s) return AvoidOutcome::kWait;
+    if (!map_) {
+      AbortWith(abort_reason::kHazardUnknown, "no traversability map within " + Fixed2(options_.map_wait_s) +
+                                                  " s (is hazards.map.enabled on, and a camera running?)");
+      return AvoidOutcome::kAborted;
+    }
+    step_note_ += "map without frame " + std::to_string(pair_here_id_) + "; ";
+  }
+  // 3. Vote.
+  avoidance::VoteOptions o;
+  o.footprint = map_->footprint;
+  o.num_arcs = options_.avoid_num_arcs;
+  o.max_curvature_per_m = options_.avoid_max_curvature_per_m;
+  o.lookahead_m = options_.avoid_lookahead_m;
+  o.step_m = StepLength();
+  o.max_turn_rad = MaxTurn();
+  o.blind_margin_m = map_->blind_margin_m;
+  o.max_unknown_fraction = map_->max_unknown_fraction;
+  o.backup_m = std::min(options_.avoid_backup_m, StepLength());
+  avoidance::Choice choice;
+  try {
+    choice = avoidance::VoteArcs(map_->grid, {p.x, p.y, p.yaw}, goto_.target.x(), goto_.target.y(), o);
+  } catch (const std::invalid_argument& e) {
+    AbortWith(abort_reason::kHazardUnknown, std::string("arc voting cannot decide: ") + e.what());
+    return AvoidOutcome::kAborted;
+  }
+  if (!choice.found) {
+    AbortWith(abort_reason::kHazardMap, "hazard_map: " + choice.detail);
+    return AvoidOutcome::kAborted;
+  }
+  const avoidance::Candidate& b = choice.best;
+  if (b.kind == avoidance::Candidate::Kind::kTurn) {
+    step->kind = PlannedStep::Kind::kTurn;
+    step->turn_rad = b.turn_rad;
+  } else {
+    step->kind = PlannedStep::Kind::kArc;
+    step->distance_m = b.distance_m;
+    step->curvature_per_m = b.curvature_per_m;
+  }
+  detail_ = std::string("avoid: ") + avoidance::ToString(b.kind) +
+            (b.kind == avoidance::Candidate::Kind::kTurn ? " " + Fixed2(b.turn_rad * 180.0 / M_PI) + " deg"
+                                                         : " " + Fixed2(b.distance_m) + " m k " + Fixed2(b.curvature_per_m)) +
+            " (goodness " + Fixed2(b.goodness) + ", goal " + Fixed2(b.goal) + ", " + Fixed2(remaining) + " m to go)";
+  return AvoidOutcome::kStep;
+}
+
+bool SequenceExecutor::ImagesForMap(const HazardReply& reply) {
+  if (reply.zone_name != abort_reason::kHazardMap || map_images_taken_) return false;
+  map_images_taken_ = true;
+  if (!is_goto_ && next_step_ > 0) --next_step_;  // the same step is asked again
+  step_note_ += "map could not judge the step (" + reply.detail + "): a pair first; ";
+  StartCapture("science");
+  science_frame_seen_ = false;
+  EnterPhase(Phase::kImages);
+  return true;
+}
+
+}  // namespace rover::sequence
