@@ -1,0 +1,206 @@
+// `goto ... avoid on` and the map verdicts in the executor, against a small fake world: a
+// kinematic rover, a camera whose every pair yields the test's traversability grid (the
+// hazard monitor's map), and a monitor that judges each query's swept footprint on that
+// grid (common/avoidance). No bus.
+#include "avoidance/grid.hpp"
+#include "sequence/executor.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <deque>
+#include <functional>
+
+using namespace rover::sequence;
+using rover::avoidance::CellClass;
+using rover::avoidance::Grid;
+
+namespace {
+
+class MapWorld {
+ public:
+  Grid grid = Grid::Filled(-4, -6, 0.2, 60, 60, CellClass::kSafe, 0.9f);
+  bool map_known = true;          // false: every cell unknown until the first pair
+  bool camera = true;
+  PlanePose pose;
+  std::vector<MobilityCommand> motions;
+  std::vector<CaptureRequest> captures;
+  std::vector<SequenceStatus> statuses;
+  int64_t utime = 1'000'000;
+  double wall = 100.0;
+
+  explicit MapWorld(SequenceExecutor& ex) : ex_(ex) {}
+
+  void Run(int max_iterations = 20000) {
+    for (int i = 0; i < max_iterations; ++i) {
+      utime += 100'000;
+      wall += 0.1;
+      std::deque<std::function<void()>> now;
+      now.swap(pending_);
+      for (auto& f : now) f();
+      for (const char* name : {"rover_sim", "state_estimator", "hazard_monitor", "camera_capture", "visual_odometry"})
+        ex_.OnHeartbeat(name, wall);
+      PoseEstimate p;
+      p.utime = utime;
+      p.position = Eigen::Vector3d(pose.x, pose.y, 0);
+      p.orientation = Eigen::Quaterniond(rover::geometry::RotationFromRpy(0, 0, pose.yaw));
+      ex_.OnPose(p);
+      HazardStatus h;
+      h.utime = utime;
+      h.state = HazardState::kSafe;
+      ex_.OnHazardStatus(h);
+      ex_.Tick(utime, wall);
+      for (auto& o : ex_.TakeOutputs()) std::visit([this](auto& v) { Handle(v); }, o);
+      const SequenceState s = ex_.state();
+      if (s == SequenceState::kCompleted || s == SequenceState::kAborted || s == SequenceState::kRejected) return;
+    }
+  }
+
+  SequenceStatus Final() const { return statuses.back(); }
+
+ private:
+  Grid Seen() const {
+    if (map_known) return grid;
+    return Grid::Filled(grid.origin_x, grid.origin_y, grid.cell_m, grid.rows, grid.cols, CellClass::kUnknown, 0.0f);
+  }
+
+  void Handle(const MobilityCommand& c) {
+    if (c.type == MobilityCommand::Type::kStop) return;
+    motions.push_back(c);
+    PlannedStep s;
+    if (c.type == MobilityCommand::Type::kTurn) {
+      s.kind = PlannedStep::Kind::kTurn;
+      s.turn_rad = c.turn_rad;
+    } else {
+      s.distance_m = c.distance_m;
+      s.curvature_per_m = c.curvature_per_m;
+    }
+    pose = EndOfStep(pose, s);
+    utime += 10'000'000;
+    pending_.push_back([this, c] { ex_.OnMobilityStatus({utime, c.command_id, MobilityState::kDone, 0, 0, ""}); });
+  }
+  void Handle(const CaptureRequest& c) {
+    captures.push_back(c);
+    if (!camera) return;
+    map_known = true;  // the pair shows the ground
+    pending_.push_back([this, c] {
+      ex_.OnStereoFrame(c.frame_id);
+      TraversabilityMap m;
+      m.utime = utime;
+      m.last_frame_id = c.frame_id;
+      m.grid = Seen();
+      ex_.OnTraversabilityMap(m);
+    });
+  }
+  void Handle(const HazardQuery& q) {
+    std::vector<rover::avoidance::Pose2> path;
+    for (const auto& s : q.samples) path.push_back({s.x, s.y, s.yaw});
+    const auto sw = rover::avoidance::SweepFootprint(Seen(), {}, path, path.front(), 0.5);
+    HazardReply r;
+    r.query_id = q.query_id;
+    r.verdict = HazardVerdict::kSafe;
+    if (sw.unsafe > 0) {
+      r.verdict = HazardVerdict::kUnsafe;
+      r.zone_name = "hazard_map";
+      r.detail = "hazard_map: step " + std::to_string(sw.worst_step_m).substr(0, 4) + " m";
+    } else if (sw.UnknownFraction() > 0.2) {
+      r.verdict = HazardVerdict::kUnknown;
+      r.zone_name = "hazard_map";
+      r.detail = "hazard_map: unknown";
+    }
+    pending_.push_back([this, r] { ex_.OnHazardReply(r); });
+  }
+  void Handle(const SequenceStatus& s) { statuses.push_back(s); }
+  template <class T>
+  void Handle(const T&) {}
+
+  SequenceExecutor& ex_;
+  std::deque<std::function<void()>> pending_;
+};
+
+ExecutorOptions Fast() {
+  ExecutorOptions o;
+  o.hazard_reply_wait_s = 1.0;
+  o.hazard_status_wait_s = 1.0;
+  o.pose_wait_s = 1.0;
+  o.start_wait_s = 1.0;
+  o.heartbeat_timeout_s = 1.0;
+  o.map_wait_s = 1.0;
+  o.capture_wait_s = 1.0;
+  return o;
+}
+
+// A rock 2.5 m ahead on the line to the goal.
+void Rock(Grid* g) { g->Paint(2.5, 0.0, 0.45, CellClass::kUnsafe, 0.0f, 0.4f); }
+
+TEST(AvoidStep, GotoWithAvoidanceGoesRoundTheRock) {
+  SequenceExecutor ex(Fast());
+  MapWorld w(ex);
+  Rock(&w.grid);
+  ex.SubmitText("goto 5 m 0 m within 0.4 m distance 12 m avoid on\n", 1, "t.seq");
+  w.Run();
+  ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().abort_reason << ": " << w.Final().detail;
+  EXPECT_LT(std::hypot(w.pose.x - 5.0, w.pose.y), 0.4);
+  // A pair was taken before the first step (image, map, then drive), and some step turned.
+  ASSERT_FALSE(w.captures.empty());
+  ASSERT_FALSE(w.motions.empty());
+  bool steered = false;
+  for (const auto& m : w.motions) steered = steered || std::abs(m.curvature_per_m) > 1e-6 || std::abs(m.turn_rad) > 1e-6;
+  EXPECT_TRUE(steered);
+}
+
+TEST(AvoidStep, WithoutAvoidanceTheMapStopsTheRover) {
+  SequenceExecutor ex(Fast());
+  MapWorld w(ex);
+  Rock(&w.grid);
+  ex.SubmitText("goto 5 m 0 m within 0.4 m avoid off\n", 1, "t.seq");
+  w.Run();
+  EXPECT_EQ(w.Final().state, SequenceState::kAborted);
+  EXPECT_EQ(w.Final().abort_reason, "hazard_map");
+  EXPECT_NE(w.Final().detail.find("hazard_map: step 0.4"), std::string::npos) << w.Final().detail;
+  EXPECT_LT(w.pose.x, 2.5 - 0.45 - 0.8);  // the body never reached the rock
+}
+
+TEST(AvoidStep, UnknownMapTakesAPairFirstThenDrives) {
+  SequenceExecutor ex(Fast());
+  MapWorld w(ex);
+  w.map_known = false;
+  ex.SubmitText("drive 1.2 m\n", 1, "t.seq");
+  w.Run();
+  ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+  ASSERT_FALSE(w.captures.empty());
+  EXPECT_EQ(w.captures.front().purpose, "science");
+  EXPECT_NEAR(w.pose.x, 1.2, 1e-6);
+}
+
+TEST(AvoidStep, UnknownMapWithoutACameraCannotDecide) {
+  SequenceExecutor ex(Fast());
+  MapWorld w(ex);
+  w.map_known = false;
+  w.camera = false;
+  ex.SubmitText("drive 1.2 m\n", 1, "t.seq");
+  w.Run();
+  EXPECT_EQ(w.Final().abort_reason, "hazard_unknown") << w.Final().detail;
+  EXPECT_TRUE(w.motions.empty());
+}
+
+TEST(AvoidStep, BoxedInAbortsWithTheHazard) {
+  SequenceExecutor ex(Fast());
+  MapWorld w(ex);
+  for (int i = 0; i < w.grid.rows; ++i)
+    for (int j = 0; j < w.grid.cols; ++j) {
+      const double x = w.grid.CellCentreX(i), y = w.grid.CellCentreY(j);
+      if (std::abs(x) < 1.0 && std::abs(y) < 0.9) continue;
+      const std::size_t k = static_cast<std::size_t>(i) * w.grid.cols + j;
+      w.grid.state[k] = CellClass::kUnsafe;
+      w.grid.goodness[k] = 0.0f;
+      w.grid.step_m[k] = 0.5f;
+    }
+  ex.SubmitText("goto 5 m 0 m within 0.4 m avoid on\n", 1, "t.seq");
+  w.Run();
+  EXPECT_EQ(w.Final().abort_reason, "hazard_map") << w.Final().detail;
+  EXPECT_NE(w.Final().detail.find("no safe step"), std::string::npos) << w.Final().detail;
+  EXPECT_TRUE(w.motions.empty());
+}
+
+}  // namespace
