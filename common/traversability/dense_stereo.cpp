@@ -1,16 +1,203 @@
 #include "traversability/dense_stereo.hpp"
 
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <sstream>
 #include <stdexcept>
 
 namespace rover::traversability {
 
-RectifiedRig Rectify(const geometry::StereoRig&, double) {
-  throw std::invalid_argument("traversability: dense stereo not yet built");
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-StereoPoints DenseStereo(const cv::Mat&, const cv::Mat&, const geometry::StereoRig&,
-                         const MapOptions&, UpdateStats*) {
-  throw std::invalid_argument("traversability: dense stereo not yet built");
+[[noreturn]] void Bad(const std::string& what) {
+  throw std::invalid_argument("traversability stereo: " + what);
+}
+
+// The optical axis of a model: the ray through its image centre.
+Eigen::Vector3d Axis(const geometry::CameraModel& m) {
+  Eigen::Vector3d o, d;
+  m.BackProject(Eigen::Vector2d((m.width() - 1) / 2.0, (m.height() - 1) / 2.0), &o, &d);
+  return d.normalized();
+}
+
+// Focal length (px) at the image centre, from the angle between neighbouring pixels' rays.
+double CentreFocal(const geometry::CameraModel& m) {
+  const double cx = (m.width() - 1) / 2.0, cy = (m.height() - 1) / 2.0;
+  Eigen::Vector3d o, a, b, c, d;
+  m.BackProject(Eigen::Vector2d(cx - 1, cy), &o, &a);
+  m.BackProject(Eigen::Vector2d(cx + 1, cy), &o, &b);
+  m.BackProject(Eigen::Vector2d(cx, cy - 1), &o, &c);
+  m.BackProject(Eigen::Vector2d(cx, cy + 1), &o, &d);
+  const double ax = std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0));
+  const double ay = std::acos(std::clamp(c.normalized().dot(d.normalized()), -1.0, 1.0));
+  return 1.0 / std::tan(0.25 * (ax + ay));  // 2 px span each: tan(half angle per px)
+}
+
+std::vector<double> RigKey(const geometry::StereoRig& rig, double scale) {
+  std::vector<double> key{scale, static_cast<double>(rig.left->width()),
+                          static_cast<double>(rig.left->height()),
+                          static_cast<double>(rig.right->width()),
+                          static_cast<double>(rig.right->height())};
+  for (const auto* m : {rig.left.get(), rig.right.get()}) {
+    key.push_back(static_cast<double>(m->type().size()) + 100.0 * m->type()[0]);
+    for (double v : m->Params()) key.push_back(v);
+  }
+  return key;
+}
+
+// Levels of 2x Gaussian reduction applied before remapping, for a scale <= 1.
+int PyramidLevels(double scale) {
+  int levels = 0;
+  while (scale * (1 << (levels + 1)) <= 1.0 + 1e-9 && levels < 4) ++levels;
+  return levels;
+}
+
+void FillMap(const geometry::CameraModel& model, const RectifiedRig& r,
+             const Eigen::Vector3d& centre, int levels, cv::Mat* mx, cv::Mat* my) {
+  mx->create(r.height, r.width, CV_32FC1);
+  my->create(r.height, r.width, CV_32FC1);
+  const double k = 1.0 / (1 << levels);
+  for (int v = 0; v < r.height; ++v) {
+    float* px = mx->ptr<float>(v);
+    float* py = my->ptr<float>(v);
+    for (int u = 0; u < r.width; ++u) {
+      const Eigen::Vector3d d_rect((u - r.cx) / r.f, (v - r.cy) / r.f, 1.0);
+      const Eigen::Vector3d p = centre + 10.0 * (r.R_rover_rect * d_rect).normalized();
+      Eigen::Vector2d pix;
+      if (model.Project(p, &pix) && pix.allFinite()) {
+        // Pixel in the pyramid level the remap reads (centres stay centres).
+        px[u] = static_cast<float>((pix.x() + 0.5) * k - 0.5);
+        py[u] = static_cast<float>((pix.y() + 0.5) * k - 0.5);
+      } else {
+        px[u] = py[u] = -1e6f;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+RectifiedRig Rectify(const geometry::StereoRig& rig, double scale) {
+  if (!rig.left || !rig.right) Bad("the rig has no left or right model");
+  if (!(scale > 0 && scale <= 1)) Bad("the rectification scale must be in (0, 1]");
+  const geometry::CameraModel& L = *rig.left;
+  const geometry::CameraModel& R = *rig.right;
+  if (L.width() != R.width() || L.height() != R.height())
+    Bad("the left and right models differ in size");
+  RectifiedRig r;
+  r.left_centre = L.Center();
+  const Eigen::Vector3d b = R.Center() - L.Center();
+  r.baseline_m = b.norm();
+  if (!(r.baseline_m > 1e-6)) Bad("the rig's baseline is zero");
+  const Eigen::Vector3d aL = Axis(L), aR = Axis(R);
+  if (aL.dot(aR) < std::cos(10.0 * M_PI / 180.0)) Bad("the rig's optical axes differ by over 10 deg");
+  const Eigen::Vector3d x = b / r.baseline_m;
+  Eigen::Vector3d z = (aL + aR).normalized();
+  z = (z - z.dot(x) * x);
+  if (z.norm() < 0.5) Bad("the rig's baseline runs along its optical axis");
+  z.normalize();
+  const Eigen::Vector3d y = z.cross(x);
+  r.R_rover_rect.col(0) = x;
+  r.R_rover_rect.col(1) = y;
+  r.R_rover_rect.col(2) = z;
+  r.width = std::max(8, static_cast<int>(std::lround(L.width() * scale)));
+  r.height = std::max(8, static_cast<int>(std::lround(L.height() * scale)));
+  const double s_x = static_cast<double>(r.width) / L.width();
+  r.f = 0.5 * (CentreFocal(L) + CentreFocal(R)) * s_x;
+  r.cx = (r.width - 1) / 2.0;
+  r.cy = (r.height - 1) / 2.0;
+  const int levels = PyramidLevels(s_x);
+  FillMap(L, r, L.Center(), levels, &r.map_lx, &r.map_ly);
+  FillMap(R, r, R.Center(), levels, &r.map_rx, &r.map_ry);
+  return r;
+}
+
+StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
+                         const geometry::StereoRig& rig, const MapOptions& o,
+                         UpdateStats* stats) {
+  if (!rig.left || !rig.right) Bad("the rig has no left or right model");
+  for (const auto& [name, img, model] :
+       {std::tuple<const char*, const cv::Mat*, const geometry::CameraModel*>{"left", &left, rig.left.get()},
+        {"right", &right, rig.right.get()}}) {
+    if (img->empty()) Bad(std::string(name) + " image: empty");
+    if (img->type() != CV_8UC1) Bad(std::string(name) + " image: expected 8-bit grey (CV_8UC1)");
+    if (img->cols != model->width() || img->rows != model->height()) {
+      std::ostringstream s;
+      s << name << " image: " << img->cols << "x" << img->rows << ", expected the model's "
+        << model->width() << "x" << model->height();
+      Bad(s.str());
+    }
+  }
+  auto t0 = std::chrono::steady_clock::now();
+  thread_local std::vector<double> cached_key;
+  thread_local std::shared_ptr<RectifiedRig> cached;
+  const double scale = o.stereo_width_px > 0 && left.cols > o.stereo_width_px
+                          ? static_cast<double>(o.stereo_width_px) / left.cols
+                          : 1.0;
+  const std::vector<double> key = RigKey(rig, scale);
+  if (!cached || key != cached_key) {
+    cached = std::make_shared<RectifiedRig>(Rectify(rig, scale));
+    cached_key = key;
+  }
+  const RectifiedRig& r = *cached;
+  const int levels = PyramidLevels(static_cast<double>(r.width) / left.cols);
+  cv::Mat srcL = left, srcR = right, tmp;
+  for (int k = 0; k < levels; ++k) {
+    cv::pyrDown(srcL, tmp);
+    srcL = tmp.clone();
+    cv::pyrDown(srcR, tmp);
+    srcR = tmp.clone();
+  }
+  cv::Mat rectL, rectR;
+  cv::remap(srcL, rectL, r.map_lx, r.map_ly, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
+  cv::remap(srcR, rectR, r.map_rx, r.map_ry, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
+  if (stats) stats->seconds_rectify = SecondsSince(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  const int num_disp = ((o.num_disparities + 15) / 16) * 16;
+  const int bs = o.block_size;
+  cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
+      0, num_disp, bs, 8 * bs * bs, 32 * bs * bs, 1, 31, o.uniqueness_ratio, o.speckle_window,
+      o.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
+  cv::Mat disp16;
+  sgbm->compute(rectL, rectR, disp16);
+  if (stats) stats->seconds_match = SecondsSince(t0);
+
+  // Triangulate: z = f B / d along the common axis.
+  StereoPoints out;
+  const double fB = r.f * r.baseline_m;
+  const int step = o.subsample;
+  const double max_range2 = o.max_range_m * o.max_range_m;
+  const double min_range2 = o.min_range_m * o.min_range_m;
+  out.points_rover.reserve(static_cast<std::size_t>(r.width / step) * (r.height / step));
+  out.sigma_height_m.reserve(out.points_rover.capacity());
+  for (int v = 0; v < r.height; v += step) {
+    const std::int16_t* dp = disp16.ptr<std::int16_t>(v);
+    const float* mlx = r.map_lx.ptr<float>(v);
+    const float* mrx = r.map_rx.ptr<float>(v);
+    for (int u = 0; u < r.width; u += step) {
+      if (dp[u] <= 0 || mlx[u] < -0.5f || mrx[u - dp[u] / 16] < -0.5f) continue;  // no match, or off the source images
+      const double d = dp[u] / 16.0;
+      const double z = fB / d;
+      const Eigen::Vector3d ray((u - r.cx) / r.f, (v - r.cy) / r.f, 1.0);
+      const Eigen::Vector3d dir = r.R_rover_rect * ray;
+      const Eigen::Vector3d p = r.left_centre + z * dir;
+      const double range2 = (z * dir).squaredNorm();
+      if (range2 > max_range2 || range2 < min_range2) continue;
+      const double sigma_z = z * z / fB * o.disparity_sigma_px;
+      out.points_rover.push_back(p);
+      out.sigma_height_m.push_back(std::abs(dir.z()) * sigma_z);
+    }
+  }
+  return out;
 }
 
 }  // namespace rover::traversability

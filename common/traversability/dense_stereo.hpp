@@ -36,7 +36,7 @@ struct RectifiedRig {
   cv::Mat map_lx, map_ly, map_rx, map_ry;  // CV_32FC1: rectified pixel -> source pixel
 };
 
-// Builds the rectification for `rig` with images scaled by `scale`. Throws
+// Builds the rectification for `rig` with images scaled by `scale` (in (0, 1]). Throws
 // std::invalid_argument on a degenerate rig (zero baseline, axes far from parallel).
 RectifiedRig Rectify(const geometry::StereoRig& rig, double scale);
 

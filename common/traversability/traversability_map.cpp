@@ -49,7 +49,8 @@ TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(optio
   if (!(o.caution_fraction > 0 && o.caution_fraction <= 1)) Bad("caution_fraction must be in (0, 1]");
   if (!(o.min_patch_fraction > 0 && o.min_patch_fraction <= 1))
     Bad("min_patch_fraction must be in (0, 1]");
-  if (!(o.stereo_scale > 0 && o.stereo_scale <= 1)) Bad("stereo_scale must be in (0, 1]");
+  if (o.stereo_width_px != 0 && (o.stereo_width_px < 32 || o.stereo_width_px > 8192))
+    Bad("stereo_width_px must be 0 or in [32, 8192]");
   if (o.num_disparities < 16 || o.num_disparities > 512) Bad("num_disparities must be in [16, 512]");
   if (o.block_size < 1 || o.block_size > 21 || o.block_size % 2 == 0)
     Bad("block_size must be odd, in [1, 21]");
@@ -211,12 +212,13 @@ void TraversabilityMap::Rate() const {
         ss.push_back(s[k]);
       }
       if (xs.size() < min_known) continue;
-      // Plane h = c0 + c1 dx + c2 dy by least squares over the known cells, then once more
-      // without the cells more than half a step limit off it (rocks), so that the plane
-      // follows the ground and a rock shows as a step rather than a tilt.
+      // Plane h = c0 + c1 dx + c2 dy by least squares over the known cells, then again
+      // without the cells more than half a step limit ABOVE it: rocks stand up from the
+      // ground, so the plane settles on the ground around them even when a big rock fills
+      // much of the patch, and the rock shows as a step rather than a tilt.
       inlier.assign(xs.size(), 1);
       Eigen::Vector3d c = Eigen::Vector3d::Zero();
-      for (int pass = 0; pass < 2; ++pass) {
+      for (int pass = 0; pass < 4; ++pass) {
         Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
         Eigen::Vector3d Atb = Eigen::Vector3d::Zero();
         int used = 0;
@@ -231,16 +233,15 @@ void TraversabilityMap::Rate() const {
         const Eigen::Vector3d c_new = AtA.ldlt().solve(Atb);
         if (!c_new.allFinite()) break;
         c = c_new;
-        if (pass == 0) {
-          std::size_t kept = 0;
-          std::vector<char> next(xs.size(), 0);
-          for (std::size_t k = 0; k < xs.size(); ++k) {
-            const double res = xs[k].z() - (c[0] + c[1] * xs[k].x() + c[2] * xs[k].y());
-            if (std::abs(res) <= 0.5 * o.max_step_m) { next[k] = 1; ++kept; }
-          }
-          if (kept * 2 < xs.size() || kept < 3) break;  // no ground majority: keep the first fit
-          inlier = std::move(next);
+        std::size_t kept = 0, changed = 0;
+        for (std::size_t k = 0; k < xs.size(); ++k) {
+          const double res = xs[k].z() - (c[0] + c[1] * xs[k].x() + c[2] * xs[k].y());
+          const char in = res <= 0.5 * o.max_step_m ? 1 : 0;
+          kept += in;
+          changed += in != inlier[k];
+          inlier[k] = in;
         }
+        if (changed == 0 || kept < 3) break;
       }
       double lo = 0, hi = 0, sum2 = 0, sig2 = 0;
       for (std::size_t k = 0; k < xs.size(); ++k) {
@@ -275,7 +276,7 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
   if (!node.IsMap()) node.Fail("expected a map of traversability options");
   node.CheckKeys({"cell_size_m", "extent_m", "footprint_radius_m", "max_step_m", "max_tilt_deg",
                   "max_roughness_m", "max_range_m", "min_points", "caution_fraction",
-                  "min_patch_fraction", "stereo_scale", "num_disparities", "block_size",
+                  "min_patch_fraction", "stereo_width_px", "num_disparities", "block_size",
                   "uniqueness_ratio", "speckle_window", "speckle_range", "disparity_sigma_px",
                   "subsample", "min_range_m"});
   node.Get("cell_size_m", o.cell_size_m, 0.01, 10.0);
@@ -288,7 +289,9 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
   node.Get("min_points", o.min_points, 1, 100000);
   node.Get("caution_fraction", o.caution_fraction, 0.01, 1.0);
   node.Get("min_patch_fraction", o.min_patch_fraction, 0.01, 1.0);
-  node.Get("stereo_scale", o.stereo_scale, 0.05, 1.0);
+  node.Get("stereo_width_px", o.stereo_width_px, 0, 8192);
+  if (o.stereo_width_px != 0 && o.stereo_width_px < 32)
+    node.Fail("stereo_width_px: expected 0 (the images' own width) or at least 32");
   node.Get("num_disparities", o.num_disparities, 16, 512);
   node.Get("block_size", o.block_size, 1, 21);
   if (o.block_size % 2 == 0) node.Fail("block_size: expected an odd number, got " + std::to_string(o.block_size));

@@ -45,7 +45,8 @@ struct Cell {
 
 struct MapOptions {           // read from YAML by LoadMapOptions (key names = field names)
   double cell_size_m = 0.2;
-  double extent_m = 10.0;     // square grid extent, centred on the rover, moves with it
+  double extent_m = 14.0;     // square grid extent, centred on the rover, moves with it
+                              // (at least 2 x max_range_m + 2 x footprint_radius_m)
   double footprint_radius_m = 0.6;  // patch over which each cell's plane is fitted
   double max_step_m = 0.2;    // limits: from the rover config (rock step limit)
   double max_tilt_deg = 20.0;
@@ -57,15 +58,16 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // A patch needs at least this fraction of its cells known to be rated.
   double min_patch_fraction = 0.3;
 
-  // Dense stereo. Images are matched at `stereo_scale` of their size (0.5: 1024 -> 512).
-  double stereo_scale = 0.5;
-  int num_disparities = 64;     // at the matching scale; rounded up to a multiple of 16
+  // Dense stereo. Images wider than stereo_width_px are reduced to it before matching
+  // (1024 -> 512); 0 matches at the images' own size.
+  int stereo_width_px = 512;
+  int num_disparities = 96;     // at the matching width; rounded up to a multiple of 16
   int block_size = 5;           // SGBM block, odd
   int uniqueness_ratio = 10;
   int speckle_window = 100;     // 0 disables the speckle filter
   int speckle_range = 2;
   double disparity_sigma_px = 0.3;  // matching error at the matching scale
-  int subsample = 2;            // triangulate every n-th pixel of the matching scale
+  int subsample = 1;            // triangulate every n-th pixel (row and column) of the match
   double min_range_m = 0.5;     // points nearer than this are ignored
 };
 

@@ -1,0 +1,256 @@
+// The traversability map on synthetic data with known answers: point clouds of flat ground,
+// a tilted plane, a box rock of known height, noise; and a rendered scene with a rock.
+#include "traversability/dense_stereo.hpp"
+#include "traversability/traversability_map.hpp"
+
+#include "config/yaml_config.hpp"
+#include "geometry/camera_io.hpp"
+#include "geometry/pose.hpp"
+#include "render/stereo_renderer.hpp"
+#include "terrain/world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <random>
+
+namespace rover::traversability {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+// A dense point cloud (10 per cell) of the elevation function over +-r around (cx, cy).
+void AddSurface(TraversabilityMap* map, const std::function<double(double, double)>& elevation,
+                double cx, double cy, double r, double noise = 0.0, unsigned seed = 1) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<Eigen::Vector3d> pts;
+  for (double x = cx - r; x < cx + r; x += 0.06)
+    for (double y = cy - r; y < cy + r; y += 0.06)
+      pts.emplace_back(x, y, -(elevation(x, y) + noise * n(rng)));
+  map->AddPoints(pts, std::vector<double>(pts.size(), std::max(noise, 0.01)));
+}
+
+TEST(TraversabilityMap, FlatGroundIsSafeAndUnseenGroundUnknown) {
+  TraversabilityMap map(MapOptions{});
+  AddSurface(&map, [](double, double) { return 0.3; }, 2.0, 0.0, 1.5);
+  const Cell c = map.At(2.0, 0.0);
+  EXPECT_EQ(c.state, CellState::kSafe);
+  EXPECT_NEAR(c.step_m, 0.0, 1e-4);
+  EXPECT_NEAR(c.tilt_rad, 0.0, 1e-4);
+  EXPECT_NEAR(c.roughness_m, 0.0, 1e-4);
+  EXPECT_NEAR(c.goodness, 1.0, 1e-3);
+  EXPECT_EQ(map.At(-4.0, 4.0).state, CellState::kUnknown);   // in the grid, no data
+  EXPECT_EQ(map.At(100.0, 0.0).state, CellState::kUnknown);  // outside the grid
+}
+
+TEST(TraversabilityMap, TiltOfAPlaneIsMeasured) {
+  MapOptions o;
+  o.max_tilt_deg = 20.0;
+  for (double deg : {10.0, 25.0}) {
+    TraversabilityMap map(o);
+    const double g = std::tan(deg * kDeg);
+    // Rising toward north-east.
+    AddSurface(&map, [g](double x, double y) { return g * (x + y) / std::sqrt(2.0); }, 1.0, 1.0, 1.5);
+    const Cell c = map.At(1.0, 1.0);
+    EXPECT_NEAR(c.tilt_rad / kDeg, deg, 0.05);
+    EXPECT_NEAR(c.step_m, 0.0, 1e-3);
+    EXPECT_EQ(c.state, deg < 20.0 * o.caution_fraction ? CellState::kSafe
+                       : deg < 20.0                   ? CellState::kCaution
+                                                      : CellState::kUnsafe)
+        << deg;
+  }
+}
+
+TEST(TraversabilityMap, BoxRockStepHeightAndFootprint) {
+  // A 0.4 m box of 0.4 m height on a 10 deg slope: the cells within the footprint radius of
+  // the box see a step of 0.4 m (the plane stays on the ground), the cells beyond do not.
+  MapOptions o;
+  TraversabilityMap map(o);
+  const double g = std::tan(10 * kDeg);
+  auto ground = [g](double x, double) { return g * x; };
+  auto scene = [&](double x, double y) {
+    return ground(x, y) + ((std::abs(x - 3.0) < 0.2 && std::abs(y) < 0.2) ? 0.4 : 0.0);
+  };
+  AddSurface(&map, scene, 3.0, 0.0, 2.5);
+  const Cell on = map.At(3.0, 0.0);
+  EXPECT_EQ(on.state, CellState::kUnsafe);
+  EXPECT_NEAR(on.step_m, 0.4, 0.02);
+  EXPECT_NEAR(on.tilt_rad / kDeg, 10.0, 0.5);  // the ground's tilt, not the rock's
+  const Cell beside = map.At(3.0, 0.6);        // the box edge is 0.4 m away: in the patch
+  EXPECT_EQ(beside.state, CellState::kUnsafe);
+  const Cell far = map.At(3.0, 1.5);  // over 1 m from the box
+  EXPECT_NE(far.state, CellState::kUnsafe);
+  EXPECT_NEAR(far.step_m, 0.0, 0.01);
+  // A box under the limit is not a hazard.
+  TraversabilityMap low(o);
+  AddSurface(&low, [&](double x, double y) {
+    return ground(x, y) + ((std::abs(x - 3.0) < 0.2 && std::abs(y) < 0.2) ? 0.08 : 0.0);
+  }, 3.0, 0.0, 2.5);
+  EXPECT_NE(low.At(3.0, 0.0).state, CellState::kUnsafe);
+  EXPECT_NEAR(low.At(3.0, 0.0).step_m, 0.08, 0.01);
+}
+
+TEST(TraversabilityMap, RoughnessFromNoiseAndTooFewPointsIsUnknown) {
+  MapOptions o;
+  o.min_points = 3;
+  TraversabilityMap map(o);
+  // Bumps of +-0.1 m in a checkerboard of cells: RMS 0.1 m, over the 0.05 m limit.
+  AddSurface(&map, [](double x, double y) {
+    const int i = static_cast<int>(std::floor(x / 0.2)), j = static_cast<int>(std::floor(y / 0.2));
+    return ((i + j) % 2 == 0) ? 0.05 : -0.05;
+  }, 2.0, 0.0, 1.5);
+  const Cell c = map.At(2.1, 0.1);
+  EXPECT_NEAR(c.roughness_m, 0.05, 0.01);
+  // One point per cell is below min_points.
+  TraversabilityMap sparse(o);
+  std::vector<Eigen::Vector3d> pts;
+  for (double x = 0.1; x < 3; x += 0.2)
+    for (double y = -1.5; y < 1.5; y += 0.2) pts.emplace_back(x, y, 0.0);
+  sparse.AddPoints(pts, std::vector<double>(pts.size(), 0.01));
+  EXPECT_EQ(sparse.At(1.5, 0.0).state, CellState::kUnknown);
+  EXPECT_THROW(sparse.AddPoints(pts, {0.01}), std::invalid_argument);
+}
+
+TEST(TraversabilityMap, SigmaIsTheCellsPointSigmaAndRecentreForgets) {
+  TraversabilityMap map(MapOptions{});
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<double> sig;
+  for (double x = 0.5; x < 3.5; x += 0.05)
+    for (double y = -1.0; y < 1.0; y += 0.05) {
+      pts.emplace_back(x, y, 0.0);
+      sig.push_back(0.01 + 0.02 * x);  // grows with range
+    }
+  map.AddPoints(pts, sig);
+  EXPECT_LT(map.At(1.0, 0.0).sigma_m, map.At(3.0, 0.0).sigma_m);
+  EXPECT_NEAR(map.At(3.0, 0.0).sigma_m, 0.01 + 0.02 * 3.0, 0.005);
+  // The cell at (1, 0) leaves a 14 m grid re-centred 9 m away; (3, 0) stays.
+  map.Recentre(-9.0, 0.0);
+  EXPECT_EQ(map.At(1.0, 0.0).state, CellState::kUnknown);
+  map.Recentre(-5.0, 0.0);
+  EXPECT_EQ(map.At(-1.0, 0.0).state, CellState::kUnknown);
+  TraversabilityMap kept(MapOptions{});
+  kept.AddPoints(pts, sig);
+  kept.Recentre(1.0, 0.0);  // whole cells move, nothing is resampled
+  EXPECT_EQ(kept.At(2.0, 0.0).state, CellState::kSafe);
+  EXPECT_NEAR(kept.At(2.0, 0.0).sigma_m, 0.01 + 0.02 * 2.1, 0.005);
+}
+
+TEST(TraversabilityMap, OptionsFromYamlAndBadInput) {
+  const config::ConfigNode node = config::ConfigNode::FromString(
+      "cell_size_m: 0.25\nmax_step_m: 0.15\nstereo_width_px: 256\n", "test.yaml");
+  const MapOptions o = LoadMapOptions(node);
+  EXPECT_DOUBLE_EQ(o.cell_size_m, 0.25);
+  EXPECT_DOUBLE_EQ(o.max_step_m, 0.15);
+  EXPECT_EQ(o.stereo_width_px, 256);
+  EXPECT_THROW(LoadMapOptions(config::ConfigNode::FromString("max_stepp: 1\n", "t.yaml")),
+               config::ConfigError);
+  EXPECT_THROW(LoadMapOptions(config::ConfigNode::FromString("block_size: 4\n", "t.yaml")),
+               config::ConfigError);
+  try {
+    LoadMapOptions(YAML::Load("cell_size_m: -1"), "rover.yaml: traversability");
+    FAIL();
+  } catch (const config::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("cell_size_m"), std::string::npos) << e.what();
+  }
+  MapOptions bad;
+  bad.cell_size_m = 0;
+  EXPECT_THROW(TraversabilityMap{bad}, std::invalid_argument);
+
+  TraversabilityMap map(MapOptions{});
+  const geometry::StereoRig rig = geometry::LoadStereoRigFile(
+      std::string(ROVER_SOURCE_DIR) + "/configs/cameras/navcam_pinhole.yaml");
+  const cv::Mat small(10, 10, CV_8UC1, cv::Scalar(0));
+  const cv::Mat full(1024, 1024, CV_8UC1, cv::Scalar(0));
+  const cv::Mat colour(1024, 1024, CV_8UC3, cv::Scalar(0, 0, 0));
+  const geometry::Pose T = geometry::Pose::Identity();
+  const geometry::Matrix6d cov = geometry::Matrix6d::Identity() * 1e-4;
+  EXPECT_THROW(map.AddStereoPair(small, small, rig, T, cov), std::invalid_argument);
+  EXPECT_THROW(map.AddStereoPair(colour, full, rig, T, cov), std::invalid_argument);
+  EXPECT_THROW(map.AddStereoPair(cv::Mat(), full, rig, T, cov), std::invalid_argument);
+  geometry::Matrix6d nan_cov = cov;
+  nan_cov(0, 0) = NAN;
+  EXPECT_THROW(map.AddStereoPair(full, full, rig, T, nan_cov), std::invalid_argument);
+}
+
+// The rectification of a CAHVOR rig with real distortion: a 3-D point projects (through the
+// original models) to pixels whose rectified positions lie on one row, with the disparity
+// f B / z of the rectified pair.
+TEST(DenseStereo, RectifiesACahvorRigOntoCommonRows) {
+  const geometry::StereoRig base = geometry::LoadStereoRigFile(
+      std::string(ROVER_SOURCE_DIR) + "/configs/cameras/navcam_cahvor.yaml");
+  std::vector<double> pl = base.left->Params(), pr = base.right->Params();
+  pl[15] = pr[15] = 0.0;   // R0
+  pl[16] = pr[16] = -0.02; // R1: barrel distortion of a real NAVCAM's order
+  pl[17] = pr[17] = 0.01;  // R2
+  geometry::StereoRig rig;
+  rig.left = geometry::CameraModelFromParams("cahvor", 1024, 1024, pl);
+  rig.right = geometry::CameraModelFromParams("cahvor", 1024, 1024, pr);
+  const RectifiedRig r = Rectify(rig, 0.5);
+  EXPECT_EQ(r.width, 512);
+  EXPECT_NEAR(r.baseline_m, 0.2, 1e-9);
+  for (const Eigen::Vector3d p : {Eigen::Vector3d(3.0, 0.5, 0.0), Eigen::Vector3d(5.0, -1.0, -0.3),
+                                  Eigen::Vector3d(2.0, -0.4, 0.1)}) {
+    // Rectified pixel of p in each camera (pinholes along R_rover_rect).
+    const Eigen::Vector3d qL = r.R_rover_rect.transpose() * (p - rig.left->Center());
+    const Eigen::Vector3d qR = r.R_rover_rect.transpose() * (p - rig.right->Center());
+    const Eigen::Vector2d uL(r.f * qL.x() / qL.z() + r.cx, r.f * qL.y() / qL.z() + r.cy);
+    const Eigen::Vector2d uR(r.f * qR.x() / qR.z() + r.cx, r.f * qR.y() / qR.z() + r.cy);
+    EXPECT_NEAR(uL.y(), uR.y(), 1e-9);
+    EXPECT_NEAR(uL.x() - uR.x(), r.f * r.baseline_m / qL.z(), 1e-9);
+    // The maps send those rectified pixels to where the original models project p (at
+    // half size, through one pyramid level).
+    Eigen::Vector2d oL;
+    ASSERT_TRUE(rig.left->Project(p, &oL));
+    const int u = static_cast<int>(std::lround(uL.x())), v = static_cast<int>(std::lround(uL.y()));
+    ASSERT_TRUE(u >= 0 && v >= 0 && u < r.width && v < r.height);
+    // Nearest rectified pixel: within a pixel of the source position.
+    EXPECT_NEAR(r.map_lx.at<float>(v, u), (oL.x() + 0.5) * 0.5 - 0.5, 1.0);
+    EXPECT_NEAR(r.map_ly.at<float>(v, u), (oL.y() + 0.5) * 0.5 - 0.5, 1.0);
+  }
+}
+
+// A rendered scene: flat textured ground and one rock 0.35 m tall 3 m ahead. The map built
+// from the stereo pair marks the rock unsafe, the open ground 1.2 m beside it not, and the
+// ground elevation it sees matches the world's to within a few centimetres.
+TEST(DenseStereo, RenderedRockIsUnsafeAndGroundIsSafe) {
+  const config::ConfigNode root = config::ConfigNode::FromString(R"(
+name: one_rock
+seed: 5
+map: {center: [4, 0], size_m: [12, 10], resolution_m: 0.05}
+roughness: {amplitude_m: 0.005, min_wavelength_m: 0.3, max_wavelength_m: 4.0}
+soil: {default: packed_soil}
+rocks:
+  placed:
+    - {name: R, position: [3.0, 0.3], diameter_m: 0.6, height_m: 0.35}
+albedo:
+  packed_soil: {mean: 0.28, contrast: 0.2}
+sun: {azimuth_deg: 120, elevation_deg: 55}
+)", "one_rock.yaml");
+  const terrain::World world(terrain::WorldOptions::Load(root));
+  const geometry::StereoRig rig = geometry::LoadStereoRigFile(
+      std::string(ROVER_SOURCE_DIR) + "/configs/cameras/navcam_pinhole.yaml");
+  render::RenderOptions ro;
+  ro.image_scale = 0.5;
+  render::StereoRenderer renderer(ro);
+  const geometry::Pose T = geometry::PoseFromXyzRpy(0, 0, -world.Elevation(0, 0), 0, 0, 0);
+  const render::StereoImages images = renderer.RenderPair(world, rig, T, 1);
+  TraversabilityMap map(MapOptions{});
+  geometry::Matrix6d cov = geometry::Matrix6d::Zero();
+  cov.diagonal() << 1e-4, 1e-4, 1e-4, 1e-5, 1e-5, 1e-5;
+  map.AddStereoPair(images.left, images.right, images.rig, T, cov);
+  EXPECT_GT(map.last_update().points, 10000);
+  const Cell rock = map.At(3.0, 0.3);
+  EXPECT_EQ(rock.state, CellState::kUnsafe);
+  EXPECT_NEAR(rock.step_m, 0.35, 0.08);
+  const Cell open = map.At(3.0, -1.0);
+  EXPECT_EQ(open.state, CellState::kSafe);
+  EXPECT_LT(open.step_m, 0.1);
+  EXPECT_LT(open.tilt_rad, 5 * kDeg);
+  // Sigma grows with range.
+  EXPECT_LT(map.At(2.0, -0.5).sigma_m, map.At(5.0, -0.5).sigma_m);
+}
+
+}  // namespace
+}  // namespace rover::traversability

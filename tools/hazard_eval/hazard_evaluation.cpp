@@ -1,0 +1,193 @@
+#include "hazard_evaluation.hpp"
+
+#include "geometry/pose.hpp"
+#include "render/stereo_renderer.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+namespace rover::hazard_eval {
+
+namespace tv = traversability;
+
+void BandCounts::Add(const BandCounts& o) {
+  rocks += o.rocks;
+  rocks_detected += o.rocks_detected;
+  in_view_cells += o.in_view_cells;
+  unknown_cells += o.unknown_cells;
+  traversable_cells += o.traversable_cells;
+  false_unsafe_cells += o.false_unsafe_cells;
+}
+
+BandCounts EvalResult::Within4m() const {
+  BandCounts b = bands[0];
+  b.Add(bands[1]);
+  return b;
+}
+
+namespace {
+
+// The rover's pose standing on the ground at (x, y) facing yaw: attitude from the normal.
+Eigen::Isometry3d PoseOnGround(const terrain::World& world, double x, double y, double yaw) {
+  const Eigen::Vector3d n = world.NormalUp(x, y);
+  const Eigen::Matrix3d Rz = geometry::RotationFromRpy(0, 0, yaw);
+  const Eigen::Vector3d n_yawed = Rz.transpose() * n;
+  const double pitch = std::atan2(-n_yawed.x(), -n_yawed.z());
+  const double roll = std::atan2(n_yawed.y(), std::hypot(n_yawed.x(), n_yawed.z()));
+  return geometry::PoseFromXyzRpy(x, y, -world.Elevation(x, y), roll, pitch, yaw);
+}
+
+int Band(double range_m) {
+  if (range_m < 0 || range_m >= 6.0) return -1;
+  return static_cast<int>(range_m / 2.0);
+}
+
+bool InView(const geometry::CameraModel& cam, const Eigen::Isometry3d& T_rover_site,
+            const Eigen::Vector3d& p_site) {
+  Eigen::Vector2d px;
+  if (!cam.Project(T_rover_site * p_site, &px)) return false;
+  return px.x() >= 0 && px.y() >= 0 && px.x() <= cam.width() - 1 && px.y() <= cam.height() - 1;
+}
+
+// The true terrain on the map's grid: 4x4 samples of the exact surface per cell.
+void FillTruth(const terrain::World& world, tv::TraversabilityMap* truth) {
+  truth->Clear();
+  const int k = 4;
+  const double cell = truth->cell_size();
+  std::vector<Eigen::Vector3d> pts;
+  pts.reserve(static_cast<std::size_t>(truth->rows()) * truth->cols() * k * k);
+  for (int i = 0; i < truth->rows(); ++i)
+    for (int j = 0; j < truth->cols(); ++j)
+      for (int a = 0; a < k; ++a)
+        for (int b = 0; b < k; ++b) {
+          const double x = truth->origin_x() + (i + (a + 0.5) / k) * cell;
+          const double y = truth->origin_y() + (j + (b + 0.5) / k) * cell;
+          pts.emplace_back(x, y, -world.ElevationDetailed(x, y));
+        }
+  truth->AddPoints(pts, std::vector<double>(pts.size(), 0.005));
+}
+
+}  // namespace
+
+EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_full,
+                    const EvalOptions& options) {
+  if (options.poses.empty()) throw std::invalid_argument("hazard-eval: no poses to evaluate");
+  if (!rig_full.left || !rig_full.right) throw std::invalid_argument("hazard-eval: the rig has no models");
+  render::RenderOptions ro = options.render;
+  ro.image_scale = static_cast<double>(options.image_size) / rig_full.left->width();
+  render::StereoRenderer renderer(ro);
+  tv::TraversabilityMap map(options.map);
+  tv::TraversabilityMap truth(options.map);
+  geometry::Matrix6d cov = geometry::Matrix6d::Zero();
+  const double sp = options.pose_sigma_m, sa = options.pose_sigma_deg * M_PI / 180.0;
+  cov.diagonal() << sp * sp, sp * sp, sp * sp, sa * sa, sa * sa, sa * sa;
+
+  EvalResult result;
+  for (std::size_t k = 0; k < options.poses.size(); ++k) {
+    const EvalPose& ep = options.poses[k];
+    if (!world.Contains(ep.x, ep.y)) {
+      std::ostringstream s;
+      s << "hazard-eval: pose " << k + 1 << " (" << ep.x << ", " << ep.y << ") is off the world's map";
+      throw std::invalid_argument(s.str());
+    }
+    const Eigen::Isometry3d T = PoseOnGround(world, ep.x, ep.y, ep.yaw_deg * M_PI / 180.0);
+    const render::StereoImages images =
+        renderer.RenderPair(world, rig_full, T, static_cast<std::int64_t>(k + 1));
+    map.Recentre(ep.x, ep.y);
+    const auto t0 = std::chrono::steady_clock::now();
+    map.AddStereoPair(images.left, images.right, images.rig, T, cov);
+    map.cells();  // the rating is part of the update
+    result.update_seconds.push_back(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+
+    truth.Recentre(ep.x, ep.y);
+    FillTruth(world, &truth);
+    const Eigen::Isometry3d T_rover_site = T.inverse();
+    const geometry::CameraModel& cam = *images.rig.left;
+    const auto& mc = map.cells();
+    const auto& tc = truth.cells();
+    for (int i = 0; i < map.rows(); ++i) {
+      for (int j = 0; j < map.cols(); ++j) {
+        const double x = map.origin_x() + (i + 0.5) * map.cell_size();
+        const double y = map.origin_y() + (j + 0.5) * map.cell_size();
+        const int band = Band(std::hypot(x - ep.x, y - ep.y));
+        if (band < 0) continue;
+        if (!InView(cam, T_rover_site, Eigen::Vector3d(x, y, -world.Elevation(x, y)))) continue;
+        BandCounts& b = result.bands[band];
+        const std::size_t idx = static_cast<std::size_t>(i) * map.cols() + j;
+        ++b.in_view_cells;
+        if (mc[idx].state == tv::CellState::kUnknown) ++b.unknown_cells;
+        if (tc[idx].state != tv::CellState::kUnknown && tc[idx].state != tv::CellState::kUnsafe) {
+          ++b.traversable_cells;
+          if (mc[idx].state == tv::CellState::kUnsafe) ++b.false_unsafe_cells;
+        }
+      }
+    }
+    for (const terrain::Rock& rock : world.rocks()) {
+      if (rock.height_m <= options.rock_limit_m) continue;
+      const double range = std::hypot(rock.position.x() - ep.x, rock.position.y() - ep.y);
+      const int band = Band(range);
+      if (band < 0) continue;
+      const Eigen::Vector3d top(rock.position.x(), rock.position.y(),
+                                -world.Elevation(rock.position.x(), rock.position.y()));
+      if (!InView(cam, T_rover_site, top)) continue;
+      const tv::Cell c = map.At(rock.position.x(), rock.position.y());
+      RockSighting s;
+      s.name = rock.name;
+      s.pose = static_cast<int>(k) + 1;
+      s.range_m = range;
+      s.height_m = rock.height_m;
+      s.detected = c.state == tv::CellState::kUnsafe;
+      s.step_m = c.step_m;
+      s.state = tv::CellStateName(c.state);
+      result.sightings.push_back(s);
+      ++result.bands[band].rocks;
+      if (s.detected) ++result.bands[band].rocks_detected;
+    }
+  }
+  std::vector<double> t = result.update_seconds;
+  std::sort(t.begin(), t.end());
+  result.median_update_seconds = t[t.size() / 2];
+  return result;
+}
+
+std::string FormatTable(const EvalResult& r, double rock_limit_m) {
+  auto pct = [](int num, int den) {
+    char buf[32];
+    if (den == 0) std::snprintf(buf, sizeof buf, "%6s", "-");
+    else std::snprintf(buf, sizeof buf, "%5.1f%%", 100.0 * num / den);
+    return std::string(buf);
+  };
+  std::ostringstream out;
+  char line[256];
+  std::snprintf(line, sizeof line, "%-9s | %5s %8s %7s | %11s %12s %7s | %7s %8s %7s\n", "range",
+                "rocks", "detected", "", "traversable", "false unsafe", "", "in view",
+                "unknown", "");
+  out << line;
+  char limit[32];
+  std::snprintf(limit, sizeof limit, ">%.2fm", rock_limit_m);
+  std::snprintf(line, sizeof line, "%-9s | %5s %8s %7s | %11s %12s %7s | %7s %8s %7s\n", "",
+                limit, "", "", "cells",
+                "cells", "", "cells", "cells", "");
+  out << line;
+  out << std::string(94, '-') << "\n";
+  const char* names[] = {"0-2 m", "2-4 m", "4-6 m"};
+  auto row = [&](const char* name, const BandCounts& b) {
+    std::snprintf(line, sizeof line, "%-9s | %5d %8d %7s | %11d %12d %7s | %7d %8d %7s\n", name,
+                  b.rocks, b.rocks_detected, pct(b.rocks_detected, b.rocks).c_str(),
+                  b.traversable_cells, b.false_unsafe_cells,
+                  pct(b.false_unsafe_cells, b.traversable_cells).c_str(), b.in_view_cells,
+                  b.unknown_cells, pct(b.unknown_cells, b.in_view_cells).c_str());
+    out << line;
+  };
+  for (int k = 0; k < EvalResult::kBands; ++k) row(names[k], r.bands[k]);
+  out << std::string(94, '-') << "\n";
+  row("0-4 m", r.Within4m());
+  return out.str();
+}
+
+}  // namespace rover::hazard_eval

@@ -1,0 +1,74 @@
+// hazard-eval: how well the traversability map the rover builds from its own stereo pairs
+// finds the hazards of a simulated world (issue 11).
+//
+// Stereo pairs are rendered from the world at a list of poses (the rover's attitude from
+// the ground under it); after each pair the map is compared with the world's own terrain
+// in the cells and rocks the left camera sees from that pose, by horizontal range from
+// the rover (bands 0-2, 2-4, 4-6 m):
+//   rocks     rocks taller than the rover's step limit (rock_collision.max_height_m) whose
+//             top is in view; detected when the map cell under the rock's centre is unsafe;
+//   traversable cells (truth): in-view cells the TRUE terrain, rated by the same plane fit
+//             and limits, does not make unsafe; "false unsafe" = the map marks them unsafe;
+//   unknown   in-view cells the map has no rating for (occluded, no stereo match).
+// Counts are summed over the poses.
+#pragma once
+
+#include "geometry/camera_model.hpp"
+#include "render/render_options.hpp"
+#include "terrain/world.hpp"
+#include "traversability/traversability_map.hpp"
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace rover::hazard_eval {
+
+struct EvalPose {
+  double x = 0, y = 0, yaw_deg = 0;
+};
+
+struct EvalOptions {
+  traversability::MapOptions map;
+  render::RenderOptions render;
+  double rock_limit_m = 0.3;       // rocks taller than this must be found
+  double pose_sigma_m = 0.02;      // the pose covariance handed to the map
+  double pose_sigma_deg = 0.5;
+  std::vector<EvalPose> poses;
+  int image_size = 512;            // rendered width in pixels
+};
+
+struct BandCounts {
+  int rocks = 0, rocks_detected = 0;
+  int in_view_cells = 0, unknown_cells = 0;
+  int traversable_cells = 0, false_unsafe_cells = 0;
+  void Add(const BandCounts& o);
+};
+
+struct RockSighting {
+  std::string name;
+  int pose = 0;
+  double range_m = 0, height_m = 0;
+  bool detected = false;
+  float step_m = 0;  // the map's step at the rock's centre
+  std::string state;
+};
+
+struct EvalResult {
+  static constexpr int kBands = 3;  // 0-2, 2-4, 4-6 m
+  std::array<BandCounts, kBands> bands;
+  std::vector<RockSighting> sightings;
+  std::vector<double> update_seconds;  // AddStereoPair per pose
+  double median_update_seconds = 0;
+  // Bands 0-2 and 2-4 together.
+  BandCounts Within4m() const;
+};
+
+// Renders, maps and compares. Throws std::invalid_argument / config::ConfigError with a
+// one-line message on bad options.
+EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_full_size,
+                    const EvalOptions& options);
+
+std::string FormatTable(const EvalResult& result, double rock_limit_m);
+
+}  // namespace rover::hazard_eval

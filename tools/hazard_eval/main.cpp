@@ -1,0 +1,193 @@
+// ./rover hazard-eval WORLD.yaml: how well the rover's own traversability map finds the
+// world's hazards (hazard_evaluation.hpp).
+//   hazard_eval WORLD.yaml [--rig configs/cameras/navcam_pinhole.yaml] [--size 512]
+//               [--rover-config configs/rover.yaml] [--map-options FILE.yaml]
+//               [--poses "x,y,yaw_deg;x,y,yaw_deg;..."] [--steps 3] [--step-m 1.0]
+//               [--min-detection 0.95] [--max-false-unsafe 0.05] [--verbose]
+// Default poses: the world's start and --steps - 1 more, --step-m apart along its heading.
+// --min-detection / --max-false-unsafe check the 0-4 m row: exit 1 when one fails.
+// Bad arguments or files: one line naming what was expected, exit 2.
+#include "hazard_evaluation.hpp"
+
+#include "config/yaml_config.hpp"
+#include "geometry/camera_io.hpp"
+
+#include <opencv2/core/utility.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+int Usage(const std::string& message) {
+  std::cerr << "hazard-eval: " << message << "\n";
+  return 2;
+}
+
+bool ParseNumbers(const std::string& text, std::vector<double>& out) {
+  std::stringstream ss(text);
+  std::string item;
+  out.clear();
+  while (std::getline(ss, item, ',')) {
+    try {
+      std::size_t used = 0;
+      out.push_back(std::stod(item, &used));
+      if (used != item.size() || !std::isfinite(out.back())) return false;
+    } catch (const std::exception&) {
+      return false;
+    }
+  }
+  return !out.empty();
+}
+
+bool ParseOne(const char* text, double lo, double hi, double& out) {
+  std::vector<double> v;
+  if (!ParseNumbers(text, v) || v.size() != 1 || v[0] < lo || v[0] > hi) return false;
+  out = v[0];
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace rover;
+  std::string world_path, rig_path = "configs/cameras/navcam_pinhole.yaml";
+  std::string rover_path = "configs/rover.yaml", map_path, poses_text;
+  double size = 512, steps = 3, step_m = 1.0, min_detection = -1, max_false_unsafe = -1;
+  bool verbose = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const bool has = i + 1 < argc;
+    if (a == "--help" || a == "-h") {
+      std::cout << "usage: hazard-eval WORLD.yaml [--rig RIG.yaml] [--size N] [--rover-config FILE]\n"
+                   "       [--map-options FILE] [--poses \"x,y,yaw;...\"] [--steps N] [--step-m M]\n"
+                   "       [--min-detection F] [--max-false-unsafe F] [--verbose]\n";
+      return 0;
+    } else if (a == "--rig") {
+      if (!has) return Usage("--rig: expected a stereo rig YAML file");
+      rig_path = argv[++i];
+    } else if (a == "--rover-config") {
+      if (!has) return Usage("--rover-config: expected the rover YAML (configs/rover.yaml)");
+      rover_path = argv[++i];
+    } else if (a == "--map-options") {
+      if (!has) return Usage("--map-options: expected a YAML file of traversability map options");
+      map_path = argv[++i];
+    } else if (a == "--poses") {
+      if (!has) return Usage("--poses: expected \"x,y,yaw_deg;x,y,yaw_deg;...\"");
+      poses_text = argv[++i];
+    } else if (a == "--size") {
+      if (!has || !ParseOne(argv[++i], 64, 2048, size) || size != std::floor(size))
+        return Usage("--size: expected an image width in pixels, an integer in [64, 2048]");
+    } else if (a == "--steps") {
+      if (!has || !ParseOne(argv[++i], 1, 50, steps) || steps != std::floor(steps))
+        return Usage("--steps: expected a number of poses, an integer in [1, 50]");
+    } else if (a == "--step-m") {
+      if (!has || !ParseOne(argv[++i], 0.01, 10, step_m))
+        return Usage("--step-m: expected metres between poses, in [0.01, 10]");
+    } else if (a == "--min-detection") {
+      if (!has || !ParseOne(argv[++i], 0, 1, min_detection))
+        return Usage("--min-detection: expected a fraction in [0, 1]");
+    } else if (a == "--max-false-unsafe") {
+      if (!has || !ParseOne(argv[++i], 0, 1, max_false_unsafe))
+        return Usage("--max-false-unsafe: expected a fraction in [0, 1]");
+    } else if (a == "--verbose") {
+      verbose = true;
+    } else if (!a.empty() && a[0] == '-') {
+      return Usage("unknown option '" + a + "' (see --help)");
+    } else if (world_path.empty()) {
+      world_path = a;
+    } else {
+      return Usage("unexpected argument '" + a + "' (expected one WORLD.yaml)");
+    }
+  }
+  if (world_path.empty()) return Usage("expected a world file (WORLD.yaml) as the first argument");
+
+  try {
+    hazard_eval::EvalOptions options;
+    options.image_size = static_cast<int>(size);
+    const config::ConfigNode root = config::ConfigNode::LoadFile(world_path);
+    terrain::WorldOptions world_options;
+    if (root.Has("render")) {
+      options.render = render::LoadRenderOptions(root["render"]);
+      YAML::Node copy = YAML::Clone(root.yaml());
+      copy.remove("render");
+      world_options = terrain::WorldOptions::Load(config::ConfigNode(copy, world_path, ""));
+    } else {
+      world_options = terrain::WorldOptions::Load(root);
+    }
+    const config::ConfigNode rover = config::ConfigNode::LoadFile(rover_path);
+    const config::ConfigNode rc = rover["mobility"]["rock_collision"];
+    if (rc.IsNull() || !rc.Has("max_height_m"))
+      rc.Fail("expected mobility.rock_collision.max_height_m (the rover's step limit)");
+    options.rock_limit_m = rc.RequireDouble("max_height_m", 0.01, 5.0);
+    if (!map_path.empty()) {
+      const config::ConfigNode m = config::ConfigNode::LoadFile(map_path);
+      options.map = traversability::LoadMapOptions(m.Has("traversability") ? m["traversability"] : m);
+    }
+    if (!poses_text.empty()) {
+      std::stringstream ss(poses_text);
+      std::string item;
+      while (std::getline(ss, item, ';')) {
+        std::vector<double> v;
+        if (!ParseNumbers(item, v) || v.size() != 3)
+          return Usage("--poses: '" + item + "': expected x,y,yaw_deg (metres, degrees)");
+        options.poses.push_back({v[0], v[1], v[2]});
+      }
+    } else {
+      const auto& s = world_options.start;
+      const double yaw = s.yaw_deg * M_PI / 180.0;
+      for (int k = 0; k < static_cast<int>(steps); ++k)
+        options.poses.push_back({s.x + k * step_m * std::cos(yaw), s.y + k * step_m * std::sin(yaw), s.yaw_deg});
+    }
+    const geometry::StereoRig rig = geometry::LoadStereoRigFile(rig_path);
+    const terrain::World world(world_options);
+    cv::setNumThreads(1);  // one core, as on the rover computer
+
+    const hazard_eval::EvalResult r = hazard_eval::Evaluate(world, rig, options);
+    std::printf("hazard-eval: world %s, %zu poses, %dx%d stereo pairs, map step limit %.2f m, "
+                "rover step limit %.2f m\n",
+                world_options.name.c_str(), options.poses.size(), options.image_size,
+                options.image_size * rig.left->height() / rig.left->width(), options.map.max_step_m,
+                options.rock_limit_m);
+    std::printf("%s", hazard_eval::FormatTable(r, options.rock_limit_m).c_str());
+    std::printf("map update (AddStereoPair + rating): median %.0f ms over %zu pairs\n",
+                1000 * r.median_update_seconds, r.update_seconds.size());
+    for (const auto& s : r.sightings) {
+      if (!verbose && s.detected) continue;
+      std::printf("  %s %s from pose %d at %.1f m: %.2f m tall, map step %.2f m (%s)\n",
+                  s.detected ? "found " : "MISSED", s.name.c_str(), s.pose, s.range_m, s.height_m,
+                  s.step_m, s.state.c_str());
+    }
+    const hazard_eval::BandCounts near = r.Within4m();
+    int status = 0;
+    if (min_detection >= 0) {
+      const double f = near.rocks ? static_cast<double>(near.rocks_detected) / near.rocks : 0.0;
+      const bool ok = near.rocks > 0 && f >= min_detection;
+      std::printf("check: rocks over %.2f m detected within 4 m: %d of %d (%.1f %%), need >= %.1f %%: %s\n",
+                  options.rock_limit_m, near.rocks_detected, near.rocks, 100 * f,
+                  100 * min_detection, ok ? "PASS" : "FAIL");
+      if (!ok) status = 1;
+    }
+    if (max_false_unsafe >= 0) {
+      const double f = near.traversable_cells
+                           ? static_cast<double>(near.false_unsafe_cells) / near.traversable_cells
+                           : 1.0;
+      const bool ok = near.traversable_cells > 0 && f < max_false_unsafe;
+      std::printf("check: traversable cells marked unsafe within 4 m: %d of %d (%.1f %%), need < %.1f %%: %s\n",
+                  near.false_unsafe_cells, near.traversable_cells, 100 * f, 100 * max_false_unsafe,
+                  ok ? "PASS" : "FAIL");
+      if (!ok) status = 1;
+    }
+    return status;
+  } catch (const config::ConfigError& e) {
+    return Usage(e.what());
+  } catch (const std::invalid_argument& e) {
+    return Usage(e.what());
+  } catch (const std::exception& e) {
+    return Usage(std::string("error: ") + e.what());
+  }
+}

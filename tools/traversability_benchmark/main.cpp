@@ -1,0 +1,138 @@
+// Traversability map speed (issue 11): median time of one map update (AddStereoPair:
+// rectify, dense stereo, triangulate, bin, rate) on ONE core, at 512x512 and 1024x1024.
+//   traversability_benchmark [--world configs/worlds/rock_field.yaml]
+//                            [--rig configs/cameras/navcam_pinhole.yaml] [--pairs 20]
+//                            [--sizes 512,1024]
+// The pairs are rendered first (not timed) at poses 0.2 m apart along the world's start
+// heading; then each is added to one map, re-centred on its pose. Targets: <= 150 ms at
+// 512x512, <= 600 ms at 1024x1024. Bad arguments: one line, exit 2.
+#include "config/yaml_config.hpp"
+#include "geometry/camera_io.hpp"
+#include "geometry/pose.hpp"
+#include "render/stereo_renderer.hpp"
+#include "terrain/world.hpp"
+#include "traversability/traversability_map.hpp"
+
+#include <opencv2/core/utility.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+int Usage(const std::string& message) {
+  std::cerr << "traversability_benchmark: " << message << "\n";
+  return 2;
+}
+
+bool ParseInts(const std::string& text, std::vector<int>& out, int lo, int hi) {
+  std::stringstream ss(text);
+  std::string item;
+  out.clear();
+  while (std::getline(ss, item, ',')) {
+    try {
+      std::size_t used = 0;
+      const int v = std::stoi(item, &used);
+      if (used != item.size() || v < lo || v > hi) return false;
+      out.push_back(v);
+    } catch (const std::exception&) {
+      return false;
+    }
+  }
+  return !out.empty();
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace rover;
+  std::string world_path = "configs/worlds/rock_field.yaml";
+  std::string rig_path = "configs/cameras/navcam_pinhole.yaml";
+  std::vector<int> sizes{512, 1024};
+  int pairs = 20;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const bool has = i + 1 < argc;
+    std::vector<int> v;
+    if (a == "--help" || a == "-h") {
+      std::cout << "usage: traversability_benchmark [--world WORLD.yaml] [--rig RIG.yaml] [--pairs N] [--sizes 512,1024]\n";
+      return 0;
+    } else if (a == "--world") {
+      if (!has) return Usage("--world: expected a world YAML file");
+      world_path = argv[++i];
+    } else if (a == "--rig") {
+      if (!has) return Usage("--rig: expected a stereo rig YAML file");
+      rig_path = argv[++i];
+    } else if (a == "--pairs") {
+      if (!has || !ParseInts(argv[++i], v, 1, 1000) || v.size() != 1)
+        return Usage("--pairs: expected a number of stereo pairs in [1, 1000]");
+      pairs = v[0];
+    } else if (a == "--sizes") {
+      if (!has || !ParseInts(argv[++i], sizes, 64, 4096))
+        return Usage("--sizes: expected image widths in pixels, e.g. 512,1024 (each in [64, 4096])");
+    } else {
+      return Usage("unknown argument '" + a + "' (see --help)");
+    }
+  }
+  try {
+    const terrain::World world(terrain::WorldOptions::LoadFile(world_path));
+    const geometry::StereoRig rig = geometry::LoadStereoRigFile(rig_path);
+    cv::setNumThreads(1);  // one core
+    const auto& start = world.options().start;
+    const double yaw = start.yaw_deg * M_PI / 180.0;
+    geometry::Matrix6d cov = geometry::Matrix6d::Zero();
+    cov.diagonal() << 4e-4, 4e-4, 4e-4, 7.6e-5, 7.6e-5, 7.6e-5;  // 2 cm, 0.5 deg
+    std::printf("traversability_benchmark: world %s, %d pairs per size, one core\n",
+                world.options().name.c_str(), pairs);
+    std::printf("%-10s %12s %12s %12s %12s %10s\n", "size", "median ms", "rectify ms",
+                "match ms", "grid ms", "points");
+    for (int size : sizes) {
+      render::RenderOptions ro;
+      ro.image_scale = static_cast<double>(size) / rig.left->width();
+      render::StereoRenderer renderer(ro);
+      std::vector<render::StereoImages> images;
+      std::vector<geometry::Pose> poses;
+      for (int k = 0; k < pairs; ++k) {
+        const double x = start.x + 0.2 * k * std::cos(yaw), y = start.y + 0.2 * k * std::sin(yaw);
+        poses.push_back(geometry::PoseFromXyzRpy(x, y, -world.Elevation(x, y), 0, 0, yaw));
+        images.push_back(renderer.RenderPair(world, rig, poses.back(), k + 1));
+      }
+      traversability::TraversabilityMap map(traversability::MapOptions{});
+      std::vector<double> total, rect, match, grid, points;
+      for (int k = 0; k < pairs; ++k) {
+        map.Recentre(poses[k].translation().x(), poses[k].translation().y());
+        const auto t0 = std::chrono::steady_clock::now();
+        map.AddStereoPair(images[k].left, images[k].right, images[k].rig, poses[k], cov);
+        map.cells();
+        total.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        rect.push_back(map.last_update().seconds_rectify);
+        match.push_back(map.last_update().seconds_match);
+        grid.push_back(map.last_update().seconds_grid);
+        points.push_back(map.last_update().points);
+      }
+      const double target = size <= 512 ? 150.0 : size <= 1024 ? 600.0 : 0.0;
+      char label[32];
+      std::snprintf(label, sizeof label, "%dx%d", size, size * rig.left->height() / rig.left->width());
+      std::printf("%-10s %12.1f %12.1f %12.1f %12.1f %10.0f%s\n", label, 1000 * Median(total),
+                  1000 * Median(rect), 1000 * Median(match), 1000 * Median(grid), Median(points),
+                  target > 0 ? (1000 * Median(total) <= target ? "   (target <= " + std::to_string(static_cast<int>(target)) + " ms: met)"
+                                                              : "   (target <= " + std::to_string(static_cast<int>(target)) + " ms: MISSED)").c_str()
+                             : "");
+    }
+  } catch (const std::exception& e) {
+    return Usage(e.what());
+  }
+  return 0;
+}
