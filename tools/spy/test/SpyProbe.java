@@ -55,7 +55,9 @@ public final class SpyProbe {
     long timeoutS = parseLong("ROVER_SPY_PROBE_TIMEOUT_S", env("ROVER_SPY_PROBE_TIMEOUT_S", "30"));
     String screenshot = env("ROVER_SPY_PROBE_SCREENSHOT", "");
 
+    long t0 = System.nanoTime();
     lcm.spy.Spy.main(args);  // lcm-spy's own entry point: its window, its LCM subscription
+    System.out.println("spy probe: lcm-spy started in " + ms(t0) + " ms; waiting up to " + timeoutS + " s");
 
     long deadline = System.nanoTime() + timeoutS * 1_000_000_000L;
     JTable table = null;
@@ -76,7 +78,7 @@ public final class SpyProbe {
       System.out.println("spy probe: FAIL after " + timeoutS + " s: " + String.join("; ", missing));
       System.exit(1);
     }
-    System.out.println("spy probe: every expected channel decoded: " + expect);
+    System.out.println("spy probe: every expected channel decoded after " + ms(t0) + " ms: " + expect);
     if (!fields.isEmpty()) System.out.println("spy probe: decoded fields as published: " + fields);
     if (!screenshot.isEmpty()) {
       String first = expect.keySet().iterator().next();
@@ -89,6 +91,10 @@ public final class SpyProbe {
       System.out.println("spy probe: screenshot " + screenshot);
     }
     System.exit(0);
+  }
+
+  private static long ms(long t0) {
+    return (System.nanoTime() - t0) / 1_000_000;
   }
 
   private static String env(String name, String fallback) {

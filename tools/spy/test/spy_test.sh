@@ -13,6 +13,8 @@ set -u
 SRC="${ROVER_SOURCE_DIR:?set by ctest}"
 BUILD="${ROVER_BUILD_DIR:?set by ctest}"
 OUT="$BUILD/test-out/spy"
+t0="$(date +%s%N)"
+stamp() { echo "[$((($(date +%s%N) - t0) / 1000000)) ms] $*"; }
 skip() { echo "SKIP: $* (lcm-spy test not run)"; exit 77; }
 fail() { echo "FAIL: $*"; exit 1; }
 
@@ -58,7 +60,7 @@ wait_for 30 '[ -s "$OUT/display" ] || ! kill -0 $xvfb_pid 2>/dev/null' \
   || fail "Xvfb did not report a display within 30 s (see $OUT/xvfb.log)"
 kill -0 "$xvfb_pid" 2>/dev/null || fail "Xvfb exited: $(tail -3 "$OUT/xvfb.log")"
 display=":$(tr -d '[:space:]' <"$OUT/display")"
-echo "Xvfb on display $display"
+stamp "Xvfb on display $display"
 
 # A bus of this test's own (group and port no other test uses), loopback only.
 url="udpm://239.255.76.69:$((50000 + $$ % 10000))?ttl=0"
@@ -72,10 +74,11 @@ ROVER_SPY_PROBE_FIELDS="HEARTBEAT.process=spy_test_publisher;POSE.position=[1.5,
 ROVER_SPY_PROBE_MIN=5 ROVER_SPY_PROBE_TIMEOUT_S=30 ROVER_SPY_PROBE_SCREENSHOT="$OUT/screenshot.png" \
   timeout -k 5 100 "$SRC/tools/spy/spy.sh" --lcm-url "$url" >"$OUT/spy.log" 2>&1
 rc=$?
+stamp "lcm-spy with the probe exited $rc; its output:"
 cat "$OUT/spy.log"
 kill -0 "$pub_pid" 2>/dev/null || fail "spy_test_publisher exited early: $(cat "$OUT/publisher.log")"
 [ "$rc" -eq 0 ] || fail "lcm-spy with the probe exited $rc (log: $OUT/spy.log)"
 grep -qx "Found $n_types LCM types" "$OUT/spy.log" \
   || fail "lcm-spy did not report 'Found $n_types LCM types' (one per lcmtypes/*.lcm)"
 [ -s "$OUT/screenshot.png" ] || fail "no screenshot at $OUT/screenshot.png"
-echo "PASS: lcm-spy found $n_types types and decoded the project's messages; screenshot: $OUT/screenshot.png"
+stamp "PASS: lcm-spy found $n_types types and decoded the project's messages; screenshot: $OUT/screenshot.png"
