@@ -11,6 +11,12 @@
 #
 # --prefix DIR installs into a staging root (tests, images): no systemctl calls on the
 # running system; units are enabled offline with `systemctl --root=DIR`.
+#
+# --deployment FILE --host NAME: one computer of a rover split over several (README,
+# "Several hosts"): every unit is installed, but only the process units of NAME's share
+# of FILE (its processes with `host: NAME`, as `./rover launch FILE --host NAME` starts
+# them) are enabled, with the route and logger units. Every computer needs the same
+# /etc/rover/rover.env bus (ttl=1, same group and port) and the same key.
 set -euo pipefail
 
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -18,6 +24,8 @@ ROOT="$(cd "$HERE/../.." && pwd)"
 BUILD="$ROOT/build"
 PREFIX=""
 ENABLE=1
+DEPLOYMENT=""
+HOST=""
 
 die() { echo "install.sh: error: $*" >&2; exit 1; }
 note() { echo "install.sh: $*"; }
@@ -28,6 +36,9 @@ usage: configs/systemd/install.sh [--prefix DIR] [--build-dir DIR] [--no-enable]
   --prefix DIR     install under DIR (a staging root) instead of /; no systemctl on the running system
   --build-dir DIR  build tree holding bin/ (default: build/ at the repository root)
   --no-enable      copy files only; do not enable the units into rover.target / rover-sim.target
+  --deployment FILE --host NAME
+                   enable only the process units of host NAME's share of FILE (configs/deploy/*.yaml
+                   with `host:` per process); the rest are installed but not enabled
 EOF
 }
 
@@ -36,6 +47,8 @@ while [ $# -gt 0 ]; do
     --prefix) [ $# -ge 2 ] || die "--prefix needs a directory"; PREFIX="$2"; shift 2 ;;
     --build-dir) [ $# -ge 2 ] || die "--build-dir needs a directory"; BUILD="$2"; shift 2 ;;
     --no-enable) ENABLE=0; shift ;;
+    --deployment) [ $# -ge 2 ] || die "--deployment needs a file (configs/deploy/*.yaml)"; DEPLOYMENT="$2"; shift 2 ;;
+    --host) [ $# -ge 2 ] || die "--host needs a host name (from the deployment file)"; HOST="$2"; shift 2 ;;
     -h|--help) usage; exit 0 ;;
     *) die "unknown argument '$1' (see --help)" ;;
   esac
@@ -43,6 +56,13 @@ done
 
 BIN="$BUILD/bin"
 [ -d "$BIN" ] || die "no build output at $BIN: build first (./rover build) or pass --build-dir"
+if [ -n "$DEPLOYMENT" ] || [ -n "$HOST" ]; then
+  [ -n "$DEPLOYMENT" ] && [ -n "$HOST" ] || die "--deployment FILE and --host NAME go together"
+  [ -x "$BIN/launcher" ] || die "$BIN/launcher not built: it reads the deployment file (./rover build)"
+  # The programs of this host's share, one a line (the launcher reads the file: one parser).
+  host_programs="$("$BIN/launcher" "$DEPLOYMENT" --host "$HOST" --list 2>&1)" || die "$host_programs"
+  host_programs="$(echo "$host_programs" | awk '{ n = split($2, p, "/"); print p[n] }')"
+fi
 if [ -n "$PREFIX" ]; then
   mkdir -p "$PREFIX" || die "cannot create prefix $PREFIX"
   PREFIX="$(cd "$PREFIX" && pwd)"
@@ -89,6 +109,8 @@ for unit in "$HERE"/*.service "$HERE"/*.target; do
   installed_units+=("$name")
 done
 [ "${#installed_units[@]}" -gt 0 ] || die "no unit files found in $HERE"
+# rover-lcm-route.service's check of the bus settings (a shell script).
+install -m 0755 "$HERE/rover-bus-check" "$OPT/rover-bus-check"
 
 install_config "$ROOT/configs/rover.yaml" "$ETC/rover.yaml"
 install_config "$ROOT/configs/vo.yaml" "$ETC/vo.yaml"
@@ -128,8 +150,15 @@ fi
 enable_units=()
 for name in "${installed_units[@]}"; do
   [ "$name" = rover.target ] && continue
-  grep -q '^WantedBy=' "$UNITS/$name" && enable_units+=("$name")
+  grep -q '^WantedBy=' "$UNITS/$name" || continue
+  bin="$(unit_binary "$UNITS/$name")"
+  if [ -n "$HOST" ] && [ -n "$bin" ] && ! echo "$host_programs" | grep -qx "$bin"; then
+    note "$name not enabled: $bin runs on another host of $DEPLOYMENT"
+    continue
+  fi
+  enable_units+=("$name")
 done
+[ -z "$HOST" ] || note "host $HOST of $DEPLOYMENT: enabling ${enable_units[*]}"
 
 if [ -n "$PREFIX" ]; then
   if [ "$ENABLE" -eq 1 ] && [ "${#enable_units[@]}" -gt 0 ]; then

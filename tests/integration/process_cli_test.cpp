@@ -249,7 +249,7 @@ TEST(Launcher, BadDeploymentIsOneLine) {
   std::ofstream(deployment) << "processes:\n  - nam: rover_sim\n";
   const auto r = RunCommand(Bin("launcher") + " " + deployment);
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_EQ(r.output, deployment + ": processes[0].nam: unknown key (expected one of: name, program, args)\n");
+  EXPECT_EQ(r.output, deployment + ": processes[0].nam: unknown key (expected one of: name, program, args, host)\n");
 }
 
 }  // namespace

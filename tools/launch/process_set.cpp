@@ -8,6 +8,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <csignal>
@@ -18,6 +20,17 @@
 #include <thread>
 
 namespace rover::launch {
+namespace {
+
+bool ValidHostName(const std::string& name) {
+  if (name.empty() || name.size() > 64) return false;
+  for (const char c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != '-') return false;
+  }
+  return true;
+}
+
+}  // namespace
 
 Deployment LoadDeployment(const std::string& path) {
   const auto root = config::ConfigNode::LoadFile(path);
@@ -31,7 +44,7 @@ Deployment LoadDeployment(const std::string& path) {
   }
   for (std::size_t i = 0; i < list.size(); ++i) {
     const auto item = list.at(i);
-    item.CheckKeys({"name", "program", "args"});
+    item.CheckKeys({"name", "program", "args", "host"});
     ProcessSpec spec;
     spec.name = item.RequireString("name");
     spec.program = spec.name;
@@ -41,12 +54,45 @@ Deployment LoadDeployment(const std::string& path) {
       if (!args.IsSequence()) args.Fail("expected a list of arguments");
       for (std::size_t k = 0; k < args.size(); ++k) spec.args.push_back(args.at(k).AsString());
     }
+    if (item.Has("host")) {
+      spec.host = item.RequireString("host");
+      if (!ValidHostName(spec.host)) {
+        item["host"].Fail("expected a host name (letters, digits, '.', '_' or '-')");
+      }
+    }
     for (const auto& other : d.processes) {
       if (other.name == spec.name) item.Fail("duplicate process name \"" + spec.name + "\"");
+    }
+    // All or none: a process left without a host in a split set would run nowhere.
+    if (i > 0 && spec.host.empty() != d.processes.front().host.empty()) {
+      item.Fail(spec.host.empty() ? "missing host (expected host: NAME on every process, as processes[0] has)"
+                                  : "host: given here but not on processes[0] (expected it on every process or on none)");
+    }
+    if (!spec.host.empty() && std::find(d.hosts.begin(), d.hosts.end(), spec.host) == d.hosts.end()) {
+      d.hosts.push_back(spec.host);
     }
     d.processes.push_back(spec);
   }
   return d;
+}
+
+std::vector<ProcessSpec> ProcessesOnHost(const Deployment& deployment, const std::string& host) {
+  if (deployment.hosts.empty()) {
+    throw config::ConfigError(deployment.source + ": no host \"" + host +
+                              "\": this deployment assigns no process a host (it runs whole on one "
+                              "host: leave out --host)");
+  }
+  std::vector<ProcessSpec> on_host;
+  for (const auto& p : deployment.processes) {
+    if (p.host == host) on_host.push_back(p);
+  }
+  if (on_host.empty()) {
+    std::string names;
+    for (const auto& h : deployment.hosts) names += (names.empty() ? "" : ", ") + h;
+    throw config::ConfigError(deployment.source + ": no host \"" + host + "\" (expected one of: " +
+                              names + ")");
+  }
+  return on_host;
 }
 
 std::string BinDir() {

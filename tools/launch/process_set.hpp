@@ -16,16 +16,25 @@ struct ProcessSpec {
   std::string name;                // label in output, e.g. "state_estimator"
   std::string program;             // executable; a bare name is looked up in the bin dir
   std::vector<std::string> args;
+  std::string host = "";           // the computer it runs on (`host:`); "" in a one-host set
 };
 
 struct Deployment {
   std::string source;              // file it came from
   std::string lcm_url;             // empty = the caller's default
   std::vector<ProcessSpec> processes;
+  // The host names the processes are assigned to, in order of first appearance; empty
+  // when the file names none (the whole set runs on one host). Either every process has
+  // `host:` or none has.
+  std::vector<std::string> hosts;
 };
 
 // Reads configs/deploy/*.yaml. Throws config::ConfigError naming the file and key.
 Deployment LoadDeployment(const std::string& path);
+
+// The processes of `deployment` that run on `host`. Throws config::ConfigError (one line
+// listing the file's host names) when the file has no such host, or names no hosts at all.
+std::vector<ProcessSpec> ProcessesOnHost(const Deployment& deployment, const std::string& host);
 
 // The directory holding this executable (build/bin): where process binaries live.
 std::string BinDir();

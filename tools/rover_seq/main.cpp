@@ -12,6 +12,7 @@
 #include "bus/process.hpp"
 #include "bus/signing.hpp"
 #include "config/file_read.hpp"
+#include "launch/lcm_url.hpp"
 #include "sequence/executor.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
@@ -22,6 +23,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -73,16 +75,28 @@ double Now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+// How long a submit waits for the executor to answer (a status of the submission) before
+// it says that nothing answered, and why that might be.
+constexpr double kAnswerWaitS = 4.0;
+
 // Follows statuses (of `submission_id`, or of any sequence when < 0) until a terminal
 // one: exit 0 when it completed, 1 when it was aborted or rejected. With `once`, prints
-// the first status heard and returns 0. 3 when no status is heard for `silence_s`.
+// the first status heard and returns 0. 3 when no status is heard for `silence_s`, or,
+// for a submission, when the executor has not answered it within kAnswerWaitS.
+// `send` (the submit) runs once the subscriptions are in place, so no answer can be missed.
 int Follow(rover::bus::Bus& bus, std::int64_t submission_id, bool once, double silence_s,
-           bool signed_commands) {
+           bool signed_commands, const std::function<void()>& send = nullptr) {
   std::string last;
   int result = -1;
-  double last_heard = Now();
+  double last_heard = 0;  // set when the submit has gone
+  bool answered = false;               // a status of this submission was heard
+  bool executor_heard = false;         // the executor's heartbeat or any status
+  std::int64_t executor_dropped = -1;  // its count of dropped messages, first heard
+  std::int64_t executor_dropped_now = -1;
   bus.Subscribe<sequence_status_t>(rover::channels::kSequenceStatus, [&](const sequence_status_t& st) {
+    executor_heard = true;
     if (result >= 0 || (submission_id >= 0 && st.submission_id != submission_id)) return;
+    answered = true;
     last_heard = Now();
     std::ostringstream key;
     key << static_cast<int>(st.state) << " " << st.command_index << "/" << st.step_index << " " << st.detail;
@@ -94,15 +108,44 @@ int Follow(rover::bus::Bus& bus, std::int64_t submission_id, bool once, double s
       result = st.state == sequence_status_t::STATE_COMPLETED ? 0 : 1;
     }
   });
+  bus.Subscribe<rover_msgs::heartbeat_t>(rover::channels::kHeartbeat, [&](const rover_msgs::heartbeat_t& hb) {
+    if (hb.process != "sequence_executor") return;
+    executor_heard = true;
+    if (executor_dropped < 0) executor_dropped = hb.dropped;
+    executor_dropped_now = hb.dropped;
+  });
+  if (send) send();
+  const double start = Now();
+  last_heard = start;
   while (result < 0) {
     bus.Handle(100);
+    if (submission_id >= 0 && !answered && Now() - start > kAnswerWaitS) {
+      if (!executor_heard) {
+        std::cerr << "rover_seq: no answer to submission " << submission_id << " within " << kAnswerWaitS
+                  << " s: no sequence_executor heard on " << bus.url()
+                  << " (no sequence status, no executor heartbeat), so the submit reached no executor; "
+                  << rover::launch::NothingHeardCauses(bus.url(), "sequence_executor") << "\n";
+      } else {
+        std::cerr << "rover_seq: sequence_executor is heard on " << bus.url()
+                  << " but did not answer submission " << submission_id << " within " << kAnswerWaitS << " s"
+                  << (executor_dropped_now > executor_dropped ? " (it dropped a message meanwhile)" : "")
+                  << (signed_commands ? ": does it hold the same key as --key / $ROVER_KEY_FILE?"
+                                      : ": if it requires signed commands, pass --key FILE or set $ROVER_KEY_FILE")
+                  << "\n";
+      }
+      return 3;
+    }
     if (Now() - last_heard > silence_s) {
-      std::cerr << "rover_seq: no sequence status heard for " << silence_s << " s on " << bus.url()
-                << " (is sequence_executor running on this bus?"
-                << (submission_id >= 0 && !signed_commands
-                        ? " If it requires signed commands, pass --key FILE or set $ROVER_KEY_FILE."
-                        : "")
-                << ")\n";
+      std::cerr << "rover_seq: no sequence status heard for " << silence_s << " s on " << bus.url();
+      if (submission_id >= 0) {
+        std::cerr << " (sequence_executor stopped reporting submission " << submission_id
+                  << ": did it stop, or the bus between the hosts break?)\n";
+      } else if (executor_heard) {
+        std::cerr << " (sequence_executor is heard but reported nothing)\n";
+      } else {
+        std::cerr << " (no sequence_executor heard either; "
+                  << rover::launch::NothingHeardCauses(bus.url(), "sequence_executor") << ")\n";
+      }
       return 3;
     }
   }
@@ -197,10 +240,16 @@ int main(int argc, char** argv) {
       msg.submission_id = static_cast<std::int64_t>(Now() * 1e3);
       msg.name = positional[1];
       msg.text = text;
-      bus->Publish(rover::channels::kSequenceSubmit, msg);
-      std::cout << (key ? "submitted (signed) " : "submitted ") << positional[1] << " as "
-                << msg.submission_id << "\n";
-      return follow ? Follow(*bus, msg.submission_id, false, 10.0, key.has_value()) : 0;
+      auto send = [&] {
+        bus->Publish(rover::channels::kSequenceSubmit, msg);
+        std::cout << (key ? "submitted (signed) " : "submitted ") << positional[1] << " as "
+                  << msg.submission_id << " on " << bus->url() << "\n" << std::flush;
+      };
+      if (!follow) {
+        send();
+        return 0;
+      }
+      return Follow(*bus, msg.submission_id, false, 10.0, key.has_value(), send);
     }
     if (sub == "status") {
       auto bus = OpenBus(url, std::nullopt);
