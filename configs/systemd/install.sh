@@ -153,7 +153,7 @@ for name in "${installed_units[@]}"; do
   grep -q '^WantedBy=' "$UNITS/$name" || continue
   bin="$(unit_binary "$UNITS/$name")"
   if [ -n "$HOST" ] && [ -n "$bin" ] && ! echo "$host_programs" | grep -qx "$bin"; then
-    note "$name not enabled: $bin runs on another host of $DEPLOYMENT"
+    note "$name not enabled: $bin is not in host $HOST's share of $DEPLOYMENT"
     continue
   fi
   enable_units+=("$name")
