@@ -31,6 +31,7 @@ if [ "${ROVER_MULTIHOST_INNER:-}" != 1 ]; then
   ROVER_MULTIHOST_INNER=1 exec unshare -rn bash "$0" "$@"
 fi
 
+BUILD="$(cd "$BUILD" && pwd)" || exit 2
 BIN="$BUILD/bin"
 DEPLOY="configs/deploy/sim_vo_two_hosts.yaml"
 OUT="$BUILD/test-out/multihost_$MODE"
@@ -51,9 +52,11 @@ cleanup() {
 launchers=()
 trap cleanup EXIT
 
-# Two hosts: each a network namespace held open by a sleeping process.
-unshare -n sleep 600 & ROVER_NS=$!; pids+=("$ROVER_NS")
-unshare -n sleep 600 & GROUND_NS=$!; pids+=("$GROUND_NS")
+# Two hosts: each a network namespace held open by a sleeping process. Nothing here
+# outlives the test by long, even if it is killed: the holders sleep 150 s, the launchers
+# are stopped by `timeout` after 120 s (their processes die with them, PR_SET_PDEATHSIG).
+unshare -n sleep 150 & ROVER_NS=$!; pids+=("$ROVER_NS")
+unshare -n sleep 150 & GROUND_NS=$!; pids+=("$GROUND_NS")
 for _ in $(seq 50); do
   [ "$(readlink /proc/$ROVER_NS/ns/net)" != "$(readlink /proc/self/ns/net)" ] &&
     [ "$(readlink /proc/$GROUND_NS/ns/net)" != "$(readlink /proc/self/ns/net)" ] && break
@@ -74,9 +77,9 @@ echo "host rover:  $(on "$ROVER_NS" ip -brief addr show vrover); $(on "$ROVER_NS
 echo "host ground: $(on "$GROUND_NS" ip -brief addr show vground); $(on "$GROUND_NS" ip route show 224.0.0.0/4)"
 
 # Each host starts its share of the deployment with the real launcher.
-on "$ROVER_NS" "$BIN/launcher" "$DEPLOY" --host rover --lcm-url "$URL" > "$OUT/rover.log" 2>&1 &
+on "$ROVER_NS" timeout 120 "$BIN/launcher" "$DEPLOY" --host rover --lcm-url "$URL" > "$OUT/rover.log" 2>&1 &
 launchers+=($!)
-on "$GROUND_NS" "$BIN/launcher" "$DEPLOY" --host ground --lcm-url "$URL" > "$OUT/ground.log" 2>&1 &
+on "$GROUND_NS" timeout 120 "$BIN/launcher" "$DEPLOY" --host ground --lcm-url "$URL" > "$OUT/ground.log" 2>&1 &
 launchers+=($!)
 
 # Ready when each host hears the heartbeats it should: with ttl=1 every process of both
@@ -115,7 +118,7 @@ launcher_ok() {  # no process died on either host
 
 if [ "$MODE" = ttl1 ]; then
   # Host rover records its bus meanwhile: what it heard from host ground.
-  on "$ROVER_NS" "$BIN/rover_recorder" --lcm-url "$URL" "$OUT/rover.lcm" > "$OUT/recorder.log" 2>&1 &
+  on "$ROVER_NS" timeout 120 "$BIN/rover_recorder" --lcm-url "$URL" "$OUT/rover.lcm" > "$OUT/recorder.log" 2>&1 &
   recorder=$!
   launchers+=("$recorder")
   for _ in $(seq 100); do [ -s "$OUT/rover.lcm" ] && break; sleep 0.1; done
