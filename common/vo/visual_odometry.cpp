@@ -4,7 +4,9 @@
 #include "vo/correlation.hpp"
 #include "vo/features.hpp"
 #include "vo/motion_estimation.hpp"
+#include "vo/tracks.hpp"
 #include "vo/triangulation.hpp"
+#include "vo/window.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <opencv2/imgproc.hpp>
@@ -34,6 +36,11 @@ struct Feature {
   Eigen::Vector3d P;
   Eigen::Matrix3d Sigma;
   Eigen::Vector3d dP_ddisparity;  // dP / d(right x): a disparity offset (VO-13)
+  // Windowed mode: the stereo match behind P, and the track (id, pairs seen so far).
+  Eigen::Vector2d right = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d Sigma_left = Eigen::Matrix2d::Identity(), Sigma_right = Eigen::Matrix2d::Identity();
+  std::int64_t track_id = 0;
+  int age = 1;
 };
 
 // One stereo pair at the working resolution.
@@ -46,6 +53,8 @@ struct Pair {
   cv::Mat left, right, right_half, scratch, response;
   std::vector<cv::Mat> left_levels;
   std::vector<Feature> features;
+  std::vector<Corner> corners;  // windowed mode: VO-2's corners, stereo-matched later
+  std::int64_t frame_id = 0;
   int width = 0, height = 0;
   double pixel_angle = 1e-3;  // radians per pixel near the left image centre
   double far_range = 1e6;     // range at stereo_min_disparity_px
@@ -81,6 +90,21 @@ struct VisualOdometry::State {
   Correlator correlator;
   Template tmpl, coarse_tmpl;
   std::uint64_t calls = 0;
+  // Windowed mode: `prev` is the last keyframe (the reference pair); the last call's pair
+  // in the reference pair's frame; the window; the next track id.
+  SlidingWindow window;
+  Eigen::Isometry3d T_ref_last = Eigen::Isometry3d::Identity();
+  std::int64_t next_track_id = 1;
+  bool Windowed() const { return o.window_size >= 2; }
+  // Windowed mode: gives `pair` the carried tracks plus fresh corners stereo-matched where
+  // tracks are missing (VO-2 top-up), and counts its features in res.
+  void CompleteFeatures(Pair* pair, std::vector<Feature> carried, VoResult* res);
+  // Windowed mode: the window restarts on `pair` (first pair, a failure, a refused
+  // refinement), which becomes the reference pair.
+  void RestartWindow(Pair* pair);
+  void Accept(std::int64_t frame_id, const geometry::StereoRig& rig, const std::vector<int>& corr_source,
+              const std::vector<int>& inliers, const MotionUncertainty& u, std::vector<Feature>* carried,
+              std::unique_ptr<Pair>* cur, std::unique_ptr<Pair>* ref, VoResult* res);
 
   std::string CheckInput(const StereoImages& im) const;
   std::unique_ptr<Pair> Prepare(const StereoImages& im, VoResult* res, Clock::time_point* t);
@@ -182,13 +206,16 @@ std::unique_ptr<Pair> VisualOdometry::State::Prepare(const StereoImages& im, VoR
   co.count = o.feature_count;
   co.min_response = o.feature_min_response;
   co.border_px = o.feature_border_px;
-  const std::vector<Corner> corners = DetectCorners(left, co, &pair->response);
+  pair->frame_id = im.frame_id;
+  pair->corners = DetectCorners(left, co, &pair->response);
+  const std::vector<Corner>& corners = pair->corners;
   res->num_detected = static_cast<int>(corners.size());
   const auto t_detect = Clock::now();
   res->times.detect_ms = Ms(*t, t_detect);
   *t = t_detect;
 
-  StereoMatchFresh(pair.get(), corners);
+  // Windowed mode: stereo waits until tracking has shown where tracks are missing.
+  if (!Windowed()) StereoMatchFresh(pair.get(), corners);
   res->num_matched = static_cast<int>(pair->features.size());
   const auto t_stereo = Clock::now();
   res->times.stereo_ms = Ms(*t, t_stereo);
@@ -290,17 +317,72 @@ void VisualOdometry::State::StereoMatchFresh(Pair* pair, const std::vector<Corne
     if (!TriangulateStereo(pair->rig, left, self.covariance, right, Sigma_right, limits, &sp, &J)) {
       continue;
     }
-    found[i] = {left, sp.P, sp.Sigma, J.col(2)};
+    Feature& f = found[i];
+    f.left = left;
+    f.P = sp.P;
+    f.Sigma = sp.Sigma;
+    f.dP_ddisparity = J.col(2);
+    f.right = right;
+    f.Sigma_left = self.covariance;
+    f.Sigma_right = Sigma_right;
     ok[i] = 1;
   }
   for (std::size_t i = 0; i < corners.size(); ++i) {
-    if (ok[i]) pair->features.push_back(found[i]);
+    if (!ok[i]) continue;
+    found[i].track_id = next_track_id++;
+    pair->features.push_back(found[i]);
   }
+}
+
+void VisualOdometry::State::CompleteFeatures(Pair* pair, std::vector<Feature> carried, VoResult* res) {
+  const auto t0 = Clock::now();
+  std::vector<Eigen::Vector2d> pos;
+  std::vector<int> ages;
+  for (const Feature& f : carried) {
+    pos.push_back(f.left);
+    ages.push_back(f.age);
+  }
+  const std::vector<int> keep = SelectTracks(pos, ages, o.track_min_distance_px, o.feature_count);
+  std::vector<Eigen::Vector2d> kept_pos;
+  pair->features.clear();
+  for (int i : keep) {
+    pair->features.push_back(carried[static_cast<std::size_t>(i)]);
+    kept_pos.push_back(carried[static_cast<std::size_t>(i)].left);
+  }
+  std::vector<Feature> tracks = std::move(pair->features);
+  pair->features.clear();
+  const std::vector<int> top = TopUpCorners(kept_pos, pair->corners, o.feature_min_distance_px, o.feature_count);
+  std::vector<Corner> fresh;
+  fresh.reserve(top.size());
+  for (int i : top) fresh.push_back(pair->corners[static_cast<std::size_t>(i)]);
+  StereoMatchFresh(pair, fresh);
+  // Tracks first (the order RANSAC draws in), then the fresh features.
+  tracks.insert(tracks.end(), pair->features.begin(), pair->features.end());
+  pair->features = std::move(tracks);
+  res->num_matched = static_cast<int>(pair->features.size());
+  res->times.stereo_ms += Ms(t0, Clock::now());
+}
+
+void VisualOdometry::State::RestartWindow(Pair* pair) {
+  window.Reset();
+  std::vector<WindowObservation> obs;
+  obs.reserve(pair->features.size());
+  for (const Feature& f : pair->features) {
+    obs.push_back({f.track_id, f.left, f.right, f.Sigma_left, f.Sigma_right, f.P, f.Sigma});
+  }
+  window.AddFrame(pair->frame_id, Eigen::Isometry3d::Identity(), std::move(obs));
+  T_ref_last = Eigen::Isometry3d::Identity();
 }
 
 VisualOdometry::VisualOdometry(VoOptions options) : state_(std::make_unique<State>()) {
   ValidateVoOptions(options);
   state_->o = options;
+  WindowOptions w;
+  w.max_frames = std::max(2, options.window_size);
+  w.max_iterations = options.window_max_iterations;
+  w.huber_sigmas = options.window_huber_sigmas;
+  w.disparity_offset_sigma_px = options.window_disparity_offset_sigma_px;
+  state_->window = SlidingWindow(w);
 }
 VisualOdometry::~VisualOdometry() = default;
 VisualOdometry::VisualOdometry(VisualOdometry&&) noexcept = default;
@@ -310,6 +392,8 @@ void VisualOdometry::Reset() {
   state_->prev.reset();
   state_->spare.reset();
   state_->calls = 0;
+  state_->window = SlidingWindow(state_->window.options());
+  state_->T_ref_last = Eigen::Isometry3d::Identity();
 }
 
 const VoOptions& VisualOdometry::options() const { return state_->o; }
@@ -322,7 +406,18 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   VoResult res;
   const auto t_start = Clock::now();
   auto t = t_start;
+  const bool windowed = s.Windowed();
+  // The new pair, and the pair it is measured against (the previous one; in windowed
+  // mode the last keyframe).
+  std::unique_ptr<Pair> cur, prev;
   auto finish = [&](VoStatus status, std::string reason) {
+    if (windowed && cur) {
+      // Every outcome but an accepted measurement restarts the tracks and the window on
+      // the new pair, which becomes the reference (as VO-10 makes it the previous pair).
+      s.CompleteFeatures(cur.get(), {}, &res);
+      s.RestartWindow(cur.get());
+      s.prev = std::move(cur);
+    }
     res.status = status;
     res.reason = std::move(reason);
     res.times.total_ms = Ms(t_start, Clock::now());
@@ -337,10 +432,12 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   }
   ++s.calls;
 
-  std::unique_ptr<Pair> cur = s.Prepare(images, &res, &t);
-  std::unique_ptr<Pair> prev = std::move(s.prev);
-  s.prev = std::move(cur);  // every outcome below makes this pair the previous one
-  const Pair& c = *s.prev;
+  cur = s.Prepare(images, &res, &t);
+  prev = std::move(s.prev);
+  if (!windowed) s.prev = std::move(cur);  // every outcome below makes this pair the previous one
+  const Pair& c = windowed ? *cur : *s.prev;
+  // Windowed mode: the prior from the reference pair (the last keyframe).
+  const Eigen::Isometry3d prior_ref = windowed ? s.T_ref_last * prior_T_prev_curr : prior_T_prev_curr;
   struct Recycle {  // hands the old pair's buffers to the next call, on every return path
     State& s;
     std::unique_ptr<Pair>& p;
@@ -355,8 +452,8 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   }
 
   // ---- VO-10: motion too large for the overlap (checked on the prior) ----
-  const Eigen::Vector3d prior_t = prior_T_prev_curr.translation();
-  const double prior_angle = Eigen::AngleAxisd(prior_T_prev_curr.linear()).angle();
+  const Eigen::Vector3d prior_t = prior_ref.translation();
+  const double prior_angle = Eigen::AngleAxisd(prior_ref.linear()).angle();
   if (o.motion_max_translation_m > 0 && prior_t.norm() > o.motion_max_translation_m) {
     return finish(VoStatus::kMotionTooLarge,
                   Format("prior step %.3f m exceeds %.3f m; re-initialised", prior_t.norm(),
@@ -369,7 +466,7 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   }
 
   // ---- VO-6: tracking through the motion prior ----
-  const Eigen::Matrix3d R_pc = prior_T_prev_curr.linear();
+  const Eigen::Matrix3d R_pc = prior_ref.linear();
   const Eigen::Vector3d rpy = geometry::RpyFromRotation(R_pc);
   Eigen::Matrix3d dR[3];
   geometry::RotationFromRpyDerivatives(rpy, nullptr, dR);
@@ -396,6 +493,8 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   });
   std::vector<Correspondence> tracked(nprev);
   std::vector<char> tracked_ok(nprev, 0), tracked_fixed(nprev, 0);
+  std::vector<Feature> carried(windowed ? nprev : 0);  // windowed: the tracks as seen now
+  std::vector<int> corr_source;                          // corr index -> prev feature
   for (const int fi : order) {
     const Feature& f = prev->features[fi];
     const Eigen::Vector3d d = f.P - prior_t;
@@ -428,7 +527,10 @@ VoResult VisualOdometry::Process(const StereoImages& images,
       const int tx = static_cast<int>(std::lround(ToLevel(f.left.x(), l)));
       const int ty = static_cast<int>(std::lround(ToLevel(f.left.y(), l)));
       const int side = l == 0 ? o.match_template_px : o.track_coarse_template_px;
-      if (!s.tmpl.Extract(prev->left_band[l], tx, ty, side)) {
+      // A track's position is sub-pixel: its template is resampled there at full size.
+      const bool subpixel = l == 0 && (f.left.x() != tx || f.left.y() != ty);
+      if (subpixel ? !s.tmpl.ExtractSubpixel(prev->left_band[0], f.left.x(), f.left.y(), side)
+                   : !s.tmpl.Extract(prev->left_band[l], tx, ty, side)) {
         ok = false;
         break;
       }
@@ -496,12 +598,25 @@ VoResult VisualOdometry::Process(const StereoImages& images,
     x.dPprev_ddisparity = f.dP_ddisparity;
     tracked[fi] = x;
     tracked_ok[fi] = 1;
+    if (windowed) {
+      Feature& n = carried[fi];
+      n.left = m.position;
+      n.P = sp.P;
+      n.Sigma = sp.Sigma;
+      n.dP_ddisparity = J.col(2);
+      n.right = right;
+      n.Sigma_left = m.covariance;
+      n.Sigma_right = Sigma_right;
+      n.track_id = f.track_id;
+      n.age = f.age + 1;
+    }
     tracked_fixed[fi] = (m.position - f.left).norm() < o.shadow_fixed_px &&
                         (u_pred - f.left).norm() > o.shadow_min_predicted_px;
   }
   for (int i = 0; i < nprev; ++i) {
     if (!tracked_ok[i]) continue;
     corr.push_back(tracked[i]);
+    corr_source.push_back(i);
     res.tracks.push_back({prev->features[i].left, tracked[i].left, false});
     fixed.push_back(tracked_fixed[i]);
   }
@@ -596,6 +711,7 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   res.T_prev_curr = ml.T_prev_curr;
 
   // ---- VO-13: the covariance from what the data shows (timed with the ML) ----
+  MotionUncertainty u;
   {
     const auto t_u = Clock::now();
     const int grid = o.covariance_cluster_grid;
@@ -613,8 +729,7 @@ VoResult VisualOdometry::Process(const StereoImages& images,
     shared.disparity_sigma_px = o.covariance_disparity_sigma_px;
     shared.centre_px = Eigen::Vector2d(0.5 * (c.width - 1), 0.5 * (c.height - 1));
     shared.half_size_px = 0.5 * std::max(c.width, c.height);
-    const MotionUncertainty u =
-        EstimateMotionUncertainty(corr, inliers, ml.T_prev_curr, cluster, grid * grid, shared);
+    u = EstimateMotionUncertainty(corr, inliers, ml.T_prev_curr, cluster, grid * grid, shared);
     if (!u.ok) {
       res.T_prev_curr = Eigen::Isometry3d::Identity();
       return finish(VoStatus::kDegenerate, "motion undetermined: the normal matrix is singular");
@@ -710,7 +825,95 @@ VoResult VisualOdometry::Process(const StereoImages& images,
                                                   sigma_r / kDeg, o.degenerate_max_rotation_sigma_deg));
     }
   }
+  if (windowed) s.Accept(images.frame_id, c.rig, corr_source, inliers, u, &carried, &cur, &prev, &res);
   return finish(VoStatus::kOk, "");
+}
+
+// Windowed mode, an accepted measurement of the new pair against the reference pair
+// (res->T_prev_curr, covariance res->covariance): keyframe or not, the window's
+// refinement, and the delta from the last call's pair.
+void VisualOdometry::State::Accept(std::int64_t frame_id, const geometry::StereoRig& rig,
+                                   const std::vector<int>& corr_source, const std::vector<int>& inliers,
+                                   const MotionUncertainty& u, std::vector<Feature>* carried,
+                                   std::unique_ptr<Pair>* cur, std::unique_ptr<Pair>* ref, VoResult* res) {
+  const Eigen::Isometry3d T_ref_cur = res->T_prev_curr;
+  const Matrix6d pair_cov = res->covariance;
+  double age_sum = 0;
+  for (int k : inliers) {
+    const int age = (*carried)[static_cast<std::size_t>(corr_source[static_cast<std::size_t>(k)])].age;
+    age_sum += age;
+    res->track_length_max = std::max(res->track_length_max, age);
+  }
+  res->track_length_mean = inliers.empty() ? 0.0 : age_sum / double(inliers.size());
+  const double moved = T_ref_cur.translation().norm();
+  const double turned = Eigen::AngleAxisd(T_ref_cur.linear()).angle();
+  // A pair that moved too little is measured against the reference and forgotten; one
+  // that kept too few of the reference's features becomes a keyframe anyway.
+  const bool keyframe = moved >= o.keyframe_min_translation_m || turned >= o.keyframe_min_rotation_deg * kDeg ||
+                        2 * static_cast<int>(inliers.size()) < static_cast<int>((*ref)->features.size());
+  res->keyframe = keyframe;
+  if (!keyframe) {
+    res->T_prev_curr = T_ref_last.inverse() * T_ref_cur;
+    T_ref_last = T_ref_cur;
+    prev = std::move(*ref);
+    spare = std::move(*cur);
+    res->window_frames = window.size();
+    return;
+  }
+  // The tracks VO-8 used live on; detection tops them up.
+  std::vector<Feature> tracks;
+  tracks.reserve(inliers.size());
+  for (int k : inliers) tracks.push_back((*carried)[static_cast<std::size_t>(corr_source[static_cast<std::size_t>(k)])]);
+  CompleteFeatures(cur->get(), std::move(tracks), res);
+
+  const auto t0 = Clock::now();
+  std::vector<WindowObservation> obs;
+  obs.reserve((*cur)->features.size());
+  for (const Feature& f : (*cur)->features) {
+    obs.push_back({f.track_id, f.left, f.right, f.Sigma_left, f.Sigma_right, f.P, f.Sigma});
+  }
+  const Eigen::Isometry3d T_w_ref = window.pose(window.size() - 1);
+  window.AddFrame(frame_id, T_w_ref * T_ref_cur, std::move(obs));
+  const WindowSolution w = window.Refine(rig);
+  res->window_frames = window.size();
+  res->window_points = w.points;
+  res->window_iterations = w.iterations;
+  res->disparity_offset_px = w.disparity_offset_px;
+  Eigen::Isometry3d T_ref_cur_final = T_ref_cur;
+  bool used = false;
+  if (w.ok) {
+    // The refined delta's covariance: the pair's VO-13 covariance with its fit part
+    // (everything but the shared errors, which no window averages away) carried from the
+    // pair's inverse normal matrix to the window's: S (C - G) S^T + G with
+    // S = L_w L_p^-1, L L^T the two inverse normal matrices.
+    const Eigen::LLT<Matrix6d> Lp(u.inverse_normal), Lw(w.covariance);
+    if (Lp.info() == Eigen::Success && Lw.info() == Eigen::Success) {
+      const Matrix6d L_p = Lp.matrixL();
+      const Matrix6d Sm = Matrix6d(Lw.matrixL()) * L_p.inverse();
+      Matrix6d cov = Sm * (pair_cov - u.shared) * Sm.transpose() + u.shared;
+      cov = 0.5 * (cov + cov.transpose()).eval();
+      const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
+      const geometry::Vector6d b = geometry::XyzRpyFromPose(T_ref_cur);
+      geometry::Vector6d d = a - b;
+      for (int i = 3; i < 6; ++i) d(i) = geometry::WrapAngle(d(i));
+      const double chi2 = d.dot(pair_cov.ldlt().solve(d));
+      if (cov.allFinite() && (o.window_max_chi2 <= 0 || chi2 <= o.window_max_chi2)) {
+        T_ref_cur_final = w.T_prev_last;
+        res->covariance = cov;
+        used = true;
+      }
+    }
+  }
+  if (!used) {
+    // Refused: the window restarts on this pair; the pair's own estimate is published.
+    window.PopNewest();
+    RestartWindow(cur->get());
+  }
+  res->window_used = used;
+  res->times.window_ms = Ms(t0, Clock::now());
+  res->T_prev_curr = T_ref_last.inverse() * T_ref_cur_final;
+  T_ref_last = Eigen::Isometry3d::Identity();
+  prev = std::move(*cur);
 }
 
 }  // namespace rover::vo

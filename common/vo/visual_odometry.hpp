@@ -208,6 +208,33 @@ struct VoOptions {
   // rendered truth only (tools/vo_eval/README.md): 0.02 and 0.05 px.
   double covariance_field_sigma_px = 0.02;
   double covariance_disparity_sigma_px = 0.05;
+
+  // ---- VO with memory: feature tracks and a sliding window (README "VO with memory") ----
+  // Keyframes in the sliding-window maximum-likelihood refinement (window.hpp); < 2 = off:
+  // the MER frame-to-frame VO above, unchanged (fresh features every pair, no keyframes).
+  // On: features that VO-8 used live on as tracks (tracks.hpp), detection (VO-2) only
+  // tops up the image where tracks are missing, and after each keyframe's VO-8 estimate
+  // the last window_size poses and the points tracked through them are refined together.
+  int window_size = 5;
+  // Levenberg-Marquardt iterations of the refinement, and its Huber threshold (sigmas of
+  // an observation's normalised stereo reprojection residual).
+  int window_max_iterations = 8;
+  double window_huber_sigmas = 3.0;
+  // The refined delta must agree with the pair's VO-8 estimate: chi-square (6 dof) of
+  // their difference under the pair's covariance. Beyond it the pair estimate is used and
+  // the window restarts (20.06: the 99.7 % bound).
+  double window_max_chi2 = 20.06;
+  // The window also estimates one disparity offset of the rig (right x, pixels; a zero-mean
+  // prior of this sigma), which scales every range and so every step; 0 = not estimated.
+  double window_disparity_offset_sigma_px = 0.5;
+  // Carried tracks closer than this to an older track are dropped (older tracks win), so
+  // tracks stay spread; fresh corners keep feature_min_distance_px from every track.
+  double track_min_distance_px = 10.0;
+  // Keyframes: a pair that moved less than both of these from the last keyframe (a short
+  // step, standing still) is measured against that keyframe, so noise does not add up
+  // frame after frame; it joins neither the window nor the tracks.
+  double keyframe_min_translation_m = 0.1;
+  double keyframe_min_rotation_deg = 2.0;
 };
 
 // Reads the node of the `vo:` section. Unknown keys and out-of-range values throw
@@ -228,6 +255,7 @@ struct StereoImages {
 
 struct StageTimes {
   double detect_ms = 0, stereo_ms = 0, track_ms = 0, ransac_ms = 0, ml_ms = 0, total_ms = 0;
+  double window_ms = 0;  // sliding-window refinement (0 when off)
 };
 
 struct VoResult {
@@ -249,6 +277,16 @@ struct VoResult {
   double variance_factor = 0;
   double cluster_factor = 0;
   StageTimes times;
+  // Windowed mode (VoOptions::window_size): whether this pair became a keyframe, the
+  // lengths (pairs seen, this one included) of the tracks VO-8 used, the window's
+  // keyframes, points and iterations, and whether the refined delta was published
+  // (false: the pair's VO-8 estimate was).
+  bool keyframe = true;
+  double track_length_mean = 0;
+  int track_length_max = 0;
+  int window_frames = 0, window_points = 0, window_iterations = 0;
+  bool window_used = false;
+  double disparity_offset_px = 0;  // the window's estimate of the rig's disparity offset
   // The features tracked from the previous pair (VO-6), in the order of the
   // correspondences, with the ones the ML motion used marked (tracked_feature.hpp).
   std::vector<TrackedFeature> tracks;

@@ -282,7 +282,9 @@ void WriteEvaluation(const std::string& out_dir, const EvalInput& input, const E
            "iterations,detect_ms,stereo_ms,track_ms,ransac_ms,ml_ms,total_ms,wall_ms,cpu_ms,"
            "x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,"
            "sigma_x_m,sigma_y_m,sigma_z_m,sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg,"
-           "err_x_m,err_y_m,err_z_m,err_roll_deg,err_pitch_deg,err_yaw_deg,nees,variance_factor,cluster_factor\n";
+           "err_x_m,err_y_m,err_z_m,err_roll_deg,err_pitch_deg,err_yaw_deg,nees,variance_factor,cluster_factor,"
+           "keyframe,window_used,window_frames,window_points,window_iterations,window_ms,"
+           "track_length_mean,track_length_max,disparity_offset_px\n";
     for (const FrameRecord& f : report.frames) {
       const vo::VoResult& r = f.result;
       const geometry::Vector6d m = geometry::XyzRpyFromPose(f.motion);
@@ -317,7 +319,9 @@ void WriteEvaluation(const std::string& out_dir, const EvalInput& input, const E
       if (f.accepted) csv << JsonNumber(r.variance_factor);
       csv << ",";
       if (f.accepted) csv << JsonNumber(r.cluster_factor);
-      csv << "\n";
+      csv << "," << (r.keyframe ? 1 : 0) << "," << (r.window_used ? 1 : 0) << "," << r.window_frames << ","
+          << r.window_points << "," << r.window_iterations << "," << JsonNumber(r.times.window_ms) << ","
+          << JsonNumber(r.track_length_mean) << "," << r.track_length_max << "," << JsonNumber(r.disparity_offset_px) << "\n";
     }
     if (!csv) throw std::runtime_error(csv_path + ": write failed");
   }

@@ -1,0 +1,341 @@
+#include "vo/window.hpp"
+
+#include "geometry/pose.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <cmath>
+
+namespace rover::vo {
+
+namespace {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix63 = Eigen::Matrix<double, 6, 3>;
+
+struct PointBlock {
+  std::int64_t id = 0;
+  Eigen::Vector3d X = Eigen::Vector3d::Zero();
+  std::vector<std::pair<int, const WindowObservation*>> obs;  // (keyframe, observation)
+};
+
+// Residual (measured minus predicted, left then right) and the Jacobians of the
+// prediction with respect to the pose perturbation and to the point.
+bool Linearise(const geometry::StereoRig& rig, const Eigen::Isometry3d& T_w, const Eigen::Vector3d& X,
+               const WindowObservation& z, Eigen::Vector4d* r, Eigen::Matrix<double, 4, 6>* Jp,
+               Eigen::Matrix<double, 4, 3>* Jx) {
+  const Eigen::Matrix3d Rt = T_w.linear().transpose();
+  const Eigen::Vector3d P = Rt * (X - T_w.translation());
+  Eigen::Vector2d ul, ur;
+  Eigen::Matrix<double, 2, 3> Jl, Jr;
+  if (!rig.left->Project(P, &ul, Jp ? &Jl : nullptr)) return false;
+  if (!rig.right->Project(P, &ur, Jp ? &Jr : nullptr)) return false;
+  r->head<2>() = z.left - ul;
+  r->tail<2>() = z.right - ur;
+  if (Jp) {
+    Eigen::Matrix<double, 4, 3> Ju;
+    Ju.topRows<2>() = Jl;
+    Ju.bottomRows<2>() = Jr;
+    // P = Exp(-w) (P0 - v): dP/dv = -I, dP/dw = [P]x.
+    Jp->leftCols<3>() = -Ju;
+    Jp->rightCols<3>() = Ju * geometry::Skew(P);
+    *Jx = Ju * Rt;
+  }
+  return true;
+}
+
+Eigen::Matrix4d Information(const WindowObservation& z) {
+  Eigen::Matrix4d W = Eigen::Matrix4d::Zero();
+  W.topLeftCorner<2, 2>() = z.Sigma_left.inverse();
+  W.bottomRightCorner<2, 2>() = z.Sigma_right.inverse();
+  return W;
+}
+
+// Huber: cost of a squared normalised residual e2, and the IRLS weight.
+double HuberCost(double e2, double k, double* weight) {
+  const double e = std::sqrt(e2);
+  if (e <= k) {
+    if (weight) *weight = 1.0;
+    return e2;
+  }
+  if (weight) *weight = k / e;
+  return 2 * k * e - k * k;
+}
+
+}  // namespace
+
+Eigen::Isometry3d Retract(const Eigen::Isometry3d& T, const Vector6d& d) {
+  Eigen::Isometry3d out = T;
+  const Eigen::Vector3d w = d.tail<3>();
+  const double angle = w.norm();
+  const Eigen::Matrix3d dR =
+      angle > 1e-15 ? Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  out.linear() = T.linear() * dR;
+  out.translation() = T.translation() + T.linear() * d.head<3>();
+  return out;
+}
+
+Eigen::Matrix<double, 6, 12> RelativePoseJacobian(const Eigen::Isometry3d& Ta, const Eigen::Isometry3d& Tb) {
+  Eigen::Matrix<double, 6, 12> J;
+  const double h = 1e-6;
+  for (int i = 0; i < 12; ++i) {
+    Vector6d d = Vector6d::Zero();
+    d(i % 6) = h;
+    const Eigen::Isometry3d a_plus = i < 6 ? Retract(Ta, d) : Ta;
+    const Eigen::Isometry3d b_plus = i < 6 ? Tb : Retract(Tb, d);
+    const Eigen::Isometry3d a_minus = i < 6 ? Retract(Ta, -d) : Ta;
+    const Eigen::Isometry3d b_minus = i < 6 ? Tb : Retract(Tb, -d);
+    geometry::Vector6d diff = geometry::XyzRpyFromPose(a_plus.inverse() * b_plus) -
+                              geometry::XyzRpyFromPose(a_minus.inverse() * b_minus);
+    for (int k = 3; k < 6; ++k) diff(k) = geometry::WrapAngle(diff(k));
+    J.col(i) = diff / (2 * h);
+  }
+  return J;
+}
+
+void SlidingWindow::Reset() {
+  frames_.clear();
+  saved_poses_.clear();
+  has_dropped_ = false;
+  points_.clear();
+}
+
+void SlidingWindow::AddFrame(std::int64_t frame_id, const Eigen::Isometry3d& T_w_frame,
+                             std::vector<WindowObservation> observations) {
+  saved_poses_.clear();
+  for (const Frame& f : frames_) saved_poses_.push_back(f.T_w);
+  has_dropped_ = false;
+  if (static_cast<int>(frames_.size()) >= std::max(2, o_.max_frames)) {
+    dropped_ = std::move(frames_.front());
+    frames_.erase(frames_.begin());
+    saved_poses_.erase(saved_poses_.begin());
+    has_dropped_ = true;
+  }
+  Frame f;
+  f.id = frame_id;
+  f.T_w = T_w_frame;
+  f.obs = std::move(observations);
+  frames_.push_back(std::move(f));
+}
+
+void SlidingWindow::PopNewest() {
+  if (frames_.empty()) return;
+  frames_.pop_back();
+  for (std::size_t i = 0; i < frames_.size() && i < saved_poses_.size(); ++i) frames_[i].T_w = saved_poses_[i];
+  if (has_dropped_) {
+    frames_.insert(frames_.begin(), std::move(dropped_));
+    has_dropped_ = false;
+  }
+  saved_poses_.clear();
+}
+
+WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
+  WindowSolution sol;
+  const int M = size();
+  if (M < 2 || !rig.left || !rig.right) return sol;
+  const int np = M - 1;  // free poses 1..M-1
+  const int dim = 6 * np;
+
+  // Points seen in at least two keyframes.
+  std::unordered_map<std::int64_t, int> index;
+  std::vector<PointBlock> pts;
+  for (int i = 0; i < M; ++i) {
+    for (const WindowObservation& z : frames_[static_cast<std::size_t>(i)].obs) {
+      auto [it, fresh] = index.emplace(z.track_id, static_cast<int>(pts.size()));
+      if (fresh) {
+        pts.emplace_back();
+        pts.back().id = z.track_id;
+      }
+      pts[static_cast<std::size_t>(it->second)].obs.emplace_back(i, &z);
+    }
+  }
+  std::vector<PointBlock> used;
+  used.reserve(pts.size());
+  for (PointBlock& p : pts) {
+    if (p.obs.size() < 2) continue;
+    const auto cached = points_.find(p.id);
+    if (cached != points_.end()) {
+      p.X = cached->second;
+    } else {
+      // The best-conditioned observation starts the point.
+      double best = 1e300;
+      for (const auto& [i, z] : p.obs) {
+        const double tr = z->Sigma.trace();
+        if (tr < best) {
+          best = tr;
+          p.X = frames_[static_cast<std::size_t>(i)].T_w * z->P;
+        }
+      }
+    }
+    used.push_back(std::move(p));
+  }
+  sol.points = static_cast<int>(used.size());
+  for (const PointBlock& p : used) sol.observations += static_cast<int>(p.obs.size());
+  const int redundancy = 4 * sol.observations - 3 * sol.points - dim;
+  if (sol.points < 3 || redundancy <= 0) return sol;
+
+  auto cost_of = [&](const std::vector<Eigen::Isometry3d>& poses, const std::vector<Eigen::Vector3d>& X, double d) {
+    double cost = 0;
+    for (std::size_t j = 0; j < used.size(); ++j) {
+      for (const auto& [i, z] : used[j].obs) {
+        Eigen::Vector4d r;
+        if (!Linearise(rig, poses[static_cast<std::size_t>(i)], X[j], *z, &r, nullptr, nullptr)) {
+          cost += 2 * o_.huber_sigmas * 100.0;  // behind a camera: a large, finite penalty
+          continue;
+        }
+        r(2) -= d;
+        cost += HuberCost(r.dot(Information(*z) * r), o_.huber_sigmas, nullptr);
+      }
+    }
+    return cost;
+  };
+
+  std::vector<Eigen::Isometry3d> poses(static_cast<std::size_t>(M));
+  for (int i = 0; i < M; ++i) poses[static_cast<std::size_t>(i)] = frames_[static_cast<std::size_t>(i)].T_w;
+  std::vector<Eigen::Vector3d> X(used.size());
+  for (std::size_t j = 0; j < used.size(); ++j) X[j] = used[j].X;
+
+  // The reduced variables: the free poses, then (optionally) the disparity offset.
+  const bool offset = o_.disparity_offset_sigma_px > 0;
+  const int nc = dim + (offset ? 1 : 0);
+  const int id = dim;  // index of the offset
+  double delta = offset ? disparity_offset_ : 0.0;
+  Eigen::MatrixXd S(nc, nc), Hcc(nc, nc);
+  Eigen::VectorXd bs(nc), bc(nc);
+  std::vector<Eigen::Matrix3d> Hxx_inv(used.size());
+  std::vector<Eigen::Vector3d> bx(used.size());
+  std::vector<Eigen::MatrixXd> Hcx(used.size());
+
+  // Builds the normal equations at the current estimate with damping lambda and returns
+  // the Schur complement on the reduced variables in S, bs.
+  auto build = [&](double lambda) {
+    Hcc.setZero();
+    bc.setZero();
+    for (std::size_t j = 0; j < used.size(); ++j) {
+      Eigen::Matrix3d Hxx = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d b = Eigen::Vector3d::Zero();
+      Hcx[j].setZero(nc, 3);
+      for (const auto& [i, z] : used[j].obs) {
+        Eigen::Vector4d r;
+        Eigen::Matrix<double, 4, 6> Jp;
+        Eigen::Matrix<double, 4, 3> Jx;
+        if (!Linearise(rig, poses[static_cast<std::size_t>(i)], X[j], *z, &r, &Jp, &Jx)) continue;
+        r(2) -= delta;
+        Eigen::Matrix4d W = Information(*z);
+        double w = 1;
+        HuberCost(r.dot(W * r), o_.huber_sigmas, &w);
+        W *= w;
+        const Eigen::Matrix<double, 4, 3> WJx = W * Jx;
+        const Eigen::Vector4d Wr = W * r;
+        Hxx += Jx.transpose() * WJx;
+        b += Jx.transpose() * Wr;
+        if (offset) {
+          // d(prediction)/d(offset) = e_2 (the right image's x).
+          Hcc(id, id) += W(2, 2);
+          bc(id) += Wr(2);
+          Hcx[j].row(id) += WJx.row(2);
+        }
+        if (i == 0) continue;
+        const int k = 6 * (i - 1);
+        Hcc.block<6, 6>(k, k) += Jp.transpose() * W * Jp;
+        bc.segment<6>(k) += Jp.transpose() * Wr;
+        Hcx[j].block<6, 3>(k, 0) += Jp.transpose() * WJx;
+        if (offset) {
+          const Vector6d Hpd = Jp.transpose() * W.col(2);
+          Hcc.block<6, 1>(k, id) += Hpd;
+          Hcc.block<1, 6>(id, k) += Hpd.transpose();
+        }
+      }
+      Hxx.diagonal() *= 1 + lambda;
+      Hxx.diagonal().array() += 1e-12;
+      Hxx_inv[j] = Hxx.inverse();
+      bx[j] = b;
+    }
+    if (offset) {
+      const double info = 1.0 / (o_.disparity_offset_sigma_px * o_.disparity_offset_sigma_px);
+      Hcc(id, id) += info;
+      bc(id) -= info * delta;
+    }
+    S = Hcc;
+    S.diagonal() *= 1 + lambda;
+    bs = bc;
+    for (std::size_t j = 0; j < used.size(); ++j) {
+      const Eigen::MatrixXd HH = Hcx[j] * Hxx_inv[j];
+      bs.noalias() -= HH * bx[j];
+      S.noalias() -= HH * Hcx[j].transpose();
+    }
+  };
+
+  auto total_cost = [&](const std::vector<Eigen::Isometry3d>& P, const std::vector<Eigen::Vector3d>& Xs, double d) {
+    const double prior = offset ? d * d / (o_.disparity_offset_sigma_px * o_.disparity_offset_sigma_px) : 0.0;
+    return cost_of(P, Xs, d) + prior;
+  };
+  double cost = total_cost(poses, X, delta);
+  sol.initial_cost = cost;
+  double lambda = 1e-4;
+  for (int it = 0; it < o_.max_iterations; ++it) {
+    ++sol.iterations;
+    build(lambda);
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
+    if (ldlt.info() != Eigen::Success) break;
+    const Eigen::VectorXd dc = ldlt.solve(bs);
+    if (!dc.allFinite()) break;
+    std::vector<Eigen::Isometry3d> new_poses = poses;
+    for (int i = 1; i < M; ++i) {
+      new_poses[static_cast<std::size_t>(i)] = Retract(poses[static_cast<std::size_t>(i)], dc.segment<6>(6 * (i - 1)));
+    }
+    const double new_delta = offset ? delta + dc(id) : 0.0;
+    std::vector<Eigen::Vector3d> new_X = X;
+    for (std::size_t j = 0; j < used.size(); ++j) {
+      new_X[j] = X[j] + Hxx_inv[j] * (bx[j] - Hcx[j].transpose() * dc);
+    }
+    const double new_cost = total_cost(new_poses, new_X, new_delta);
+    if (new_cost < cost) {
+      const double gain = (cost - new_cost) / std::max(cost, 1e-300);
+      poses = std::move(new_poses);
+      X = std::move(new_X);
+      delta = new_delta;
+      cost = new_cost;
+      lambda = std::max(1e-7, lambda / 10);
+      if (gain < o_.tolerance) break;
+    } else {
+      lambda *= 10;
+      if (lambda > 1e4) break;
+    }
+  }
+
+  // The covariance of the poses: the inverse of the undamped reduced normal matrix.
+  build(0.0);
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
+  if (ldlt.info() != Eigen::Success) return sol;
+  const Eigen::MatrixXd cov = ldlt.solve(Eigen::MatrixXd::Identity(nc, nc));
+  if (!cov.allFinite() || cov.diagonal().minCoeff() <= 0) return sol;
+
+  const int a = M - 2, b = M - 1;
+  Eigen::Matrix<double, 12, 12> joint = Eigen::Matrix<double, 12, 12>::Zero();
+  joint.bottomRightCorner<6, 6>() = cov.block<6, 6>(6 * (b - 1), 6 * (b - 1));
+  if (a > 0) {
+    joint.topLeftCorner<6, 6>() = cov.block<6, 6>(6 * (a - 1), 6 * (a - 1));
+    joint.topRightCorner<6, 6>() = cov.block<6, 6>(6 * (a - 1), 6 * (b - 1));
+    joint.bottomLeftCorner<6, 6>() = joint.topRightCorner<6, 6>().transpose();
+  }
+  const Eigen::Matrix<double, 6, 12> J = RelativePoseJacobian(poses[static_cast<std::size_t>(a)], poses[static_cast<std::size_t>(b)]);
+  sol.covariance = J * joint * J.transpose();
+  sol.covariance = 0.5 * (sol.covariance + sol.covariance.transpose()).eval();
+  sol.T_prev_last = poses[static_cast<std::size_t>(a)].inverse() * poses[static_cast<std::size_t>(b)];
+  sol.final_cost = cost;
+  sol.variance_factor = cost / redundancy;
+  sol.disparity_offset_px = delta;
+  disparity_offset_ = delta;
+  sol.ok = true;
+
+  for (int i = 0; i < M; ++i) frames_[static_cast<std::size_t>(i)].T_w = poses[static_cast<std::size_t>(i)];
+  points_.clear();
+  for (std::size_t j = 0; j < used.size(); ++j) points_[used[j].id] = X[j];
+  return sol;
+}
+
+}  // namespace rover::vo

@@ -1,0 +1,115 @@
+// Sliding-window maximum-likelihood refinement (common/vo/README.md, "VO with memory").
+//
+// The window holds the last N keyframe poses T_w_i of the rig (w: the frame of the
+// window's first pose) and, per keyframe, the stereo observations of the tracked features
+// (tracks.hpp). Refine() minimises the covariance-weighted stereo reprojection error
+//   sum_ij rho( |u_l,ij - pi_l(T_i^-1 X_j)|^2_{W_l} + |u_r,ij - pi_r(T_i^-1 X_j)|^2_{W_r} )
+// over the poses 1..N-1 and the points X_j seen in at least two keyframes, W the inverse
+// 2x2 match covariances of VO-3 and rho a Huber loss. The oldest pose is held fixed (the
+// gauge; stereo fixes the scale).
+//
+// Solver: our own Levenberg-Marquardt on Eigen with the points eliminated by the Schur
+// complement, not Ceres: the problem is small (at most 9 free poses, a few hundred points,
+// a 54x54 reduced system), its structure is fixed, and it must run in a couple of
+// milliseconds on one core with no new dependency in the flight build.
+#pragma once
+
+#include "geometry/camera_model.hpp"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace rover::vo {
+
+// One feature seen in one keyframe: its left and right pixels (working resolution) and
+// their 2x2 covariances (VO-3), and its triangulated point in that keyframe (VO-4/VO-5),
+// which starts the point's estimate.
+struct WindowObservation {
+  std::int64_t track_id = 0;
+  Eigen::Vector2d left = Eigen::Vector2d::Zero(), right = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d Sigma_left = Eigen::Matrix2d::Identity();
+  Eigen::Matrix2d Sigma_right = Eigen::Matrix2d::Identity();
+  Eigen::Vector3d P = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d Sigma = Eigen::Matrix3d::Identity();
+};
+
+struct WindowOptions {
+  int max_frames = 5;          // keyframes kept (>= 2)
+  int max_iterations = 8;      // Levenberg-Marquardt iterations
+  double huber_sigmas = 3.0;   // Huber threshold on an observation's normalised residual
+  double tolerance = 1e-7;     // stop when the relative cost decrease is below this
+  // One disparity offset (right x, pixels) for every observation, estimated with the
+  // poses under a zero-mean prior of this sigma (the rig's calibration drifts with
+  // temperature; a disparity offset scales every range); 0 = not estimated.
+  double disparity_offset_sigma_px = 0.0;
+};
+
+struct WindowSolution {
+  bool ok = false;
+  int iterations = 0;
+  int points = 0;         // points in the problem (seen in >= 2 keyframes)
+  int observations = 0;   // their observations
+  double initial_cost = 0, final_cost = 0;
+  // A-posteriori variance factor: final cost / (4 observations - 3 points - 6 poses).
+  double variance_factor = 0;
+  double disparity_offset_px = 0;  // the estimated offset (0 when not estimated)
+  // The last keyframe's pose in the one before it, and the covariance of that delta
+  // (x y z roll pitch yaw of the delta, as VoResult::covariance) from the inverse of the
+  // reduced (Schur) normal matrix, in the units of the match covariances (not scaled by
+  // the variance factor).
+  Eigen::Isometry3d T_prev_last = Eigen::Isometry3d::Identity();
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+};
+
+class SlidingWindow {
+ public:
+  explicit SlidingWindow(WindowOptions options = {}) : o_(options) {}
+
+  const WindowOptions& options() const { return o_; }
+  void Reset();
+  // Appends a keyframe with its initial pose in the window frame; the oldest keyframe
+  // leaves when the window is full (its pose is then the new fixed one).
+  void AddFrame(std::int64_t frame_id, const Eigen::Isometry3d& T_w_frame,
+                std::vector<WindowObservation> observations);
+  // Removes the newest keyframe and restores every pose to what it was before that
+  // keyframe was added (a refinement that is refused leaves the window as it was).
+  void PopNewest();
+  double disparity_offset_px() const { return disparity_offset_; }
+  int size() const { return static_cast<int>(frames_.size()); }
+  const Eigen::Isometry3d& pose(int i) const { return frames_[static_cast<std::size_t>(i)].T_w; }
+  std::int64_t frame_id(int i) const { return frames_[static_cast<std::size_t>(i)].id; }
+
+  // Refines the poses 1..size-1 and the points. Needs >= 2 keyframes and enough points.
+  WindowSolution Refine(const geometry::StereoRig& rig);
+
+ private:
+  struct Frame {
+    std::int64_t id = 0;
+    Eigen::Isometry3d T_w = Eigen::Isometry3d::Identity();
+    std::vector<WindowObservation> obs;
+  };
+  WindowOptions o_;
+  std::vector<Frame> frames_;
+  // For PopNewest: the poses before the last AddFrame (and the frame that slid out).
+  std::vector<Eigen::Isometry3d> saved_poses_;
+  bool has_dropped_ = false;
+  Frame dropped_;
+  // Point estimates of the last refinement, by track id (a warm start).
+  std::unordered_map<std::int64_t, Eigen::Vector3d> points_;
+  double disparity_offset_ = 0;  // warm start
+};
+
+// x y z roll pitch yaw of the relative pose inv(Ta exp(da)) Tb exp(db), differentiated
+// numerically with respect to (da, db) (each a body-frame perturbation: translation
+// first, then rotation): the 6x12 Jacobian.
+Eigen::Matrix<double, 6, 12> RelativePoseJacobian(const Eigen::Isometry3d& Ta,
+                                                  const Eigen::Isometry3d& Tb);
+
+// T exp(d): rotation R Exp(w), translation t + R v (d = (v, w)).
+Eigen::Isometry3d Retract(const Eigen::Isometry3d& T, const Eigen::Matrix<double, 6, 1>& d);
+
+}  // namespace rover::vo
