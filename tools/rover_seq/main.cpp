@@ -6,6 +6,9 @@
 // Uses --lcm-url, else $ROVER_LCM_URL, else the default bus. With --key FILE, else
 // $ROVER_KEY_FILE, submit and abort are signed with the deployment's key (common/auth),
 // as an executor with `auth:` in its config requires.
+// A submit that no executor answers within 4 s ends with exit 3 and one line naming the
+// URL and the likely causes (README, "Several hosts"): ttl=0, no multicast route on the
+// LAN interface, another group or port on the executor's host, the executor not running.
 #include "auth/auth.hpp"
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
@@ -197,6 +200,7 @@ int main(int argc, char** argv) {
         std::cout << "usage: rover_seq submit FILE [--no-follow] | status [--once] | abort [REASON]"
                      " | keygen FILE\n"
                      "                 [--lcm-url URL] [--key FILE]\n\n"
+                     "submit exits 3 when no executor answers within 4 s, naming the likely causes.\n"
                      "--key FILE (else $ROVER_KEY_FILE): sign submit and abort with the deployment's\n"
                      "key. keygen writes a new random key, mode 0600, and never replaces a file.\n";
         return 0;
