@@ -218,6 +218,9 @@ MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c
   Matrix6d H = Matrix6d::Zero();
   Eigen::Matrix<double, 6, kModes> B = Eigen::Matrix<double, 6, kModes>::Zero();
   double cost = 0;
+  // Per cell: the scores of the cell errors (shift x, shift y, disparity now, before).
+  std::vector<Eigen::Matrix<double, 6, 4>> Bc(clustered ? num_clusters : 1,
+                                              Eigen::Matrix<double, 6, 4>::Zero());
   for (int k : indices) {
     const Correspondence& x = c[k];
     const Eigen::Vector3d d = x.P_prev - t;
@@ -243,6 +246,11 @@ MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c
     D.col(3) = x.dPcurr_dshift * p;
     D.col(4) = x.dPcurr_ddisparity - Rcp * x.dPprev_ddisparity;
     B += JtW * D;
+    Eigen::Matrix<double, 3, 4> Dc;
+    Dc.leftCols<2>() = x.dPcurr_dshift;
+    Dc.col(2) = x.dPcurr_ddisparity;
+    Dc.col(3) = -Rcp * x.dPprev_ddisparity;
+    Bc[clustered ? cluster[k] : 0] += JtW * Dc;
   }
   out.redundancy = 3 * static_cast<int>(indices.size()) - 6;
   if (out.redundancy <= 0) return out;
@@ -269,6 +277,13 @@ MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c
   Eigen::Matrix<double, kModes, 1> var;
   var << f2, f2, f2, f2, shared.disparity_sigma_px * shared.disparity_sigma_px;
   out.shared = G * var.asDiagonal() * G.transpose();
+  const double cs2 = shared.cell_shift_sigma_px * shared.cell_shift_sigma_px;
+  const double cd2 = shared.cell_disparity_sigma_px * shared.cell_disparity_sigma_px;
+  const Eigen::Vector4d cell_var(cs2, cs2, cd2, cd2);
+  for (const auto& b : Bc) {
+    const Eigen::Matrix<double, 6, 4> Gc = out.inverse_normal * b;
+    out.shared += Gc * cell_var.asDiagonal() * Gc.transpose();
+  }
   out.shared = 0.5 * (out.shared + out.shared.transpose()).eval();
   out.covariance = std::max(out.variance_factor, out.cluster_factor) * out.inverse_normal + out.shared;
   out.ok = true;

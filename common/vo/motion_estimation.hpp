@@ -97,6 +97,20 @@ struct SharedErrors {
   double half_size_px = 1;
   // One disparity offset for both pairs (the rig's calibration), pixels.
   double disparity_sigma_px = 0;
+  // Errors that the features of one image cell share (the cells of `cluster` below; all
+  // features form one cell without clusters): neighbours see the same texture, the same
+  // sub-pixel phase (they moved alike, and lie at about the same range) and the same
+  // template deformation, so the peak-fit bias of their matches agrees. Per cell, independent
+  // between cells: a shift of the current pair's matches in x and in y
+  // (`cell_shift_sigma_px` each), and a disparity error in each of the two pairs
+  // (`cell_disparity_sigma_px` each, independent between the pairs: their sub-pixel phases
+  // differ). With features over many cells these average out like independent errors;
+  // with the features in one or two cells (a lone textured patch) they move the whole
+  // cloud, and no residual shows them. The cluster factor sees only the part of them that
+  // differs between cells. VisualOdometry keeps these defaults (learned on rendered
+  // truth, tools/vo_eval/README.md) until VoOptions carries them.
+  double cell_shift_sigma_px = 0.04;
+  double cell_disparity_sigma_px = 0.04;
 };
 
 // VO-13: the covariance of an ML motion from what the data shows. At the solution, with
@@ -110,13 +124,14 @@ struct SharedErrors {
 //     right; the cluster factor also grows when neighbours share their errors;
 //   - the shared errors (SharedErrors), which the fit absorbs and no residual shows:
 //     d theta = H^-1 sum_j J_j^T W_j D_j dc with D_j = dr_j / dc, so their covariance is
-//     G diag(sigma^2) G^T with G = H^-1 sum_j J_j^T W_j D_j.
-// covariance = max(s0^2, k) H^-1 + G diag(sigma^2) G^T.
+//     G diag(sigma^2) G^T with G = H^-1 sum_j J_j^T W_j D_j; the cell errors the same per
+//     cell g (G_g = H^-1 sum_{j in g} J_j^T W_j D_j), summed over the cells.
+// covariance = max(s0^2, k) H^-1 + G diag(sigma^2) G^T + sum_g G_g diag(sigma_cell^2) G_g^T.
 struct MotionUncertainty {
   bool ok = false;                 // H invertible
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 6> inverse_normal = Eigen::Matrix<double, 6, 6>::Zero();  // H^-1
-  Eigen::Matrix<double, 6, 6> shared = Eigen::Matrix<double, 6, 6>::Zero();  // G diag G^T
+  Eigen::Matrix<double, 6, 6> shared = Eigen::Matrix<double, 6, 6>::Zero();  // G diag G^T + cells
   double variance_factor = 0;      // s0^2
   double cluster_factor = 0;       // k (0 with fewer than two clusters)
   int redundancy = 0;              // 3n - 6
@@ -124,7 +139,7 @@ struct MotionUncertainty {
 };
 
 // `cluster` gives each correspondence's cluster, in [0, num_clusters) (indexed like `c`);
-// empty or num_clusters < 2: no cluster factor.
+// empty or num_clusters < 2: no cluster factor, and all features form one cell.
 MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c,
                                             const std::vector<int>& indices,
                                             const Eigen::Isometry3d& T_prev_curr,

@@ -115,13 +115,25 @@ struct MonteCarlo {
   int beyond = 0;                   // NEES over 20.06 (the 99.73 % bound)
 };
 
-// `model` says what the estimator is told about the shared errors.
-MonteCarlo RunMonteCarlo(const Noise& noise, const SharedErrors& model, int trials, unsigned seed) {
+// The estimator told of no shared error at all (SharedErrors' defaults carry the cell
+// errors VisualOdometry assumes).
+SharedErrors Untold() {
+  SharedErrors m;
+  m.cell_shift_sigma_px = 0;
+  m.cell_disparity_sigma_px = 0;
+  return m;
+}
+
+// `model` says what the estimator is told about the shared errors. `one_cell`: every
+// feature counts as one image cell (a lone textured patch).
+MonteCarlo RunMonteCarlo(const Noise& noise, const SharedErrors& model, int trials, unsigned seed,
+                         bool one_cell = false) {
   const geometry::StereoRig rig = test::MakeRig(640, 480, 500, 319.5, 239.5, 0.3);
   std::mt19937 rng(seed);
   MonteCarlo mc;
   for (int k = 0; k < trials; ++k) {
-    const Trial t = MakeTrial(rig, noise, rng);
+    Trial t = MakeTrial(rig, noise, rng);
+    if (one_cell) t.cluster.assign(t.cluster.size(), 0);
     const MlOutcome ml = MaximumLikelihoodMotion(t.c, t.all, kMotion, 20, 1e-10);
     EXPECT_TRUE(ml.converged);
     SharedErrors m = model;
@@ -147,7 +159,7 @@ MonteCarlo RunMonteCarlo(const Noise& noise, const SharedErrors& model, int tria
 
 TEST(MotionUncertainty, VO13_ReportedCovarianceMatchesTheSpreadOfEstimates) {
   Noise noise;  // 0.2 px, reported as 0.2 px
-  const MonteCarlo mc = RunMonteCarlo(noise, SharedErrors{}, 300, 1);
+  const MonteCarlo mc = RunMonteCarlo(noise, Untold(), 300, 1);
   // chi-square(6) has mean 6; 300 trials put the mean within about +-0.4 of it.
   EXPECT_GT(mc.nees_mean, 5.0);
   EXPECT_LT(mc.nees_mean, 7.0);
@@ -166,7 +178,7 @@ TEST(MotionUncertainty, VO13_VarianceFactorGrowsWithInjectedNoise) {
   for (const double sigma : {0.1, 0.2, 0.4}) {
     Noise noise;
     noise.sigma_px = sigma;
-    const MonteCarlo mc = RunMonteCarlo(noise, SharedErrors{}, 120, 2);
+    const MonteCarlo mc = RunMonteCarlo(noise, Untold(), 120, 2);
     const double expected = (sigma / noise.model_sigma_px) * (sigma / noise.model_sigma_px);
     EXPECT_NEAR(mc.variance_factor / expected, 1.0, 0.15) << "sigma " << sigma;
     EXPECT_GT(mc.variance_factor, 2.5 * previous);
@@ -183,7 +195,7 @@ TEST(MotionUncertainty, VO13_ClusterFactorSeesErrorsThatNeighboursShare) {
   // residuals within a cell agree, so s0^2 barely moves, but the motion errs more.
   Noise noise;
   noise.cell_sigma_px = 0.2;
-  const MonteCarlo mc = RunMonteCarlo(noise, SharedErrors{}, 200, 3);
+  const MonteCarlo mc = RunMonteCarlo(noise, Untold(), 200, 3);
   EXPECT_GT(mc.cluster_factor, 1.8 * mc.variance_factor);
   EXPECT_GT(mc.nees_unscaled_mean, 2.0 * mc.nees_mean);
   EXPECT_GT(mc.nees_mean, 4.0);
@@ -199,7 +211,7 @@ TEST(MotionUncertainty, VO13_SharedErrorsNoResidualShowsArePropagated) {
   noise.model_sigma_px = 0.1;
   noise.shift_sigma_px = 0.1;
   noise.disparity_sigma_px = 0.2;
-  SharedErrors told;
+  SharedErrors told = Untold();
   told.field_sigma_px = 0.1;
   told.disparity_sigma_px = 0.2;
   const MonteCarlo with = RunMonteCarlo(noise, told, 300, 4);
@@ -207,8 +219,40 @@ TEST(MotionUncertainty, VO13_SharedErrorsNoResidualShowsArePropagated) {
   EXPECT_GT(with.nees_mean, 3.0);  // the rotation and scale modes were not injected
   EXPECT_LT(with.nees_mean, 7.0);
   EXPECT_LE(with.beyond, 6);
-  const MonteCarlo without = RunMonteCarlo(noise, SharedErrors{}, 300, 4);
+  const MonteCarlo without = RunMonteCarlo(noise, Untold(), 300, 4);
   EXPECT_GT(without.nees_mean, 3.0 * with.nees_mean);
+}
+
+TEST(MotionUncertainty, VO13_CellErrorsCountWhenTheFeaturesShareOneCell) {
+  // Every current match shifted alike (a lone textured patch whose matches share their
+  // sub-pixel bias), all features in one cell: no cluster factor, s0^2 stays 1, and only
+  // the cell term, told the shift's size, accounts for it.
+  Noise noise;
+  noise.sigma_px = 0.1;
+  noise.model_sigma_px = 0.1;
+  noise.shift_sigma_px = 0.1;
+  SharedErrors told = Untold();
+  told.cell_shift_sigma_px = 0.1;
+  const MonteCarlo with = RunMonteCarlo(noise, told, 300, 5, true);
+  EXPECT_NEAR(with.variance_factor, 1.0, 0.1);
+  EXPECT_EQ(with.cluster_factor, 0.0);
+  EXPECT_GT(with.nees_mean, 4.5);
+  EXPECT_LT(with.nees_mean, 7.5);
+  EXPECT_LE(with.beyond, 6);
+  const MonteCarlo without = RunMonteCarlo(noise, Untold(), 300, 5, true);
+  EXPECT_GT(without.nees_mean, 2.0 * with.nees_mean);
+}
+
+TEST(MotionUncertainty, VO13_DefaultCellErrorsStayModestForSpreadFeatures) {
+  // Independent errors only, 0.2 px (more than VO's matches show), the estimator told of
+  // the cell errors VisualOdometry assumes (SharedErrors' defaults): spread over 16 cells
+  // they average out, so the covariance grows by a third at most (NEES 5.7 -> 3.8 here),
+  // not beyond use.
+  Noise noise;  // 0.2 px, reported as 0.2 px
+  const MonteCarlo cells = RunMonteCarlo(noise, SharedErrors{}, 200, 6);
+  const MonteCarlo none = RunMonteCarlo(noise, Untold(), 200, 6);
+  EXPECT_GT(cells.nees_mean, 0.6 * none.nees_mean);
+  EXPECT_LT(cells.nees_mean, none.nees_mean);
 }
 
 }  // namespace
