@@ -83,12 +83,14 @@ public final class SpyProbe {
     if (!screenshot.isEmpty()) {
       String first = expect.keySet().iterator().next();
       openViewer(spyOf(table), first);
+      waitForRate(table, first, deadline);
+      System.out.println("spy probe: structure viewer for " + first + " opened after " + ms(t0) + " ms");
       String why = saveScreenshot(new File(screenshot));
       if (why != null) {
         System.out.println("spy probe: FAIL: screenshot " + screenshot + ": " + why);
         System.exit(1);
       }
-      System.out.println("spy probe: screenshot " + screenshot);
+      System.out.println("spy probe: screenshot " + screenshot + " after " + ms(t0) + " ms");
     }
     System.exit(0);
   }
@@ -269,12 +271,35 @@ public final class SpyProbe {
     if (failed[0] != null) throw failed[0];
   }
 
+  /** For the picture only: until lcm-spy's once-a-second refresh has shown a rate (Hz > 0). */
+  private static void waitForRate(JTable table, String channel, long deadline) throws Exception {
+    long until = Math.max(deadline, System.nanoTime() + 5_000_000_000L);
+    while (System.nanoTime() < until) {
+      double[] hz = {0};
+      SwingUtilities.invokeAndWait(() -> {
+        TableModel m = table.getModel();
+        for (int r = 0; r < m.getRowCount(); ++r) {
+          if (channel.equals(String.valueOf(m.getValueAt(r, 0)))) {
+            try {
+              hz[0] = Double.parseDouble(String.valueOf(m.getValueAt(r, 3)).trim());
+            } catch (NumberFormatException e) {
+              hz[0] = 0;  // "NaN" before the first refresh
+            }
+          }
+        }
+      });
+      if (hz[0] > 0) return;
+      Thread.sleep(200);
+    }
+  }
+
   /** Null when written, else why not. A screen of one colour means nothing was drawn. */
   private static String saveScreenshot(File out) throws Exception {
+    // lcm-spy repaints its viewer with each message (20 Hz here): let it paint, then let the
+    // event queue drain (cheaper than Robot.waitForIdle on a busy host).
+    Thread.sleep(500);
+    SwingUtilities.invokeAndWait(() -> {});
     Robot robot = new Robot();
-    robot.waitForIdle();
-    robot.delay(1500);  // lcm-spy refreshes its table and viewer once a second
-    robot.waitForIdle();
     BufferedImage img = robot.createScreenCapture(new Rectangle(Toolkit.getDefaultToolkit().getScreenSize()));
     Set<Integer> colours = new HashSet<>();
     for (int y = 0; y < img.getHeight(); y += 4) {
