@@ -167,8 +167,13 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
   cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
       0, num_disp, bs, 8 * bs * bs, 32 * bs * bs, 1, 31, o.uniqueness_ratio, o.speckle_window,
       o.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
-  cv::Mat disp16;
-  sgbm->compute(rectL, rectR, disp16);
+  // SGBM leaves the left num_disp columns unmatched: pad both images on the left so that
+  // the whole left image is matched, then crop.
+  cv::Mat padL, padR, padded;
+  cv::copyMakeBorder(rectL, padL, 0, 0, num_disp, 0, cv::BORDER_CONSTANT, 0);
+  cv::copyMakeBorder(rectR, padR, 0, 0, num_disp, 0, cv::BORDER_CONSTANT, 0);
+  sgbm->compute(padL, padR, padded);
+  const cv::Mat disp16 = padded.colRange(num_disp, padded.cols);
   if (stats) stats->seconds_match = SecondsSince(t0);
 
   // Triangulate: z = f B / d along the common axis.
@@ -184,7 +189,7 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
     const float* mlx = r.map_lx.ptr<float>(v);
     const float* mrx = r.map_rx.ptr<float>(v);
     for (int u = 0; u < r.width; u += step) {
-      if (dp[u] <= 0 || mlx[u] < -0.5f || mrx[u - dp[u] / 16] < -0.5f) continue;  // no match, or off the source images
+      if (dp[u] <= 0 || u - dp[u] / 16 < 0 || mlx[u] < -0.5f || mrx[u - dp[u] / 16] < -0.5f) continue;  // no match, or off the source images
       const double d = dp[u] / 16.0;
       const double z = fB / d;
       const Eigen::Vector3d ray((u - r.cx) / r.f, (v - r.cy) / r.f, 1.0);

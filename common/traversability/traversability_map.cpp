@@ -108,8 +108,10 @@ void TraversabilityMap::AddPoints(const std::vector<Eigen::Vector3d>& points_sit
     const Eigen::Vector3d& p = points_site[k];
     const double s = sigma_m[k];
     if (!p.allFinite() || !std::isfinite(s) || s <= 0) continue;
-    const long i = static_cast<long>(std::floor((p.x() - origin_x_) * inv_cell));
-    const long j = static_cast<long>(std::floor((p.y() - origin_y_) * inv_cell));
+    const double fi = std::floor((p.x() - origin_x_) * inv_cell);
+    const double fj = std::floor((p.y() - origin_y_) * inv_cell);
+    if (!(fi >= 0 && fj >= 0 && fi < n_ && fj < n_)) continue;
+    const long i = static_cast<long>(fi), j = static_cast<long>(fj);
     if (i < 0 || j < 0 || i >= n_ || j >= n_) continue;
     Accumulator& a = acc_[static_cast<std::size_t>(i) * n_ + j];
     const double w = 1.0 / (s * s);
@@ -118,6 +120,8 @@ void TraversabilityMap::AddPoints(const std::vector<Eigen::Vector3d>& points_sit
     a.sw += static_cast<float>(w);
     a.sh += static_cast<float>(w * h);
     a.shh += static_cast<float>(w * h * h);
+    a.sx += static_cast<float>(w * (p.x() - origin_x_ - (fi + 0.5) * options_.cell_size_m));
+    a.sy += static_cast<float>(w * (p.y() - origin_y_ - (fj + 0.5) * options_.cell_size_m));
   }
   dirty_ = true;
 }
@@ -174,13 +178,15 @@ void TraversabilityMap::Rate() const {
   const std::size_t count = static_cast<std::size_t>(n_) * n_;
   cells_.assign(count, Cell{});
   // Cell heights (weighted means) and sigmas.
-  std::vector<float> h(count, 0.0f), s(count, 0.0f);
+  std::vector<float> h(count, 0.0f), s(count, 0.0f), mx(count, 0.0f), my(count, 0.0f);
   std::vector<char> known(count, 0);
   for (std::size_t k = 0; k < count; ++k) {
     const Accumulator& a = acc_[k];
     if (a.n < o.min_points || a.sw <= 0) continue;
     known[k] = 1;
     h[k] = a.sh / a.sw;
+    mx[k] = a.sx / a.sw;  // the centroid of the cell's points, from the cell centre
+    my[k] = a.sy / a.sw;
     s[k] = std::sqrt(a.n / a.sw);
   }
   // The patch: cell offsets within the footprint radius.
@@ -208,7 +214,7 @@ void TraversabilityMap::Rate() const {
         if (a < 0 || b < 0 || a >= n_ || b >= n_) continue;
         const std::size_t k = static_cast<std::size_t>(a) * n_ + b;
         if (!known[k]) continue;
-        xs.emplace_back(di * cell, dj * cell, h[k]);
+        xs.emplace_back(di * cell + mx[k], dj * cell + my[k], h[k]);
         ss.push_back(s[k]);
       }
       if (xs.size() < min_known) continue;

@@ -119,6 +119,7 @@ class TraversabilityMap {
     float sw = 0;        // sum of weights
     float sh = 0;        // weighted sum of elevation (m, up)
     float shh = 0;       // weighted sum of elevation^2
+    float sx = 0, sy = 0;  // weighted sums of the offset from the cell centre (m)
   };
 
  private:

@@ -46,28 +46,39 @@ int Band(double range_m) {
   return static_cast<int>(range_m / 2.0);
 }
 
-bool InView(const geometry::CameraModel& cam, const Eigen::Isometry3d& T_rover_site,
+// In both images (the stereo overlap).
+bool InView(const geometry::StereoRig& rig, const Eigen::Isometry3d& T_rover_site,
             const Eigen::Vector3d& p_site) {
-  Eigen::Vector2d px;
-  if (!cam.Project(T_rover_site * p_site, &px)) return false;
-  return px.x() >= 0 && px.y() >= 0 && px.x() <= cam.width() - 1 && px.y() <= cam.height() - 1;
+  for (const auto* cam : {rig.left.get(), rig.right.get()}) {
+    Eigen::Vector2d px;
+    if (!cam->Project(T_rover_site * p_site, &px)) return false;
+    if (!(px.x() >= 0 && px.y() >= 0 && px.x() <= cam->width() - 1 && px.y() <= cam->height() - 1))
+      return false;
+  }
+  return true;
 }
 
-// The true terrain on the map's grid: 4x4 samples of the exact surface per cell.
+// The true terrain on the map's grid: each cell holds the highest of 5x5 samples of the
+// exact surface in it (a rock reaching into a cell counts at its top there, as a wheel
+// would meet it; the map's own cells hold the mean of the points the cameras see, which
+// lie on rocks' visible faces and tops).
 void FillTruth(const terrain::World& world, tv::TraversabilityMap* truth) {
   truth->Clear();
-  const int k = 4;
+  const int k = 5;
   const double cell = truth->cell_size();
   std::vector<Eigen::Vector3d> pts;
-  pts.reserve(static_cast<std::size_t>(truth->rows()) * truth->cols() * k * k);
+  pts.reserve(static_cast<std::size_t>(truth->rows()) * truth->cols() * 3);
   for (int i = 0; i < truth->rows(); ++i)
-    for (int j = 0; j < truth->cols(); ++j)
+    for (int j = 0; j < truth->cols(); ++j) {
+      double top = -1e9;
       for (int a = 0; a < k; ++a)
-        for (int b = 0; b < k; ++b) {
-          const double x = truth->origin_x() + (i + (a + 0.5) / k) * cell;
-          const double y = truth->origin_y() + (j + (b + 0.5) / k) * cell;
-          pts.emplace_back(x, y, -world.ElevationDetailed(x, y));
-        }
+        for (int b = 0; b < k; ++b)
+          top = std::max(top, world.ElevationDetailed(truth->origin_x() + (i + (a + 0.5) / k) * cell,
+                                                      truth->origin_y() + (j + (b + 0.5) / k) * cell));
+      // min_points copies at the cell centre.
+      const Eigen::Vector3d p(truth->origin_x() + (i + 0.5) * cell, truth->origin_y() + (j + 0.5) * cell, -top);
+      for (int c = 0; c < truth->options().min_points; ++c) pts.push_back(p);
+    }
   truth->AddPoints(pts, std::vector<double>(pts.size(), 0.005));
 }
 
@@ -107,7 +118,6 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
     truth.Recentre(ep.x, ep.y);
     FillTruth(world, &truth);
     const Eigen::Isometry3d T_rover_site = T.inverse();
-    const geometry::CameraModel& cam = *images.rig.left;
     const auto& mc = map.cells();
     const auto& tc = truth.cells();
     for (int i = 0; i < map.rows(); ++i) {
@@ -116,14 +126,18 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
         const double y = map.origin_y() + (j + 0.5) * map.cell_size();
         const int band = Band(std::hypot(x - ep.x, y - ep.y));
         if (band < 0) continue;
-        if (!InView(cam, T_rover_site, Eigen::Vector3d(x, y, -world.Elevation(x, y)))) continue;
+        if (!InView(images.rig, T_rover_site, Eigen::Vector3d(x, y, -world.Elevation(x, y)))) continue;
         BandCounts& b = result.bands[band];
         const std::size_t idx = static_cast<std::size_t>(i) * map.cols() + j;
         ++b.in_view_cells;
         if (mc[idx].state == tv::CellState::kUnknown) ++b.unknown_cells;
         if (tc[idx].state != tv::CellState::kUnknown && tc[idx].state != tv::CellState::kUnsafe) {
           ++b.traversable_cells;
-          if (mc[idx].state == tv::CellState::kUnsafe) ++b.false_unsafe_cells;
+          if (mc[idx].state == tv::CellState::kUnsafe) {
+            ++b.false_unsafe_cells;
+            result.false_unsafe.push_back({static_cast<int>(k) + 1, x, y,
+                                           std::hypot(x - ep.x, y - ep.y), mc[idx], tc[idx]});
+          }
         }
       }
     }
@@ -134,7 +148,7 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
       if (band < 0) continue;
       const Eigen::Vector3d top(rock.position.x(), rock.position.y(),
                                 -world.Elevation(rock.position.x(), rock.position.y()));
-      if (!InView(cam, T_rover_site, top)) continue;
+      if (!InView(images.rig, T_rover_site, top)) continue;
       const tv::Cell c = map.At(rock.position.x(), rock.position.y());
       RockSighting s;
       s.name = rock.name;

@@ -3,12 +3,13 @@
 //
 // Stereo pairs are rendered from the world at a list of poses (the rover's attitude from
 // the ground under it); after each pair the map is compared with the world's own terrain
-// in the cells and rocks the left camera sees from that pose, by horizontal range from
+// in the cells and rocks both cameras see from that pose, by horizontal range from
 // the rover (bands 0-2, 2-4, 4-6 m):
 //   rocks     rocks taller than the rover's step limit (rock_collision.max_height_m) whose
 //             top is in view; detected when the map cell under the rock's centre is unsafe;
-//   traversable cells (truth): in-view cells the TRUE terrain, rated by the same plane fit
-//             and limits, does not make unsafe; "false unsafe" = the map marks them unsafe;
+//   traversable cells (truth): in-view cells the TRUE terrain (each cell at the highest
+//             point of the exact surface in it), rated by the same plane fit and limits,
+//             does not make unsafe; "false unsafe" = the map marks them unsafe;
 //   unknown   in-view cells the map has no rating for (occluded, no stereo match).
 // Counts are summed over the poses.
 #pragma once
@@ -54,10 +55,18 @@ struct RockSighting {
   std::string state;
 };
 
+// A traversable cell the map marked unsafe: what each side measured.
+struct FalseUnsafe {
+  int pose = 0;
+  double x = 0, y = 0, range_m = 0;
+  traversability::Cell map, truth;
+};
+
 struct EvalResult {
   static constexpr int kBands = 3;  // 0-2, 2-4, 4-6 m
   std::array<BandCounts, kBands> bands;
   std::vector<RockSighting> sightings;
+  std::vector<FalseUnsafe> false_unsafe;
   std::vector<double> update_seconds;  // AddStereoPair per pose
   double median_update_seconds = 0;
   // Bands 0-2 and 2-4 together.

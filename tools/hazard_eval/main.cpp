@@ -162,6 +162,14 @@ int main(int argc, char** argv) {
                   s.detected ? "found " : "MISSED", s.name.c_str(), s.pose, s.range_m, s.height_m,
                   s.step_m, s.state.c_str());
     }
+    if (verbose) {
+      for (const auto& f : r.false_unsafe)
+        std::printf("  false unsafe from pose %d at %.1f m, cell (%.1f, %.1f): map step %.2f tilt %.1f "
+                    "rough %.3f; truth step %.2f tilt %.1f rough %.3f (%s)\n",
+                    f.pose, f.range_m, f.x, f.y, f.map.step_m, f.map.tilt_rad * 180 / M_PI,
+                    f.map.roughness_m, f.truth.step_m, f.truth.tilt_rad * 180 / M_PI,
+                    f.truth.roughness_m, traversability::CellStateName(f.truth.state));
+    }
     const hazard_eval::BandCounts near = r.Within4m();
     int status = 0;
     if (min_detection >= 0) {

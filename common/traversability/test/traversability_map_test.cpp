@@ -190,7 +190,7 @@ TEST(DenseStereo, RectifiesACahvorRigOntoCommonRows) {
   const RectifiedRig r = Rectify(rig, 0.5);
   EXPECT_EQ(r.width, 512);
   EXPECT_NEAR(r.baseline_m, 0.2, 1e-9);
-  for (const Eigen::Vector3d p : {Eigen::Vector3d(3.0, 0.5, 0.0), Eigen::Vector3d(5.0, -1.0, -0.3),
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(3.0, 0.5, 0.0), Eigen::Vector3d(5.0, -1.0, -0.3),
                                   Eigen::Vector3d(2.0, -0.4, 0.1)}) {
     // Rectified pixel of p in each camera (pinholes along R_rover_rect).
     const Eigen::Vector3d qL = r.R_rover_rect.transpose() * (p - rig.left->Center());
