@@ -2,7 +2,7 @@
 # output for every lcmtypes/*.lcm, compiled into build/share/java/rover_msgs.jar. Built
 # only when a JDK (javac, jar) and LCM's Java library (liblcm-java's lcm.jar) are present;
 # the C++ build needs neither.
-find_package(Java 17 QUIET COMPONENTS Development)
+find_package(Java QUIET COMPONENTS Development)
 find_file(LCM_JAR lcm.jar PATHS /usr/share/java /usr/local/share/java NO_DEFAULT_PATH)
 if(NOT Java_FOUND OR NOT Java_JAVAC_EXECUTABLE OR NOT Java_JAR_EXECUTABLE OR NOT LCM_JAR)
   message(STATUS "rover_msgs.jar (lcm-spy's message types) skipped: needs a JDK "
