@@ -44,6 +44,25 @@ Grid Grid::Filled(double origin_x, double origin_y, double cell_m, int rows, int
   return grid;
 }
 
+int Grid::DistrustEdges() {
+  std::vector<std::size_t> edge;
+  auto unknown = [&](int i, int j) {
+    return i < 0 || j < 0 || i >= rows || j >= cols ||
+           state[static_cast<std::size_t>(i) * cols + j] == CellClass::kUnknown;
+  };
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < cols; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * cols + j;
+      if (state[k] != CellClass::kUnsafe && state[k] != CellClass::kCaution) continue;
+      if (unknown(i - 1, j) || unknown(i + 1, j) || unknown(i, j - 1) || unknown(i, j + 1)) edge.push_back(k);
+    }
+  for (std::size_t k : edge) {
+    state[k] = CellClass::kUnknown;
+    goodness[k] = 0.0f;
+  }
+  return static_cast<int>(edge.size());
+}
+
 void Grid::Paint(double x, double y, double radius_m, CellClass s, float g, float step) {
   for (int i = 0; i < rows; ++i)
     for (int j = 0; j < cols; ++j)

@@ -35,6 +35,12 @@ struct Grid {
   // A grid of `state`/`goodness` everywhere, for tests.
   static Grid Filled(double origin_x, double origin_y, double cell_m, int rows, int cols,
                      CellClass state, float goodness);
+  // Cells at the edge of what the cameras saw: an unsafe or caution cell with an unknown
+  // (or off-grid) 4-neighbour becomes unknown. Its rating came from a plane fitted over a
+  // patch only partly seen, and stereo edges (the near limit of the view, the sides of the
+  // field of view) rate falsely high there; a real rock spans several cells, so its inner
+  // cells stay unsafe. Returns how many cells changed.
+  int DistrustEdges();
   // Sets the cells whose centre lies within radius_m of (x, y).
   void Paint(double x, double y, double radius_m, CellClass state, float goodness, float step_m);
 };

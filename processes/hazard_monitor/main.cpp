@@ -16,6 +16,7 @@
 #include "bus/traversability_convert.hpp"
 #include "hazards/hazard_assessor.hpp"
 #include "hazards/map_check.hpp"
+#include "map_worker.hpp"
 #include "traversability/traversability_map.hpp"
 
 #include <rover_msgs/hazard_query_t.hpp>
@@ -48,41 +49,32 @@ int main(int argc, char** argv) {
     // would otherwise never see the ground, and every step would be undecidable).
     hazards::MapCheckOptions map_check;
     map_check.enabled = false;
-    std::unique_ptr<traversability::TraversabilityMap> map;
+    std::unique_ptr<MapWorker> map;
     if (section.Has("map")) {
       const auto map_section = section["map"];
       map_check = hazards::LoadMapCheckOptions(map_section, {"traversability"});
       if (map_check.enabled) {
-        map = std::make_unique<traversability::TraversabilityMap>(
-            traversability::LoadMapOptions(map_section["traversability"]));
+        map = std::make_unique<MapWorker>(traversability::LoadMapOptions(map_section["traversability"]));
       }
     }
     bus::MapRules rules;
     rules.footprint = hazards::GridFootprint(options.footprint);
     rules.blind_margin_m = map_check.blind_margin_m;
     rules.max_unknown_fraction = map_check.max_unknown_fraction;
-    avoidance::Grid grid;  // the map as the checks see it, rebuilt after each pair
+    avoidance::Grid grid;  // the map as the checks see it: the worker's newest
     int64_t last_frame_id = -1;
-    auto rebuild_grid = [&] {
-      grid.origin_x = map->origin_x();
-      grid.origin_y = map->origin_y();
-      grid.cell_m = map->cell_size();
-      grid.rows = map->rows();
-      grid.cols = map->cols();
-      const auto& cells = map->cells();
-      grid.state.resize(cells.size());
-      grid.goodness.resize(cells.size());
-      grid.step_m.resize(cells.size());
-      for (std::size_t k = 0; k < cells.size(); ++k) {
-        grid.state[k] = static_cast<avoidance::CellClass>(cells[k].state);
-        grid.goodness[k] = cells[k].goodness;
-        grid.step_m[k] = cells[k].step_m;
-      }
-    };
+    if (map) grid = map->Initial();
     auto publish_map = [&] {
       if (map) proc.bus().Publish(channels::kTraversabilityMap, bus::MapToMsg(grid, rules, proc.now(), last_frame_id));
     };
-    if (map) rebuild_grid();
+    // Takes a grid the worker finished; true when there was one.
+    auto take_map = [&] {
+      if (!map) return false;
+      std::string notes;
+      const bool fresh = map->Take(&grid, &last_frame_id, &notes);
+      if (!notes.empty()) std::cerr << notes;
+      return fresh;
+    };
     hazards::HazardAssessor assessor(options);
     const std::vector<hazards::KeepOutZone> config_zones = options.zones;
     std::string zone_error;  // non-empty: the last zone set was invalid -> UNKNOWN
@@ -135,56 +127,68 @@ int main(int argc, char** argv) {
               images.left.convertTo(images.left, CV_8U, 1.0 / 256.0);
               images.right.convertTo(images.right, CV_8U, 1.0 / 256.0);
             }
-            const auto T = bus::PoseFromMsg(frame.pose_at_capture);
-            try {
-              map->Recentre(T.translation().x(), T.translation().y());
-              map->AddStereoPair(images.left, images.right, images.rig, T,
-                                 bus::CovarianceFromArray(frame.pose_at_capture.covariance));
-            } catch (const std::invalid_argument& e) {
-              std::cerr << "hazard_monitor: STEREO_FRAME " << frame.frame_id << ": " << e.what() << " (not mapped)\n";
-              return;
-            }
-            last_frame_id = std::max(last_frame_id, frame.frame_id);
-            rebuild_grid();
-            publish_map();
+            MapWorker::Job job;
+            job.left = images.left;
+            job.right = images.right;
+            job.rig = images.rig;
+            job.T_site_rover = bus::PoseFromMsg(frame.pose_at_capture);
+            job.covariance = bus::CovarianceFromArray(frame.pose_at_capture.covariance);
+            job.frame_id = frame.frame_id;
+            map->Add(std::move(job));
           },
           4);
     }
+    // A query that comes while a pair is being mapped waits for that map (answered on a
+    // later tick): the step is judged on a map holding every pair taken before it.
+    std::vector<rover_msgs::hazard_query_t> held;
+    auto answer = [&](const rover_msgs::hazard_query_t& q) {
+      rover_msgs::hazard_reply_t r{};
+      r.utime = proc.now();
+      r.query_id = q.query_id;
+      std::vector<hazards::Pose2> path;
+      bool finite = q.num_poses > 0;
+      for (int i = 0; i < q.num_poses; ++i) {
+        finite = finite && std::isfinite(q.x[i]) && std::isfinite(q.y[i]) && std::isfinite(q.yaw[i]);
+        path.push_back({q.x[i], q.y[i], q.yaw[i]});
+      }
+      if (!finite) {
+        r.verdict = rover_msgs::hazard_reply_t::VERDICT_UNKNOWN;
+        r.detail = "query " + std::to_string(q.query_id) + ": empty or non-finite path";
+      } else if (!zone_error.empty()) {
+        r.verdict = rover_msgs::hazard_reply_t::VERDICT_UNKNOWN;
+        r.detail = "invalid keep-out zones: " + zone_error;
+      } else {
+        // A non-finite or negative margin makes the check UNKNOWN (CheckSweptPath).
+        // Pose age is judged at the time of asking: a query held while a pair was mapped
+        // is not refused for the rover time that ran on meanwhile.
+        const int64_t asked = q.utime > 0 ? std::min(proc.now(), q.utime) : proc.now();
+        auto check = assessor.CheckStep(path, asked, q.margin_m);
+        if (map && check.verdict != hazards::Verdict::kUnsafe) {
+          // The map judges the same swept path; an unsafe cell outranks an undecided
+          // keep-out check, and either stops the step.
+          const auto on_map = hazards::CheckPathOnMap(grid, rules.footprint, path, map_check);
+          if (on_map.verdict == hazards::Verdict::kUnsafe ||
+              (on_map.verdict == hazards::Verdict::kUnknown && check.verdict == hazards::Verdict::kSafe)) {
+            check = on_map;
+          }
+        }
+        r.verdict = static_cast<std::int8_t>(check.verdict);
+        r.zone_name = check.zone_name;
+        r.min_clearance_m = std::isfinite(check.min_clearance_m) ? check.min_clearance_m : 1e9;
+        r.detail = check.detail;
+      }
+      proc.bus().Publish(channels::kHazardReply, r);
+    };
+    auto answer_held = [&] {
+      if (take_map()) publish_map();
+      if (map && map->Busy()) return;
+      for (const auto& q : held) answer(q);
+      held.clear();
+    };
     proc.bus().Subscribe<rover_msgs::hazard_query_t>(
         channels::kHazardQuery, [&](const rover_msgs::hazard_query_t& q) {
-          rover_msgs::hazard_reply_t r{};
-          r.utime = proc.now();
-          r.query_id = q.query_id;
-          std::vector<hazards::Pose2> path;
-          bool finite = q.num_poses > 0;
-          for (int i = 0; i < q.num_poses; ++i) {
-            finite = finite && std::isfinite(q.x[i]) && std::isfinite(q.y[i]) && std::isfinite(q.yaw[i]);
-            path.push_back({q.x[i], q.y[i], q.yaw[i]});
-          }
-          if (!finite) {
-            r.verdict = rover_msgs::hazard_reply_t::VERDICT_UNKNOWN;
-            r.detail = "query " + std::to_string(q.query_id) + ": empty or non-finite path";
-          } else if (!zone_error.empty()) {
-            r.verdict = rover_msgs::hazard_reply_t::VERDICT_UNKNOWN;
-            r.detail = "invalid keep-out zones: " + zone_error;
-          } else {
-            // A non-finite or negative margin makes the check UNKNOWN (CheckSweptPath).
-            auto check = assessor.CheckStep(path, proc.now(), q.margin_m);
-            if (map && check.verdict != hazards::Verdict::kUnsafe) {
-              // The map judges the same swept path; an unsafe cell outranks an undecided
-              // keep-out check, and either stops the step.
-              const auto on_map = hazards::CheckPathOnMap(grid, rules.footprint, path, map_check);
-              if (on_map.verdict == hazards::Verdict::kUnsafe ||
-                  (on_map.verdict == hazards::Verdict::kUnknown && check.verdict == hazards::Verdict::kSafe)) {
-                check = on_map;
-              }
-            }
-            r.verdict = static_cast<std::int8_t>(check.verdict);
-            r.zone_name = check.zone_name;
-            r.min_clearance_m = std::isfinite(check.min_clearance_m) ? check.min_clearance_m : 1e9;
-            r.detail = check.detail;
-          }
-          proc.bus().Publish(channels::kHazardReply, r);
+          held.push_back(q);
+          answer_held();
         });
 
     int ticks = 0;
@@ -208,6 +212,7 @@ int main(int argc, char** argv) {
             m.detail = "invalid keep-out zones: " + zone_error;
           }
           proc.bus().Publish(channels::kHazardStatus, m);
+          answer_held();
           if (++ticks % static_cast<int>(std::max(1.0, publish_hz)) == 0) publish_map();
         },
         static_cast<int>(1000.0 / publish_hz));

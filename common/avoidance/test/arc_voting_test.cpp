@@ -57,6 +57,17 @@ TEST(Sweep, FindsTheWorstUnsafeCellAndTheBlindRing) {
   EXPECT_GT(SweepFootprint(Open(), fp, SamplePath(edge, 0.0, 0.6, 0.0), edge, 0.0).outside, 0);
 }
 
+TEST(Grid, DistrustEdgesKeepsTheInsideOfARock) {
+  Grid g = Grid::Filled(0, 0, 0.2, 20, 20, CellClass::kUnknown, 0.0f);
+  g.Paint(2.0, 2.0, 1.2, CellClass::kSafe, 0.9f, 0.0f);   // the seen patch
+  g.Paint(2.0, 2.0, 0.35, CellClass::kUnsafe, 0.0f, 0.4f);  // a rock inside it
+  g.Paint(2.0, 0.9, 0.15, CellClass::kUnsafe, 0.0f, 0.4f);  // a false one on the seen edge
+  const int changed = g.DistrustEdges();
+  EXPECT_GE(changed, 1);
+  EXPECT_EQ(g.state[g.IndexAt(2.0, 2.0)], CellClass::kUnsafe);
+  EXPECT_EQ(g.state[g.IndexAt(2.1, 0.9)], CellClass::kUnknown);
+}
+
 TEST(ArcVoting, OpenGroundDrivesStraightAtTheGoal) {
   const Choice c = VoteArcs(Open(), {0, 0, 0}, 4.0, 0.0, VoteOptions{});
   ASSERT_TRUE(c.found);

@@ -341,7 +341,7 @@ TEST(SequenceParser, GotoAvoid) {
   EXPECT_FALSE(off.avoid);
   EXPECT_DOUBLE_EQ(*off.distance_limit_m, 9.0);
   EXPECT_FALSE(std::get<Goto>(r.sequence.commands[2].action).avoid);
-  ExpectError("goto 1 m 2 m within 1 m avoid\n", 1, 30, "missing goto avoid mode");
+  ExpectError("goto 1 m 2 m within 1 m avoid\n", 1, 31, "missing goto avoid mode");
   ExpectError("goto 1 m 2 m within 1 m avoid maybe\n", 1, 31, "unknown goto avoid mode");
   ExpectError("goto 1 m 2 m within 1 m avoid on avoid off\n", 1, 34, "'avoid' given twice");
 }

@@ -1,0 +1,145 @@
+// The traversability map on its own thread: dense stereo on a pair takes long enough (a few
+// hundred ms of wall time on a busy computer, tens of seconds of rover time at 50x) that the
+// monitor's bus loop must not wait for it, or its status and replies would stall and
+// the messages queued behind it would be judged against a stale rover clock. Pairs are
+// mapped in the order they came; the bus loop takes each finished grid (Take) and holds
+// back any hazard query that arrives while a pair is still being mapped (Busy), so a step
+// is always judged on a map that includes every pair taken before it was asked about.
+#pragma once
+
+#include "avoidance/grid.hpp"
+#include "traversability/traversability_map.hpp"
+
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <string>
+#include <thread>
+
+namespace rover {
+
+class MapWorker {
+ public:
+  struct Job {
+    cv::Mat left, right;  // 8-bit grey
+    geometry::StereoRig rig;
+    geometry::Pose T_site_rover;
+    geometry::Matrix6d covariance;
+    int64_t frame_id = -1;
+  };
+
+  explicit MapWorker(const traversability::MapOptions& options) : map_(options), grid_(ToGrid(map_)) {
+    thread_ = std::thread([this] { Loop(); });
+  }
+  ~MapWorker() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  MapWorker(const MapWorker&) = delete;
+  MapWorker& operator=(const MapWorker&) = delete;
+
+  void Add(Job job) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      jobs_.push_back(std::move(job));
+    }
+    cv_.notify_all();
+  }
+  // A pair queued, being mapped, or mapped and not yet taken.
+  bool Busy() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return !jobs_.empty() || running_ || fresh_;
+  }
+  // The newest grid when one was finished since the last call; `notes` gets one line per
+  // mapped or refused pair.
+  bool Take(avoidance::Grid* grid, int64_t* last_frame_id, std::string* notes) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    *notes = std::move(notes_);
+    notes_.clear();
+    if (!fresh_) return false;
+    fresh_ = false;
+    *grid = grid_;
+    *last_frame_id = last_frame_id_;
+    return true;
+  }
+  // The grid before any pair (every cell unknown).
+  avoidance::Grid Initial() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return grid_;
+  }
+
+  // The map as the checks see it (edge cells of the seen region distrusted: grid.hpp).
+  static avoidance::Grid ToGrid(const traversability::TraversabilityMap& map) {
+    avoidance::Grid g;
+    g.origin_x = map.origin_x();
+    g.origin_y = map.origin_y();
+    g.cell_m = map.cell_size();
+    g.rows = map.rows();
+    g.cols = map.cols();
+    const auto& cells = map.cells();
+    g.state.resize(cells.size());
+    g.goodness.resize(cells.size());
+    g.step_m.resize(cells.size());
+    for (std::size_t k = 0; k < cells.size(); ++k) {
+      g.state[k] = static_cast<avoidance::CellClass>(cells[k].state);
+      g.goodness[k] = cells[k].goodness;
+      g.step_m[k] = cells[k].step_m;
+    }
+    g.DistrustEdges();
+    return g;
+  }
+
+ private:
+  void Loop() {
+    for (;;) {
+      Job job;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
+        if (stop_) return;
+        job = std::move(jobs_.front());
+        jobs_.pop_front();
+        running_ = true;
+      }
+      std::string note;
+      bool ok = true;
+      try {
+        map_.Recentre(job.T_site_rover.translation().x(), job.T_site_rover.translation().y());
+        map_.AddStereoPair(job.left, job.right, job.rig, job.T_site_rover, job.covariance);
+        const auto& st = map_.last_update();
+        note = "hazard_monitor: mapped frame " + std::to_string(job.frame_id) + ": " + std::to_string(st.points) +
+               " points, " + std::to_string(static_cast<int>(1000 * (st.seconds_rectify + st.seconds_match +
+                                                                      st.seconds_grid))) +
+               " ms\n";
+      } catch (const std::exception& e) {
+        ok = false;
+        note = "hazard_monitor: STEREO_FRAME " + std::to_string(job.frame_id) + ": " + e.what() + " (not mapped)\n";
+      }
+      avoidance::Grid grid = ok ? ToGrid(map_) : avoidance::Grid{};
+      std::lock_guard<std::mutex> lock(mutex_);
+      running_ = false;
+      notes_ += note;
+      if (ok) {
+        grid_ = std::move(grid);
+        last_frame_id_ = std::max(last_frame_id_, job.frame_id);
+        fresh_ = true;
+      }
+    }
+  }
+
+  traversability::TraversabilityMap map_;  // the worker thread's alone (after construction)
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<Job> jobs_;
+  bool running_ = false, fresh_ = false, stop_ = false;
+  avoidance::Grid grid_;
+  int64_t last_frame_id_ = -1;
+  std::string notes_;
+  std::thread thread_;
+};
+
+}  // namespace rover
