@@ -90,10 +90,11 @@ struct VisualOdometry::State {
   Correlator correlator;
   Template tmpl, coarse_tmpl;
   std::uint64_t calls = 0;
-  // Windowed mode: `prev` is the last keyframe (the reference pair); the last call's pair
-  // in the reference pair's frame; the window; the next track id.
+  // Windowed mode: `prev` is the last keyframe (the reference pair); the window; the
+  // last call's pair as published, in the window's frame (the deltas VO publishes compose
+  // to the window's latest estimate); the next track id.
   SlidingWindow window;
-  Eigen::Isometry3d T_ref_last = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_w_last = Eigen::Isometry3d::Identity();
   std::int64_t next_track_id = 1;
   bool Windowed() const { return o.window_size >= 2; }
   // Windowed mode: gives `pair` the carried tracks plus fresh corners stereo-matched where
@@ -371,7 +372,7 @@ void VisualOdometry::State::RestartWindow(Pair* pair) {
     obs.push_back({f.track_id, f.left, f.right, f.Sigma_left, f.Sigma_right, f.P, f.Sigma});
   }
   window.AddFrame(pair->frame_id, Eigen::Isometry3d::Identity(), std::move(obs));
-  T_ref_last = Eigen::Isometry3d::Identity();
+  T_w_last = Eigen::Isometry3d::Identity();
 }
 
 VisualOdometry::VisualOdometry(VoOptions options) : state_(std::make_unique<State>()) {
@@ -393,7 +394,7 @@ void VisualOdometry::Reset() {
   state_->spare.reset();
   state_->calls = 0;
   state_->window = SlidingWindow(state_->window.options());
-  state_->T_ref_last = Eigen::Isometry3d::Identity();
+  state_->T_w_last = Eigen::Isometry3d::Identity();
 }
 
 const VoOptions& VisualOdometry::options() const { return state_->o; }
@@ -437,7 +438,10 @@ VoResult VisualOdometry::Process(const StereoImages& images,
   if (!windowed) s.prev = std::move(cur);  // every outcome below makes this pair the previous one
   const Pair& c = windowed ? *cur : *s.prev;
   // Windowed mode: the prior from the reference pair (the last keyframe).
-  const Eigen::Isometry3d prior_ref = windowed ? s.T_ref_last * prior_T_prev_curr : prior_T_prev_curr;
+  const Eigen::Isometry3d prior_ref =
+      windowed && prev && s.window.size() > 0
+          ? s.window.pose(s.window.size() - 1).inverse() * s.T_w_last * prior_T_prev_curr
+          : prior_T_prev_curr;
   struct Recycle {  // hands the old pair's buffers to the next call, on every return path
     State& s;
     std::unique_ptr<Pair>& p;
@@ -852,9 +856,11 @@ void VisualOdometry::State::Accept(std::int64_t frame_id, const geometry::Stereo
   const bool keyframe = moved >= o.keyframe_min_translation_m || turned >= o.keyframe_min_rotation_deg * kDeg ||
                         2 * static_cast<int>(inliers.size()) < static_cast<int>((*ref)->features.size());
   res->keyframe = keyframe;
+  const Eigen::Isometry3d T_w_ref = window.pose(window.size() - 1);
   if (!keyframe) {
-    res->T_prev_curr = T_ref_last.inverse() * T_ref_cur;
-    T_ref_last = T_ref_cur;
+    const Eigen::Isometry3d T_w_cur = T_w_ref * T_ref_cur;
+    res->T_prev_curr = T_w_last.inverse() * T_w_cur;
+    T_w_last = T_w_cur;
     prev = std::move(*ref);
     spare = std::move(*cur);
     res->window_frames = window.size();
@@ -872,14 +878,12 @@ void VisualOdometry::State::Accept(std::int64_t frame_id, const geometry::Stereo
   for (const Feature& f : (*cur)->features) {
     obs.push_back({f.track_id, f.left, f.right, f.Sigma_left, f.Sigma_right, f.P, f.Sigma});
   }
-  const Eigen::Isometry3d T_w_ref = window.pose(window.size() - 1);
   window.AddFrame(frame_id, T_w_ref * T_ref_cur, std::move(obs));
   const WindowSolution w = window.Refine(rig);
   res->window_frames = window.size();
   res->window_points = w.points;
   res->window_iterations = w.iterations;
   res->disparity_offset_px = w.disparity_offset_px;
-  Eigen::Isometry3d T_ref_cur_final = T_ref_cur;
   bool used = false;
   if (w.ok) {
     // The refined delta's covariance: the pair's VO-13 covariance with its fit part
@@ -898,21 +902,26 @@ void VisualOdometry::State::Accept(std::int64_t frame_id, const geometry::Stereo
       for (int i = 3; i < 6; ++i) d(i) = geometry::WrapAngle(d(i));
       const double chi2 = d.dot(pair_cov.ldlt().solve(d));
       if (cov.allFinite() && (o.window_max_chi2 <= 0 || chi2 <= o.window_max_chi2)) {
-        T_ref_cur_final = w.T_prev_last;
         res->covariance = cov;
         used = true;
       }
     }
   }
-  if (!used) {
-    // Refused: the window restarts on this pair; the pair's own estimate is published.
+  // Published: the window's estimate of this pair against the last call's pair as it
+  // was published, so that the deltas compose to the window's latest estimate and its
+  // corrections of the poses before reach the user (the window's oldest pose is fixed).
+  if (used) {
+    const Eigen::Isometry3d T_w_cur = window.pose(window.size() - 1);
+    res->T_prev_curr = T_w_last.inverse() * T_w_cur;
+    T_w_last = T_w_cur;
+  } else {
+    // Refused: the pair's own estimate is published and the window restarts on this pair.
     window.PopNewest();
+    res->T_prev_curr = T_w_last.inverse() * window.pose(window.size() - 1) * T_ref_cur;
     RestartWindow(cur->get());
   }
   res->window_used = used;
   res->times.window_ms = Ms(t0, Clock::now());
-  res->T_prev_curr = T_ref_last.inverse() * T_ref_cur_final;
-  T_ref_last = Eigen::Isometry3d::Identity();
   prev = std::move(*cur);
 }
 

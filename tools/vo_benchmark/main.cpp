@@ -107,8 +107,12 @@ int main(int argc, char** argv) {
     std::printf("vo_benchmark: config %s, working_scale %g, pinned to CPU %d, OpenCV threads %d\n",
                 config_path.c_str(), options.vo.working_scale, cpu, cv::getNumThreads());
 
+    // Both modes in the same run, so that their times are comparable on a busy machine:
+    // the config's (windowed by default) and the MER frame-to-frame VO (window_size 0).
+    vo_eval::EvalOptions frame_to_frame = options;
+    frame_to_frame.vo.window_size = 0;
     struct Row {
-      std::string name;
+      std::string name, mode;
       int width, height, frames, converged;
       vo_eval::StageStats median;
     };
@@ -116,10 +120,13 @@ int main(int argc, char** argv) {
     auto run = [&](const std::string& name, const vo_eval::EvalInput& input) {
       std::vector<cv::Mat> lefts, rights;
       const vo_eval::EvalInput pre = Preloaded(input, &lefts, &rights);
-      const vo_eval::EvalReport report = vo_eval::RunEvaluation(pre, options);
-      rows.push_back({name, lefts[0].cols, lefts[0].rows, input.num_frames, report.converged,
-                      report.median_ms});
-      std::fprintf(stderr, "  %s: %d frames done\n", name.c_str(), input.num_frames);
+      for (const vo_eval::EvalOptions* o : {&options, &frame_to_frame}) {
+        const vo_eval::EvalReport report = vo_eval::RunEvaluation(pre, *o);
+        const std::string mode = o->vo.window_size >= 2 ? "window " + std::to_string(o->vo.window_size) : "frame-to-frame";
+        rows.push_back({name, mode, lefts[0].cols, lefts[0].rows, input.num_frames, report.converged,
+                        report.median_ms});
+        std::fprintf(stderr, "  %s (%s): %d frames done\n", name.c_str(), mode.c_str(), input.num_frames);
+      }
     };
 
     std::error_code ec;
@@ -140,15 +147,16 @@ int main(int argc, char** argv) {
     }
 
     std::printf("\nmedian ms per stereo pair (one core; the VO call only)\n");
-    std::printf("%-26s %10s %7s %9s %7s %7s %7s %7s %7s %7s %7s %7s\n", "input", "size", "frames",
-                "converged", "detect", "stereo", "track", "ransac", "ml", "total", "wall", "cpu");
+    std::printf("%-26s %-15s %10s %7s %9s %7s %7s %7s %7s %7s %7s %7s %7s %7s\n", "input", "mode", "size",
+                "frames", "converged", "detect", "stereo", "track", "ransac", "ml", "window", "total", "wall",
+                "cpu");
     for (const Row& r : rows) {
       char size[32];
       std::snprintf(size, sizeof(size), "%dx%d", r.width, r.height);
-      std::printf("%-26s %10s %7d %5d/%-3d %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f\n",
-                  r.name.c_str(), size, r.frames, r.converged, r.frames - 1, r.median.detect,
-                  r.median.stereo, r.median.track, r.median.ransac, r.median.ml, r.median.total,
-                  r.median.whole, r.median.cpu);
+      std::printf("%-26s %-15s %10s %7d %5d/%-3d %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f\n",
+                  r.name.c_str(), r.mode.c_str(), size, r.frames, r.converged, r.frames - 1, r.median.detect,
+                  r.median.stereo, r.median.track, r.median.ransac, r.median.ml, r.median.window,
+                  r.median.total, r.median.whole, r.median.cpu);
     }
     std::printf("(stage medians are taken separately, so they need not add up to the total; "
                 "'wall' is timed around the call by the benchmark, 'cpu' is the thread's CPU time "

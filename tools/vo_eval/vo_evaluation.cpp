@@ -55,7 +55,7 @@ std::string StageJson(const StageStats& s) {
   o << "{\"whole\": " << JsonNumber(s.whole) << ", \"whole_cpu\": " << JsonNumber(s.cpu) << ", \"detect\": " << JsonNumber(s.detect)
     << ", \"stereo\": " << JsonNumber(s.stereo) << ", \"track\": " << JsonNumber(s.track)
     << ", \"ransac\": " << JsonNumber(s.ransac) << ", \"ml\": " << JsonNumber(s.ml)
-    << ", \"total\": " << JsonNumber(s.total) << "}";
+    << ", \"window\": " << JsonNumber(s.window) << ", \"total\": " << JsonNumber(s.total) << "}";
   return o.str();
 }
 
@@ -91,21 +91,22 @@ double Median(std::vector<double> values) {
 }
 
 void StageStatistics(const std::vector<FrameRecord>& frames, StageStats* median, StageStats* mean) {
-  std::vector<double> v[8];
+  std::vector<double> v[9];
   for (const FrameRecord& f : frames) {
     const vo::StageTimes& t = f.result.times;
-    const double x[8] = {f.wall_ms, t.detect_ms, t.stereo_ms, t.track_ms, t.ransac_ms, t.ml_ms, t.total_ms, f.cpu_ms};
-    for (int i = 0; i < 8; ++i) v[i].push_back(x[i]);
+    const double x[9] = {f.wall_ms, t.detect_ms, t.stereo_ms, t.track_ms, t.ransac_ms, t.ml_ms, t.total_ms, f.cpu_ms,
+                         t.window_ms};
+    for (int i = 0; i < 9; ++i) v[i].push_back(x[i]);
   }
-  double med[8], avg[8];
-  for (int i = 0; i < 8; ++i) {
+  double med[9], avg[9];
+  for (int i = 0; i < 9; ++i) {
     med[i] = Median(v[i]);
     avg[i] = 0.0;
     for (double x : v[i]) avg[i] += x;
     if (!v[i].empty()) avg[i] /= static_cast<double>(v[i].size());
   }
-  *median = {med[0], med[1], med[2], med[3], med[4], med[5], med[6], med[7]};
-  *mean = {avg[0], avg[1], avg[2], avg[3], avg[4], avg[5], avg[6], avg[7]};
+  *median = {med[0], med[1], med[2], med[3], med[4], med[5], med[6], med[8], med[7]};
+  *mean = {avg[0], avg[1], avg[2], avg[3], avg[4], avg[5], avg[6], avg[8], avg[7]};
 }
 
 EvalInput KittiInput(const KittiSequence& sequence, int max_frames) {
@@ -259,6 +260,19 @@ EvalReport RunEvaluation(const EvalInput& input, const EvalOptions& options, std
     report.nees = SummariseNees(nees_values, normalised);
   }
   StageStatistics(report.frames, &report.median_ms, &report.mean_ms);
+  int with_tracks = 0;
+  for (std::size_t i = 1; i < report.frames.size(); ++i) {
+    const vo::VoResult& r = report.frames[i].result;
+    if (r.status != vo::VoStatus::kOk) continue;
+    report.keyframes += r.keyframe ? 1 : 0;
+    report.window_used += r.window_used ? 1 : 0;
+    if (r.track_length_max > 0) {
+      report.track_length_mean += r.track_length_mean;
+      ++with_tracks;
+    }
+    report.track_length_max = std::max(report.track_length_max, r.track_length_max);
+  }
+  if (with_tracks > 0) report.track_length_mean /= with_tracks;
   return report;
 }
 
@@ -393,6 +407,11 @@ void WriteEvaluation(const std::string& out_dir, const EvalInput& input, const E
     } else {
       j << "  \"accuracy\": null,\n  \"nees\": null,\n";
     }
+    j << "  \"window\": {\"size\": " << options.vo.window_size << ", \"keyframes\": " << report.keyframes
+      << ", \"refinements_published\": " << report.window_used
+      << ", \"track_length_mean\": " << JsonNumber(report.track_length_mean)
+      << ", \"track_length_max\": " << report.track_length_max
+      << ", \"median_ms\": " << JsonNumber(report.median_ms.window) << "},\n";
     j << "  \"timing_ms\": {\n";
     j << "    \"measured\": \"around the VO call only (image decoding excluded); stages from VoResult.times (wall clock); whole_cpu is this thread's CPU time over the call, which a busy machine does not inflate\",\n";
     j << "    \"calls\": " << report.frames.size() << ",\n";

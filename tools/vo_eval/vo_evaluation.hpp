@@ -71,6 +71,7 @@ struct FrameRecord {
 
 struct StageStats {
   double whole = 0, detect = 0, stereo = 0, track = 0, ransac = 0, ml = 0, total = 0;
+  double window = 0;  // sliding-window refinement (windowed mode)
   double cpu = 0;  // thread CPU time of the whole call
 };
 
@@ -84,6 +85,11 @@ struct EvalReport {
   TrajectoryAccuracy accuracy;
   SegmentOptions segments;
   NeesSummary nees;
+  // Windowed mode: lengths (pairs seen) of the tracks VO-8 used, over accepted pairs
+  // (mean of the per-pair means, and the longest), keyframes, refinements published.
+  double track_length_mean = 0;
+  int track_length_max = 0;
+  int keyframes = 0, window_used = 0;
   StageStats median_ms;            // over every VO call
   StageStats mean_ms;
 };

@@ -1,0 +1,277 @@
+// The sliding-window refinement (window.hpp) on synthetic 3-D points seen from known
+// poses with known pixel noise, and the windowed VO's handling of a failed pair.
+#include "test_rig.hpp"
+#include "geometry/pose.hpp"
+#include "vo/triangulation.hpp"
+#include "vo/visual_odometry.hpp"
+#include "vo/window.hpp"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <random>
+
+namespace rover::vo {
+namespace {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+// A rig driving forward 0.5 m per frame through a field of points, turning slowly.
+struct Scene {
+  geometry::StereoRig rig = test::MakeRig(640, 480, 500.0, 319.5, 239.5, 0.3);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Isometry3d> poses;  // T_w_frame
+
+  explicit Scene(int frames, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> ux(-15, 15), uy(-3, 1.5), uz(3, 2 + 0.5 * frames + 40);
+    for (int i = 0; i < 3000; ++i) points.emplace_back(ux(rng), uy(rng), uz(rng));
+    for (int k = 0; k < frames; ++k) {
+      poses.push_back(geometry::PoseFromXyzRpy(0.02 * k, 0.0, 0.5 * k, 0.0, 0.004 * k, 0.0));
+    }
+  }
+
+  // Noisy stereo observations of the points in view from frame k; the right image's x is
+  // offset by `disparity_offset_px` (a calibration error).
+  std::vector<WindowObservation> Observe(int k, double sigma_px, double disparity_offset_px, std::mt19937* rng) const {
+    std::normal_distribution<double> g(0.0, sigma_px);
+    std::vector<WindowObservation> out;
+    TriangulationLimits limits;
+    limits.max_gap_rad = 1.0;
+    const Eigen::Matrix2d S = std::max(1e-6, sigma_px * sigma_px) * Eigen::Matrix2d::Identity();
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const Eigen::Vector3d P = poses[static_cast<std::size_t>(k)].inverse() * points[i];
+      if (P.z() < 2.0 || P.z() > 40.0) continue;
+      Eigen::Vector2d l, r;
+      if (!rig.left->Project(P, &l) || !rig.right->Project(P, &r)) continue;
+      if (l.x() < 10 || l.y() < 10 || l.x() > 629 || l.y() > 469 || r.x() < 10 || r.x() > 629) continue;
+      WindowObservation z;
+      z.track_id = static_cast<std::int64_t>(i);
+      z.left = l + Eigen::Vector2d(g(*rng), g(*rng));
+      z.right = r + Eigen::Vector2d(g(*rng) + disparity_offset_px, g(*rng));
+      z.Sigma_left = S;
+      z.Sigma_right = S;
+      StereoPoint sp;
+      if (!TriangulateStereo(rig, z.left, S, z.right, S, limits, &sp)) continue;
+      z.P = sp.P;
+      z.Sigma = sp.Sigma;
+      out.push_back(z);
+      if (out.size() >= 250) break;
+    }
+    return out;
+  }
+};
+
+struct DriveResult {
+  double end_error_m = 0;         // |composed - true| at the last frame
+  double max_delta_error_m = 0;   // largest error of one published delta
+  double last_offset_px = 0;
+};
+
+// Runs a window of `size` keyframes along the scene (size 2: frame-to-frame), each new
+// pose started from the truth perturbed by a few centimetres and a few tenths of a
+// degree, and composes the published deltas as VO's users do.
+DriveResult Drive(const Scene& scene, int size, double sigma_px, double offset_px, double offset_sigma_px,
+                  unsigned seed) {
+  WindowOptions wo;
+  wo.max_frames = size;
+  wo.max_iterations = 15;
+  wo.disparity_offset_sigma_px = offset_sigma_px;
+  SlidingWindow window(wo);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  window.AddFrame(0, Eigen::Isometry3d::Identity(), scene.Observe(0, sigma_px, offset_px, &rng));
+  DriveResult out;
+  Eigen::Isometry3d last = Eigen::Isometry3d::Identity();  // published, window frame
+  for (int k = 1; k < static_cast<int>(scene.poses.size()); ++k) {
+    const Eigen::Isometry3d truth = scene.poses[static_cast<std::size_t>(k - 1)].inverse() * scene.poses[static_cast<std::size_t>(k)];
+    const Eigen::Isometry3d guess =
+        truth * geometry::PoseFromXyzRpy(0.03 * g(rng), 0.03 * g(rng), 0.03 * g(rng), 0.005 * g(rng), 0.005 * g(rng),
+                                         0.005 * g(rng));
+    window.AddFrame(k, window.pose(window.size() - 1) * guess, scene.Observe(k, sigma_px, offset_px, &rng));
+    const WindowSolution w = window.Refine(scene.rig);
+    EXPECT_TRUE(w.ok) << "frame " << k;
+    if (!w.ok) return out;
+    EXPECT_TRUE(w.covariance.allFinite());
+    EXPECT_GT(w.covariance.diagonal().minCoeff(), 0.0);
+    // Published as VisualOdometry does: the newest pose against the last one published.
+    const Eigen::Isometry3d delta = last.inverse() * window.pose(window.size() - 1);
+    last = window.pose(window.size() - 1);
+    out.max_delta_error_m = std::max(out.max_delta_error_m, (delta.translation() - truth.translation()).norm());
+    out.last_offset_px = w.disparity_offset_px;
+  }
+  out.end_error_m = ((scene.poses[0] * last).translation() - scene.poses.back().translation()).norm();
+  return out;
+}
+
+TEST(SlidingWindow, ExactObservationsGiveTheTrueMotionFromAPerturbedStart) {
+  const Scene scene(8, 3);
+  const DriveResult r = Drive(scene, 5, 0.0, 0.0, 0.0, 1);
+  EXPECT_LT(r.max_delta_error_m, 1e-6);
+  EXPECT_LT(r.end_error_m, 1e-5);
+}
+
+TEST(SlidingWindow, WindowOfFiveDriftsLessThanFrameToFrame) {
+  // Same scene, same noise draws (same seed): only the window size differs.
+  double err2 = 0, err5 = 0;
+  for (unsigned seed : {11u, 12u, 13u, 14u}) {
+    const Scene scene(30, seed);
+    err2 += Drive(scene, 2, 0.3, 0.0, 0.0, seed).end_error_m;
+    err5 += Drive(scene, 5, 0.3, 0.0, 0.0, seed).end_error_m;
+  }
+  EXPECT_LT(err5, 0.8 * err2) << "window 5: " << err5 / 4 << " m, frame-to-frame: " << err2 / 4 << " m";
+}
+
+TEST(SlidingWindow, EstimatesADisparityOffsetAndRemovesItsScaleError) {
+  const Scene scene(20, 21);
+  const DriveResult off = Drive(scene, 5, 0.1, 0.3, 0.0, 21);    // offset not estimated
+  const DriveResult on = Drive(scene, 5, 0.1, 0.3, 0.5, 21);     // estimated
+  EXPECT_NEAR(on.last_offset_px, 0.3, 0.05);
+  EXPECT_LT(on.end_error_m, 0.5 * off.end_error_m) << on.end_error_m << " against " << off.end_error_m;
+}
+
+TEST(SlidingWindow, PopNewestRestoresThePosesAndTheOldestFrame) {
+  const Scene scene(7, 5);
+  WindowOptions wo;
+  wo.max_frames = 3;
+  SlidingWindow window(wo);
+  std::mt19937 rng(5);
+  for (int k = 0; k < 5; ++k) {
+    window.AddFrame(k, scene.poses[static_cast<std::size_t>(k)], scene.Observe(k, 0.2, 0.0, &rng));
+    if (k > 0) ASSERT_TRUE(window.Refine(scene.rig).ok);
+  }
+  ASSERT_EQ(window.size(), 3);
+  std::vector<Eigen::Isometry3d> before;
+  for (int i = 0; i < window.size(); ++i) before.push_back(window.pose(i));
+  window.AddFrame(5, scene.poses[5] * geometry::PoseFromXyzRpy(0.5, 0, 0, 0, 0, 0.1), scene.Observe(5, 0.2, 0.0, &rng));
+  ASSERT_TRUE(window.Refine(scene.rig).ok);
+  EXPECT_EQ(window.frame_id(0), 3);  // frame 2 slid out
+  window.PopNewest();
+  ASSERT_EQ(window.size(), 3);
+  EXPECT_EQ(window.frame_id(0), 2);
+  EXPECT_EQ(window.frame_id(2), 4);
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(window.pose(i).isApprox(before[static_cast<std::size_t>(i)], 1e-12));
+}
+
+TEST(SlidingWindow, RelativePoseJacobianMatchesTheRetraction) {
+  const Eigen::Isometry3d a = geometry::PoseFromXyzRpy(1, 2, 3, 0.1, -0.2, 0.3);
+  const Eigen::Isometry3d b = geometry::PoseFromXyzRpy(1.5, 2.1, 3.2, 0.12, -0.25, 0.4);
+  const Eigen::Matrix<double, 6, 12> J = RelativePoseJacobian(a, b);
+  Eigen::Matrix<double, 6, 1> da, db;
+  da << 1e-4, -2e-4, 1e-4, 2e-4, 1e-4, -1e-4;
+  db << -1e-4, 1e-4, 2e-4, -1e-4, 2e-4, 1e-4;
+  const geometry::Vector6d f0 = geometry::XyzRpyFromPose(a.inverse() * b);
+  const geometry::Vector6d f1 = geometry::XyzRpyFromPose(Retract(a, da).inverse() * Retract(b, db));
+  Eigen::Matrix<double, 12, 1> d;
+  d << da, db;
+  EXPECT_LT((f1 - f0 - J * d).norm(), 1e-6);
+}
+
+// ---- VisualOdometry in windowed mode: a failed pair leaves the window consistent ----
+
+constexpr double kDepth = 6.0, kFocal = 400.0, kTexel = 0.006;
+constexpr int kTex = 1024;
+
+cv::Mat Texture() {
+  std::mt19937 rng(7);
+  std::normal_distribution<float> g(0, 1);
+  cv::Mat acc = cv::Mat::zeros(kTex, kTex, CV_32F);
+  for (double sigma : {1.5, 4.0}) {
+    cv::Mat noise(kTex, kTex, CV_32F);
+    for (int y = 0; y < kTex; ++y)
+      for (int x = 0; x < kTex; ++x) noise.at<float>(y, x) = g(rng);
+    cv::GaussianBlur(noise, noise, cv::Size(0, 0), sigma);
+    cv::normalize(noise, noise, 0, 1, cv::NORM_MINMAX);
+    acc += noise;
+  }
+  cv::Mat out;
+  cv::normalize(acc, out, 20, 235, cv::NORM_MINMAX);
+  return out;
+}
+
+// A textured wall 6 m ahead, seen with the rig moved rig_x to its right.
+cv::Mat RenderWall(const cv::Mat& texture, const geometry::CameraModel& cam, double rig_x) {
+  cv::Mat mx(cam.height(), cam.width(), CV_32F), my(cam.height(), cam.width(), CV_32F);
+  for (int y = 0; y < cam.height(); ++y) {
+    for (int x = 0; x < cam.width(); ++x) {
+      Eigen::Vector3d o, d;
+      cam.BackProject(Eigen::Vector2d(x, y), &o, &d);
+      const Eigen::Vector3d X = o + Eigen::Vector3d(rig_x, 0, 0) + (kDepth - o.z()) / d.z() * d;
+      mx.at<float>(y, x) = static_cast<float>(kTex / 2 + X.x() / kTexel);
+      my.at<float>(y, x) = static_cast<float>(kTex / 2 + X.y() / kTexel);
+    }
+  }
+  cv::Mat out, out8;
+  cv::remap(texture, out, mx, my, cv::INTER_CUBIC, cv::BORDER_REFLECT);
+  out.convertTo(out8, CV_8U);
+  return out8;
+}
+
+TEST(WindowedVisualOdometry, FailedPairRestartsTheWindowAndMotionStaysRight) {
+  const geometry::StereoRig rig = test::MakeRig(384, 288, kFocal, 191.5, 143.5, 0.25);
+  const cv::Mat texture = Texture();
+  auto pair = [&](double rig_x, std::int64_t id, bool blank) {
+    StereoImages im;
+    im.rig = rig;
+    im.frame_id = id;
+    im.utime = id * 100000;
+    im.left = blank ? cv::Mat(rig.left->height(), rig.left->width(), CV_8UC1, cv::Scalar(128))
+                    : RenderWall(texture, *rig.left, rig_x);
+    im.right = blank ? im.left.clone() : RenderWall(texture, *rig.right, rig_x);
+    return im;
+  };
+  Matrix6d prior = Matrix6d::Zero();
+  prior.diagonal() << 0.01, 0.01, 0.01, 1e-4, 1e-4, 1e-4;
+  VoOptions o;
+  ASSERT_GE(o.window_size, 2);  // windowed by default
+  VisualOdometry vo(o);
+  Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
+  step.translation() = Eigen::Vector3d(0.12, 0, 0);
+  ASSERT_EQ(vo.Process(pair(0.0, 0, false), step, prior).status, VoStatus::kBaseline);
+  std::vector<VoResult> results;
+  for (int k = 1; k <= 6; ++k) {
+    const bool blank = k == 3;  // a pair with nothing to see
+    results.push_back(vo.Process(pair(0.12 * k, k, blank), step, prior));
+  }
+  // Pairs 1, 2: measured, the window grows. Pair 3: fails (no features), the window
+  // restarts on it. Pair 4 tracks from the blank pair: too few features, restart on 4.
+  // Pairs 5, 6: measured again, from a window of 2 then 3.
+  EXPECT_EQ(results[0].status, VoStatus::kOk) << results[0].reason;
+  EXPECT_EQ(results[1].status, VoStatus::kOk) << results[1].reason;
+  EXPECT_EQ(results[1].window_frames, 3);
+  EXPECT_NE(results[2].status, VoStatus::kOk);
+  EXPECT_NE(results[3].status, VoStatus::kOk);
+  for (int i : {4, 5}) {
+    const VoResult& r = results[static_cast<std::size_t>(i)];
+    ASSERT_EQ(r.status, VoStatus::kOk) << "pair " << i + 1 << ": " << r.reason;
+    EXPECT_TRUE(r.keyframe);
+    EXPECT_EQ(r.window_frames, i - 2);
+    EXPECT_NEAR(r.T_prev_curr.translation().x(), 0.12, 0.01);
+    EXPECT_NEAR(r.T_prev_curr.translation().z(), 0.0, 0.03);
+  }
+  EXPECT_EQ(results[5].track_length_max, 3);  // tracks restarted on pair 4
+}
+
+TEST(WindowedVisualOdometry, StandingStillIsMeasuredAgainstTheKeyframe) {
+  const geometry::StereoRig rig = test::MakeRig(384, 288, kFocal, 191.5, 143.5, 0.25);
+  const cv::Mat texture = Texture();
+  Matrix6d prior = Matrix6d::Zero();
+  prior.diagonal() << 0.01, 0.01, 0.01, 1e-4, 1e-4, 1e-4;
+  VisualOdometry vo(VoOptions{});
+  StereoImages im;
+  im.rig = rig;
+  im.left = RenderWall(texture, *rig.left, 0.0);
+  im.right = RenderWall(texture, *rig.right, 0.0);
+  ASSERT_EQ(vo.Process(im, Eigen::Isometry3d::Identity(), prior).status, VoStatus::kBaseline);
+  for (int k = 1; k <= 3; ++k) {
+    im.frame_id = k;
+    const VoResult r = vo.Process(im, Eigen::Isometry3d::Identity(), prior);
+    ASSERT_EQ(r.status, VoStatus::kOk) << r.reason;
+    EXPECT_FALSE(r.keyframe);
+    EXPECT_EQ(r.window_frames, 1);  // nothing joined the window
+    EXPECT_LT(r.T_prev_curr.translation().norm(), 0.005);
+  }
+}
+
+}  // namespace
+}  // namespace rover::vo
