@@ -66,6 +66,8 @@ done
 ip link add vrover type veth peer name vground || { echo "SKIP: cannot create a veth pair here (kernel veth support?)"; exit 77; }
 ip link set vrover netns "$ROVER_NS" && ip link set vground netns "$GROUND_NS" || fail "cannot move the veth ends"
 on() { local pid="$1"; shift; nsenter -t "$pid" -n "$@"; }
+# Background starts call nsenter directly, not `on`: a function run with & is a subshell,
+# and $! would be that subshell, whose death leaves the launcher running.
 host_setup() {  # PID IFACE ADDRESS
   on "$1" ip link set lo up &&
     on "$1" ip addr add "$3" dev "$2" &&
@@ -78,9 +80,9 @@ echo "host rover:  $(on "$ROVER_NS" ip -brief addr show vrover); $(on "$ROVER_NS
 echo "host ground: $(on "$GROUND_NS" ip -brief addr show vground); $(on "$GROUND_NS" ip route show 224.0.0.0/4)"
 
 # Each host starts its share of the deployment with the real launcher.
-on "$ROVER_NS" timeout 120 "$BIN/launcher" "$DEPLOY" --host rover --lcm-url "$URL" > "$OUT/rover.log" 2>&1 &
+nsenter -t "$ROVER_NS" -n timeout 120 "$BIN/launcher" "$DEPLOY" --host rover --lcm-url "$URL" > "$OUT/rover.log" 2>&1 &
 launchers+=($!)
-on "$GROUND_NS" timeout 120 "$BIN/launcher" "$DEPLOY" --host ground --lcm-url "$URL" > "$OUT/ground.log" 2>&1 &
+nsenter -t "$GROUND_NS" -n timeout 120 "$BIN/launcher" "$DEPLOY" --host ground --lcm-url "$URL" > "$OUT/ground.log" 2>&1 &
 launchers+=($!)
 
 # Ready when each host hears the heartbeats it should: with ttl=1 every process of both
@@ -119,7 +121,7 @@ launcher_ok() {  # no process died on either host
 
 if [ "$MODE" = ttl1 ]; then
   # Host rover records its bus meanwhile: what it heard from host ground.
-  on "$ROVER_NS" timeout 120 "$BIN/rover_recorder" --lcm-url "$URL" "$OUT/rover.lcm" > "$OUT/recorder.log" 2>&1 &
+  nsenter -t "$ROVER_NS" -n timeout 120 "$BIN/rover_recorder" --lcm-url "$URL" "$OUT/rover.lcm" > "$OUT/recorder.log" 2>&1 &
   recorder=$!
   launchers+=("$recorder")
   for _ in $(seq 100); do [ -s "$OUT/rover.lcm" ] && break; sleep 0.1; done
