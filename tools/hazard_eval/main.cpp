@@ -2,7 +2,7 @@
 // world's hazards (hazard_evaluation.hpp).
 //   hazard_eval WORLD.yaml [--rig configs/cameras/navcam_pinhole.yaml] [--size 512]
 //               [--rover-config configs/rover.yaml] [--map-options FILE.yaml]
-//               [--poses "x,y,yaw_deg;x,y,yaw_deg;..."] [--steps 3] [--step-m 1.0]
+//               [--poses "x,y,yaw_deg;x,y,yaw_deg;..."] [--steps 5] [--step-m 0.5]
 //               [--min-detection 0.95] [--max-false-unsafe 0.05] [--verbose]
 // Default poses: the world's start and --steps - 1 more, --step-m apart along its heading.
 // --min-detection / --max-false-unsafe check the 0-4 m row: exit 1 when one fails.
@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
   using namespace rover;
   std::string world_path, rig_path = "configs/cameras/navcam_pinhole.yaml";
   std::string rover_path = "configs/rover.yaml", map_path, poses_text;
-  double size = 512, steps = 3, step_m = 1.0, min_detection = -1, max_false_unsafe = -1;
+  double size = 512, steps = 5, step_m = 0.5, min_detection = -1, max_false_unsafe = -1;
   bool verbose = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];

@@ -4,8 +4,10 @@
 //                            [--rig configs/cameras/navcam_pinhole.yaml] [--pairs 20]
 //                            [--sizes 512,1024]
 // The pairs are rendered first (not timed) at poses 0.2 m apart along the world's start
-// heading; then each is added to one map, re-centred on its pose. Targets: <= 150 ms at
-// 512x512, <= 600 ms at 1024x1024. Bad arguments: one line, exit 2.
+// heading; then each is added to one map, re-centred on its pose. Prints the median wall
+// and thread-CPU time per update (on a shared machine the CPU time is the one to trust) and
+// the stages' wall times. Targets: <= 150 ms at 512x512, <= 600 ms at 1024x1024, judged on
+// CPU time. Bad arguments: one line, exit 2.
 #include "config/yaml_config.hpp"
 #include "geometry/camera_io.hpp"
 #include "geometry/pose.hpp"
@@ -14,6 +16,8 @@
 #include "traversability/traversability_map.hpp"
 
 #include <opencv2/core/utility.hpp>
+
+#include <time.h>
 
 #include <algorithm>
 #include <chrono>
@@ -46,6 +50,13 @@ bool ParseInts(const std::string& text, std::vector<int>& out, int lo, int hi) {
     }
   }
   return !out.empty();
+}
+
+// CPU time of this thread: the machine may be shared, and wall time then counts the others.
+double ThreadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 double Median(std::vector<double> v) {
@@ -96,7 +107,7 @@ int main(int argc, char** argv) {
     cov.diagonal() << 4e-4, 4e-4, 4e-4, 7.6e-5, 7.6e-5, 7.6e-5;  // 2 cm, 0.5 deg
     std::printf("traversability_benchmark: world %s, %d pairs per size, one core\n",
                 world.options().name.c_str(), pairs);
-    std::printf("%-10s %12s %12s %12s %12s %10s\n", "size", "median ms", "rectify ms",
+    std::printf("%-10s %10s %10s %11s %9s %8s %8s\n", "size", "wall ms", "CPU ms", "rectify ms",
                 "match ms", "grid ms", "points");
     for (int size : sizes) {
       render::RenderOptions ro;
@@ -110,13 +121,15 @@ int main(int argc, char** argv) {
         images.push_back(renderer.RenderPair(world, rig, poses.back(), k + 1));
       }
       traversability::TraversabilityMap map(traversability::MapOptions{});
-      std::vector<double> total, rect, match, grid, points;
+      std::vector<double> total, cpu, rect, match, grid, points;
       for (int k = 0; k < pairs; ++k) {
         map.Recentre(poses[k].translation().x(), poses[k].translation().y());
         const auto t0 = std::chrono::steady_clock::now();
+        const double c0 = ThreadCpuSeconds();
         map.AddStereoPair(images[k].left, images[k].right, images[k].rig, poses[k], cov);
         map.cells();
         total.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        cpu.push_back(ThreadCpuSeconds() - c0);
         rect.push_back(map.last_update().seconds_rectify);
         match.push_back(map.last_update().seconds_match);
         grid.push_back(map.last_update().seconds_grid);
@@ -125,11 +138,13 @@ int main(int argc, char** argv) {
       const double target = size <= 512 ? 150.0 : size <= 1024 ? 600.0 : 0.0;
       char label[32];
       std::snprintf(label, sizeof label, "%dx%d", size, size * rig.left->height() / rig.left->width());
-      std::printf("%-10s %12.1f %12.1f %12.1f %12.1f %10.0f%s\n", label, 1000 * Median(total),
-                  1000 * Median(rect), 1000 * Median(match), 1000 * Median(grid), Median(points),
-                  target > 0 ? (1000 * Median(total) <= target ? "   (target <= " + std::to_string(static_cast<int>(target)) + " ms: met)"
-                                                              : "   (target <= " + std::to_string(static_cast<int>(target)) + " ms: MISSED)").c_str()
-                             : "");
+      std::string verdict;
+      if (target > 0)
+        verdict = std::string("   target <= ") + std::to_string(static_cast<int>(target)) + " ms: " +
+                  (1000 * Median(cpu) <= target ? "met" : "MISSED") + " (CPU)";
+      std::printf("%-10s %10.1f %10.1f %11.1f %9.1f %8.1f %8.0f%s\n", label, 1000 * Median(total),
+                  1000 * Median(cpu), 1000 * Median(rect), 1000 * Median(match), 1000 * Median(grid),
+                  Median(points), verdict.c_str());
     }
   } catch (const std::exception& e) {
     return Usage(e.what());
