@@ -50,7 +50,12 @@ Args Parse(int argc, char** argv) {
       if (i + 1 >= argc) throw std::invalid_argument("argument " + arg + ": missing value");
       return argv[++i];
     };
-    if (arg == "--lcm-url") {
+    if (arg == "--help" || arg == "-h") {
+      std::cout << "usage: spy_test_publisher --lcm-url URL [--seconds S] [--period-ms MS]\n"
+                   "  publishes HEARTBEAT, POSE, IMU and WHEEL_ODOMETRY with known values, and one\n"
+                   "  packet of an unknown type, for the lcm-spy test (tools/spy/test)\n";
+      std::exit(0);
+    } else if (arg == "--lcm-url") {
       a.url = value();
     } else if (arg == "--seconds") {
       a.seconds = ParseNumber(arg, value(), 0.1, 3600.0);
