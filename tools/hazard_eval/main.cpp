@@ -4,6 +4,8 @@
 //               [--rover-config configs/rover.yaml] [--map-options FILE.yaml]
 //               [--poses "x,y,yaw_deg;x,y,yaw_deg;..."] [--steps 5] [--step-m 0.5]
 //               [--min-detection 0.95] [--max-false-unsafe 0.05] [--verbose]
+// --map-options: a YAML of traversability::MapOptions keys, bare, under `traversability:`,
+// or a rover config's hazards.map.traversability (configs/rover.yaml: hazard_monitor's map).
 // Default poses: the world's start and --steps - 1 more, --step-m apart along its heading.
 // --min-detection / --max-false-unsafe check the 0-4 m row: exit 1 when one fails.
 // Bad arguments or files: one line naming what was expected, exit 2.
@@ -126,7 +128,12 @@ int main(int argc, char** argv) {
     options.rock_limit_m = rc.RequireDouble("max_height_m", 0.01, 5.0);
     if (!map_path.empty()) {
       const config::ConfigNode m = config::ConfigNode::LoadFile(map_path);
-      options.map = traversability::LoadMapOptions(m.Has("traversability") ? m["traversability"] : m);
+      // A bare options map, a `traversability:` section, or a rover config's
+      // hazards.map.traversability.
+      if (m.Has("hazards") && m["hazards"].Has("map") && m["hazards"]["map"].Has("traversability"))
+        options.map = traversability::LoadMapOptions(m["hazards"]["map"]["traversability"]);
+      else
+        options.map = traversability::LoadMapOptions(m.Has("traversability") ? m["traversability"] : m);
     }
     if (!poses_text.empty()) {
       std::stringstream ss(poses_text);
