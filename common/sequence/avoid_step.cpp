@@ -56,6 +56,9 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   // 3. Vote.
   avoidance::VoteOptions o;
   o.footprint = map_->footprint;
+  const double margin = options_.avoid_margin_m * (avoid_refused_ ? 3.0 : 1.0);
+  o.footprint.length_m += 2.0 * margin;
+  o.footprint.width_m += 2.0 * margin;
   o.num_arcs = options_.avoid_num_arcs;
   o.max_curvature_per_m = options_.avoid_max_curvature_per_m;
   o.lookahead_m = options_.avoid_lookahead_m;
@@ -84,11 +87,34 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     step->distance_m = b.distance_m;
     step->curvature_per_m = b.curvature_per_m;
   }
-  detail_ = std::string("avoid: ") + avoidance::ToString(b.kind) +
-            (b.kind == avoidance::Candidate::Kind::kTurn ? " " + Fixed2(b.turn_rad * 180.0 / M_PI) + " deg"
-                                                         : " " + Fixed2(b.distance_m) + " m k " + Fixed2(b.curvature_per_m)) +
-            " (goodness " + Fixed2(b.goodness) + ", goal " + Fixed2(b.goal) + ", " + Fixed2(remaining) + " m to go)";
+  std::string d = "avoid: ";
+  d += avoidance::ToString(b.kind);
+  d += ' ';
+  if (b.kind == avoidance::Candidate::Kind::kTurn) {
+    d += Fixed2(b.turn_rad * 180.0 / M_PI);
+    d += " deg";
+  } else {
+    d += Fixed2(b.distance_m);
+    d += " m k ";
+    d += Fixed2(b.curvature_per_m);
+  }
+  d += " (goodness ";
+  d += Fixed2(b.goodness);
+  d += ", goal ";
+  d += Fixed2(b.goal);
+  d += ", ";
+  d += Fixed2(remaining);
+  d += " m to go)";
+  detail_ = std::move(d);
   return AvoidOutcome::kStep;
+}
+
+bool SequenceExecutor::AvoidRefused(const HazardReply& reply) {
+  if (!is_goto_ || !goto_.avoid || avoid_refused_) return false;
+  avoid_refused_ = true;
+  step_note_ += "the monitor refused the voted step (" + reply.detail + "): voting again with a wider margin; ";
+  EnterPhase(Phase::kReady);
+  return true;
 }
 
 bool SequenceExecutor::ImagesForMap(const HazardReply& reply) {

@@ -84,8 +84,8 @@ void ValidateExecutorOptions(const ExecutorOptions& o) {
   positive(o.map_wait_s, "map_wait_s");
   positive(o.avoid_lookahead_m, "avoid_lookahead_m");
   positive(o.avoid_max_curvature_per_m, "avoid_max_curvature_per_m");
-  if (o.avoid_num_arcs < 1 || !(o.avoid_backup_m >= 0.0)) {
-    throw std::invalid_argument("executor options avoid_num_arcs must be >= 1 and avoid_backup_m >= 0");
+  if (o.avoid_num_arcs < 1 || !(o.avoid_backup_m >= 0.0) || !(o.avoid_margin_m >= 0.0)) {
+    throw std::invalid_argument("executor options avoid_num_arcs must be >= 1, avoid_backup_m and avoid_margin_m >= 0");
   }
   if (o.recent_steps < 1) {
     throw std::invalid_argument("executor option recent_steps must be >= 1, got " +
@@ -119,7 +119,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "path_sample_turn_deg", "slip_min_step_m", "status_period_s", "blind_slope_deg",
                "blind_slip_pct", "recent_steps", "lost_min_step_m", "step_sigma_growth_pct",
                "margin_sigma_multiplier", "state_file", "map_wait_s", "avoid_lookahead_m",
-               "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m"});
+               "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m"});
   auto names = [&](const char* key, std::vector<std::string>& out) {
     if (!n.Has(key)) return;
     const config::ConfigNode list = n[key];
@@ -170,6 +170,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("avoid_max_curvature_per_m", o.avoid_max_curvature_per_m, 0.01, 10.0);
   n.Get("avoid_num_arcs", o.avoid_num_arcs, 1, 101);
   n.Get("avoid_backup_m", o.avoid_backup_m, 0.0, 0.75);
+  n.Get("avoid_margin_m", o.avoid_margin_m, 0.0, 1.0);
   return o;
 }
 
@@ -499,6 +500,9 @@ void SequenceExecutor::Poll() {
         const HazardReply r = *hazard_reply_;
         if (r.verdict == HazardVerdict::kSafe) {
           CommandStep();
+        } else if (r.verdict == HazardVerdict::kUnsafe && r.zone_name == abort_reason::kHazardMap &&
+                   AvoidRefused(r)) {
+          return;
         } else if (r.verdict == HazardVerdict::kUnsafe && r.zone_name == abort_reason::kHazardMap) {
           AbortWith(abort_reason::kHazardMap, r.detail + "; not commanded");
         } else if (r.verdict == HazardVerdict::kUnknown && ImagesForMap(r)) {
@@ -830,6 +834,7 @@ void SequenceExecutor::CommandStep() {
   outputs_.push_back(cmd);
   pair_here_id_ = -1;  // the rover moves: no pair is where it will stand
   map_images_taken_ = false;
+  avoid_refused_ = false;
   mobility_deadline_utime_ =
       now_utime_ + static_cast<int64_t>((expected_s * options_.mobility_timeout_factor +
                                          options_.mobility_timeout_margin_s) * 1e6);

@@ -96,6 +96,10 @@ struct ExecutorOptions {
   double avoid_max_curvature_per_m = 1.0;
   int avoid_num_arcs = 21;
   double avoid_backup_m = 0.3;           // 0: never back up
+  // Arc voting sweeps a footprint this much larger all round than the monitor's, so that
+  // the drift the monitor's check allows for (the step's path shifted by the drift VO
+  // measured) does not make it refuse the step the vote chose.
+  double avoid_margin_m = 0.1;
 
   // The running sequence's submission id, name and state, kept on disk (run_state.hpp)
   // so that a restarted executor reports it interrupted. Empty = off. Used by the shell.
@@ -364,6 +368,9 @@ class SequenceExecutor {
   // An UNKNOWN map verdict on a step with no pair taken where the rover stands: take one
   // (MER: image, map, then drive) and ask again. False: the reply stands.
   bool ImagesForMap(const HazardReply& reply);
+  // The monitor refused the step the vote chose (the drift it allows for): vote once more
+  // with a wider margin. False: the refusal stands (abort).
+  bool AvoidRefused(const HazardReply& reply);
   void RecordStep(const StepMotion& motion, bool measured, const PoseEstimate& after);
   double StepLength() const { return step_m_ * lost_step_scale_; }
   double MaxTurn() const { return max_turn_rad_ * lost_step_scale_; }
@@ -474,6 +481,7 @@ class SequenceExecutor {
   std::optional<TraversabilityMap> map_;
   int64_t pair_here_id_ = -1;    // the last pair taken since the rover last moved, or -1
   bool map_images_taken_ = false;  // ImagesForMap took its pair for the step in hand
+  bool avoid_refused_ = false;     // the monitor refused this stop's first voted step
 };
 
 }  // namespace rover::sequence
