@@ -3,6 +3,7 @@
 #include "geometry/pose.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 #include <algorithm>
@@ -100,6 +101,7 @@ void SlidingWindow::Reset() {
   frames_.clear();
   saved_poses_.clear();
   has_dropped_ = false;
+  has_newest_cov_ = false;
   points_.clear();
 }
 
@@ -122,6 +124,7 @@ void SlidingWindow::AddFrame(std::int64_t frame_id, const Eigen::Isometry3d& T_w
 }
 
 void SlidingWindow::PopNewest() {
+  has_newest_cov_ = false;
   if (frames_.empty()) return;
   frames_.pop_back();
   for (std::size_t i = 0; i < frames_.size() && i < saved_poses_.size(); ++i) frames_[i].T_w = saved_poses_[i];
@@ -324,6 +327,15 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   }
   const Eigen::Matrix<double, 6, 12> J = RelativePoseJacobian(poses[static_cast<std::size_t>(a)], poses[static_cast<std::size_t>(b)]);
   sol.covariance = J * joint * J.transpose();
+  if (a > 0 && has_newest_cov_ && newest_id_ == frames_[static_cast<std::size_t>(a)].id) {
+    const Eigen::SelfAdjointEigenSolver<Matrix6d> es(newest_cov_ - joint.topLeftCorner<6, 6>());
+    const Matrix6d correction =
+        es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
+    sol.covariance += J.leftCols<6>() * correction * J.leftCols<6>().transpose();
+  }
+  has_newest_cov_ = true;
+  newest_id_ = frames_[static_cast<std::size_t>(b)].id;
+  newest_cov_ = joint.bottomRightCorner<6, 6>();
   sol.covariance = 0.5 * (sol.covariance + sol.covariance.transpose()).eval();
   sol.T_prev_last = poses[static_cast<std::size_t>(a)].inverse() * poses[static_cast<std::size_t>(b)];
   sol.final_cost = cost;

@@ -41,7 +41,7 @@ struct WindowOptions {
   int max_frames = 5;          // keyframes kept (>= 2)
   int max_iterations = 8;      // Levenberg-Marquardt iterations
   double huber_sigmas = 3.0;   // Huber threshold on an observation's normalised residual
-  double tolerance = 1e-7;     // stop when the relative cost decrease is below this
+  double tolerance = 1e-4;     // stop when the relative cost decrease is below this
   // One disparity offset (right x, pixels) for every observation, estimated with the
   // poses under a zero-mean prior of this sigma (the rig's calibration drifts with
   // temperature; a disparity offset scales every range); 0 = not estimated.
@@ -60,7 +60,10 @@ struct WindowSolution {
   // The last keyframe's pose in the one before it, and the covariance of that delta
   // (x y z roll pitch yaw of the delta, as VoResult::covariance) from the inverse of the
   // reduced (Schur) normal matrix, in the units of the match covariances (not scaled by
-  // the variance factor).
+  // the variance factor). The delta VO publishes starts from the previous keyframe's pose
+  // as it was published (before this refinement moved it by c), so the covariance also
+  // holds that correction's: Cov(c) = Sigma_then - Sigma_now of that pose's marginal
+  // (the smoother's correction is orthogonal to its error), carried into the delta.
   Eigen::Isometry3d T_prev_last = Eigen::Isometry3d::Identity();
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
 };
@@ -101,6 +104,10 @@ class SlidingWindow {
   // Point estimates of the last refinement, by track id (a warm start).
   std::unordered_map<std::int64_t, Eigen::Vector3d> points_;
   double disparity_offset_ = 0;  // warm start
+  // The newest pose's marginal covariance at the last refinement, for Cov(c).
+  bool has_newest_cov_ = false;
+  std::int64_t newest_id_ = 0;
+  Eigen::Matrix<double, 6, 6> newest_cov_ = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 // x y z roll pitch yaw of the relative pose inv(Ta exp(da)) Tb exp(db), differentiated
