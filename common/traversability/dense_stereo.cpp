@@ -174,6 +174,21 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
   cv::copyMakeBorder(rectR, padR, 0, 0, num_disp, 0, cv::BORDER_CONSTANT, 0);
   sgbm->compute(padL, padR, padded);
   const cv::Mat disp16 = padded.colRange(num_disp, padded.cols);
+  // Depth edges: the range of matched disparities over each pixel's 5x5 neighbourhood.
+  cv::Mat edge;
+  if (o.max_disparity_jump > 0) {
+    cv::Mat dmax, dmin, valid;
+    const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5));
+    cv::Mat d = cv::max(disp16, 0);
+    cv::dilate(d, dmax, kernel);  // unmatched pixels (0) never raise the maximum
+    cv::Mat d_for_min = d.clone();
+    d_for_min.setTo(cv::Scalar(32767), d <= 0);  // holes do not pull the minimum down
+    cv::erode(d_for_min, dmin, kernel);
+    cv::Mat spread, dfloat;
+    cv::Mat(dmax - dmin).convertTo(spread, CV_32F);
+    d.convertTo(dfloat, CV_32F);
+    edge = spread > dfloat * o.max_disparity_jump;
+  }
   if (stats) stats->seconds_match = SecondsSince(t0);
 
   // Triangulate: z = f B / d along the common axis.
@@ -188,8 +203,10 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
     const std::int16_t* dp = disp16.ptr<std::int16_t>(v);
     const float* mlx = r.map_lx.ptr<float>(v);
     const float* mrx = r.map_rx.ptr<float>(v);
+    const std::uint8_t* ep = edge.empty() ? nullptr : edge.ptr<std::uint8_t>(v);
     for (int u = 0; u < r.width; u += step) {
       if (dp[u] <= 0 || u - dp[u] / 16 < 0 || mlx[u] < -0.5f || mrx[u - dp[u] / 16] < -0.5f) continue;  // no match, or off the source images
+      if (ep && ep[u]) continue;  // on a depth edge
       const double d = dp[u] / 16.0;
       const double z = fB / d;
       const Eigen::Vector3d ray((u - r.cx) / r.f, (v - r.cy) / r.f, 1.0);

@@ -58,6 +58,8 @@ TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(optio
   if (o.speckle_window < 0 || o.speckle_range < 0) Bad("speckle_window and speckle_range must be >= 0");
   if (!positive(o.disparity_sigma_px)) Bad("disparity_sigma_px must be > 0");
   if (o.subsample < 1 || o.subsample > 16) Bad("subsample must be in [1, 16]");
+  if (!std::isfinite(o.max_disparity_jump) || o.max_disparity_jump < 0)
+    Bad("max_disparity_jump must be >= 0");
   if (!std::isfinite(o.min_range_m) || o.min_range_m < 0 || o.min_range_m >= o.max_range_m)
     Bad("min_range_m must be in [0, max_range_m)");
   n_ = std::max(1, static_cast<int>(std::lround(o.extent_m / o.cell_size_m)));
@@ -284,7 +286,7 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
                   "max_roughness_m", "max_range_m", "min_points", "caution_fraction",
                   "min_patch_fraction", "stereo_width_px", "num_disparities", "block_size",
                   "uniqueness_ratio", "speckle_window", "speckle_range", "disparity_sigma_px",
-                  "subsample", "min_range_m"});
+                  "subsample", "min_range_m", "max_disparity_jump"});
   node.Get("cell_size_m", o.cell_size_m, 0.01, 10.0);
   node.Get("extent_m", o.extent_m, 0.1, 200.0);
   node.Get("footprint_radius_m", o.footprint_radius_m, 0.0, 10.0);
@@ -307,6 +309,7 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
   node.Get("disparity_sigma_px", o.disparity_sigma_px, 1e-3, 10.0);
   node.Get("subsample", o.subsample, 1, 16);
   node.Get("min_range_m", o.min_range_m, 0.0, 100.0);
+  node.Get("max_disparity_jump", o.max_disparity_jump, 0.0, 10.0);
   if (o.min_range_m >= o.max_range_m)
     node.Fail("min_range_m: expected less than max_range_m");
   if (o.footprint_radius_m > o.extent_m / 2)

@@ -178,20 +178,20 @@ std::string FormatTable(const EvalResult& r, double rock_limit_m) {
   };
   std::ostringstream out;
   char line[256];
-  std::snprintf(line, sizeof line, "%-9s | %5s %8s %7s | %11s %12s %7s | %7s %8s %7s\n", "range",
+  std::snprintf(line, sizeof line, "%-7s | %6s %8s %7s | %11s %12s %7s | %7s %8s %7s\n", "range",
                 "rocks", "detected", "", "traversable", "false unsafe", "", "in view",
                 "unknown", "");
   out << line;
   char limit[32];
   std::snprintf(limit, sizeof limit, ">%.2fm", rock_limit_m);
-  std::snprintf(line, sizeof line, "%-9s | %5s %8s %7s | %11s %12s %7s | %7s %8s %7s\n", "",
+  std::snprintf(line, sizeof line, "%-7s | %6s %8s %7s | %11s %12s %7s | %7s %8s %7s\n", "",
                 limit, "", "", "cells",
                 "cells", "", "cells", "cells", "");
   out << line;
-  out << std::string(94, '-') << "\n";
+  out << std::string(93, '-') << "\n";
   const char* names[] = {"0-2 m", "2-4 m", "4-6 m"};
   auto row = [&](const char* name, const BandCounts& b) {
-    std::snprintf(line, sizeof line, "%-9s | %5d %8d %7s | %11d %12d %7s | %7d %8d %7s\n", name,
+    std::snprintf(line, sizeof line, "%-7s | %6d %8d %7s | %11d %12d %7s | %7d %8d %7s\n", name,
                   b.rocks, b.rocks_detected, pct(b.rocks_detected, b.rocks).c_str(),
                   b.traversable_cells, b.false_unsafe_cells,
                   pct(b.false_unsafe_cells, b.traversable_cells).c_str(), b.in_view_cells,
@@ -199,7 +199,7 @@ std::string FormatTable(const EvalResult& r, double rock_limit_m) {
     out << line;
   };
   for (int k = 0; k < EvalResult::kBands; ++k) row(names[k], r.bands[k]);
-  out << std::string(94, '-') << "\n";
+  out << std::string(93, '-') << "\n";
   row("0-4 m", r.Within4m());
   return out.str();
 }
