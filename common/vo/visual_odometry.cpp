@@ -886,15 +886,14 @@ void VisualOdometry::State::Accept(std::int64_t frame_id, const geometry::Stereo
   res->disparity_offset_px = w.disparity_offset_px;
   bool used = false;
   if (w.ok) {
-    // The refined delta's covariance: the pair's VO-13 covariance with its fit part
-    // (everything but the shared errors, which no window averages away) carried from the
-    // pair's inverse normal matrix to the window's: S (C - G) S^T + G with
-    // S = L_w L_p^-1, L L^T the two inverse normal matrices.
-    const Eigen::LLT<Matrix6d> Lp(u.inverse_normal), Lw(w.covariance);
-    if (Lp.info() == Eigen::Success && Lw.info() == Eigen::Success) {
-      const Matrix6d L_p = Lp.matrixL();
-      const Matrix6d Sm = Matrix6d(Lw.matrixL()) * L_p.inverse();
-      Matrix6d cov = Sm * (pair_cov - u.shared) * Sm.transpose() + u.shared;
+    // The refined delta's covariance: the pair's VO-13 covariance, not shrunk by the
+    // window (tracked features share errors over pairs that the window's own inverse
+    // normal matrix does not see: it was overconfident on rendered sand, NEES 35), plus
+    // the previous pose's correction (WindowSolution::correction), scaled like the fit
+    // part of VO-13 (the larger of the variance and cluster factors).
+    {
+      const double factor = std::max({1.0, u.variance_factor, u.cluster_factor});
+      Matrix6d cov = pair_cov + factor * w.correction;
       cov = 0.5 * (cov + cov.transpose()).eval();
       const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
       const geometry::Vector6d b = geometry::XyzRpyFromPose(T_ref_cur);
