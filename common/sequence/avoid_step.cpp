@@ -67,6 +67,27 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.blind_margin_m = map_->blind_margin_m;
   o.max_unknown_fraction = map_->max_unknown_fraction;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
+  // Near the goal (inside the look-ahead) with a clear line to it: steer straight at it as
+  // a plain goto does, so that the vote's look-ahead, longer than the way left, cannot
+  // carry the rover past the disc.
+  if (remaining < o.lookahead_m) {
+    const GotoDecision direct = SteerToward(p, goto_.target, goto_.tolerance_m, StepLength(), MaxTurn(),
+                                            options_.goto_turn_threshold_deg * M_PI / 180.0);
+    const avoidance::Pose2 here{p.x, p.y, p.yaw};
+    const bool turn = direct.step.kind == PlannedStep::Kind::kTurn;
+    const auto step_path = avoidance::SamplePath(here, turn ? direct.step.turn_rad : 0.0,
+                                                 turn ? 0.0 : direct.step.distance_m, 0.0);
+    const double bearing = std::atan2(goto_.target.y() - p.y, goto_.target.x() - p.x);
+    const auto line = avoidance::SamplePath(here, geometry::WrapAngle(bearing - p.yaw), remaining, 0.0);
+    const auto s = avoidance::SweepFootprint(map_->grid, o.footprint, step_path, here, o.blind_margin_m);
+    const auto l = avoidance::SweepFootprint(map_->grid, o.footprint, line, here, o.blind_margin_m);
+    if (s.unsafe == 0 && s.UnknownFraction() <= o.max_unknown_fraction && l.unsafe == 0) {
+      *step = direct.step;
+      detail_ = "avoid: the goal is in reach and the way to it clear: steering straight at it (" +
+                Fixed2(remaining) + " m to go)";
+      return AvoidOutcome::kStep;
+    }
+  }
   avoidance::Choice choice;
   try {
     choice = avoidance::VoteArcs(map_->grid, {p.x, p.y, p.yaw}, goto_.target.x(), goto_.target.y(), o);
