@@ -112,13 +112,15 @@ int main(int argc, char** argv) {
     for (int size : sizes) {
       render::RenderOptions ro;
       ro.image_scale = static_cast<double>(size) / rig.left->width();
-      render::StereoRenderer renderer(ro);
       std::vector<render::StereoImages> images;
       std::vector<geometry::Pose> poses;
-      for (int k = 0; k < pairs; ++k) {
-        const double x = start.x + 0.2 * k * std::cos(yaw), y = start.y + 0.2 * k * std::sin(yaw);
-        poses.push_back(geometry::PoseFromXyzRpy(x, y, -world.Elevation(x, y), 0, 0, yaw));
-        images.push_back(renderer.RenderPair(world, rig, poses.back(), k + 1));
+      {  // the renderer (and any threads it keeps) is gone before the timing starts
+        render::StereoRenderer renderer(ro);
+        for (int k = 0; k < pairs; ++k) {
+          const double x = start.x + 0.2 * k * std::cos(yaw), y = start.y + 0.2 * k * std::sin(yaw);
+          poses.push_back(geometry::PoseFromXyzRpy(x, y, -world.Elevation(x, y), 0, 0, yaw));
+          images.push_back(renderer.RenderPair(world, rig, poses.back(), k + 1));
+        }
       }
       traversability::TraversabilityMap map(traversability::MapOptions{});
       std::vector<double> total, cpu, rect, match, grid, points;
