@@ -531,10 +531,10 @@ VoResult VisualOdometry::Process(const StereoImages& images,
       const int tx = static_cast<int>(std::lround(ToLevel(f.left.x(), l)));
       const int ty = static_cast<int>(std::lround(ToLevel(f.left.y(), l)));
       const int side = l == 0 ? o.match_template_px : o.track_coarse_template_px;
-      // A track's position is sub-pixel: its template is resampled there at full size.
-      const bool subpixel = l == 0 && (f.left.x() != tx || f.left.y() != ty);
-      if (subpixel ? !s.tmpl.ExtractSubpixel(prev->left_band[0], f.left.x(), f.left.y(), side)
-                   : !s.tmpl.Extract(prev->left_band[l], tx, ty, side)) {
+      // A track's position is sub-pixel: its template is cut at the nearest pixel (not
+      // resampled, which would blur it a little more every pair) and the match moved by
+      // the same sub-pixel offset afterwards.
+      if (!s.tmpl.Extract(prev->left_band[l], tx, ty, side)) {
         ok = false;
         break;
       }
@@ -557,6 +557,7 @@ VoResult VisualOdometry::Process(const StereoImages& images,
     if (!m.ok || m.score < o.track_min_score) continue;
     s.correlator.Iterate(s.tmpl, c.left_band[0], o.match_subpixel_iterations,
                          o.match_covariance_scale, o.match_min_sigma_px, &m);
+    m.position += f.left - Eigen::Vector2d(std::lround(f.left.x()), std::lround(f.left.y()));
 
     // Stereo match of the tracked feature, its disparity narrowed by the known 3-D
     // position (VO-6).
