@@ -10,6 +10,7 @@
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/imu_t.hpp>
 #include <rover_msgs/keepout_zones_t.hpp>
+#include <rover_msgs/traversability_map_t.hpp>
 #include <rover_msgs/mobility_command_t.hpp>
 #include <rover_msgs/mobility_status_t.hpp>
 #include <rover_msgs/new_site_t.hpp>
@@ -346,6 +347,29 @@ Bytes Sample(const std::string& channel, std::int64_t now) {
     Identity(m.orientation);
     m.soil = "sand";
     m.command_id = -1;
+    return Encode(m);
+  }
+  if (channel == "TRAVERSABILITY_MAP") {
+    // A small map far from the rover: safe cells around a tall step.
+    traversability_map_t m{};
+    m.utime = now;
+    m.pub_seq = PubSeq(1);
+    m.last_frame_id = kFakeId;
+    m.origin_x = 100;
+    m.origin_y = 100;
+    m.cell_m = 0.2;
+    m.rows = 3;
+    m.cols = 3;
+    m.num_cells = 9;
+    m.state.assign(9, traversability_map_t::STATE_SAFE);
+    m.state[4] = traversability_map_t::STATE_UNSAFE;
+    m.goodness.assign(9, 1.0f);
+    m.goodness[4] = 0.0f;
+    m.step_m.assign(9, 0.01f);
+    m.step_m[4] = 0.5f;
+    m.footprint_length_m = 1.6;
+    m.footprint_width_m = 1.2;
+    m.max_unknown_fraction = 0.2;
     return Encode(m);
   }
   throw std::invalid_argument("no sample for channel " + channel);
@@ -687,7 +711,8 @@ const std::vector<ChannelInfo>& AllChannels() {
       {"HAZARD_STATUS", "hazard_status_t"},   {"HAZARD_QUERY", "hazard_query_t"},
       {"HAZARD_REPLY", "hazard_reply_t"},     {"SEQUENCE_SUBMIT", "sequence_submit_t"},
       {"SEQUENCE_CONTROL", "sequence_control_t"}, {"SEQUENCE_STATUS", "sequence_status_t"},
-      {"STEP_REPORT", "step_report_t"},       {"SIM_TRUTH", "sim_truth_t"}};
+      {"STEP_REPORT", "step_report_t"},       {"SIM_TRUTH", "sim_truth_t"},
+      {"TRAVERSABILITY_MAP", "traversability_map_t"}};
   return channels;
 }
 

@@ -22,6 +22,7 @@
 #include <rover_msgs/sim_truth_t.hpp>
 #include <rover_msgs/step_report_t.hpp>
 #include <rover_msgs/stereo_frame_t.hpp>
+#include <rover_msgs/traversability_map_t.hpp>
 #include <rover_msgs/vo_update_t.hpp>
 #include <rover_msgs/wheel_odometry_t.hpp>
 
@@ -39,7 +40,7 @@ namespace {
 
 using namespace rover_msgs;
 
-constexpr std::array<ChannelType, 20> kChannels = {{
+constexpr std::array<ChannelType, 21> kChannels = {{
     {channels::kHeartbeat, "heartbeat_t", &heartbeat_t::getHash, Counter::kHeartbeatSeq},
     {channels::kClock, "rover_clock_t", &rover_clock_t::getHash, Counter::kPubSeq},
     {channels::kImu, "imu_t", &imu_t::getHash, Counter::kPubSeq},
@@ -60,6 +61,7 @@ constexpr std::array<ChannelType, 20> kChannels = {{
     {channels::kSequenceStatus, "sequence_status_t", &sequence_status_t::getHash, Counter::kPubSeq},
     {channels::kStepReport, "step_report_t", &step_report_t::getHash, Counter::kPubSeq},
     {channels::kSimTruth, "sim_truth_t", &sim_truth_t::getHash, Counter::kPubSeq},
+    {channels::kTraversabilityMap, "traversability_map_t", &traversability_map_t::getHash, Counter::kPubSeq},
 }};
 
 // Names for publisher ids when the log holds no heartbeat from them: the processes, and the
