@@ -95,6 +95,9 @@ struct VisualOdometry::State {
   // to the window's latest estimate); the next track id.
   SlidingWindow window;
   Eigen::Isometry3d T_w_last = Eigen::Isometry3d::Identity();
+  // The covariance of the last call's pair against the reference pair (zero when it was
+  // the reference): a delta from it carries that pair's error too.
+  Matrix6d last_ref_cov = Matrix6d::Zero();
   std::int64_t next_track_id = 1;
   bool Windowed() const { return o.window_size >= 2; }
   // Windowed mode: gives `pair` the carried tracks plus fresh corners stereo-matched where
@@ -373,6 +376,7 @@ void VisualOdometry::State::RestartWindow(Pair* pair) {
   }
   window.AddFrame(pair->frame_id, Eigen::Isometry3d::Identity(), std::move(obs));
   T_w_last = Eigen::Isometry3d::Identity();
+  last_ref_cov.setZero();
 }
 
 VisualOdometry::VisualOdometry(VoOptions options) : state_(std::make_unique<State>()) {
@@ -395,6 +399,7 @@ void VisualOdometry::Reset() {
   state_->calls = 0;
   state_->window = SlidingWindow(state_->window.options());
   state_->T_w_last = Eigen::Isometry3d::Identity();
+  state_->last_ref_cov.setZero();
 }
 
 const VoOptions& VisualOdometry::options() const { return state_->o; }
@@ -862,6 +867,10 @@ void VisualOdometry::State::Accept(std::int64_t frame_id, const geometry::Stereo
     const Eigen::Isometry3d T_w_cur = T_w_ref * T_ref_cur;
     res->T_prev_curr = T_w_last.inverse() * T_w_cur;
     T_w_last = T_w_cur;
+    // Both pairs are measured against the reference: the delta holds both errors. Their
+    // sum bounds it (the reference's share cancels), which keeps the NEES honest.
+    res->covariance = pair_cov + last_ref_cov;
+    last_ref_cov = pair_cov;
     prev = std::move(*ref);
     spare = std::move(*cur);
     res->window_frames = window.size();
@@ -892,9 +901,13 @@ void VisualOdometry::State::Accept(std::int64_t frame_id, const geometry::Stereo
     // normal matrix does not see: it was overconfident on rendered sand, NEES 35), plus
     // the previous pose's correction (WindowSolution::correction), scaled like the fit
     // part of VO-13 (the larger of the variance and cluster factors).
+    // The window's model of that correction sees match noise only; it is scaled by how much
+    // the pair's full VO-13 covariance exceeds its own match-noise model, tr(H C) / 6.
     {
       const double factor = std::max({1.0, u.variance_factor, u.cluster_factor});
-      Matrix6d cov = pair_cov + factor * w.correction;
+      const Eigen::LDLT<Matrix6d> Hp(u.inverse_normal);
+      const double excess = Hp.info() == Eigen::Success ? Hp.solve(pair_cov).trace() / 6.0 : factor;
+      Matrix6d cov = pair_cov + std::max(factor, excess) * w.correction;
       cov = 0.5 * (cov + cov.transpose()).eval();
       const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
       const geometry::Vector6d b = geometry::XyzRpyFromPose(T_ref_cur);
@@ -920,6 +933,8 @@ void VisualOdometry::State::Accept(std::int64_t frame_id, const geometry::Stereo
     res->T_prev_curr = T_w_last.inverse() * window.pose(window.size() - 1) * T_ref_cur;
     RestartWindow(cur->get());
   }
+  res->covariance += last_ref_cov;
+  last_ref_cov.setZero();
   res->window_used = used;
   res->times.window_ms = Ms(t0, Clock::now());
   prev = std::move(*cur);
