@@ -202,10 +202,17 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   for (std::size_t j = 0; j < used.size(); ++j) X[j] = used[j].X;
 
   // The reduced variables: the free poses, then (optionally) the disparity offset.
-  const bool offset = o_.disparity_offset_sigma_px > 0;
+  // The offset is estimated only from a full window (a point then seen at several
+  // ranges); otherwise it is held at its last estimate. Its prior is centred on that
+  // estimate, with the information of the last solution (capped at that of a fifth of
+  // the prior sigma, since consecutive windows share observations).
+  const bool offset = o_.disparity_offset_sigma_px > 0 && M >= std::max(3, o_.max_frames);
+  const double offset_mean = disparity_offset_;
+  const double base_info = o_.disparity_offset_sigma_px > 0 ? 1.0 / (o_.disparity_offset_sigma_px * o_.disparity_offset_sigma_px) : 0.0;
+  const double prior_info = std::max(base_info, offset_prior_info_);
   const int nc = dim + (offset ? 1 : 0);
   const int id = dim;  // index of the offset
-  double delta = offset ? disparity_offset_ : 0.0;
+  double delta = disparity_offset_;
   Eigen::MatrixXd S(nc, nc), Hcc(nc, nc);
   Eigen::VectorXd bs(nc), bc(nc);
   std::vector<Eigen::Matrix3d> Hxx_inv(used.size());
@@ -258,9 +265,8 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
       bx[j] = b;
     }
     if (offset) {
-      const double info = 1.0 / (o_.disparity_offset_sigma_px * o_.disparity_offset_sigma_px);
-      Hcc(id, id) += info;
-      bc(id) -= info * delta;
+      Hcc(id, id) += prior_info;
+      bc(id) -= prior_info * (delta - offset_mean);
     }
     S = Hcc;
     S.diagonal() *= 1 + lambda;
@@ -273,7 +279,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   };
 
   auto total_cost = [&](const std::vector<Eigen::Isometry3d>& P, const std::vector<Eigen::Vector3d>& Xs, double d) {
-    const double prior = offset ? d * d / (o_.disparity_offset_sigma_px * o_.disparity_offset_sigma_px) : 0.0;
+    const double prior = offset ? prior_info * (d - offset_mean) * (d - offset_mean) : 0.0;
     return cost_of(P, Xs, d) + prior;
   };
   double cost = total_cost(poses, X, delta);
@@ -290,7 +296,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
     for (int i = 1; i < M; ++i) {
       new_poses[static_cast<std::size_t>(i)] = Retract(poses[static_cast<std::size_t>(i)], dc.segment<6>(6 * (i - 1)));
     }
-    const double new_delta = offset ? delta + dc(id) : 0.0;
+    const double new_delta = offset ? delta + dc(id) : delta;
     std::vector<Eigen::Vector3d> new_X = X;
     for (std::size_t j = 0; j < used.size(); ++j) {
       new_X[j] = X[j] + Hxx_inv[j] * (bx[j] - Hcx[j].transpose() * dc);
@@ -343,6 +349,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   sol.variance_factor = cost / redundancy;
   sol.disparity_offset_px = delta;
   disparity_offset_ = delta;
+  if (offset && cov(id, id) > 0) offset_prior_info_ = std::min(25.0 * base_info, 1.0 / cov(id, id));
   sol.ok = true;
 
   for (int i = 0; i < M; ++i) frames_[static_cast<std::size_t>(i)].T_w = poses[static_cast<std::size_t>(i)];

@@ -105,7 +105,8 @@ class SlidingWindow {
   Frame dropped_;
   // Point estimates of the last refinement, by track id (a warm start).
   std::unordered_map<std::int64_t, Eigen::Vector3d> points_;
-  double disparity_offset_ = 0;  // warm start
+  double disparity_offset_ = 0;  // the running estimate (held between windows)
+  double offset_prior_info_ = 0;
   // The newest pose's marginal covariance at the last refinement, for Cov(c).
   bool has_newest_cov_ = false;
   std::int64_t newest_id_ = 0;

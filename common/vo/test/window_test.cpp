@@ -138,7 +138,9 @@ TEST(SlidingWindow, PopNewestRestoresThePosesAndTheOldestFrame) {
   std::mt19937 rng(5);
   for (int k = 0; k < 5; ++k) {
     window.AddFrame(k, scene.poses[static_cast<std::size_t>(k)], scene.Observe(k, 0.2, 0.0, &rng));
-    if (k > 0) ASSERT_TRUE(window.Refine(scene.rig).ok);
+    if (k > 0) {
+      ASSERT_TRUE(window.Refine(scene.rig).ok);
+    }
   }
   ASSERT_EQ(window.size(), 3);
   std::vector<Eigen::Isometry3d> before;
