@@ -107,8 +107,8 @@ struct SharedErrors {
   // differ). With features over many cells these average out like independent errors;
   // with the features in one or two cells (a lone textured patch) they move the whole
   // cloud, and no residual shows them. The cluster factor sees only the part of them that
-  // differs between cells. VisualOdometry keeps these defaults until VoOptions carries
-  // them. They were chosen on rendered truth: vo_eval --world drives (0.5-0.6 m steps on
+  // differs between cells. VoOptions carries them (covariance_cell_shift_sigma_px,
+  // covariance_cell_disparity_sigma_px in configs/vo.yaml). They were chosen on rendered truth: vo_eval --world drives (0.5-0.6 m steps on
   // columbia_hills_traverse and outcrop_slope, turns up to 26 deg on flat_rock_course, the
   // clustered_features patch), the synthetic terrain and catalogue runs (sol304_approach,
   // sol188_191, large_turn, clustered_features): over those 243 updates the mean NEES went

@@ -737,6 +737,8 @@ VoResult VisualOdometry::Process(const StereoImages& images,
     SharedErrors shared;
     shared.field_sigma_px = o.covariance_field_sigma_px;
     shared.disparity_sigma_px = o.covariance_disparity_sigma_px;
+    shared.cell_shift_sigma_px = o.covariance_cell_shift_sigma_px;
+    shared.cell_disparity_sigma_px = o.covariance_cell_disparity_sigma_px;
     shared.centre_px = Eigen::Vector2d(0.5 * (c.width - 1), 0.5 * (c.height - 1));
     shared.half_size_px = 0.5 * std::max(c.width, c.height);
     u = EstimateMotionUncertainty(corr, inliers, ml.T_prev_curr, cluster, grid * grid, shared);

@@ -208,6 +208,10 @@ struct VoOptions {
   // rendered truth only (tools/vo_eval/README.md): 0.02 and 0.05 px.
   double covariance_field_sigma_px = 0.02;
   double covariance_disparity_sigma_px = 0.05;
+  // Errors the features of one cluster-grid cell share (motion_estimation.hpp,
+  // SharedErrors): a shift of the current matches, and a disparity error in each pair.
+  double covariance_cell_shift_sigma_px = 0.04;
+  double covariance_cell_disparity_sigma_px = 0.04;
 
   // ---- VO with memory: feature tracks and a sliding window (README "VO with memory") ----
   // Keyframes in the sliding-window maximum-likelihood refinement (window.hpp); < 2 = off:

@@ -56,7 +56,8 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "degenerate_min_spread", "degenerate_max_translation_sigma_m",
                   "degenerate_max_rotation_sigma_deg",
                   "covariance_cluster_grid", "covariance_field_sigma_px",
-                  "covariance_disparity_sigma_px",
+                  "covariance_disparity_sigma_px", "covariance_cell_shift_sigma_px",
+                  "covariance_cell_disparity_sigma_px",
                   "window_size", "window_max_iterations", "window_huber_sigmas", "window_max_chi2",
                   "window_disparity_offset_sigma_px",
                   "track_min_distance_px", "keyframe_min_translation_m", "keyframe_min_rotation_deg"});
@@ -119,6 +120,8 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   node.Get("covariance_cluster_grid", o.covariance_cluster_grid, 0, 16);
   node.Get("covariance_field_sigma_px", o.covariance_field_sigma_px, 0.0, 10.0);
   node.Get("covariance_disparity_sigma_px", o.covariance_disparity_sigma_px, 0.0, 10.0);
+  node.Get("covariance_cell_shift_sigma_px", o.covariance_cell_shift_sigma_px, 0.0, 10.0);
+  node.Get("covariance_cell_disparity_sigma_px", o.covariance_cell_disparity_sigma_px, 0.0, 10.0);
   node.Get("window_size", o.window_size, 0, 10);
   node.Get("window_max_iterations", o.window_max_iterations, 1, 100);
   node.Get("window_huber_sigmas", o.window_huber_sigmas, 0.5, 100.0);

@@ -145,7 +145,9 @@ TEST(VoEvaluation, RenderedDriveThatLeavesTheMapIsRefusedNamingTheFrame) {
 }
 
 int RunEvaluator(const std::string& args, std::string* stderr_text) {
-  const fs::path err = FreshDir("vo_eval_stderr.txt");
+  // One file per test: ctest runs these tests as separate processes, side by side.
+  const fs::path err = FreshDir(std::string("vo_eval_stderr_") +
+                                ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".txt");
   const std::string cmd = std::string(ROVER_BINARY_DIR) + "/bin/vo_eval " + args + " >/dev/null 2>" + err.string();
   const int status = std::system(cmd.c_str());
   *stderr_text = ReadText(err);
