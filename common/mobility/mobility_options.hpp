@@ -116,7 +116,7 @@ struct ImuOptions {
 };
 
 struct EncoderOptions {
-  double rate_hz = 10.0;      // >= 8 Hz (issue 2)
+  double rate_hz = 10.0;      // >= 8 Hz
   double resolution_m = 0.0;  // quantization of each wheel's distance; 0 = none
 };
 

@@ -1,4 +1,4 @@
-// Hazard avoidance (issue 11): the hazard monitor's traversability map from the NAVCAM
+// Hazard avoidance: the hazard monitor's traversability map from the NAVCAM
 // pairs, and `goto ... avoid on` (arc voting, common/avoidance), on worlds of UNDECLARED
 // rocks (no keep-out zone anywhere), asserted against truth. Each scenario runs the real
 // process set on a private LCM bus (scenario_runner); summary.json carries the truth
