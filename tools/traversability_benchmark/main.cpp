@@ -1,4 +1,4 @@
-// Traversability map speed (issue 11): median time of one map update (AddStereoPair:
+// Traversability map speed: median time of one map update (AddStereoPair:
 // rectify, dense stereo, triangulate, bin, rate) on ONE core, at 512x512 and 1024x1024.
 //   traversability_benchmark [--world configs/worlds/rock_field.yaml]
 //                            [--rig configs/cameras/navcam_pinhole.yaml] [--pairs 20]
