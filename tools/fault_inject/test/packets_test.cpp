@@ -24,6 +24,7 @@
 #include <rover_msgs/sim_truth_t.hpp>
 #include <rover_msgs/step_report_t.hpp>
 #include <rover_msgs/stereo_frame_t.hpp>
+#include <rover_msgs/traversability_map_t.hpp>
 #include <rover_msgs/vo_update_t.hpp>
 #include <rover_msgs/wheel_odometry_t.hpp>
 
@@ -66,7 +67,8 @@ bool Decodes(const std::string& channel, const Bytes& bytes, Bytes* again) {
       {"HAZARD_STATUS", RoundTrip<hazard_status_t>},   {"HAZARD_QUERY", RoundTrip<hazard_query_t>},
       {"HAZARD_REPLY", RoundTrip<hazard_reply_t>},     {"SEQUENCE_SUBMIT", RoundTrip<sequence_submit_t>},
       {"SEQUENCE_CONTROL", RoundTrip<sequence_control_t>}, {"SEQUENCE_STATUS", RoundTrip<sequence_status_t>},
-      {"STEP_REPORT", RoundTrip<step_report_t>},       {"SIM_TRUTH", RoundTrip<sim_truth_t>}};
+      {"STEP_REPORT", RoundTrip<step_report_t>},       {"SIM_TRUTH", RoundTrip<sim_truth_t>},
+      {"TRAVERSABILITY_MAP", RoundTrip<traversability_map_t>}};
   return decoders.at(channel)(bytes, again);
 }
 
@@ -86,7 +88,7 @@ TEST(FaultSchema, EveryChannelTypeIsInTheEmbeddedLcmFiles) {
   for (const auto& c : AllChannels()) EXPECT_TRUE(s.Has(c.type)) << c.type;
   EXPECT_TRUE(s.Has("image_t"));
   EXPECT_TRUE(s.Has("auth_t"));
-  EXPECT_EQ(AllChannels().size(), 20u);
+  EXPECT_EQ(AllChannels().size(), 21u);  // every channel of common/bus/channels.hpp
 }
 
 TEST(FaultSchema, WalkConsumesEverySampleExactly) {
