@@ -1,5 +1,5 @@
 // hazard-eval: how well the traversability map the rover builds from its own stereo pairs
-// finds the hazards of a simulated world (issue 11).
+// finds the hazards of a simulated world.
 //
 // Stereo pairs are rendered from the world at a list of poses (the rover's attitude from
 // the ground under it); after each pair the map is compared with the world's own terrain

@@ -1,5 +1,5 @@
 // Render time per stereo pair at 1024x1024 and 512x512 (targets 1.0 s and 0.25 s on one
-// core), and the realism comparison of issue 4: Harris corner density and the spread of
+// core), and the realism comparison: Harris corner density and the spread of
 // local contrast of a rendered rocky and a rendered sand world against real NAVCAM images
 // (rocky Gusev, Spirit 2n*.png; smooth Meridiani, Opportunity 1N*.png), then a verdict per
 // rendered world: which real images' range each figure falls in, or how far outside.

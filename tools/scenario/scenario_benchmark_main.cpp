@@ -1,7 +1,7 @@
 // ./rover bench scenario: how fast the whole process set simulates a 20 m drive.
 // Runs configs/scenarios/bench_20m.yaml (or the scenario given) several times through
 // scenario_runner and prints the rover time covered, the wall time, and their ratio.
-// Target (issue 2): at least 20x faster than real time at MER speed (~4 cm/s).
+// Target: at least 20x faster than real time at MER speed (~4 cm/s).
 #include "bus/process.hpp"
 #include "launch/process_set.hpp"
 

@@ -20,7 +20,7 @@ namespace rover::vo_eval {
 using PoseList = std::vector<Eigen::Isometry3d, Eigen::aligned_allocator<Eigen::Isometry3d>>;
 
 struct SegmentOptions {
-  // Segment lengths in metres. Default: 10..50 m (issue 3).
+  // Segment lengths in metres. Default: 10..50 m.
   std::vector<double> lengths_m = {10.0, 20.0, 30.0, 40.0, 50.0};
   // Every `start_step`-th frame starts segments (the devkit uses 10; we use all).
   int start_step = 1;

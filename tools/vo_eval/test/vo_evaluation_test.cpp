@@ -1,4 +1,4 @@
-// End to end: the evaluator on real KITTI frames (issue 3 "done when"), on the synthetic
+// End to end: the evaluator on real KITTI frames, on the synthetic
 // terrain with exact truth (VO-13), and the command line's handling of bad input.
 #include "vo_eval/vo_evaluation.hpp"
 
