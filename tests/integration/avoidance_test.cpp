@@ -5,7 +5,7 @@
 // clearance of the rover's footprint to every rock taller than the step limit
 // (min_rock_clearance_m, from SIM_TRUTH and the world). ./rover test runs ctest inside a
 // private network namespace.
-#include "integration/run_support.hpp"
+#include "integration/scenario_run.hpp"
 
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
@@ -17,16 +17,7 @@
 namespace rover::test {
 namespace {
 
-YAML::Node RunScenario(const std::string& name) {
-  const std::string out = OutDir("avoidance_" + name);
-  const auto result = RunCommand(Bin("scenario_runner") + " configs/scenarios/" + name +
-                                 ".yaml --out " + out + " --quiet --no-plot");
-  EXPECT_EQ(result.exit_code, 0) << result.output;
-  EXPECT_TRUE(std::filesystem::exists(out + "/log.lcm")) << "no log written";
-  return YAML::LoadFile(out + "/summary.json");
-}
-
-std::string Detail(const YAML::Node& s) { return s["detail"].as<std::string>(""); }
+YAML::Node RunScenario(const std::string& name) { return RunScenarioSummary("avoidance_", name); }
 
 double Dist(const YAML::Node& pose, double x, double y) {
   return std::hypot(pose["x"].as<double>() - x, pose["y"].as<double>() - y);

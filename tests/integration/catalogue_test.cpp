@@ -3,7 +3,7 @@
 // against truth: outcome, errors, clearance, and no false VO update (summary.json counts
 // an accepted update whose error against truth lies beyond the 99.7 % NEES bound).
 // ./rover test runs ctest inside a private network namespace.
-#include "integration/run_support.hpp"
+#include "integration/scenario_run.hpp"
 
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
@@ -24,19 +24,7 @@ constexpr int kVoTooFewFeatures = 2;
 constexpr int kVoMotionTooLarge = 7;
 constexpr int kVoDegenerate = 9;
 
-// Runs configs/scenarios/NAME.yaml and returns its summary.json. The runner exits 0 only
-// when the run met every entry of the scenario's `expect:`. No pictures: they cost wall
-// time and the assertions read summary.json.
-YAML::Node RunScenario(const std::string& name) {
-  const std::string out = OutDir("catalogue_" + name);
-  const auto result = RunCommand(Bin("scenario_runner") + " configs/scenarios/" + name +
-                                 ".yaml --out " + out + " --quiet --no-plot");
-  EXPECT_EQ(result.exit_code, 0) << result.output;
-  EXPECT_TRUE(std::filesystem::exists(out + "/log.lcm")) << "no log written";
-  return YAML::LoadFile(out + "/summary.json");
-}
-
-std::string Detail(const YAML::Node& s) { return s["detail"].as<std::string>(""); }
+YAML::Node RunScenario(const std::string& name) { return RunScenarioSummary("catalogue_", name); }
 
 double Get(const YAML::Node& pose, const char* key) { return pose[key].as<double>(); }
 
