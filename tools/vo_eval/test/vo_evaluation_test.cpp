@@ -67,10 +67,19 @@ TEST(VoEvaluation, Kitti06MeetsTheIssueTargets) {
   EXPECT_GT(report.accuracy.num_segments, 40);
   EXPECT_LE(report.accuracy.trans_error_percent, 1.0);
   EXPECT_LT(report.accuracy.rot_error_deg_per_m, 0.1);
+  // VO-13 against a real truth: with the truth's own centimetre-level uncertainty the
+  // mean NEES is in 2..20; taken as exact, the truth's errors dominate it.
+  EXPECT_DOUBLE_EQ(report.truth_sigma_m, kRealTruthSigmaM);
+  EXPECT_EQ(report.nees.count, report.converged);
+  EXPECT_GE(report.nees.mean, 2.0);
+  EXPECT_LE(report.nees.mean, 20.0);
+  EXPECT_GT(report.nees_exact_truth.mean, report.nees.mean);
+  EXPECT_NE(ReadText(out / "metrics.json").find("\"against_exact_truth\""), std::string::npos);
   std::cout << "KITTI 06 0..50: trans " << report.accuracy.trans_error_percent << " %, rot "
             << report.accuracy.rot_error_deg_per_m << " deg/m, final "
             << report.accuracy.final_position_error_percent << " %, median "
-            << report.median_ms.whole << " ms, NEES " << report.nees.mean << "\n";
+            << report.median_ms.whole << " ms, NEES " << report.nees.mean << " (truth as exact "
+            << report.nees_exact_truth.mean << ")\n";
 }
 
 TEST(VoEvaluation, SyntheticTerrainIsAccurateAndHonest) {
@@ -96,6 +105,9 @@ TEST(VoEvaluation, SyntheticTerrainIsAccurateAndHonest) {
                                 (truth.translation() - report.frames[k].motion.translation()).norm());
   }
   EXPECT_LT(worst_step_error, 0.01);  // 1 cm on a 30 cm step
+  // Exact truth: nothing is added to VO's covariance.
+  EXPECT_EQ(report.truth_sigma_m, 0.0);
+  EXPECT_EQ(report.nees.mean, report.nees_exact_truth.mean);
   // VO-13: an honest 6-DOF covariance gives a mean NEES near 6; allow for 15 samples.
   ASSERT_EQ(report.nees.count, report.converged);
   EXPECT_GT(report.nees.mean, 1.0);
