@@ -1,0 +1,141 @@
+// Windowed mode (README "VO with memory"): an accepted pair becomes a keyframe or is
+// measured against the last one and forgotten; a keyframe's tracks live on, and the
+// sliding window refines the last keyframes' poses before the delta is published.
+#include "geometry/pose.hpp"
+#include "vo/vo_state.hpp"
+
+#include <Eigen/Cholesky>
+
+namespace rover::vo {
+
+namespace {
+
+// The refined delta's covariance: the pair's VO-13 covariance, not shrunk by the window
+// (tracked features share errors over pairs that the window's own inverse normal matrix
+// does not see: it was overconfident on rendered sand, NEES 35), plus the previous pose's
+// correction (WindowSolution::correction), scaled like the fit part of VO-13 (the larger
+// of the variance and cluster factors). The window's model of that correction sees match
+// noise only; it is scaled by how much the pair's full VO-13 covariance exceeds its own
+// match-noise model, tr(H C) / 6. False when the window's delta disagrees with the pair's
+// beyond max_chi2.
+bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
+                       const Eigen::Isometry3d& T_ref_cur, const Matrix6d& pair_cov, double max_chi2,
+                       Matrix6d* out) {
+  const double factor = std::max({1.0, u.variance_factor, u.cluster_factor});
+  const Eigen::LDLT<Matrix6d> Hp(u.inverse_normal);
+  const double excess = Hp.info() == Eigen::Success ? Hp.solve(pair_cov).trace() / 6.0 : factor;
+  Matrix6d cov = pair_cov + std::max(factor, excess) * w.correction;
+  cov = 0.5 * (cov + cov.transpose()).eval();
+  const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
+  const geometry::Vector6d b = geometry::XyzRpyFromPose(T_ref_cur);
+  geometry::Vector6d d = a - b;
+  for (int i = 3; i < 6; ++i) d(i) = geometry::WrapAngle(d(i));
+  const double chi2 = d.dot(pair_cov.ldlt().solve(d));
+  if (cov.allFinite() && (max_chi2 <= 0 || chi2 <= max_chi2)) {
+    *out = cov;
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::vector<WindowObservation> Observations(const Pair& pair) {
+  std::vector<WindowObservation> obs;
+  obs.reserve(pair.features.size());
+  for (const Feature& f : pair.features) {
+    obs.push_back({f.track_id, f.left, f.right, f.Sigma_left, f.Sigma_right, f.P, f.Sigma});
+  }
+  return obs;
+}
+
+void VisualOdometry::State::RestartWindow(Pair* pair) {
+  window.Reset();
+  window.AddFrame(pair->frame_id, Eigen::Isometry3d::Identity(), Observations(*pair));
+  T_w_last = Eigen::Isometry3d::Identity();
+  last_ref_cov.setZero();
+}
+
+// An accepted measurement of the new pair against the reference pair (res.T_prev_curr,
+// covariance res.covariance): keyframe or not, the window's refinement, and the delta
+// from the last call's pair.
+void VisualOdometry::State::Accept(Step* st) {
+  VoResult* res = &st->res;
+  const std::vector<int>& inliers = st->inliers;
+  const auto track = [&](int k) -> const Feature& {
+    return st->carried[static_cast<std::size_t>(st->corr_source[static_cast<std::size_t>(k)])];
+  };
+  const Eigen::Isometry3d T_ref_cur = res->T_prev_curr;
+  const Matrix6d pair_cov = res->covariance;
+  double age_sum = 0;
+  for (int k : inliers) {
+    age_sum += track(k).age;
+    res->track_length_max = std::max(res->track_length_max, track(k).age);
+  }
+  res->track_length_mean = inliers.empty() ? 0.0 : age_sum / double(inliers.size());
+  const double moved = T_ref_cur.translation().norm();
+  const double turned = Eigen::AngleAxisd(T_ref_cur.linear()).angle();
+  // A pair that moved too little is measured against the reference and forgotten; one
+  // that kept too few of the reference's features becomes a keyframe anyway.
+  const bool keyframe = moved >= o.keyframe_min_translation_m || turned >= o.keyframe_min_rotation_deg * kDeg ||
+                        2 * static_cast<int>(inliers.size()) < static_cast<int>(st->ref->features.size());
+  res->keyframe = keyframe;
+  const Eigen::Isometry3d T_w_ref = window.pose(window.size() - 1);
+  if (!keyframe) {
+    const Eigen::Isometry3d T_w_cur = T_w_ref * T_ref_cur;
+    res->T_prev_curr = T_w_last.inverse() * T_w_cur;
+    T_w_last = T_w_cur;
+    // Both pairs are measured against the reference: the delta holds both errors. Their
+    // sum bounds it (the reference's share cancels), which keeps the NEES honest.
+    res->covariance = pair_cov + last_ref_cov;
+    last_ref_cov = pair_cov;
+    prev = std::move(st->ref);
+    spare = std::move(st->cur);
+    res->window_frames = window.size();
+    return;
+  }
+  // The tracks VO-8 used live on; detection tops them up.
+  std::vector<Feature> tracks;
+  tracks.reserve(inliers.size());
+  for (int k : inliers) tracks.push_back(track(k));
+  CompleteFeatures(st->cur.get(), std::move(tracks), res);
+  RefineWindow(st, T_w_ref, T_ref_cur, pair_cov);
+}
+
+// A keyframe joins the window, which is refined; its delta is published if it agrees with
+// the pair's, else the pair's own and the window restarts on the new pair.
+void VisualOdometry::State::RefineWindow(Step* st, const Eigen::Isometry3d& T_w_ref,
+                                         const Eigen::Isometry3d& T_ref_cur, const Matrix6d& pair_cov) {
+  VoResult* res = &st->res;
+  Pair* cur = st->cur.get();
+  const auto t0 = Clock::now();
+  window.AddFrame(st->images.frame_id, T_w_ref * T_ref_cur, Observations(*cur));
+  const WindowSolution w = window.Refine(cur->rig);
+  res->window_frames = window.size();
+  res->window_points = w.points;
+  res->window_iterations = w.iterations;
+  res->disparity_offset_px = w.disparity_offset_px;
+  Matrix6d cov;
+  const bool used = w.ok && RefinedCovariance(w, st->u, T_ref_cur, pair_cov, o.window_max_chi2, &cov);
+  // Published: the window's estimate of this pair against the last call's pair as it
+  // was published, so that the deltas compose to the window's latest estimate and its
+  // corrections of the poses before reach the user (the window's oldest pose is fixed).
+  if (used) {
+    res->covariance = cov;
+    const Eigen::Isometry3d T_w_cur = window.pose(window.size() - 1);
+    res->T_prev_curr = T_w_last.inverse() * T_w_cur;
+    T_w_last = T_w_cur;
+  } else {
+    // Refused: the pair's own estimate is published and the window restarts on this pair.
+    window.PopNewest();
+    res->T_prev_curr = T_w_last.inverse() * window.pose(window.size() - 1) * T_ref_cur;
+    RestartWindow(cur);
+  }
+  res->covariance += last_ref_cov;
+  last_ref_cov.setZero();
+  res->window_used = used;
+  res->times.window_ms = Ms(t0, Clock::now());
+  prev = std::move(st->cur);
+}
+
+}  // namespace rover::vo
