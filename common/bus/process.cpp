@@ -2,6 +2,7 @@
 
 #include "bus/channels.hpp"
 #include "bus/signing.hpp"
+#include "config/number_list.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/rover_clock_t.hpp>
@@ -206,21 +207,7 @@ int RunMain(const std::string& name, const std::function<int()>& body) {
 std::vector<double> ParseNumberList(const std::string& text, std::size_t expected_count,
                                     const std::string& what) {
   std::vector<double> values;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    try {
-      std::size_t used = 0;
-      const double v = std::stod(item, &used);
-      if (used != item.size() || !std::isfinite(v)) throw std::invalid_argument("bad");
-      values.push_back(v);
-    } catch (const std::exception&) {
-      throw config::ConfigError(what + ": \"" + text + "\": expected " +
-                                std::to_string(expected_count) +
-                                " finite numbers separated by commas");
-    }
-  }
-  if (values.size() != expected_count) {
+  if (!config::ParseNumberList(text, &values) || values.size() != expected_count) {
     throw config::ConfigError(what + ": \"" + text + "\": expected " +
                               std::to_string(expected_count) +
                               " finite numbers separated by commas");

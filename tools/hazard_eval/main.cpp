@@ -12,6 +12,7 @@
 #include "hazard_evaluation.hpp"
 
 #include "config/yaml_config.hpp"
+#include "config/number_list.hpp"
 #include "geometry/camera_io.hpp"
 
 #include <opencv2/core/utility.hpp>
@@ -28,29 +29,6 @@ namespace {
 int Usage(const std::string& message) {
   std::cerr << "hazard-eval: " << message << "\n";
   return 2;
-}
-
-bool ParseNumbers(const std::string& text, std::vector<double>& out) {
-  std::stringstream ss(text);
-  std::string item;
-  out.clear();
-  while (std::getline(ss, item, ',')) {
-    try {
-      std::size_t used = 0;
-      out.push_back(std::stod(item, &used));
-      if (used != item.size() || !std::isfinite(out.back())) return false;
-    } catch (const std::exception&) {
-      return false;
-    }
-  }
-  return !out.empty();
-}
-
-bool ParseOne(const char* text, double lo, double hi, double& out) {
-  std::vector<double> v;
-  if (!ParseNumbers(text, v) || v.size() != 1 || v[0] < lo || v[0] > hi) return false;
-  out = v[0];
-  return true;
 }
 
 }  // namespace
@@ -82,19 +60,19 @@ int main(int argc, char** argv) {
       if (!has) return Usage("--poses: expected \"x,y,yaw_deg;x,y,yaw_deg;...\"");
       poses_text = argv[++i];
     } else if (a == "--size") {
-      if (!has || !ParseOne(argv[++i], 64, 2048, size) || size != std::floor(size))
+      if (!has || !config::ParseNumberInRange(argv[++i], 64, 2048, &size) || size != std::floor(size))
         return Usage("--size: expected an image width in pixels, an integer in [64, 2048]");
     } else if (a == "--steps") {
-      if (!has || !ParseOne(argv[++i], 1, 50, steps) || steps != std::floor(steps))
+      if (!has || !config::ParseNumberInRange(argv[++i], 1, 50, &steps) || steps != std::floor(steps))
         return Usage("--steps: expected a number of poses, an integer in [1, 50]");
     } else if (a == "--step-m") {
-      if (!has || !ParseOne(argv[++i], 0.01, 10, step_m))
+      if (!has || !config::ParseNumberInRange(argv[++i], 0.01, 10, &step_m))
         return Usage("--step-m: expected metres between poses, in [0.01, 10]");
     } else if (a == "--min-detection") {
-      if (!has || !ParseOne(argv[++i], 0, 1, min_detection))
+      if (!has || !config::ParseNumberInRange(argv[++i], 0, 1, &min_detection))
         return Usage("--min-detection: expected a fraction in [0, 1]");
     } else if (a == "--max-false-unsafe") {
-      if (!has || !ParseOne(argv[++i], 0, 1, max_false_unsafe))
+      if (!has || !config::ParseNumberInRange(argv[++i], 0, 1, &max_false_unsafe))
         return Usage("--max-false-unsafe: expected a fraction in [0, 1]");
     } else if (a == "--verbose") {
       verbose = true;
@@ -140,7 +118,7 @@ int main(int argc, char** argv) {
       std::string item;
       while (std::getline(ss, item, ';')) {
         std::vector<double> v;
-        if (!ParseNumbers(item, v) || v.size() != 3)
+        if (!config::ParseNumberList(item, &v) || v.size() != 3)
           return Usage("--poses: '" + item + "': expected x,y,yaw_deg (metres, degrees)");
         options.poses.push_back({v[0], v[1], v[2]});
       }

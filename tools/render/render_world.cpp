@@ -4,6 +4,7 @@
 // writes DIR/left.png, DIR/right.png and DIR/disparity_truth.png (disparity from the true
 // depth, colour-mapped). A `render:` section in the world file sets RenderOptions.
 // Bad arguments: one line naming the argument and what was expected, exit 2.
+#include "config/number_list.hpp"
 #include "config/yaml_config.hpp"
 #include "geometry/camera_io.hpp"
 #include "geometry/pose.hpp"
@@ -28,22 +29,6 @@ int Usage(const std::string& message) {
   return 2;
 }
 
-bool ParseNumbers(const std::string& text, std::vector<double>& out) {
-  std::stringstream ss(text);
-  std::string item;
-  out.clear();
-  while (std::getline(ss, item, ',')) {
-    try {
-      std::size_t used = 0;
-      out.push_back(std::stod(item, &used));
-      if (used != item.size() || !std::isfinite(out.back())) return false;
-    } catch (const std::exception&) {
-      return false;
-    }
-  }
-  return true;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -60,7 +45,7 @@ int main(int argc, char** argv) {
       std::cout << "usage: render_world WORLD.yaml --pose x,y,yaw_deg [--rig RIG.yaml] [--size N] [--seed N] --out DIR\n";
       return 0;
     } else if (a == "--pose") {
-      if (!has_value || !ParseNumbers(argv[++i], pose) || pose.size() != 3) {
+      if (!has_value || !rover::config::ParseNumberList(argv[++i], &pose) || pose.size() != 3) {
         return Usage("--pose: expected x,y,yaw_deg (three numbers, metres and degrees)");
       }
       have_pose = true;
@@ -72,14 +57,14 @@ int main(int argc, char** argv) {
       out_dir = argv[++i];
     } else if (a == "--size") {
       std::vector<double> v;
-      if (!has_value || !ParseNumbers(argv[++i], v) || v.size() != 1 || v[0] < 16 || v[0] > 4096 ||
+      if (!has_value || !rover::config::ParseNumberList(argv[++i], &v) || v.size() != 1 || v[0] < 16 || v[0] > 4096 ||
           v[0] != std::floor(v[0])) {
         return Usage("--size: expected an image width in pixels, an integer in [16, 4096]");
       }
       size = static_cast<int>(v[0]);
     } else if (a == "--seed") {
       std::vector<double> v;
-      if (!has_value || !ParseNumbers(argv[++i], v) || v.size() != 1 || v[0] != std::floor(v[0])) {
+      if (!has_value || !rover::config::ParseNumberList(argv[++i], &v) || v.size() != 1 || v[0] != std::floor(v[0])) {
         return Usage("--seed: expected an integer");
       }
       seed = static_cast<long long>(v[0]);

@@ -8,6 +8,7 @@
 // and thread-CPU time per update (on a shared machine the CPU time is the one to trust) and
 // the stages' wall times. Targets: <= 150 ms at 512x512, <= 600 ms at 1024x1024, judged on
 // CPU time. Bad arguments: one line, exit 2.
+#include "config/number_list.hpp"
 #include "config/yaml_config.hpp"
 #include "geometry/camera_io.hpp"
 #include "geometry/pose.hpp"
@@ -33,23 +34,6 @@ namespace {
 int Usage(const std::string& message) {
   std::cerr << "traversability_benchmark: " << message << "\n";
   return 2;
-}
-
-bool ParseInts(const std::string& text, std::vector<int>& out, int lo, int hi) {
-  std::stringstream ss(text);
-  std::string item;
-  out.clear();
-  while (std::getline(ss, item, ',')) {
-    try {
-      std::size_t used = 0;
-      const int v = std::stoi(item, &used);
-      if (used != item.size() || v < lo || v > hi) return false;
-      out.push_back(v);
-    } catch (const std::exception&) {
-      return false;
-    }
-  }
-  return !out.empty();
 }
 
 // CPU time of this thread: the machine may be shared, and wall time then counts the others.
@@ -87,11 +71,11 @@ int main(int argc, char** argv) {
       if (!has) return Usage("--rig: expected a stereo rig YAML file");
       rig_path = argv[++i];
     } else if (a == "--pairs") {
-      if (!has || !ParseInts(argv[++i], v, 1, 1000) || v.size() != 1)
+      if (!has || !config::ParseIntList(argv[++i], 1, 1000, &v) || v.size() != 1)
         return Usage("--pairs: expected a number of stereo pairs in [1, 1000]");
       pairs = v[0];
     } else if (a == "--sizes") {
-      if (!has || !ParseInts(argv[++i], sizes, 64, 4096))
+      if (!has || !config::ParseIntList(argv[++i], 64, 4096, &sizes))
         return Usage("--sizes: expected image widths in pixels, e.g. 512,1024 (each in [64, 4096])");
     } else {
       return Usage("unknown argument '" + a + "' (see --help)");
