@@ -333,34 +333,78 @@ class SequenceExecutor {
     kFinished,
   };
 
+  // Operator and clocks (executor.cpp).
+  void ResetSettings();  // every setting back to its default, for a new sequence
+  void SetWall(double wall_s);
+
+  // The phase machine (executor_poll.cpp): one Poll* per phase that waits for something.
   void Advance();
-  void DispatchNext();
-  void StartCommand();
-  void ApplySetting(const Command& command);
-  bool NextStepOfCommand();  // false: the command is done
-  void BeginStep(const PlannedStep& step);
-  void CommandStep();
-  void AfterMotion();
-  void FinishStep();
-  void StartCapture(const std::string& purpose);
   void EnterPhase(Phase phase);
   void Poll();
-  void SetWall(double wall_s);
+  void PollWaitStart();
+  void PollReady();
+  void PollBaseline();
+  void PollQuery();
+  void PollMoving();
+  void PollWaitVo();
+  void PollWaitPose();
+  void PollWaitHazard();
+  void PollImages();
+  void PollSite();
+  void DispatchNext();
   double PhaseAge() const { return now_wall_ - phase_start_wall_; }
 
+  // Commands (executor_settings.cpp).
+  void StartCommand();
+  void PlanMotion(const Command& command);
+  void ApplySetting(const Command& command);
+  void ApplyStepSetting(const Command& command);  // vo, vo lost, slip, tilt, limit
+  bool ApplyKeepOut(const Command& command);      // false: not a keep-out command
+  void PublishZones();
+  void StartNewSite();
+  void StartImages(const Images& images);
+
+  // A step up to the end of its motion (executor_step.cpp).
+  bool NextStepOfCommand();  // false: the command is done
+  void BeginStep(const PlannedStep& step);
+  void QueryStep();
+  void CommandStep();
+  void AfterMotion();
+  void StartCapture(const std::string& purpose);
+  void CountVoFailure(const std::string& why);
+
+  // The end of a step (executor_finish.cpp). Each check returns false when it aborted.
+  struct StepEnd;
+  void FinishStep();
+  bool RetryLostPair(const std::string& why);  // `vo lost retry`: true when a pair was taken
+  void ReportStep(const StepEnd& end);
+  bool CheckHazardAfterStep(const StepEnd& end);
+  bool ApplyVoLostPolicy(const StepEnd& end);
+  bool CheckProgress(const StepEnd& end);
+  bool ApplyVoFailurePolicy(const StepEnd& end);
+  bool CheckLimits(const StepEnd& end);
+
+  // Finishing and status (executor_report.cpp).
   void Finish(SequenceState state, const std::string& reason, const std::string& detail);
   void AbortWith(const std::string& reason, const std::string& detail);
   void Reject(int64_t submission_id, const std::string& name, const std::string& reason,
               const std::string& detail);
+  // The status record of a submission that does not run: rejected, or interrupted.
+  void ClearRun(int64_t submission_id, const std::string& name);
+  void Emit(ExecutorOutput output);
   void EmitStatus();
   void EmitStop();
-  void CountVoFailure(const std::string& why);
-  // VO lost: whether the step's motion was measured by VO, why slip is likely here (empty:
-  // it is not), and the `vo lost` policy (false: the sequence was aborted).
+
+  // VO lost (executor_finish.cpp): whether the step's motion was measured by VO, why slip
+  // is likely here (empty: it is not), and the `vo lost` policy (false: it aborted).
   bool StepMeasured() const;
   std::string SlipLikely(const PoseEstimate& before, const PoseEstimate& after) const;
   bool OnVoLost(const std::string& step_text, const std::string& why);
   void ResplitRemainingSteps();
+  void RecordStep(const StepMotion& motion, bool measured, const PoseEstimate& after);
+  double StepLength() const { return step_m_ * lost_step_scale_; }
+  double MaxTurn() const { return max_turn_rad_ * lost_step_scale_; }
+
   // `goto ... avoid on` (avoid_step.cpp). kStep fills `step`; kWait waits for a pair or the
   // map (a phase may have been entered); kDone: inside the disc; kAborted: nothing is allowed.
   enum class AvoidOutcome { kStep, kWait, kDone, kAborted };
@@ -371,10 +415,8 @@ class SequenceExecutor {
   // The monitor refused the step the vote chose (the drift it allows for): vote once more
   // with a wider margin. False: the refusal stands (abort).
   bool AvoidRefused(const HazardReply& reply);
-  void RecordStep(const StepMotion& motion, bool measured, const PoseEstimate& after);
-  double StepLength() const { return step_m_ * lost_step_scale_; }
-  double MaxTurn() const { return max_turn_rad_ * lost_step_scale_; }
 
+  // Processes and pose (executor.cpp).
   std::vector<std::string> SilentProcesses(bool include_vo) const;
   bool ProcessFresh(const std::string& entry) const;
   bool VoRequired() const;
