@@ -189,6 +189,19 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
     d.convertTo(dfloat, CV_32F);
     edge = spread > dfloat * o.max_disparity_jump;
   }
+  // Texture: where the left image is blank over the matching block, SGBM still returns a
+  // disparity (the image noise, or the smoothness term, picks one) and its depth is
+  // anything; blank sand gave 1.7 m "steps". Such pixels are not matched.
+  cv::Mat blank;
+  if (o.min_texture > 0) {
+    cv::Mat f, mean, mean2;
+    rectL.convertTo(f, CV_32F);
+    const cv::Size win(bs, bs);
+    cv::boxFilter(f, mean, CV_32F, win);
+    cv::boxFilter(f.mul(f), mean2, CV_32F, win);
+    cv::Mat var = mean2 - mean.mul(mean);
+    blank = var < static_cast<float>(o.min_texture * o.min_texture);
+  }
   if (stats) stats->seconds_match = SecondsSince(t0);
 
   // Triangulate: z = f B / d along the common axis.
@@ -204,9 +217,11 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
     const float* mlx = r.map_lx.ptr<float>(v);
     const float* mrx = r.map_rx.ptr<float>(v);
     const std::uint8_t* ep = edge.empty() ? nullptr : edge.ptr<std::uint8_t>(v);
+    const std::uint8_t* bp = blank.empty() ? nullptr : blank.ptr<std::uint8_t>(v);
     for (int u = 0; u < r.width; u += step) {
       if (dp[u] <= 0 || u - dp[u] / 16 < 0 || mlx[u] < -0.5f || mrx[u - dp[u] / 16] < -0.5f) continue;  // no match, or off the source images
       if (ep && ep[u]) continue;  // on a depth edge
+      if (bp && bp[u]) continue;  // no texture to match
       const double d = dp[u] / 16.0;
       const double z = fB / d;
       const Eigen::Vector3d ray((u - r.cx) / r.f, (v - r.cy) / r.f, 1.0);

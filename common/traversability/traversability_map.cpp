@@ -41,6 +41,10 @@ TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(optio
   if (!std::isfinite(o.footprint_radius_m) || o.footprint_radius_m < 0 ||
       o.footprint_radius_m > o.extent_m / 2)
     Bad("footprint_radius_m must be in [0, extent_m / 2]");
+  if (!std::isfinite(o.tilt_radius_m) || o.tilt_radius_m < 0 || o.tilt_radius_m > o.extent_m / 2)
+    Bad("tilt_radius_m must be in [0, extent_m / 2]");
+  if (!std::isfinite(o.max_face_deg) || o.max_face_deg < 0 || o.max_face_deg >= 90)
+    Bad("max_face_deg must be in [0, 90)");
   if (!positive(o.max_step_m) || !positive(o.max_tilt_deg) || o.max_tilt_deg >= 90 ||
       !positive(o.max_roughness_m))
     Bad("max_step_m, max_tilt_deg (< 90) and max_roughness_m must be > 0");
@@ -57,6 +61,7 @@ TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(optio
   if (o.uniqueness_ratio < 0 || o.uniqueness_ratio > 100) Bad("uniqueness_ratio must be in [0, 100]");
   if (o.speckle_window < 0 || o.speckle_range < 0) Bad("speckle_window and speckle_range must be >= 0");
   if (!positive(o.disparity_sigma_px)) Bad("disparity_sigma_px must be > 0");
+  if (!std::isfinite(o.min_texture) || o.min_texture < 0) Bad("min_texture must be >= 0");
   if (o.subsample < 1 || o.subsample > 16) Bad("subsample must be in [1, 16]");
   if (!std::isfinite(o.max_disparity_jump) || o.max_disparity_jump < 0)
     Bad("max_disparity_jump must be >= 0");
@@ -193,63 +198,98 @@ void TraversabilityMap::Rate() const {
   }
   // The patch: cell offsets within the footprint radius.
   const double cell = o.cell_size_m;
-  const int r = static_cast<int>(std::floor(o.footprint_radius_m / cell + 1e-9));
-  std::vector<std::pair<int, int>> patch;
-  for (int di = -r; di <= r; ++di)
-    for (int dj = -r; dj <= r; ++dj)
-      if ((di * di + dj * dj) * cell * cell <= o.footprint_radius_m * o.footprint_radius_m + 1e-12)
-        patch.emplace_back(di, dj);
-  const std::size_t min_known =
-      std::max<std::size_t>(3, static_cast<std::size_t>(std::ceil(o.min_patch_fraction * patch.size())));
+  // Cell offsets within a radius.
+  auto offsets = [cell](double radius) {
+    const int r = static_cast<int>(std::floor(radius / cell + 1e-9));
+    std::vector<std::pair<int, int>> out;
+    for (int di = -r; di <= r; ++di)
+      for (int dj = -r; dj <= r; ++dj)
+        if ((di * di + dj * dj) * cell * cell <= radius * radius + 1e-12) out.emplace_back(di, dj);
+    return out;
+  };
+  const std::vector<std::pair<int, int>> patch = offsets(o.footprint_radius_m);
+  const bool own_tilt_patch = o.tilt_radius_m > 0;
+  const std::vector<std::pair<int, int>> tilt_patch = own_tilt_patch ? offsets(o.tilt_radius_m) : patch;
+  auto min_known_of = [&o](std::size_t size) {
+    return std::max<std::size_t>(3, static_cast<std::size_t>(std::ceil(o.min_patch_fraction * size)));
+  };
+  const std::size_t min_known = min_known_of(patch.size());
+  const std::size_t min_known_tilt = min_known_of(tilt_patch.size());
   const double tan_max_tilt = std::tan(o.max_tilt_deg * M_PI / 180.0);
-  const double max_tilt_rad = o.max_tilt_deg * M_PI / 180.0;
-  std::vector<Eigen::Vector3d> xs;  // (dx, dy, h)
+  const double max_face_rad = o.max_face_deg > 0 ? o.max_face_deg * M_PI / 180.0 : HUGE_VAL;
+  std::vector<Eigen::Vector3d> xs, xt;  // (dx, dy, h)
   std::vector<float> ss;
   std::vector<char> inlier;
   xs.reserve(patch.size());
+  // The known cells of a patch round (i, j), as (dx, dy, h) from the cell centre.
+  auto gather = [&](const std::vector<std::pair<int, int>>& offs, int i, int j, std::vector<Eigen::Vector3d>& out,
+                    std::vector<float>* sigmas) {
+    out.clear();
+    if (sigmas) sigmas->clear();
+    for (const auto& [di, dj] : offs) {
+      const int a = i + di, b = j + dj;
+      if (a < 0 || b < 0 || a >= n_ || b >= n_) continue;
+      const std::size_t k = static_cast<std::size_t>(a) * n_ + b;
+      if (!known[k]) continue;
+      out.emplace_back(di * cell + mx[k], dj * cell + my[k], h[k]);
+      if (sigmas) sigmas->push_back(s[k]);
+    }
+  };
+  // Plane h = c0 + c1 dx + c2 dy by least squares over the known cells, then again
+  // without the cells more than half a step limit ABOVE it: rocks stand up from the
+  // ground, so the plane settles on the ground around them even when a big rock fills
+  // much of the patch, and the rock shows as a step rather than a tilt.
+  auto fit = [&](const std::vector<Eigen::Vector3d>& pts) {
+    inlier.assign(pts.size(), 1);
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int pass = 0; pass < 4; ++pass) {
+      Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d Atb = Eigen::Vector3d::Zero();
+      int used = 0;
+      for (std::size_t k = 0; k < pts.size(); ++k) {
+        if (!inlier[k]) continue;
+        const Eigen::Vector3d row(1.0, pts[k].x(), pts[k].y());
+        AtA += row * row.transpose();
+        Atb += row * pts[k].z();
+        ++used;
+      }
+      if (used < 3) break;
+      const Eigen::Vector3d c_new = AtA.ldlt().solve(Atb);
+      if (!c_new.allFinite()) break;
+      c = c_new;
+      std::size_t kept = 0, changed = 0;
+      for (std::size_t k = 0; k < pts.size(); ++k) {
+        const double res = pts[k].z() - (c[0] + c[1] * pts[k].x() + c[2] * pts[k].y());
+        const char in = res <= 0.5 * o.max_step_m ? 1 : 0;
+        kept += in;
+        changed += in != inlier[k];
+        inlier[k] = in;
+      }
+      if (changed == 0 || kept < 3) break;
+    }
+    return c;
+  };
   for (int i = 0; i < n_; ++i) {
     for (int j = 0; j < n_; ++j) {
-      xs.clear();
-      ss.clear();
-      for (const auto& [di, dj] : patch) {
-        const int a = i + di, b = j + dj;
-        if (a < 0 || b < 0 || a >= n_ || b >= n_) continue;
-        const std::size_t k = static_cast<std::size_t>(a) * n_ + b;
-        if (!known[k]) continue;
-        xs.emplace_back(di * cell + mx[k], dj * cell + my[k], h[k]);
-        ss.push_back(s[k]);
-      }
+      gather(patch, i, j, xs, &ss);
       if (xs.size() < min_known) continue;
-      // Plane h = c0 + c1 dx + c2 dy by least squares over the known cells, then again
-      // without the cells more than half a step limit ABOVE it: rocks stand up from the
-      // ground, so the plane settles on the ground around them even when a big rock fills
-      // much of the patch, and the rock shows as a step rather than a tilt.
-      inlier.assign(xs.size(), 1);
-      Eigen::Vector3d c = Eigen::Vector3d::Zero();
-      for (int pass = 0; pass < 4; ++pass) {
-        Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
-        Eigen::Vector3d Atb = Eigen::Vector3d::Zero();
-        int used = 0;
-        for (std::size_t k = 0; k < xs.size(); ++k) {
-          if (!inlier[k]) continue;
-          const Eigen::Vector3d row(1.0, xs[k].x(), xs[k].y());
-          AtA += row * row.transpose();
-          Atb += row * xs[k].z();
-          ++used;
+      const Eigen::Vector3d c = fit(xs);
+      // The tilt: of the wheel patch's own plane, or of the plane over the rover's size
+      // when that patch is known well enough (else the wheel patch's, the only one there is).
+      double grad = std::hypot(c[1], c[2]);
+      double face = 0.0;
+      if (own_tilt_patch) {
+        gather(tilt_patch, i, j, xt, nullptr);
+        if (xt.size() >= min_known_tilt) {
+          const Eigen::Vector3d ct = fit(xt);
+          // How much steeper the wheel patch is than the body's plane: never more than the
+          // wheel patch's own tilt (a rock's flank on level ground rates as it always did,
+          // although the body plane there leans a little on the rock's foot), and nothing
+          // on a uniform slope.
+          const double body = std::hypot(ct[1], ct[2]);
+          face = std::max(0.0, std::atan(grad) - std::atan(body));
+          grad = body;
         }
-        if (used < 3) break;
-        const Eigen::Vector3d c_new = AtA.ldlt().solve(Atb);
-        if (!c_new.allFinite()) break;
-        c = c_new;
-        std::size_t kept = 0, changed = 0;
-        for (std::size_t k = 0; k < xs.size(); ++k) {
-          const double res = xs[k].z() - (c[0] + c[1] * xs[k].x() + c[2] * xs[k].y());
-          const char in = res <= 0.5 * o.max_step_m ? 1 : 0;
-          kept += in;
-          changed += in != inlier[k];
-          inlier[k] = in;
-        }
-        if (changed == 0 || kept < 3) break;
       }
       double lo = 0, hi = 0, sum2 = 0, sig2 = 0;
       for (std::size_t k = 0; k < xs.size(); ++k) {
@@ -261,14 +301,13 @@ void TraversabilityMap::Rate() const {
       }
       Cell& out = cells_[static_cast<std::size_t>(i) * n_ + j];
       out.step_m = static_cast<float>(hi - lo);
-      const double grad = std::hypot(c[1], c[2]);
       out.tilt_rad = static_cast<float>(std::atan(grad));
+      out.face_rad = static_cast<float>(face);
       out.roughness_m = static_cast<float>(std::sqrt(sum2 / xs.size()));
       const std::size_t centre = static_cast<std::size_t>(i) * n_ + j;
       out.sigma_m = known[centre] ? s[centre] : static_cast<float>(std::sqrt(sig2 / xs.size()));
       const double worst = std::max({out.step_m / o.max_step_m, grad / tan_max_tilt,
-                                     out.roughness_m / o.max_roughness_m});
-      (void)max_tilt_rad;
+                                     out.roughness_m / o.max_roughness_m, face / max_face_rad});
       out.goodness = static_cast<float>(std::clamp(1.0 - worst, 0.0, 1.0));
       out.state = worst >= 1.0                  ? CellState::kUnsafe
                   : worst >= o.caution_fraction ? CellState::kCaution
@@ -282,16 +321,18 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
   MapOptions o;
   if (node.IsNull()) return o;
   if (!node.IsMap()) node.Fail("expected a map of traversability options");
-  node.CheckKeys({"cell_size_m", "extent_m", "footprint_radius_m", "max_step_m", "max_tilt_deg",
+  node.CheckKeys({"cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
                   "max_roughness_m", "max_range_m", "min_points", "caution_fraction",
                   "min_patch_fraction", "stereo_width_px", "num_disparities", "block_size",
                   "uniqueness_ratio", "speckle_window", "speckle_range", "disparity_sigma_px",
-                  "subsample", "min_range_m", "max_disparity_jump"});
+                  "subsample", "min_range_m", "max_disparity_jump", "min_texture"});
   node.Get("cell_size_m", o.cell_size_m, 0.01, 10.0);
   node.Get("extent_m", o.extent_m, 0.1, 200.0);
   node.Get("footprint_radius_m", o.footprint_radius_m, 0.0, 10.0);
+  node.Get("tilt_radius_m", o.tilt_radius_m, 0.0, 10.0);
   node.Get("max_step_m", o.max_step_m, 1e-3, 10.0);
   node.Get("max_tilt_deg", o.max_tilt_deg, 0.1, 89.0);
+  node.Get("max_face_deg", o.max_face_deg, 0.0, 89.0);
   node.Get("max_roughness_m", o.max_roughness_m, 1e-4, 10.0);
   node.Get("max_range_m", o.max_range_m, 0.1, 100.0);
   node.Get("min_points", o.min_points, 1, 100000);
@@ -310,10 +351,12 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
   node.Get("subsample", o.subsample, 1, 16);
   node.Get("min_range_m", o.min_range_m, 0.0, 100.0);
   node.Get("max_disparity_jump", o.max_disparity_jump, 0.0, 10.0);
+  node.Get("min_texture", o.min_texture, 0.0, 255.0);
   if (o.min_range_m >= o.max_range_m)
     node.Fail("min_range_m: expected less than max_range_m");
   if (o.footprint_radius_m > o.extent_m / 2)
     node.Fail("footprint_radius_m: expected at most extent_m / 2");
+  if (o.tilt_radius_m > o.extent_m / 2) node.Fail("tilt_radius_m: expected at most extent_m / 2");
   return o;
 }
 

@@ -8,7 +8,10 @@
 // keeps the weighted moments of its points, so pairs accumulate. A cell is rated from a
 // plane fitted (Eigen) over the rover-footprint patch around it:
 //   step      the highest cell above the plane minus the lowest cell below it (m),
-//   tilt      the angle between the plane's normal and the vertical (rad),
+//   tilt      the angle between the vertical and the normal of a plane fitted over the
+//             rover's own size (tilt_radius_m), the tilt it would stand at there (rad),
+//   face      how much steeper the wheel patch's plane is than that one (rad): a rock's
+//             flank under one wheel, where the body stays level (with tilt_radius_m),
 //   roughness the RMS residual of the cells about the plane (m),
 // each against its limit. A cell is unknown when it, or its patch, has too little data.
 // sigma_m is the height uncertainty of the cell's points: stereo range error (grows with
@@ -37,7 +40,8 @@ const char* CellStateName(CellState state);  // "unknown", "safe", "caution", "u
 struct Cell {
   CellState state = CellState::kUnknown;
   float step_m = 0;       // largest step height in the rover-footprint patch
-  float tilt_rad = 0;     // tilt of the plane fitted over the patch
+  float tilt_rad = 0;     // tilt of the plane fitted over the tilt patch
+  float face_rad = 0;     // the wheel patch's tilt over the tilt patch's (0 without one)
   float roughness_m = 0;  // residual of the plane fit
   float goodness = 0;     // 0 (unsafe) .. 1 (ideal); meaningful when state != kUnknown
   float sigma_m = 0;      // height uncertainty (grows with range and pose uncertainty)
@@ -50,6 +54,16 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   double footprint_radius_m = 0.6;  // patch over which each cell's plane is fitted
   double max_step_m = 0.2;    // limits: from the rover config (rock step limit)
   double max_tilt_deg = 20.0;
+  // Patch over which the tilt is fitted; 0: the footprint_radius_m patch. The rover's body
+  // tilts with the plane through all its wheels, not with the ground under one wheel: a
+  // wheel-sized patch on a cobble's flank, or on a ripple of a 28 deg slope, reads 30 to
+  // 36 deg where the body stays within its limits. Half the wheelbase-by-track diagonal
+  // makes the cell's tilt the one the rover would have standing on it.
+  double tilt_radius_m = 0.0;
+  // With tilt_radius_m: how much steeper the wheel patch's plane is than the plane the body
+  // stands on, the face a wheel meets (a rock's flank), which a uniform slope does not
+  // steepen; 0: not rated.
+  double max_face_deg = 0.0;
   double max_roughness_m = 0.05;
   double max_range_m = 6.0;   // stereo points beyond are ignored
   int min_points = 3;         // per cell; fewer -> unknown
@@ -76,6 +90,10 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // options 0.15 removes every false unsafe cell, but with a 0.3 m patch and every 3rd
   // pixel it also removes enough of the rocks' outlines to miss some (README).
   double max_disparity_jump = 0.0;
+  // Texture: a pixel whose block_size window of the left image has a standard deviation
+  // under this (grey levels, 8-bit) has nothing to match, and SGBM's disparity there is
+  // noise; it is dropped. 0 keeps every pixel.
+  double min_texture = 0.0;
 };
 
 // Per update, for the log and the benchmark.

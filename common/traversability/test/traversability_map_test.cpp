@@ -264,5 +264,73 @@ sun: {azimuth_deg: 120, elevation_deg: 55}
   EXPECT_LT(err[err.size() / 2], 0.02);
 }
 
+// The body's tilt over tilt_radius_m: a uniform slope under the limit with ripples a
+// wheel patch reads steeper is safe; the face is how much steeper the wheel patch is than
+// the body's plane, rated against max_face_deg; the options load from YAML.
+TEST(TraversabilityMap, TiltOverTheRoversSizeAndAFaceUnderOneWheel) {
+  MapOptions o;
+  o.footprint_radius_m = 0.3;
+  o.max_tilt_deg = 30.0;
+  o.max_step_m = 0.25;
+  o.tilt_radius_m = 0.75;
+  o.max_face_deg = 25.0;
+  const double g = std::tan(27.0 * kDeg);
+  // 27 deg with 4 cm ripples of 1 m wavelength along the slope: up to ~41 deg locally.
+  auto rippled = [g](double x, double) { return g * x + 0.04 * std::sin(2 * M_PI * x); };
+  {
+    TraversabilityMap wheel_only([&] { MapOptions w = o; w.tilt_radius_m = 0; w.max_face_deg = 0; return w; }());
+    AddSurface(&wheel_only, rippled, 3.0, 0.0, 2.0);
+    TraversabilityMap body(o);
+    AddSurface(&body, rippled, 3.0, 0.0, 2.0);
+    int wheel_unsafe = 0, body_unsafe = 0;
+    for (double x = 2.0; x <= 4.0; x += 0.2) {
+      wheel_unsafe += wheel_only.At(x, 0.0).state == CellState::kUnsafe;
+      const Cell c = body.At(x, 0.0);
+      body_unsafe += c.state == CellState::kUnsafe;
+      EXPECT_NEAR(c.tilt_rad / kDeg, 27.0, 1.5) << x;
+    }
+    EXPECT_GT(wheel_unsafe, 0);  // the ripples' faces pass 30 deg in a wheel patch
+    EXPECT_EQ(body_unsafe, 0);   // the body stands at 27 deg, within the rover's limit
+  }
+  {
+    // The same ripples on level ground: the body stands level, so the face is the wheel
+    // patch's own tilt, and a face limit under it refuses the cell.
+    auto level = [](double x, double) { return 0.04 * std::sin(2 * M_PI * x); };
+    MapOptions tight = o;
+    tight.max_face_deg = 5.0;
+    TraversabilityMap wheel([&] { MapOptions w = o; w.tilt_radius_m = 0; w.max_face_deg = 0; return w; }());
+    TraversabilityMap face(tight);
+    AddSurface(&wheel, level, 3.0, 0.0, 2.0);
+    AddSurface(&face, level, 3.0, 0.0, 2.0);
+    const Cell w = wheel.At(3.0, 0.0), f = face.At(3.0, 0.0);  // sin'(0): the steepest point
+    EXPECT_GT(w.tilt_rad / kDeg, 5.0);
+    EXPECT_NEAR(f.face_rad, w.tilt_rad - f.tilt_rad, 1e-4);
+    EXPECT_LT(f.tilt_rad / kDeg, 1.0);
+    EXPECT_EQ(f.state, CellState::kUnsafe);
+    EXPECT_EQ(wheel.At(3.0, 0.0).state, CellState::kSafe);
+  }
+  const MapOptions y = LoadMapOptions(
+      config::ConfigNode::FromString("tilt_radius_m: 0.75\nmax_face_deg: 25\nmin_texture: 2\n", "t.yaml"));
+  EXPECT_DOUBLE_EQ(y.tilt_radius_m, 0.75);
+  EXPECT_DOUBLE_EQ(y.max_face_deg, 25.0);
+  EXPECT_DOUBLE_EQ(y.min_texture, 2.0);
+  MapOptions bad = o;
+  bad.max_face_deg = 95;
+  EXPECT_THROW(TraversabilityMap{bad}, std::invalid_argument);
+}
+
+// Blank images: SGBM returns disparities from noise alone; min_texture drops them.
+TEST(DenseStereo, BlankImagesGiveNoPointsWithATextureFloor) {
+  const geometry::StereoRig rig = geometry::LoadStereoRigFile(
+      std::string(ROVER_SOURCE_DIR) + "/configs/cameras/navcam_pinhole.yaml");
+  cv::Mat left(rig.left->height(), rig.left->width(), CV_8UC1), right = left.clone();
+  cv::RNG rng(3);
+  rng.fill(left, cv::RNG::NORMAL, 100, 0.7);  // read noise only, independent in each camera
+  rng.fill(right, cv::RNG::NORMAL, 100, 0.7);
+  MapOptions o;
+  o.min_texture = 2.0;
+  EXPECT_EQ(DenseStereo(left, right, rig, o).points_rover.size(), 0u);
+}
+
 }  // namespace
 }  // namespace rover::traversability
