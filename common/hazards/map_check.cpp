@@ -1,5 +1,6 @@
 #include "hazards/map_check.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -32,6 +33,15 @@ MapCheckOptions LoadMapCheckOptions(const config::ConfigNode& node, const std::v
   node.Get("blind_margin_m", o.blind_margin_m, 0.0, 5.0);
   node.Get("max_unknown_fraction", o.max_unknown_fraction, 0.0, 1.0);
   return o;
+}
+
+std::string MapTiltLimitProblem(double map_max_tilt_deg, const TiltLimits& rover) {
+  const double rover_deg = std::min(rover.roll_limit_rad, rover.pitch_limit_rad) * 180.0 / M_PI;
+  // Rounding of degrees read from YAML is not a difference.
+  if (!(map_max_tilt_deg < rover_deg - 1e-6)) return "";
+  return "hazards.map.traversability.max_tilt_deg " + Fixed(map_max_tilt_deg, 1) +
+         " is tighter than the rover's own tilt limit " + Fixed(rover_deg, 1) +
+         " deg (hazards.roll_limit_deg, pitch_limit_deg): the map refuses slopes the tilt check allows";
 }
 
 avoidance::Footprint GridFootprint(const Footprint& f) {

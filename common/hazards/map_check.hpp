@@ -16,6 +16,7 @@
 
 #include "avoidance/grid.hpp"
 #include "config/yaml_config.hpp"
+#include "hazards/hazard_assessor.hpp"
 #include "hazards/keepout.hpp"
 
 #include <string>
@@ -44,6 +45,14 @@ inline constexpr const char* kMapZoneName = "hazard_map";
 // otherwise SAFE. An empty or non-finite path, or a bad grid, is UNKNOWN.
 SweptCheck CheckPathOnMap(const avoidance::Grid& grid, const avoidance::Footprint& footprint,
                           const std::vector<Pose2>& path, const MapCheckOptions& options);
+
+// The map's tilt limit against the rover's own (the tilt check's roll and pitch limits).
+// A cell's tilt is the slope of its ground plane, whatever the heading; on a plane of slope
+// s the rover's pitch (heading up it) or roll (heading across it) reaches s, so the map
+// stands for the tilt check in the worst heading when its limit is the smaller of the two.
+// A tighter map limit refuses ground the tilt check allows (a 26 deg slope drive the rover
+// makes within its 30 deg limits): returns that as a one-line note, empty when consistent.
+std::string MapTiltLimitProblem(double map_max_tilt_deg, const TiltLimits& rover);
 
 // The rover footprint rectangle of the keep-out checks, as arc voting sees it.
 avoidance::Footprint GridFootprint(const Footprint& footprint);

@@ -1,6 +1,6 @@
 // hazard_monitor: keep-out zones against the footprint plus the position uncertainty, and
-// tilt limits (common/hazards); with `hazards.map.enabled`, the traversability map
-// (common/traversability) built from every STEREO_FRAME at the pose the frame carries, which
+// tilt limits (common/hazards); unless `--map off` (or `hazards.map.enabled: false`), the
+// traversability map (common/traversability) built from every STEREO_FRAME at the pose the frame carries, which
 // every step's swept footprint must also pass (common/hazards/map_check.hpp), published on
 // TRAVERSABILITY_MAP after each pair and once a second. Publishes HAZARD_STATUS at a steady rate and answers the
 // executor's HAZARD_QUERY ("would this step's swept footprint enter a zone?"), with the
@@ -37,26 +37,43 @@ int main(int argc, char** argv) {
   return bus::RunMain("hazard_monitor", [&]() -> int {
     bus::Process proc("hazard_monitor",
                       "Keep-out, tilt and traversability-map checks. Reads POSE, IMU, KEEPOUT_ZONES,\n"
-                      "HAZARD_QUERY, STEREO_FRAME (with hazards.map.enabled); writes HAZARD_STATUS\n"
+                      "HAZARD_QUERY, STEREO_FRAME (unless the map is off); writes HAZARD_STATUS\n"
                       "(steady rate), HAZARD_REPLY and TRAVERSABILITY_MAP.\n"
                       "Config: the `hazards:` section (see configs/rover.yaml).",
-                      argc, argv);
+                      argc, argv,
+                      {{"--map", "on|off",
+                        "traversability map from STEREO_FRAME (default: hazards.map.enabled); "
+                        "off: no cameras, zones and tilt only"}});
     const auto section = proc.config()["hazards"];
     const auto options = hazards::LoadHazardOptions(section, {"publish_hz"});
     double publish_hz = 10.0;
     section.Get("publish_hz", publish_hz, 1.0, 100.0);
-    // The traversability map: off unless hazards.map.enabled (a deployment without cameras
-    // would otherwise never see the ground, and every step would be undecidable).
+    // The traversability map: on wherever the config enables it (configs/rover.yaml does),
+    // off where the deployment says `--map off`: without cameras the ground is never seen,
+    // and every step would be undecidable (hazard_unknown).
     hazards::MapCheckOptions map_check;
     map_check.enabled = false;
-    std::unique_ptr<MapWorker> map;
-    if (section.Has("map")) {
-      const auto map_section = section["map"];
-      map_check = hazards::LoadMapCheckOptions(map_section, {"traversability"});
-      if (map_check.enabled) {
-        map = std::make_unique<MapWorker>(traversability::LoadMapOptions(map_section["traversability"]));
+    if (section.Has("map")) map_check = hazards::LoadMapCheckOptions(section["map"], {"traversability"});
+    if (const auto arg = proc.option("--map")) {
+      if (*arg != "on" && *arg != "off") {
+        throw config::ConfigError("hazard_monitor: argument --map: \"" + *arg + "\": expected on or off");
       }
+      if (*arg == "on" && !section.Has("map")) {
+        throw config::ConfigError("hazard_monitor: argument --map on: " + proc.config_path() +
+                                  " has no hazards.map section (expected the map's limits there)");
+      }
+      map_check.enabled = *arg == "on";
     }
+    std::unique_ptr<MapWorker> map;
+    if (map_check.enabled) {
+      const auto map_options = traversability::LoadMapOptions(section["map"]["traversability"]);
+      if (const std::string note = hazards::MapTiltLimitProblem(map_options.max_tilt_deg, options.tilt);
+          !note.empty()) {
+        std::cerr << "hazard_monitor: warning: " << note << "\n";
+      }
+      map = std::make_unique<MapWorker>(map_options);
+    }
+    std::cerr << "hazard_monitor: traversability map " << (map ? "on" : "off") << "\n";
     bus::MapRules rules;
     rules.footprint = hazards::GridFootprint(options.footprint);
     rules.blind_margin_m = map_check.blind_margin_m;

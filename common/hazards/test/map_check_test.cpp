@@ -54,5 +54,17 @@ TEST(MapCheck, BadInputIsUnknown) {
   EXPECT_THROW(bad.Validate(), std::invalid_argument);
 }
 
+TEST(MapCheck, TiltLimitTighterThanTheRoversIsNamed) {
+  TiltLimits rover;  // 30 deg roll and pitch
+  EXPECT_EQ(MapTiltLimitProblem(30.0, rover), "");
+  EXPECT_EQ(MapTiltLimitProblem(35.0, rover), "");
+  const std::string note = MapTiltLimitProblem(25.0, rover);
+  EXPECT_NE(note.find("max_tilt_deg 25.0 is tighter than the rover's own tilt limit 30.0"), std::string::npos) << note;
+  // The smaller of the two limits is the rover's, whatever the heading.
+  rover.pitch_limit_rad = 20.0 * M_PI / 180.0;
+  EXPECT_EQ(MapTiltLimitProblem(20.0, rover), "");
+  EXPECT_NE(MapTiltLimitProblem(19.0, rover), "");
+}
+
 }  // namespace
 }  // namespace rover::hazards
