@@ -3,20 +3,14 @@
 // MER drove this way under autonomous navigation: image, map, then drive one step.
 #include "avoidance/arc_voting.hpp"
 #include "sequence/executor.hpp"
+#include "sequence/executor_internal.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 
 namespace rover::sequence {
 
-namespace {
-std::string Fixed2(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.2f", v);
-  return buf;
-}
-}  // namespace
+using internal::Fixed;
 
 void SequenceExecutor::OnTraversabilityMap(const TraversabilityMap& map) {
   map_ = map;
@@ -27,7 +21,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   const PlanePose p = CurrentPlanePose();
   const double remaining = (goto_.target - Eigen::Vector2d(p.x, p.y)).norm();
   if (remaining <= goto_.tolerance_m) {
-    detail_ = "goto reached the disc: " + Fixed2(remaining) + " m from the target";
+    detail_ = "goto reached the disc: " + Fixed(remaining) + " m from the target";
     return AvoidOutcome::kDone;
   }
   // 1. A pair where the rover stands. With VO on, NextStepOfCommand takes VO's baseline
@@ -47,7 +41,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   if (!map_ || map_->last_frame_id < pair_here_id_) {
     if (PhaseAge() <= options_.map_wait_s) return AvoidOutcome::kWait;
     if (!map_) {
-      AbortWith(abort_reason::kHazardUnknown, "no traversability map within " + Fixed2(options_.map_wait_s) +
+      AbortWith(abort_reason::kHazardUnknown, "no traversability map within " + Fixed(options_.map_wait_s) +
                                                   " s (is hazards.map.enabled on, and a camera running?)");
       return AvoidOutcome::kAborted;
     }
@@ -84,7 +78,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     if (s.unsafe == 0 && s.UnknownFraction() <= o.max_unknown_fraction && l.unsafe == 0) {
       *step = direct.step;
       detail_ = "avoid: the goal is in reach and the way to it clear: steering straight at it (" +
-                Fixed2(remaining) + " m to go)";
+                Fixed(remaining) + " m to go)";
       return AvoidOutcome::kStep;
     }
   }
@@ -112,19 +106,19 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   d += avoidance::ToString(b.kind);
   d += ' ';
   if (b.kind == avoidance::Candidate::Kind::kTurn) {
-    d += Fixed2(b.turn_rad * 180.0 / M_PI);
+    d += Fixed(b.turn_rad * 180.0 / M_PI);
     d += " deg";
   } else {
-    d += Fixed2(b.distance_m);
+    d += Fixed(b.distance_m);
     d += " m k ";
-    d += Fixed2(b.curvature_per_m);
+    d += Fixed(b.curvature_per_m);
   }
   d += " (goodness ";
-  d += Fixed2(b.goodness);
+  d += Fixed(b.goodness);
   d += ", goal ";
-  d += Fixed2(b.goal);
+  d += Fixed(b.goal);
   d += ", ";
-  d += Fixed2(remaining);
+  d += Fixed(remaining);
   d += " m to go)";
   detail_ = std::move(d);
   return AvoidOutcome::kStep;
