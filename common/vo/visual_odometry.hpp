@@ -187,15 +187,6 @@ struct VoOptions {
   // predicted more than shadow_min_predicted_px.
   double shadow_fixed_px = 1.0;
   double shadow_min_predicted_px = 5.0;
-  // On textured ground a feature on the shadow's edge is not fixed: its match slides along
-  // the edge with the ground while the edge pins it across. Its template, scored at its
-  // own place in the new image (pseudo-normalised correlation), still matches there: a
-  // feature predicted and measured to move more than shadow_min_predicted_px whose score
-  // there reaches this holds structure that moves with the rover, and is left out of the
-  // estimate when the other features can carry it (1 = off). 0.75: on rendered sand the
-  // texture of features that moved reached 0.72 (shadow edges up to 0.99); at 0.6 KITTI 06
-  // lost accuracy (0.982 % -> 1.014 %: lane markings slide along themselves too).
-  double shadow_same_place_score = 0.75;
 
   // ---- VO-12 degenerate geometry ----
   // Refuse when sqrt(smallest eigenvalue) of the inliers' image scatter is below this

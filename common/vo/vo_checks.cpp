@@ -8,46 +8,17 @@
 
 namespace rover::vo {
 
-// VO-11: the rover's shadow moves with it. Its features either stay fixed in the image
-// (`fixed`) or, on textured ground, slide along its edges with the ground while the edge
-// pins them across (`still`: their templates still match their own places). Either kind
-// biases an estimate it joins. When RANSAC's winner holds any, it is drawn again from the
-// other features alone; if those cannot carry it (too few, or clustered: VO-12), features
-// sliding along image-fixed structure refuse the update, and features fixed in the image
-// are weighed as before: a stuck rover sees everything fixed and nothing else agreeing on
-// a motion, and reports that it did not move.
+// VO-11: features fixed in the image (the rover's own shadow) carrying RANSAC's winner.
 bool VisualOdometry::State::CheckShadow(Step* st) {
-  const int n = static_cast<int>(st->corr.size());
-  int fixed_inliers = 0, still_inliers = 0;
-  for (int k : st->rs.inliers) {
-    fixed_inliers += st->fixed[k];
-    still_inliers += st->still[k];
-  }
-  if (fixed_inliers + still_inliers == 0) return true;
-  std::vector<int> free;
-  for (int k = 0; k < n; ++k) {
-    if (!st->fixed[k] && !st->still[k]) free.push_back(k);
-  }
-  if (static_cast<int>(free.size()) >= o.min_inliers) {
-    RansacOutcome alt = RansacMotion(st->corr, st->c->rig, st->ransac, free);
-    if (static_cast<int>(alt.inliers.size()) >= o.min_inliers &&
-        Spread(*st, alt.inliers) >= o.degenerate_min_spread) {
-      st->rs = std::move(alt);
-      return true;
-    }
-  }
-  if (still_inliers > 0) {
-    st->res.times.ransac_ms = Ms(st->t, Clock::now());
-    return st->Stop(VoStatus::kShadowAmbiguous,
-                    Format("%.0f inliers slide along structure fixed in the image; the %.0f other features "
-                           "cannot carry the estimate",
-                           still_inliers, free.size()));
-  }
-  if (2 * fixed_inliers <= static_cast<int>(st->rs.inliers.size())) return true;
+  const std::vector<int>& inliers = st->rs.inliers;
+  int fixed_inliers = 0;
+  for (int k : inliers) fixed_inliers += st->fixed[k];
+  if (2 * fixed_inliers <= static_cast<int>(inliers.size())) return true;
   // The winning motion rests on image-fixed features. If the other features agree on
   // a different motion, the two explanations compete: refuse rather than guess.
+  const int n = static_cast<int>(st->corr.size());
   std::vector<char> in(n, 0);
-  for (int k : st->rs.inliers) in[k] = 1;
+  for (int k : inliers) in[k] = 1;
   std::vector<int> rest;
   for (int k = 0; k < n; ++k) {
     if (!in[k] && !st->fixed[k]) rest.push_back(k);
@@ -122,21 +93,18 @@ bool VisualOdometry::State::CheckSiteFrame(Step* st) {
   return true;
 }
 
-double VisualOdometry::State::Spread(const Step& st, const std::vector<int>& features) const {
-  if (features.empty()) return 0;
-  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-  for (int k : features) mean += st.corr[k].left;
-  mean /= double(features.size());
-  Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
-  for (int k : features) scatter += (st.corr[k].left - mean) * (st.corr[k].left - mean).transpose();
-  scatter /= double(features.size());
-  return std::sqrt(std::max(0.0, scatter.selfadjointView<Eigen::Upper>().eigenvalues().minCoeff())) /
-         std::min(st.c->width, st.c->height);
-}
-
 // VO-12: inliers clustered in the image, or a motion the covariance leaves poorly determined.
 bool VisualOdometry::State::CheckGeometry(Step* st) {
-  const double spread = Spread(*st, st->inliers);
+  const Pair& c = *st->c;
+  const std::vector<int>& inliers = st->inliers;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (int k : inliers) mean += st->corr[k].left;
+  mean /= double(inliers.size());
+  Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+  for (int k : inliers) scatter += (st->corr[k].left - mean) * (st->corr[k].left - mean).transpose();
+  scatter /= double(inliers.size());
+  const double spread = std::sqrt(std::max(0.0, scatter.selfadjointView<Eigen::Upper>().eigenvalues().minCoeff())) /
+                        std::min(c.width, c.height);
   if (spread < o.degenerate_min_spread) {
     return st->Refuse(VoStatus::kDegenerate, Format("inliers clustered: spread %.3f of the image (need %.3f)",
                                                     spread, o.degenerate_min_spread));

@@ -52,7 +52,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "sanity_max_roll_deg", "sanity_max_pitch_deg", "sanity_max_yaw_deg",
                   "sanity_max_downslope_angle_deg",
                   "motion_min_overlap", "motion_max_translation_m", "motion_max_rotation_deg",
-                  "shadow_check", "shadow_fixed_px", "shadow_min_predicted_px", "shadow_same_place_score",
+                  "shadow_check", "shadow_fixed_px", "shadow_min_predicted_px",
                   "degenerate_min_spread", "degenerate_max_translation_sigma_m",
                   "degenerate_max_rotation_sigma_deg",
                   "covariance_cluster_grid", "covariance_field_sigma_px",
@@ -114,7 +114,6 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   node.Get("shadow_check", o.shadow_check);
   node.Get("shadow_fixed_px", o.shadow_fixed_px, 0.0, 1000.0);
   node.Get("shadow_min_predicted_px", o.shadow_min_predicted_px, 0.0, 10000.0);
-  node.Get("shadow_same_place_score", o.shadow_same_place_score, 0.0, 1.0);
   node.Get("degenerate_min_spread", o.degenerate_min_spread, 0.0, 1.0);
   node.Get("degenerate_max_translation_sigma_m", o.degenerate_max_translation_sigma_m, 0.0, kInf);
   node.Get("degenerate_max_rotation_sigma_deg", o.degenerate_max_rotation_sigma_deg, 0.0, 180.0);
@@ -166,10 +165,6 @@ void ValidateVoOptions(const VoOptions& o) {
   if (o.track_min_radius_px > o.track_max_radius_px) {
     fail("track_min_radius_px " + std::to_string(o.track_min_radius_px) +
          " (expected <= track_max_radius_px " + std::to_string(o.track_max_radius_px) + ")");
-  }
-  if (!(o.shadow_same_place_score > 0 && o.shadow_same_place_score <= 1)) {
-    fail("shadow_same_place_score " + std::to_string(o.shadow_same_place_score) +
-         " (expected in (0, 1]: a correlation score, 1 = off)");
   }
   if (o.ransac_sample_size < 3) {
     fail("ransac_sample_size " + std::to_string(o.ransac_sample_size) + " (expected >= 3)");

@@ -144,12 +144,11 @@ struct Step {
   Eigen::Isometry3d prior_ref = Eigen::Isometry3d::Identity();  // the prior against `ref`
 
   // VO-6: the tracked features, each with the index of its feature in `ref`, whether it
-  // stayed put in the image while predicted to move and whether its template holds
-  // structure that stayed put while the feature moved (VO-11), and (windowed mode) every
+  // stayed put in the image while predicted to move (VO-11), and (windowed mode) every
   // feature of `ref` as seen in the new pair, by index in `ref`.
   std::vector<Correspondence> corr;
   std::vector<int> corr_source;
-  std::vector<char> fixed, still;
+  std::vector<char> fixed;
   std::vector<Feature> carried;
   int predicted_inside = 0;  // features of `ref` the prior puts inside the new image
   // VO-7, VO-8, VO-13.
@@ -227,15 +226,12 @@ struct VisualOdometry::State {
     return l;
   }
   bool TrackFeature(const Step& st, int fi, const Prediction& p, int levels, double* stereo_ms,
-                    Correspondence* x, Feature* seen, char* fixed, char* still);
+                    Correspondence* x, Feature* seen, char* fixed);
   bool SearchTracked(const Feature& f, const Pair& from, const Pair& to, const Prediction& p,
-                     int levels, MatchResult* m, float* same_place);
+                     int levels, MatchResult* m);
   bool MatchTrackedStereo(const Pair& c, const Prediction& p, const Eigen::Vector2d& left,
                           double* stereo_ms, Eigen::Vector2d* right, Eigen::Matrix2d* Sigma_right);
   bool CheckShadow(Step* st);      // VO-11
-  // VO-12: sqrt of the smallest eigenvalue of the features' image scatter, as a fraction
-  // of the smaller image side.
-  double Spread(const Step& st, const std::vector<int>& features) const;
   bool CheckSiteFrame(Step* st);   // VO-9's site-frame limits
   // Windowed mode: gives `pair` the carried tracks plus fresh corners stereo-matched where
   // tracks are missing (VO-2 top-up), and counts its features in res.

@@ -76,7 +76,7 @@ void VisualOdometry::State::TrackFeatures(Step* st) {
   const int levels = static_cast<int>(std::min(ref.left_band.size(), c.left_band.size()));
   const int n = static_cast<int>(ref.features.size());
   std::vector<Correspondence> tracked(n);
-  std::vector<char> ok(n, 0), fixed(n, 0), still(n, 0);
+  std::vector<char> ok(n, 0), fixed(n, 0);
   if (Windowed()) st->carried.resize(n);
   double stereo_ms = 0;
   const auto at = [&](int i) { return ref.features[i].left; };
@@ -85,18 +85,16 @@ void VisualOdometry::State::TrackFeatures(Step* st) {
     if (!Predict(ref.features[fi], prior, c, o, &p)) continue;
     ++st->predicted_inside;
     ok[fi] = TrackFeature(*st, fi, p, levels, &stereo_ms, &tracked[fi],
-                          Windowed() ? &st->carried[fi] : nullptr, &fixed[fi], &still[fi]);
+                          Windowed() ? &st->carried[fi] : nullptr, &fixed[fi]);
   }
   st->corr.reserve(n);
   st->fixed.reserve(n);
-  st->still.reserve(n);
   for (int i = 0; i < n; ++i) {
     if (!ok[i]) continue;
     st->corr.push_back(tracked[i]);
     st->corr_source.push_back(i);
     st->res.tracks.push_back({ref.features[i].left, tracked[i].left, false});
     st->fixed.push_back(fixed[i]);
-    st->still.push_back(still[i]);
   }
   st->res.num_tracked = static_cast<int>(st->corr.size());
   const auto now = Clock::now();
@@ -106,16 +104,14 @@ void VisualOdometry::State::TrackFeatures(Step* st) {
 }
 
 // One feature of the reference pair found again: its correspondence, (windowed mode) the
-// feature as seen now, whether it stayed put in the image while predicted to move, and
-// whether its template is dominated by structure that stayed put (VO-11).
+// feature as seen now, and whether it stayed put in the image while predicted to move.
 bool VisualOdometry::State::TrackFeature(const Step& st, int fi, const Prediction& p, int levels,
                                          double* stereo_ms, Correspondence* x, Feature* seen,
-                                         char* fixed, char* still) {
+                                         char* fixed) {
   const Feature& f = st.ref->features[fi];
   const Pair& c = *st.c;
   MatchResult m;
-  float same_place = -1;
-  if (!SearchTracked(f, *st.ref, c, p, levels, &m, &same_place)) return false;
+  if (!SearchTracked(f, *st.ref, c, p, levels, &m)) return false;
   Eigen::Vector2d right;
   Eigen::Matrix2d Sigma_right;
   if (!MatchTrackedStereo(c, p, m.position, stereo_ms, &right, &Sigma_right)) return false;
@@ -145,23 +141,14 @@ bool VisualOdometry::State::TrackFeature(const Step& st, int fi, const Predictio
     seen->track_id = f.track_id;
     seen->age = f.age + 1;
   }
-  const double moved = (m.position - f.left).norm();
-  const bool predicted_to_move = (p.u - f.left).norm() > o.shadow_min_predicted_px;
-  *fixed = predicted_to_move && moved < o.shadow_fixed_px;
-  // A template that still matches its own place after the ground under it moved away holds
-  // structure that moves with the rover: the edge of its shadow, along which the match
-  // can slide with the ground while the edge pins it across. Only a feature measured to
-  // move as far as the prior's threshold counts: a nearly still one (a slipping rover)
-  // matches its own place because it barely moved.
-  *still = predicted_to_move && moved > o.shadow_min_predicted_px && o.shadow_same_place_score < 1 &&
-           same_place >= o.shadow_same_place_score;
+  *fixed = (m.position - f.left).norm() < o.shadow_fixed_px &&
+           (p.u - f.left).norm() > o.shadow_min_predicted_px;
   return true;
 }
 
 // The feature's template searched for in the new left image around its prediction.
 bool VisualOdometry::State::SearchTracked(const Feature& f, const Pair& from, const Pair& to,
-                                          const Prediction& p, int levels, MatchResult* out,
-                                          float* same_place) {
+                                          const Prediction& p, int levels, MatchResult* out) {
   int L = 0;
   while (L + 1 < levels && p.radius > o.track_coarse_radius_px * (1 << L)) ++L;
   // Coarse to fine: search the whole window at level L, then +-2 px at each finer one.
@@ -192,13 +179,6 @@ bool VisualOdometry::State::SearchTracked(const Feature& f, const Pair& from, co
     ok = correlator.SearchWindow(tmpl, to.left_band[l], cx - r, cx + r, cy - r, cy + r, &bx, &by, &score);
   }
   if (!ok || score < o.track_min_score) return false;
-  // VO-11: the full-resolution template scored at its own place in the new image.
-  *same_place = -1.0f;
-  const int sx = static_cast<int>(std::lround(f.left.x()));
-  const int sy = static_cast<int>(std::lround(f.left.y()));
-  if (TemplateFits(sx, sy, tmpl.n, to.left_band[0].cols, to.left_band[0].rows)) {
-    *same_place = ScoreAt(tmpl, to.left_band[0], sx, sy);
-  }
   MatchResult m = Correlator::Refine(tmpl, to.left_band[0], bx, by, o.match_covariance_scale, o.match_min_sigma_px);
   if (!m.ok || m.score < o.track_min_score) return false;
   correlator.Iterate(tmpl, to.left_band[0], o.match_subpixel_iterations, o.match_covariance_scale,
