@@ -44,6 +44,51 @@ std::string MapTiltLimitProblem(double map_max_tilt_deg, const TiltLimits& rover
          " deg (hazards.roll_limit_deg, pitch_limit_deg): the map refuses slopes the tilt check allows";
 }
 
+DrivenTrail::DrivenTrail(double cell_m) : cell_m_(cell_m) {
+  if (!(cell_m > 0.0) || !std::isfinite(cell_m))
+    throw std::invalid_argument("DrivenTrail: cell size " + std::to_string(cell_m) + " must be > 0");
+}
+
+std::int64_t DrivenTrail::Key(double x, double y) const {
+  const auto i = static_cast<std::int64_t>(std::floor(x / cell_m_));
+  const auto j = static_cast<std::int64_t>(std::floor(y / cell_m_));
+  return (i << 32) ^ (j & 0xffffffffLL);
+}
+
+void DrivenTrail::Add(const Pose2& pose, const Footprint& footprint) {
+  if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.yaw)) return;
+  avoidance::Footprint body;
+  body.length_m = footprint.length_m;
+  body.width_m = footprint.width_m;
+  body.center_forward_m = footprint.center_forward_m;
+  const avoidance::Pose2 p{pose.x, pose.y, pose.yaw};
+  const double reach = std::abs(footprint.center_forward_m) + 0.5 * std::hypot(footprint.length_m, footprint.width_m);
+  const double i0 = std::floor((pose.x - reach) / cell_m_), i1 = std::floor((pose.x + reach) / cell_m_);
+  const double j0 = std::floor((pose.y - reach) / cell_m_), j1 = std::floor((pose.y + reach) / cell_m_);
+  for (double i = i0; i <= i1; ++i) {
+    for (double j = j0; j <= j1; ++j) {
+      const double x = (i + 0.5) * cell_m_, y = (j + 0.5) * cell_m_;
+      if (body.Contains(p, x, y)) cells_.insert(Key(x, y));
+    }
+  }
+}
+
+int DrivenTrail::MarkDriven(avoidance::Grid* grid) const {
+  int changed = 0;
+  if (cells_.empty()) return 0;
+  for (int i = 0; i < grid->rows; ++i) {
+    for (int j = 0; j < grid->cols; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * grid->cols + j;
+      if (grid->state[k] != avoidance::CellClass::kUnknown) continue;
+      if (!cells_.count(Key(grid->CellCentreX(i), grid->CellCentreY(j)))) continue;
+      grid->state[k] = avoidance::CellClass::kSafe;
+      grid->goodness[k] = 1.0f;
+      ++changed;
+    }
+  }
+  return changed;
+}
+
 avoidance::Footprint GridFootprint(const Footprint& f) {
   avoidance::Footprint g;
   g.length_m = f.length_m + 2.0 * f.margin_m;

@@ -19,7 +19,9 @@
 #include "hazards/hazard_assessor.hpp"
 #include "hazards/keepout.hpp"
 
+#include <cstdint>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 namespace rover::hazards {
@@ -53,6 +55,27 @@ SweptCheck CheckPathOnMap(const avoidance::Grid& grid, const avoidance::Footprin
 // A tighter map limit refuses ground the tilt check allows (a 26 deg slope drive the rover
 // makes within its 30 deg limits): returns that as a one-line note, empty when consistent.
 std::string MapTiltLimitProblem(double map_max_tilt_deg, const TiltLimits& rover);
+
+// The ground the rover's body has covered: it drove there, so that ground carries it. The
+// mast cameras look ahead, and the map knows nothing behind the rover where it started;
+// without this a rover could not back out along its own tracks (MER backed out of sand
+// traps and dead ends that way). Only unknown cells are marked: a cell the map rates
+// unsafe stays unsafe. Cells are squares of cell_m in the site frame, kept for the life
+// of the process (a 1 km drive with a 1.4 m wide body covers about 35,000 cells of 20 cm).
+class DrivenTrail {
+ public:
+  explicit DrivenTrail(double cell_m = 0.2);
+  // The cells whose centre lies under `footprint` (body only, no margin) at `pose`.
+  void Add(const Pose2& pose, const Footprint& footprint);
+  // Marks the grid's unknown cells the trail covers as safe; returns how many changed.
+  int MarkDriven(avoidance::Grid* grid) const;
+  std::size_t size() const { return cells_.size(); }
+
+ private:
+  std::int64_t Key(double x, double y) const;
+  double cell_m_;
+  std::unordered_set<std::int64_t> cells_;
+};
 
 // The rover footprint rectangle of the keep-out checks, as arc voting sees it.
 avoidance::Footprint GridFootprint(const Footprint& footprint);

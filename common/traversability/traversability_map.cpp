@@ -278,6 +278,10 @@ void TraversabilityMap::Rate() const {
       // when that patch is known well enough (else the wheel patch's, the only one there is).
       double grad = std::hypot(c[1], c[2]);
       double face = 0.0;
+      // The step is measured from the ground plane under the rover's size when there is
+      // one: a rock that fills much of the wheel patch tilts that patch's own plane, which
+      // would absorb the rock as a tilt; the body-scale plane stays on the ground.
+      Eigen::Vector3d ground = c;
       if (own_tilt_patch) {
         gather(tilt_patch, i, j, xt, nullptr);
         if (xt.size() >= min_known_tilt) {
@@ -289,13 +293,15 @@ void TraversabilityMap::Rate() const {
           const double body = std::hypot(ct[1], ct[2]);
           face = std::max(0.0, std::atan(grad) - std::atan(body));
           grad = body;
+          ground = ct;
         }
       }
       double lo = 0, hi = 0, sum2 = 0, sig2 = 0;
       for (std::size_t k = 0; k < xs.size(); ++k) {
         const double res = xs[k].z() - (c[0] + c[1] * xs[k].x() + c[2] * xs[k].y());
-        lo = std::min(lo, res);
-        hi = std::max(hi, res);
+        const double above = xs[k].z() - (ground[0] + ground[1] * xs[k].x() + ground[2] * xs[k].y());
+        lo = std::min(lo, above);
+        hi = std::max(hi, above);
         sum2 += res * res;
         sig2 += static_cast<double>(ss[k]) * ss[k];
       }

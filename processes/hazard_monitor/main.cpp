@@ -93,6 +93,14 @@ int main(int argc, char** argv) {
       return fresh;
     };
     hazards::HazardAssessor assessor(options);
+    hazards::DrivenTrail trail(map ? grid.cell_m : 0.2);
+    // The map holds pairs placed with the poses of their time. When the pose source
+    // restarts (its POSE count goes back: a restarted estimator starts again from its
+    // start pose) or a new site frame begins, those no longer agree with the new poses,
+    // and ghost steps would appear where old and new pairs overlap: the map starts again.
+    bool have_pose = false;
+    std::uint32_t last_pose_count = 0;
+    std::int32_t last_site = 0;
     const std::vector<hazards::KeepOutZone> config_zones = options.zones;
     std::string zone_error;  // non-empty: the last zone set was invalid -> UNKNOWN
 
@@ -109,6 +117,19 @@ int main(int argc, char** argv) {
       p.yaw = v[5];
       p.position_sigma_m = hazards::HorizontalSigma(bus::CovarianceFromArray(m.covariance));
       assessor.OnPose(p);
+      const auto count = static_cast<std::uint32_t>(static_cast<std::uint64_t>(m.pub_seq) & 0xffffffffu);
+      if (map && have_pose && (count < last_pose_count || m.site_index != last_site)) {
+        std::cerr << "hazard_monitor: traversability map cleared: "
+                  << (m.site_index != last_site ? "a new site frame began"
+                                                : "the pose source restarted (its POSE count went back)")
+                  << "\n";
+        map->Clear();
+        trail = hazards::DrivenTrail(grid.cell_m);
+      }
+      have_pose = true;
+      last_pose_count = count;
+      last_site = m.site_index;
+      if (map) trail.Add({p.x, p.y, p.yaw}, options.footprint);
     });
     proc.bus().Subscribe<rover_msgs::imu_t>(channels::kImu, [&](const rover_msgs::imu_t& m) {
       proc.ObserveTime(m.utime);
@@ -183,7 +204,10 @@ int main(int argc, char** argv) {
         if (map && check.verdict != hazards::Verdict::kUnsafe) {
           // The map judges the same swept path; an unsafe cell outranks an undecided
           // keep-out check, and either stops the step.
-          const auto on_map = hazards::CheckPathOnMap(grid, rules.footprint, path, map_check);
+          // Ground the rover has driven over is known: it carried the rover.
+          avoidance::Grid judged = grid;
+          if (judged.Problem().empty()) trail.MarkDriven(&judged);
+          const auto on_map = hazards::CheckPathOnMap(judged, rules.footprint, path, map_check);
           if (on_map.verdict == hazards::Verdict::kUnsafe ||
               (on_map.verdict == hazards::Verdict::kUnknown && check.verdict == hazards::Verdict::kSafe)) {
             check = on_map;

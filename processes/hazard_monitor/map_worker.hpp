@@ -11,6 +11,7 @@
 #include "traversability/traversability_map.hpp"
 
 #include <condition_variable>
+#include <cstdint>
 #include <deque>
 #include <mutex>
 #include <string>
@@ -28,7 +29,8 @@ class MapWorker {
     int64_t frame_id = -1;
   };
 
-  explicit MapWorker(const traversability::MapOptions& options) : map_(options), grid_(ToGrid(map_)) {
+  explicit MapWorker(const traversability::MapOptions& options)
+      : map_(options), initial_(ToGrid(map_)), grid_(initial_) {
     thread_ = std::thread([this] { Loop(); });
   }
   ~MapWorker() {
@@ -67,9 +69,16 @@ class MapWorker {
     return true;
   }
   // The grid before any pair (every cell unknown).
-  avoidance::Grid Initial() const {
+  avoidance::Grid Initial() const { return initial_; }
+  // Forgets every pair: queued ones, the one being mapped, and the map. For when the poses
+  // the pairs were placed with can no longer be trusted against the new ones (the pose
+  // source restarted, a new site frame). The next Take gives the empty grid.
+  void Clear() {
     std::lock_guard<std::mutex> lock(mutex_);
-    return grid_;
+    jobs_.clear();
+    ++generation_;
+    grid_ = initial_;
+    fresh_ = true;
   }
 
   // The map as the checks see it (edge cells of the seen region distrusted: grid.hpp).
@@ -97,6 +106,7 @@ class MapWorker {
   void Loop() {
     for (;;) {
       Job job;
+      std::uint64_t generation = 0;
       {
         std::unique_lock<std::mutex> lock(mutex_);
         cv_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
@@ -104,10 +114,15 @@ class MapWorker {
         job = std::move(jobs_.front());
         jobs_.pop_front();
         running_ = true;
+        generation = generation_;
       }
       std::string note;
       bool ok = true;
       try {
+        if (generation != mapped_generation_) {
+          map_.Clear();
+          mapped_generation_ = generation;
+        }
         map_.Recentre(job.T_site_rover.translation().x(), job.T_site_rover.translation().y());
         map_.AddStereoPair(job.left, job.right, job.rig, job.T_site_rover, job.covariance);
         const auto& st = map_.last_update();
@@ -123,7 +138,9 @@ class MapWorker {
       std::lock_guard<std::mutex> lock(mutex_);
       running_ = false;
       notes_ += note;
-      if (ok) {
+      if (generation != generation_) {
+        notes_ += "hazard_monitor: frame " + std::to_string(job.frame_id) + " dropped: the map was cleared meanwhile\n";
+      } else if (ok) {
         grid_ = std::move(grid);
         last_frame_id_ = std::max(last_frame_id_, job.frame_id);
         fresh_ = true;
@@ -132,10 +149,13 @@ class MapWorker {
   }
 
   traversability::TraversabilityMap map_;  // the worker thread's alone (after construction)
+  std::uint64_t mapped_generation_ = 0;     // the worker thread's: the generation map_ holds
+  const avoidance::Grid initial_;
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   std::deque<Job> jobs_;
   bool running_ = false, fresh_ = false, stop_ = false;
+  std::uint64_t generation_ = 0;  // Clear() counts up
   avoidance::Grid grid_;
   int64_t last_frame_id_ = -1;
   std::string notes_;

@@ -104,7 +104,12 @@ int main(int argc, char** argv) {
     if (rc.IsNull() || !rc.Has("max_height_m"))
       rc.Fail("expected mobility.rock_collision.max_height_m (the rover's step limit)");
     options.rock_limit_m = rc.RequireDouble("max_height_m", 0.01, 5.0);
-    if (!map_path.empty()) {
+    // The map options: --map-options, else the rover config's own (what the hazard
+    // monitor builds its map with).
+    if (map_path.empty() && rover.Has("hazards") && rover["hazards"].Has("map") &&
+        rover["hazards"]["map"].Has("traversability")) {
+      options.map = traversability::LoadMapOptions(rover["hazards"]["map"]["traversability"]);
+    } else if (!map_path.empty()) {
       const config::ConfigNode m = config::ConfigNode::LoadFile(map_path);
       // A bare options map, a `traversability:` section, or a rover config's
       // hazards.map.traversability.

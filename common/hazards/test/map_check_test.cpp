@@ -68,3 +68,56 @@ TEST(MapCheck, TiltLimitTighterThanTheRoversIsNamed) {
 
 }  // namespace
 }  // namespace rover::hazards
+
+namespace rover::hazards {
+namespace {
+
+TEST(DrivenTrail, GroundTheRoverCoveredIsKnownAndUnsafeCellsStayUnsafe) {
+  // A 6 x 6 m map, all unknown, with one unsafe cell the rover's path crossed (a map
+  // error or a rock it drove beside: the map's verdict stands).
+  avoidance::Grid grid = avoidance::Grid::Filled(-3.0, -3.0, 0.2, 30, 30, avoidance::CellClass::kUnknown, 0.0f);
+  const int rock = grid.IndexAt(0.5, 0.1);
+  grid.state[static_cast<std::size_t>(rock)] = avoidance::CellClass::kUnsafe;
+  Footprint body;
+  body.length_m = 1.5;  // edges between cell centres: x in [-0.75, 1.75], y in [-0.65, 0.65]
+  body.width_m = 1.3;
+  body.margin_m = 0.3;  // not part of the driven ground
+  DrivenTrail trail(0.2);
+  for (double x = 0.0; x <= 1.0 + 1e-9; x += 0.1) trail.Add({x, 0.0, 0.0}, body);  // drove 1 m north
+  // Cell centres -0.7 .. 1.7 along (13), -0.5 .. 0.5 across (6).
+  EXPECT_EQ(trail.size(), 13u * 6u);
+  EXPECT_EQ(trail.MarkDriven(&grid), 13 * 6 - 1);
+  const auto at = [&grid](double x, double y) { return grid.state[static_cast<std::size_t>(grid.IndexAt(x, y))]; };
+  EXPECT_EQ(at(-0.7, 0.0), avoidance::CellClass::kSafe);
+  EXPECT_EQ(at(1.7, 0.5), avoidance::CellClass::kSafe);
+  EXPECT_EQ(at(0.5, 0.1), avoidance::CellClass::kUnsafe);
+  EXPECT_EQ(at(-0.9, 0.0), avoidance::CellClass::kUnknown);
+  EXPECT_EQ(at(0.5, 0.7), avoidance::CellClass::kUnknown);
+  EXPECT_EQ(trail.MarkDriven(&grid), 0);  // nothing left to mark
+
+  // Backing down its own tracks is judged on known ground; a step off them is not.
+  grid.state[static_cast<std::size_t>(rock)] = avoidance::CellClass::kSafe;  // judge unknowns only
+  MapCheckOptions o;
+  o.blind_margin_m = 0.0;
+  Footprint narrower = body;
+  narrower.margin_m = 0.0;
+  narrower.length_m = 1.3;
+  narrower.width_m = 1.1;
+  const avoidance::Footprint fp = GridFootprint(narrower);
+  std::vector<Pose2> back, aside;
+  for (double x = 1.0; x >= -1e-9; x -= 0.1) back.push_back({x, 0.0, 0.0});
+  for (double y = 0.0; y >= -1.0 - 1e-9; y -= 0.1) aside.push_back({0.5, y, 0.0});
+  EXPECT_EQ(CheckPathOnMap(grid, fp, back, o).verdict, Verdict::kSafe) << CheckPathOnMap(grid, fp, back, o).detail;
+  EXPECT_EQ(CheckPathOnMap(grid, fp, aside, o).verdict, Verdict::kUnknown);
+}
+
+TEST(DrivenTrail, NonFinitePoseIsIgnoredAndBadCellSizeThrows) {
+  DrivenTrail trail(0.2);
+  Footprint body;
+  trail.Add({std::nan(""), 0.0, 0.0}, body);
+  EXPECT_EQ(trail.size(), 0u);
+  EXPECT_THROW(DrivenTrail(0.0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rover::hazards
