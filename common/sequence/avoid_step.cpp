@@ -42,7 +42,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     if (PhaseAge() <= options_.map_wait_s) return AvoidOutcome::kWait;
     if (!map_) {
       AbortWith(abort_reason::kHazardUnknown, "no traversability map within " + Fixed(options_.map_wait_s) +
-                                                  " s (is hazards.map.enabled on, and a camera running?)");
+                                                  " s (is the hazard monitor's map on: hazards.map.enabled or --map on? is a camera running?)");
       return AvoidOutcome::kAborted;
     }
     step_note_ += "map without frame " + std::to_string(pair_here_id_) + "; ";
