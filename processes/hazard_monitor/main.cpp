@@ -1,6 +1,6 @@
 // hazard_monitor: keep-out zones against the footprint plus the position uncertainty, and
-// tilt limits (common/hazards); unless `--map off` (or `hazards.map.enabled: false`), the
-// traversability map (common/traversability) built from every STEREO_FRAME at the pose the frame carries, which
+// tilt limits (common/hazards); with `hazards.map.enabled` or `--map on`, the traversability
+// map (common/traversability) built from every STEREO_FRAME at the pose the frame carries, which
 // every step's swept footprint must also pass (common/hazards/map_check.hpp), published on
 // TRAVERSABILITY_MAP after each pair and once a second. Publishes HAZARD_STATUS at a steady rate and answers the
 // executor's HAZARD_QUERY ("would this step's swept footprint enter a zone?"), with the
@@ -48,9 +48,9 @@ int main(int argc, char** argv) {
     const auto options = hazards::LoadHazardOptions(section, {"publish_hz"});
     double publish_hz = 10.0;
     section.Get("publish_hz", publish_hz, 1.0, 100.0);
-    // The traversability map: on wherever the config enables it (configs/rover.yaml does),
-    // off where the deployment says `--map off`: without cameras the ground is never seen,
-    // and every step would be undecidable (hazard_unknown).
+    // The traversability map: on where the config enables it (configs/rover.yaml does not
+    // yet: see its comment) or the deployment says `--map on`; `--map off` for a deployment
+    // without cameras, which never sees the ground (every step would be hazard_unknown).
     hazards::MapCheckOptions map_check;
     map_check.enabled = false;
     if (section.Has("map")) map_check = hazards::LoadMapCheckOptions(section["map"], {"traversability"});
