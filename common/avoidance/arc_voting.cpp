@@ -1,8 +1,11 @@
 #include "avoidance/arc_voting.hpp"
 
+#include "avoidance/goal_field.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <stdexcept>
 
 namespace rover::avoidance {
@@ -15,14 +18,25 @@ std::string Fixed(double v, int digits = 2) {
   return buf;
 }
 
-double MinDistanceTo(const std::vector<Pose2>& path, double gx, double gy) {
-  double d = 1e300;
-  for (const Pose2& p : path) d = std::min(d, std::hypot(gx - p.x, gy - p.y));
-  return d;
+// How much closer to the goal the path brings the rover: by the distance round the known
+// hazards when there is a field and the rover stands where it is defined, else in a
+// straight line. A path whose every pose is cut off from the goal makes no progress.
+double Progress(const GoalField* field, const Pose2& pose, const std::vector<Pose2>& path, double gx, double gy) {
+  if (field) {
+    const double d0 = field->DistanceAt(pose.x, pose.y);
+    if (std::isfinite(d0)) {
+      double best = GoalField::kUnreachable;
+      for (const Pose2& p : path) best = std::min(best, field->DistanceAt(p.x, p.y));
+      return std::isfinite(best) ? d0 - best : 0.0;
+    }
+  }
+  double best = 1e300;
+  for (const Pose2& p : path) best = std::min(best, std::hypot(gx - p.x, gy - p.y));
+  return std::hypot(gx - pose.x, gy - pose.y) - best;
 }
 
 // Judges one candidate: `step` is the motion driven, `look` the motion judged (step first).
-void Judge(const Grid& grid, const Pose2& pose, double gx, double gy, const VoteOptions& o,
+void Judge(const Grid& grid, const GoalField* field, const Pose2& pose, double gx, double gy, const VoteOptions& o,
            const std::vector<Pose2>& step, const std::vector<Pose2>& look, Candidate* c) {
   c->step_sweep = SweepFootprint(grid, o.footprint, step, pose, o.blind_margin_m);
   const Sweep& s = c->step_sweep;
@@ -47,8 +61,7 @@ void Judge(const Grid& grid, const Pose2& pose, double gx, double gy, const Vote
   if (la.clear_unknown > 0) good = std::min(good, o.unknown_goodness);
   c->goodness = total > 0.0 ? good * clear / total : (la.unsafe > 0 ? 0.0 : good);
   const std::vector<Pose2> reached(look.begin(), look.begin() + std::max<std::size_t>(1, clear_end));
-  const double d0 = std::hypot(gx - pose.x, gy - pose.y);
-  const double progress = std::clamp((d0 - MinDistanceTo(reached, gx, gy)) / o.lookahead_m, -1.0, 1.0);
+  const double progress = std::clamp(Progress(field, pose, reached, gx, gy) / o.lookahead_m, -1.0, 1.0);
   c->goal = 0.5 * (1.0 + progress);
   c->vote = o.goodness_weight * c->goodness + o.goal_weight * c->goal -
             (c->kind == Candidate::Kind::kTurn ? o.turn_penalty : 0.0);
@@ -88,6 +101,8 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   if (const std::string p = grid.Problem(); !p.empty()) throw std::invalid_argument("avoidance: grid: " + p);
   Choice choice;
   const double remaining = std::hypot(gx - pose.x, gy - pose.y);
+  std::unique_ptr<GoalField> field;
+  if (o.goal_around_hazards) field = std::make_unique<GoalField>(grid, gx, gy, 0.5 * o.footprint.width_m);
   // Arcs.
   for (int a = 0; a < o.num_arcs; ++a) {
     Candidate c;
@@ -99,7 +114,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.distance_m = s;
     const auto step = SamplePath(pose, 0.0, s, c.curvature_per_m);
     const auto look = SamplePath(pose, 0.0, std::max(s, o.lookahead_m), c.curvature_per_m);
-    Judge(grid, pose, gx, gy, o, step, look, &c);
+    Judge(grid, field.get(), pose, gx, gy, o, step, look, &c);
     choice.candidates.push_back(c);
   }
   // Turns in place, then straight ahead in the new heading.
@@ -112,7 +127,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.turn_rad = t;
     const auto step = SamplePath(pose, t, 0.0, 0.0);
     const auto look = SamplePath(pose, t, o.lookahead_m, 0.0);
-    Judge(grid, pose, gx, gy, o, step, look, &c);
+    Judge(grid, field.get(), pose, gx, gy, o, step, look, &c);
     choice.candidates.push_back(c);
   }
   const Candidate* best = nullptr;
@@ -127,7 +142,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.kind = Candidate::Kind::kBackup;
     c.distance_m = -o.backup_m;
     const auto step = SamplePath(pose, 0.0, -o.backup_m, 0.0);
-    Judge(grid, pose, gx, gy, o, step, step, &c);
+    Judge(grid, field.get(), pose, gx, gy, o, step, step, &c);
     choice.candidates.push_back(c);
     if (!choice.candidates.back().vetoed) best = &choice.candidates.back();
   }

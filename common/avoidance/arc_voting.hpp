@@ -37,6 +37,10 @@ struct VoteOptions {
   double goal_weight = 1.0;
   double turn_penalty = 0.05;          // a turn in place makes no progress by itself
   double backup_m = 0.3;               // 0: never back up
+  // The goal vote counts progress along the path round the hazards the map knows
+  // (goal_field.hpp), not in a straight line; the rover's centre keeps half the footprint's
+  // width from an unsafe cell's centre there. false: straight-line progress only.
+  bool goal_around_hazards = true;
 
   // Throws std::invalid_argument naming the field.
   void Validate() const;
