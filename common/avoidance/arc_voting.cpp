@@ -46,6 +46,9 @@ void Judge(const Grid& grid, const GoalField* field, const Pose2& pose, double g
   } else if (s.UnknownFraction() > o.max_unknown_fraction) {
     c->vetoed = true;
     c->why = Fixed(100.0 * s.UnknownFraction(), 0) + " % of the cells crossed are unknown";
+  } else if (c->kind == Candidate::Kind::kTurn && c->turn_rad * o.previous_turn_rad < 0.0) {
+    c->vetoed = true;
+    c->why = "it would undo the last turn";
   }
   // The look-ahead: how far it runs clear of unsafe cells (a fraction of its length), and
   // the worst cell met before that.
@@ -60,6 +63,7 @@ void Judge(const Grid& grid, const GoalField* field, const Pose2& pose, double g
   double good = la.clear_min_goodness;
   if (la.clear_unknown > 0) good = std::min(good, o.unknown_goodness);
   c->goodness = total > 0.0 ? good * clear / total : (la.unsafe > 0 ? 0.0 : good);
+  c->clear_m = clear;
   const std::vector<Pose2> reached(look.begin(), look.begin() + std::max<std::size_t>(1, clear_end));
   const double progress = std::clamp(Progress(field, pose, reached, gx, gy) / o.lookahead_m, -1.0, 1.0);
   c->goal = 0.5 * (1.0 + progress);
@@ -80,6 +84,9 @@ void VoteOptions::Validate() const {
   positive(lookahead_m, "lookahead_m");
   positive(step_m, "step_m");
   positive(max_turn_rad, "max_turn_rad");
+  positive(max_point_turn_rad, "max_point_turn_rad");
+  if (max_point_turn_rad > M_PI) throw std::invalid_argument("avoidance: max_point_turn_rad must be <= pi");
+  if (!std::isfinite(previous_turn_rad)) throw std::invalid_argument("avoidance: previous_turn_rad must be finite");
   if (num_arcs < 1 || num_arcs > 101) throw std::invalid_argument("avoidance: num_arcs must be 1 to 101");
   if (!(blind_margin_m >= 0.0) || !(backup_m >= 0.0) || !(max_unknown_fraction >= 0.0) ||
       !(max_unknown_fraction <= 1.0) || !(unknown_goodness >= 0.0) || !(unknown_goodness <= 1.0) ||
@@ -117,26 +124,39 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     Judge(grid, field.get(), pose, gx, gy, o, step, look, &c);
     choice.candidates.push_back(c);
   }
-  // Turns in place, then straight ahead in the new heading.
+  // Turns in place to headings up to max_point_turn_rad round, then straight ahead in the
+  // new heading. The whole turn is judged (its sweep and the look-ahead after it); the step
+  // driven is its first max_turn_rad, and the next step votes again from there.
   const double bearing = std::remainder(std::atan2(gy - pose.y, gx - pose.x) - pose.yaw, 2.0 * M_PI);
-  std::vector<double> turns = {-o.max_turn_rad, o.max_turn_rad};
-  if (std::abs(bearing) > 1e-3 && std::abs(bearing) < o.max_turn_rad) turns.push_back(bearing);
+  std::vector<double> turns;
+  for (double t = o.max_turn_rad; t < o.max_point_turn_rad + 1e-9; t += o.max_turn_rad) turns.insert(turns.end(), {-t, t});
+  if (turns.empty() || std::abs(turns.back()) < o.max_point_turn_rad - 1e-9)
+    turns.insert(turns.end(), {-o.max_point_turn_rad, o.max_point_turn_rad});
+  if (std::abs(bearing) > 1e-3 && std::abs(bearing) <= o.max_point_turn_rad) turns.push_back(bearing);
   for (double t : turns) {
     Candidate c;
     c.kind = Candidate::Kind::kTurn;
-    c.turn_rad = t;
+    c.planned_turn_rad = t;
+    c.turn_rad = std::clamp(t, -o.max_turn_rad, o.max_turn_rad);
     const auto step = SamplePath(pose, t, 0.0, 0.0);
     const auto look = SamplePath(pose, t, o.lookahead_m, 0.0);
     Judge(grid, field.get(), pose, gx, gy, o, step, look, &c);
     choice.candidates.push_back(c);
   }
-  const Candidate* best = nullptr;
-  for (const Candidate& c : choice.candidates) {
-    if (c.vetoed) continue;
-    if (!best || c.vote > best->vote + 1e-9 ||
-        (std::abs(c.vote - best->vote) <= 1e-9 && std::abs(c.curvature_per_m) < std::abs(best->curvature_per_m)))
-      best = &c;
-  }
+  // A turn after which not even one step is clear leads nowhere (see the header).
+  const double one_step = std::min(o.step_m, std::max(remaining, 0.05)) - 1e-6;
+  auto leads_nowhere = [&](const Candidate& c) { return c.kind == Candidate::Kind::kTurn && c.clear_m < one_step; };
+  auto pick = [&](bool dead_ends) {
+    const Candidate* best = nullptr;
+    for (const Candidate& c : choice.candidates) {
+      if (c.vetoed || c.kind == Candidate::Kind::kBackup || leads_nowhere(c) != dead_ends) continue;
+      if (!best || c.vote > best->vote + 1e-9 ||
+          (std::abs(c.vote - best->vote) <= 1e-9 && std::abs(c.curvature_per_m) < std::abs(best->curvature_per_m)))
+        best = &c;
+    }
+    return best;
+  };
+  const Candidate* best = pick(false);
   if (!best && o.backup_m > 0.0) {
     Candidate c;
     c.kind = Candidate::Kind::kBackup;
@@ -146,6 +166,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     choice.candidates.push_back(c);
     if (!choice.candidates.back().vetoed) best = &choice.candidates.back();
   }
+  if (!best) best = pick(true);
   if (best) {
     choice.found = true;
     choice.best = *best;

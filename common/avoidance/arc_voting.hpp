@@ -4,7 +4,8 @@
 // vote) and by how much closer it brings the rover to the goal (the goal vote); the best
 // weighted sum becomes the next step. Candidates: arcs of about 20 curvatures from hard left
 // to hard right (straight included), judged over a look-ahead longer than the step but
-// driven one step at a time; turns in place left and right (then straight ahead); and,
+// driven one step at a time; turns in place left and right to headings up to 90 deg round
+// (then straight ahead), driven max_turn_rad a step; and,
 // when nothing else is allowed, backing up.
 //
 // A candidate is vetoed when the step itself (not the look-ahead) crosses an unsafe cell,
@@ -14,6 +15,12 @@
 // the fraction of the look-ahead that is clear, and its goal vote counts only the clear
 // part: arcs that run further through open ground win before the rover is close to an
 // obstacle.
+//
+// A turn in place after which the rover could not drive even one step straight ahead
+// leads nowhere: it is chosen only when neither an arc, another turn nor backing up is
+// allowed, so that a rover whose nose is at a rock backs away from it rather than turning
+// to and fro. A turn that undoes the previous step's turn is vetoed (VoteOptions::
+// previous_turn_rad).
 #pragma once
 
 #include "avoidance/grid.hpp"
@@ -30,6 +37,10 @@ struct VoteOptions {
   double lookahead_m = 3.0;            // arcs are judged over this length ...
   double step_m = 0.6;                 // ... and driven this far (less at the goal)
   double max_turn_rad = 18.0 * 3.14159265358979323846 / 180.0;  // per step, arcs and turns
+  // Turns in place are judged to headings up to this far round (in max_turn_rad steps,
+  // and the goal's bearing), each as the whole turn and the look-ahead after it; the step
+  // driven is its first max_turn_rad. A rover whose way on lies 40 deg off sees it.
+  double max_point_turn_rad = 90.0 * 3.14159265358979323846 / 180.0;
   double blind_margin_m = 0.5;
   double max_unknown_fraction = 0.2;   // of the step's new cells beyond the blind ring
   double unknown_goodness = 0.5;       // what an unknown cell in the look-ahead is worth
@@ -41,6 +52,10 @@ struct VoteOptions {
   // (goal_field.hpp), not in a straight line; the rover's centre keeps half the footprint's
   // width from an unsafe cell's centre there. false: straight-line progress only.
   bool goal_around_hazards = true;
+  // The turn in place the previous step made (0: it was no turn). A turn the other way
+  // would only undo it: it is vetoed, so that two turns cannot take turns for ever in
+  // front of an obstacle that blocks both headings.
+  double previous_turn_rad = 0.0;
 
   // Throws std::invalid_argument naming the field.
   void Validate() const;
@@ -49,7 +64,8 @@ struct VoteOptions {
 struct Candidate {
   enum class Kind { kArc, kTurn, kBackup };
   Kind kind = Kind::kArc;
-  double turn_rad = 0.0;         // kTurn
+  double turn_rad = 0.0;         // kTurn: the turn driven this step (at most max_turn_rad)
+  double planned_turn_rad = 0.0; // kTurn: the whole turn judged (turn_rad is its first part)
   double distance_m = 0.0;       // kArc, kBackup (signed)
   double curvature_per_m = 0.0;  // kArc (+ right)
   bool vetoed = false;
@@ -57,6 +73,7 @@ struct Candidate {
   double goodness = 0.0;         // 0..1: worst cell before an unsafe one x clear fraction
   double goal = 0.0;             // 0..1: (1 + progress over the clear part / look-ahead) / 2
   double vote = 0.0;
+  double clear_m = 0.0;          // how far the look-ahead runs before an unsafe cell
   Sweep step_sweep;              // the step alone
 };
 

@@ -61,6 +61,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.blind_margin_m = map_->blind_margin_m;
   o.max_unknown_fraction = map_->max_unknown_fraction;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
+  o.previous_turn_rad = last_turn_rad_;
   // Near the goal (inside the look-ahead) with a clear line to it: steer straight at it as
   // a plain goto does, so that the vote's look-ahead, longer than the way left, cannot
   // carry the rover past the disc.
@@ -108,6 +109,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   if (b.kind == avoidance::Candidate::Kind::kTurn) {
     d += Fixed(b.turn_rad * 180.0 / M_PI);
     d += " deg";
+    if (std::abs(b.planned_turn_rad - b.turn_rad) > 1e-6) d += " of " + Fixed(b.planned_turn_rad * 180.0 / M_PI);
   } else {
     d += Fixed(b.distance_m);
     d += " m k ";

@@ -523,7 +523,8 @@ class SequenceExecutor {
   std::optional<TraversabilityMap> map_;
   int64_t pair_here_id_ = -1;    // the last pair taken since the rover last moved, or -1
   bool map_images_taken_ = false;  // ImagesForMap took its pair for the step in hand
-  bool avoid_refused_ = false;     // the monitor refused this stop's first voted step
+  bool avoid_refused_ = false;
+  double last_turn_rad_ = 0.0;    // the last commanded step's turn in place (0: not a turn)     // the monitor refused this stop's first voted step
 };
 
 }  // namespace rover::sequence

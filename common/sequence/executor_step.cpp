@@ -134,6 +134,7 @@ void SequenceExecutor::CommandStep() {
   pair_here_id_ = -1;  // the rover moves: no pair is where it will stand
   map_images_taken_ = false;
   avoid_refused_ = false;
+  last_turn_rad_ = step_.kind == PlannedStep::Kind::kTurn ? step_.turn_rad : 0.0;
   mobility_deadline_utime_ =
       now_utime_ + static_cast<int64_t>((expected_s * options_.mobility_timeout_factor +
                                          options_.mobility_timeout_margin_s) * 1e6);

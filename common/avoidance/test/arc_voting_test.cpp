@@ -171,6 +171,67 @@ TEST(ArcVoting, UnknownAheadAllowsOnlyTheBlindRing) {
   EXPECT_GT(vetoed, 10);
 }
 
+// A rock just off the rover's nose, a little to its left, and the goal ahead and 45 deg to
+// the right: every step ahead crosses the rock, and so does a turn left. The way on is a
+// turn right of more than one step's 18 deg; it is judged whole and its first part driven.
+Grid NoseAtARock() {
+  Grid g = Open();
+  g.Paint(1.6, -0.5, 0.35, CellClass::kUnsafe, 0.0f, 0.35f);
+  return g;
+}
+
+TEST(ArcVoting, AWayOnMoreThanOneTurnRoundIsSeenAndStarted) {
+  const Choice c = VoteArcs(NoseAtARock(), {0, 0, 0}, 3.0, 3.0, VoteOptions{});
+  ASSERT_TRUE(c.found);
+  ASSERT_EQ(c.best.kind, Candidate::Kind::kTurn) << ToString(c.best.kind) << " k " << c.best.curvature_per_m;
+  EXPECT_NEAR(c.best.turn_rad, 18.0 * kDeg, 1e-9);       // one step's turn is driven ...
+  EXPECT_GT(c.best.planned_turn_rad, 30.0 * kDeg);       // ... of a longer one judged
+  EXPECT_GE(c.best.clear_m, 0.6);
+  // Judged one step round only, the same turn would lead nowhere.
+  VoteOptions one;
+  one.max_point_turn_rad = one.max_turn_rad;
+  const Choice d = VoteArcs(NoseAtARock(), {0, 0, 0}, 3.0, 3.0, one);
+  for (const auto& k : d.candidates)
+    if (k.kind == Candidate::Kind::kTurn && k.turn_rad > 0) {
+      EXPECT_LT(k.clear_m, 0.6);
+    }
+}
+
+TEST(ArcVoting, ATurnThatWouldUndoTheLastIsVetoed) {
+  VoteOptions o;
+  o.previous_turn_rad = 18.0 * kDeg;
+  const Choice c = VoteArcs(NoseAtARock(), {0, 0, 0}, 3.0, -3.0, o);
+  int undo = 0;
+  for (const auto& k : c.candidates)
+    if (k.kind == Candidate::Kind::kTurn && k.turn_rad < 0) {
+      EXPECT_TRUE(k.vetoed);
+      EXPECT_EQ(k.why, "it would undo the last turn");
+      ++undo;
+    }
+  EXPECT_GE(undo, 5);
+  ASSERT_TRUE(c.found);
+  EXPECT_FALSE(c.best.kind == Candidate::Kind::kTurn && c.best.turn_rad < 0);
+}
+
+TEST(ArcVoting, ARoverWhoseEveryWayOnIsBlockedBacksAwayRatherThanTurning) {
+  // A wall of rock right across the nose: no arc is allowed and every turn in place
+  // (allowed: the corners clear it) faces rock within one step. Backing up wins.
+  Grid g = Open();
+  for (double y = -3.0; y <= 3.0; y += 0.2) g.Paint(1.05, y, 0.15, CellClass::kUnsafe, 0.0f, 0.4f);
+  for (double x = -3.0; x <= 1.0; x += 0.2) {
+    g.Paint(x, -1.5, 0.15, CellClass::kUnsafe, 0.0f, 0.4f);
+    g.Paint(x, 1.5, 0.15, CellClass::kUnsafe, 0.0f, 0.4f);
+  }
+  VoteOptions o;
+  o.max_point_turn_rad = o.max_turn_rad;
+  const Choice c = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o);
+  ASSERT_TRUE(c.found);
+  bool some_turn_allowed = false;
+  for (const auto& k : c.candidates) some_turn_allowed |= k.kind == Candidate::Kind::kTurn && !k.vetoed;
+  EXPECT_TRUE(some_turn_allowed);
+  EXPECT_EQ(c.best.kind, Candidate::Kind::kBackup) << ToString(c.best.kind) << " " << c.best.turn_rad;
+}
+
 TEST(ArcVoting, BadInputThrowsOneLine) {
   Grid g = Open();
   g.goodness.pop_back();
