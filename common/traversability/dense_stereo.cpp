@@ -3,6 +3,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -83,6 +84,47 @@ void FillMap(const geometry::CameraModel& model, const RectifiedRig& r,
   }
 }
 
+// The image's noise sigma (grey levels) by Immerkaer's method: the response to the
+// difference of two Laplacians, blind to intensity ramps and curvature, whose median
+// absolute value over the image is 0.6745 * 6 sigma for Gaussian noise (the median keeps
+// edges and texture from counting). Pixels outside the source image (0 after remapping)
+// and their neighbours are skipped. Never under the 8-bit quantisation noise, 1/sqrt(12).
+double ImageNoiseSigma(const cv::Mat& f, const cv::Mat& grey) {
+  static const float k[9] = {1, -2, 1, -2, 4, -2, 1, -2, 1};
+  const cv::Mat kernel(3, 3, CV_32F, const_cast<float*>(k));
+  cv::Mat resp, outside;
+  cv::filter2D(f, resp, CV_32F, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+  cv::dilate(grey == 0, outside, cv::Mat());
+  // The responses of an 8-bit image are whole numbers up to 16 x 255: a histogram gives the
+  // median, interpolated within its bin (a bare whole-number median would step sigma by
+  // 1/4 grey level).
+  std::vector<int> hist(16 * 255 + 2, 0);
+  int count = 0;
+  for (int v = 1; v < f.rows - 1; ++v) {
+    const float* r = resp.ptr<float>(v);
+    const std::uint8_t* out = outside.ptr<std::uint8_t>(v);
+    for (int u = 1; u < f.cols - 1; ++u) {
+      if (out[u]) continue;
+      ++hist[std::min<int>(static_cast<int>(hist.size()) - 1, static_cast<int>(std::lround(std::abs(r[u]))))];
+      ++count;
+    }
+  }
+  const double quantisation = 1.0 / std::sqrt(12.0);
+  if (count == 0) return quantisation;
+  const double half = 0.5 * count;
+  double below = 0, median = 0;
+  for (std::size_t b = 0; b < hist.size(); ++b) {
+    if (below + hist[b] >= half) {
+      // Bin b holds |response| in [b - 0.5, b + 0.5) (bin 0: [0, 0.5)).
+      const double lo = b == 0 ? 0.0 : b - 0.5, width = b == 0 ? 0.5 : 1.0;
+      median = lo + width * (half - below) / hist[b];
+      break;
+    }
+    below += hist[b];
+  }
+  return std::max(quantisation, median / (0.6745 * 6.0));
+}
+
 }  // namespace
 
 RectifiedRig Rectify(const geometry::StereoRig& rig, double scale) {
@@ -117,6 +159,27 @@ RectifiedRig Rectify(const geometry::StereoRig& rig, double scale) {
   const int levels = PyramidLevels(s_x);
   FillMap(L, r, L.Center(), levels, &r.map_lx, &r.map_ly);
   FillMap(R, r, R.Center(), levels, &r.map_rx, &r.map_ry);
+  // What read noise alone gives the texture measure: white noise of a known sigma through
+  // the same reduction and resampling as the images (both smooth it, and not equally at
+  // all frequencies), then the noise estimate and the mean squared Sobel gradient on it.
+  {
+    cv::Mat noise(L.height(), L.width(), CV_8UC1), tmp;
+    cv::RNG rng(20021);
+    rng.fill(noise, cv::RNG::NORMAL, 128, 8);
+    for (int k = 0; k < levels; ++k) {
+      cv::pyrDown(noise, tmp);
+      noise = tmp;
+    }
+    cv::Mat rect, f, gx;
+    cv::remap(noise, rect, r.map_lx, r.map_ly, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
+    rect.convertTo(f, CV_32F);
+    cv::Sobel(f, gx, CV_32F, 1, 0, 3, 1.0, 0.0, cv::BORDER_REFLECT_101);
+    cv::Mat inside;
+    cv::erode(rect > 0, inside, cv::Mat());
+    const double sigma = ImageNoiseSigma(f, rect);
+    const double mean_g2 = cv::mean(gx.mul(gx), inside)[0];
+    if (sigma > 0 && mean_g2 > 0) r.texture_noise_gain = mean_g2 / (sigma * sigma);
+  }
   return r;
 }
 
@@ -202,6 +265,50 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
     cv::Mat var = mean2 - mean.mul(mean);
     blank = var < static_cast<float>(o.min_texture * o.min_texture);
   }
+  // Texture along the epipolar line, against the image's own noise: SGBM can only find a
+  // disparity from intensity that changes along the rows. Horizontal bands (ripple crests
+  // across the view, the brightness falling off with range) have variance but no such
+  // change, and in a dark shadow the ground's texture sinks under the read noise; on both
+  // SGBM's disparity is noise. A pixel is kept where the mean squared horizontal gradient
+  // (Sobel) over its block stands min_texture_snr^2 times above what noise alone gives.
+  cv::Mat snr2;
+  if (o.min_texture_snr > 0) {
+    cv::Mat f, gx, e;
+    rectL.convertTo(f, CV_32F);
+    cv::Sobel(f, gx, CV_32F, 1, 0, 3, 1.0, 0.0, cv::BORDER_REFLECT_101);
+    cv::boxFilter(gx.mul(gx), e, CV_32F, cv::Size(bs, bs));
+    const double sigma = ImageNoiseSigma(f, rectL);
+    snr2 = e / static_cast<float>(r.texture_noise_gain * sigma * sigma);
+    cv::Mat low = snr2 < static_cast<float>(o.min_texture_snr * o.min_texture_snr);
+    blank = blank.empty() ? low : (blank | low);
+  }
+  // The left border: padding lets SGBM match the left num_disp columns, but a pixel there
+  // whose true disparity exceeds its column shows ground the right camera never saw; SGBM
+  // then settles on a smaller disparity elsewhere in the row, and the point lands far
+  // beyond and below the ground (a metre below it at the image's bottom-left corner). The
+  // largest disparity matched in the interior of the nearby rows (where every disparity
+  // can be matched) bounds what the border's pixels can truly have; a pixel left of that
+  // bound is dropped. Rows with no interior match keep only what SGBM alone would match.
+  std::vector<int> min_column;
+  if (o.drop_unseen_border) {
+    const int h = disp16.rows, w = disp16.cols;
+    std::vector<int> row_max(h, 0);
+    for (int v = 0; v < h; ++v) {
+      const std::int16_t* dp = disp16.ptr<std::int16_t>(v);
+      const std::uint8_t* bp = blank.empty() ? nullptr : blank.ptr<std::uint8_t>(v);
+      int m = 0;
+      for (int u = num_disp; u < w; ++u)
+        if (dp[u] > m && !(bp && bp[u])) m = dp[u];
+      row_max[v] = m;
+    }
+    min_column.assign(h, num_disp);
+    const int reach = std::max(bs, 8);
+    for (int v = 0; v < h; ++v) {
+      int m = 0;
+      for (int k = std::max(0, v - reach); k <= std::min(h - 1, v + reach); ++k) m = std::max(m, row_max[k]);
+      if (m > 0) min_column[v] = std::min(num_disp, (m + 15) / 16 + 1);
+    }
+  }
   if (stats) stats->seconds_match = SecondsSince(t0);
 
   // Triangulate: z = f B / d along the common axis.
@@ -218,7 +325,9 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
     const float* mrx = r.map_rx.ptr<float>(v);
     const std::uint8_t* ep = edge.empty() ? nullptr : edge.ptr<std::uint8_t>(v);
     const std::uint8_t* bp = blank.empty() ? nullptr : blank.ptr<std::uint8_t>(v);
+    const int u_first = min_column.empty() ? 0 : min_column[v];
     for (int u = 0; u < r.width; u += step) {
+      if (u < u_first) continue;  // its match may lie outside the right image
       if (dp[u] <= 0 || u - dp[u] / 16 < 0 || mlx[u] < -0.5f || mrx[u - dp[u] / 16] < -0.5f) continue;  // no match, or off the source images
       if (ep && ep[u]) continue;  // on a depth edge
       if (bp && bp[u]) continue;  // no texture to match

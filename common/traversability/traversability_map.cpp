@@ -2,6 +2,8 @@
 
 #include "traversability/dense_stereo.hpp"
 
+#include <Eigen/LU>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -62,6 +64,10 @@ TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(optio
   if (o.speckle_window < 0 || o.speckle_range < 0) Bad("speckle_window and speckle_range must be >= 0");
   if (!positive(o.disparity_sigma_px)) Bad("disparity_sigma_px must be > 0");
   if (!std::isfinite(o.min_texture) || o.min_texture < 0) Bad("min_texture must be >= 0");
+  if (!std::isfinite(o.tilt_margin_sigmas) || o.tilt_margin_sigmas < 0 || o.tilt_margin_sigmas > 10)
+    Bad("tilt_margin_sigmas must be in [0, 10]");
+  if (!std::isfinite(o.min_texture_snr) || o.min_texture_snr < 0 || o.min_texture_snr > 100)
+    Bad("min_texture_snr must be in [0, 100]");
   if (o.subsample < 1 || o.subsample > 16) Bad("subsample must be in [1, 16]");
   if (!std::isfinite(o.max_disparity_jump) || o.max_disparity_jump < 0)
     Bad("max_disparity_jump must be >= 0");
@@ -239,9 +245,11 @@ void TraversabilityMap::Rate() const {
   // without the cells more than half a step limit ABOVE it: rocks stand up from the
   // ground, so the plane settles on the ground around them even when a big rock fills
   // much of the patch, and the rock shows as a step rather than a tilt.
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();  // of fit's last solve: sum of row row^T
   auto fit = [&](const std::vector<Eigen::Vector3d>& pts) {
     inlier.assign(pts.size(), 1);
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    normal.setZero();
     for (int pass = 0; pass < 4; ++pass) {
       Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
       Eigen::Vector3d Atb = Eigen::Vector3d::Zero();
@@ -257,6 +265,7 @@ void TraversabilityMap::Rate() const {
       const Eigen::Vector3d c_new = AtA.ldlt().solve(Atb);
       if (!c_new.allFinite()) break;
       c = c_new;
+      normal = AtA;
       std::size_t kept = 0, changed = 0;
       for (std::size_t k = 0; k < pts.size(); ++k) {
         const double res = pts[k].z() - (c[0] + c[1] * pts[k].x() + c[2] * pts[k].y());
@@ -269,28 +278,67 @@ void TraversabilityMap::Rate() const {
     }
     return c;
   };
+  // The plane rated: the fitted one with its gradient shrunk, about the centroid of the
+  // cells it was fitted to, by tilt_margin_sigmas standard errors of the gradient along its
+  // own direction. The error comes from the cells' height sigma and how the cells of the
+  // last fit spread over the patch (sigma^2 times the slope block of the inverse normal
+  // matrix). A plane through cells in a line has any slope across the line: its error is
+  // unbounded, so it is rated level, and steps are measured from a level plane rather than
+  // from a slope the data never determined. Returns the rated gradient; must follow the
+  // fit of `pts` (it reads that fit's normal matrix and inliers).
+  auto rate_plane = [&](const std::vector<Eigen::Vector3d>& pts, Eigen::Vector3d& c, double sigma) {
+    const double g = std::hypot(c[1], c[2]);
+    if (o.tilt_margin_sigmas <= 0 || g <= 0) return g;
+    double rated = 0.0;
+    Eigen::FullPivLU<Eigen::Matrix3d> lu(normal);
+    if (lu.isInvertible()) {
+      const Eigen::Vector2d dir(c[1] / g, c[2] / g);
+      const double var = sigma * sigma * dir.dot(lu.inverse().block<2, 2>(1, 1) * dir);
+      if (std::isfinite(var) && var >= 0) rated = std::max(0.0, g - o.tilt_margin_sigmas * std::sqrt(var));
+    }
+    if (rated >= g) return g;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    int used = 0;
+    for (std::size_t k = 0; k < pts.size(); ++k)
+      if (inlier[k]) mean += pts[k], ++used;
+    if (used == 0) return rated;
+    mean /= used;
+    const double f = rated / g;
+    const double z_at_mean = c[0] + c[1] * mean.x() + c[2] * mean.y();
+    c[1] *= f;
+    c[2] *= f;
+    c[0] = z_at_mean - c[1] * mean.x() - c[2] * mean.y();
+    return rated;
+  };
+  auto rms = [](const std::vector<float>& v) {
+    double sum = 0;
+    for (float x : v) sum += static_cast<double>(x) * x;
+    return v.empty() ? 0.0 : std::sqrt(sum / v.size());
+  };
+  std::vector<float> st;
   for (int i = 0; i < n_; ++i) {
     for (int j = 0; j < n_; ++j) {
       gather(patch, i, j, xs, &ss);
       if (xs.size() < min_known) continue;
-      const Eigen::Vector3d c = fit(xs);
+      Eigen::Vector3d c = fit(xs);
+      const Eigen::Vector3d c_fit = c;  // roughness: the scatter about the plane fitted
       // The tilt: of the wheel patch's own plane, or of the plane over the rover's size
       // when that patch is known well enough (else the wheel patch's, the only one there is).
-      double grad = std::hypot(c[1], c[2]);
+      double grad = rate_plane(xs, c, rms(ss));
       double face = 0.0;
       // The step is measured from the ground plane under the rover's size when there is
       // one: a rock that fills much of the wheel patch tilts that patch's own plane, which
       // would absorb the rock as a tilt; the body-scale plane stays on the ground.
       Eigen::Vector3d ground = c;
       if (own_tilt_patch) {
-        gather(tilt_patch, i, j, xt, nullptr);
+        gather(tilt_patch, i, j, xt, &st);
         if (xt.size() >= min_known_tilt) {
-          const Eigen::Vector3d ct = fit(xt);
+          Eigen::Vector3d ct = fit(xt);
           // How much steeper the wheel patch is than the body's plane: never more than the
           // wheel patch's own tilt (a rock's flank on level ground rates as it always did,
           // although the body plane there leans a little on the rock's foot), and nothing
           // on a uniform slope.
-          const double body = std::hypot(ct[1], ct[2]);
+          const double body = rate_plane(xt, ct, rms(st));
           face = std::max(0.0, std::atan(grad) - std::atan(body));
           grad = body;
           ground = ct;
@@ -298,7 +346,7 @@ void TraversabilityMap::Rate() const {
       }
       double lo = 0, hi = 0, sum2 = 0, sig2 = 0;
       for (std::size_t k = 0; k < xs.size(); ++k) {
-        const double res = xs[k].z() - (c[0] + c[1] * xs[k].x() + c[2] * xs[k].y());
+        const double res = xs[k].z() - (c_fit[0] + c_fit[1] * xs[k].x() + c_fit[2] * xs[k].y());
         const double above = xs[k].z() - (ground[0] + ground[1] * xs[k].x() + ground[2] * xs[k].y());
         lo = std::min(lo, above);
         hi = std::max(hi, above);
@@ -331,7 +379,8 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
                   "max_roughness_m", "max_range_m", "min_points", "caution_fraction",
                   "min_patch_fraction", "stereo_width_px", "num_disparities", "block_size",
                   "uniqueness_ratio", "speckle_window", "speckle_range", "disparity_sigma_px",
-                  "subsample", "min_range_m", "max_disparity_jump", "min_texture"});
+                  "subsample", "min_range_m", "max_disparity_jump", "min_texture", "min_texture_snr",
+                  "tilt_margin_sigmas", "drop_unseen_border"});
   node.Get("cell_size_m", o.cell_size_m, 0.01, 10.0);
   node.Get("extent_m", o.extent_m, 0.1, 200.0);
   node.Get("footprint_radius_m", o.footprint_radius_m, 0.0, 10.0);
@@ -358,6 +407,9 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
   node.Get("min_range_m", o.min_range_m, 0.0, 100.0);
   node.Get("max_disparity_jump", o.max_disparity_jump, 0.0, 10.0);
   node.Get("min_texture", o.min_texture, 0.0, 255.0);
+  node.Get("min_texture_snr", o.min_texture_snr, 0.0, 100.0);
+  node.Get("tilt_margin_sigmas", o.tilt_margin_sigmas, 0.0, 10.0);
+  node.Get("drop_unseen_border", o.drop_unseen_border);
   if (o.min_range_m >= o.max_range_m)
     node.Fail("min_range_m: expected less than max_range_m");
   if (o.footprint_radius_m > o.extent_m / 2)

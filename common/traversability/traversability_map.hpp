@@ -64,6 +64,12 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // stands on, the face a wheel meets (a rock's flank), which a uniform slope does not
   // steepen; 0: not rated.
   double max_face_deg = 0.0;
+  // The tilt rated (and the face) is the fitted one less this many standard errors of it,
+  // from the cells' height sigmas and how the known cells spread over the patch: a plane
+  // through a few cells in a line (the only texture on blank sand may be a shadow's edge)
+  // can have any slope across the line, and a sparse far patch's slope is mostly stereo
+  // error. Dense, well-spread patches lose a fraction of a degree. 0: the fitted tilt.
+  double tilt_margin_sigmas = 0.0;
   double max_roughness_m = 0.05;
   double max_range_m = 6.0;   // stereo points beyond are ignored
   int min_points = 3;         // per cell; fewer -> unknown
@@ -94,6 +100,18 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // under this (grey levels, 8-bit) has nothing to match, and SGBM's disparity there is
   // noise; it is dropped. 0 keeps every pixel.
   double min_texture = 0.0;
+  // Texture along the rows, against the image's noise: a pixel is matched only where the
+  // RMS horizontal gradient over its block_size window is at least this many times what
+  // the image's read noise alone gives (noise estimated per image). Drops pixels whose
+  // only texture runs along the rows (horizontal bands) or is under the noise (blank or
+  // shadowed sand), where SGBM's disparity is noise. 0 keeps every pixel.
+  double min_texture_snr = 0.0;
+  // The left image's border band (its first num_disparities columns) is matched against a
+  // padded right image: a pixel there whose true disparity exceeds its column has no match
+  // in the right image, and SGBM's disparity there is wrong, too small (a point below the
+  // ground). true: such pixels are dropped, bounded by the largest disparity matched in the
+  // interior of the nearby rows.
+  bool drop_unseen_border = false;
 };
 
 // Per update, for the log and the benchmark.

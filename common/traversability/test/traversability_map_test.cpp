@@ -10,6 +10,7 @@
 #include "terrain/world.hpp"
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include <cmath>
 #include <functional>
@@ -330,6 +331,143 @@ TEST(DenseStereo, BlankImagesGiveNoPointsWithATextureFloor) {
   MapOptions o;
   o.min_texture = 2.0;
   EXPECT_EQ(DenseStereo(left, right, rig, o).points_rover.size(), 0u);
+}
+
+// Texture along the rows against the image's noise: horizontal bands (brightness that
+// changes only down the image) with read noise have a standard deviation well over
+// min_texture, yet nothing to match along a row; min_texture_snr drops them, and keeps a
+// pattern that changes along the rows.
+TEST(DenseStereo, TextureAlongTheRowsAgainstTheNoise) {
+  const geometry::StereoRig rig = geometry::LoadStereoRigFile(
+      std::string(ROVER_SOURCE_DIR) + "/configs/cameras/navcam_pinhole.yaml");
+  const int w = rig.left->width(), h = rig.left->height();
+  cv::Mat bands(h, w, CV_32F), noise_l(h, w, CV_32F), noise_r(h, w, CV_32F);
+  for (int v = 0; v < h; ++v) bands.row(v).setTo(100 + 20 * std::sin(2 * M_PI * v / 24.0));
+  cv::RNG rng(5);
+  rng.fill(noise_l, cv::RNG::NORMAL, 0, 1.5);
+  rng.fill(noise_r, cv::RNG::NORMAL, 0, 1.5);
+  cv::Mat left, right;
+  cv::Mat(bands + noise_l).convertTo(left, CV_8U);
+  cv::Mat(bands + noise_r).convertTo(right, CV_8U);
+  MapOptions o;
+  o.min_texture = 2.0;
+  const std::size_t with_floor = DenseStereo(left, right, rig, o).points_rover.size();
+  EXPECT_GT(with_floor, 1000u);  // the bands pass the plain texture floor
+  o.min_texture_snr = 2.0;
+  EXPECT_LT(DenseStereo(left, right, rig, o).points_rover.size(), with_floor / 100);
+
+  // Blobs a few pixels across, shifted 40 px between the cameras: texture along the rows.
+  cv::Mat blobs(h, w, CV_32F);
+  rng.fill(blobs, cv::RNG::NORMAL, 0, 40);
+  cv::GaussianBlur(blobs, blobs, cv::Size(0, 0), 2.0);
+  cv::Mat shifted = blobs.clone();
+  blobs.colRange(40, w).copyTo(shifted.colRange(0, w - 40));
+  cv::Mat l2, r2;
+  cv::Mat(blobs + 100 + noise_l).convertTo(l2, CV_8U);
+  cv::Mat(shifted + 100 + noise_r).convertTo(r2, CV_8U);
+  MapOptions plain;
+  plain.max_range_m = 50;
+  MapOptions snr = plain;
+  snr.min_texture_snr = 2.0;
+  const std::size_t all = DenseStereo(l2, r2, rig, plain).points_rover.size();
+  EXPECT_GT(DenseStereo(l2, r2, rig, snr).points_rover.size(), all * 8 / 10);
+  const MapOptions y = LoadMapOptions(config::ConfigNode::FromString(
+      "min_texture_snr: 2\ntilt_margin_sigmas: 2\ndrop_unseen_border: true\n", "t.yaml"));
+  EXPECT_DOUBLE_EQ(y.min_texture_snr, 2.0);
+  EXPECT_DOUBLE_EQ(y.tilt_margin_sigmas, 2.0);
+  EXPECT_TRUE(y.drop_unseen_border);
+  EXPECT_THROW(LoadMapOptions(config::ConfigNode::FromString("min_texture_snr: -1\n", "t.yaml")),
+               config::ConfigError);
+  EXPECT_THROW(LoadMapOptions(config::ConfigNode::FromString("tilt_margin_sigmas: 11\n", "t.yaml")),
+               config::ConfigError);
+}
+
+// The left border: on bland sand under a low sun, the left image's bottom-left corner shows
+// ground the right camera never saw (its disparity exceeds its column). Matched anyway
+// against the padded right image, it gave points a metre below the ground, and a false
+// step; drop_unseen_border drops them and keeps nearly everything else.
+TEST(DenseStereo, LeftBorderPixelsTheRightCameraNeverSawAreDropped) {
+  const std::string text = R"(
+name: sand_two_rocks_low_sun
+seed: 640325
+map: {center: [5, 0], size_m: [20, 16], resolution_m: 0.05}
+roughness: {amplitude_m: 0.005, min_wavelength_m: 0.4, max_wavelength_m: 8.0}
+ripples: {amplitude_m: 0.008, wavelength_m: 2.5, crest_azimuth_deg: 100}
+soil:
+  default: sand
+rocks:
+  placed:
+    - {name: Pebble_A, position: [3.0, -0.6], diameter_m: 0.2, height_m: 0.1}
+    - {name: Pebble_B, position: [4.2, 0.8], diameter_m: 0.25, height_m: 0.12}
+sun: {azimuth_deg: 180, elevation_deg: 12}
+)";
+  const terrain::World world(terrain::WorldOptions::Load(config::ConfigNode::FromString(text, "sand.yaml")));
+  const geometry::StereoRig rig = geometry::LoadStereoRigFile(
+      std::string(ROVER_SOURCE_DIR) + "/configs/cameras/navcam_pinhole.yaml");
+  render::RenderOptions ro;
+  ro.image_scale = 0.5;
+  render::StereoRenderer renderer(ro);
+  const double yaw = 2.8 * kDeg, x = 0.07 + 1.5 * std::cos(yaw), y = 0.02 + 1.5 * std::sin(yaw);
+  const geometry::Pose T = geometry::PoseFromXyzRpy(x, y, -world.Elevation(x, y), 0, 0, yaw);
+  const render::StereoImages images = renderer.RenderPair(world, rig, T, 4);
+  MapOptions o;
+  o.subsample = 3;
+  o.min_texture = 2.0;
+  auto below = [&](const StereoPoints& sp) {
+    int n = 0;
+    for (const Eigen::Vector3d& pr : sp.points_rover) {
+      const Eigen::Vector3d p = T * pr;
+      n += -p.z() < world.ElevationDetailed(p.x(), p.y()) - 0.3;
+    }
+    return n;
+  };
+  const StereoPoints kept = DenseStereo(images.left, images.right, images.rig, o);
+  o.drop_unseen_border = true;
+  const StereoPoints dropped = DenseStereo(images.left, images.right, images.rig, o);
+  EXPECT_GE(below(kept), 2);
+  EXPECT_EQ(below(dropped), 0);
+  EXPECT_GT(dropped.points_rover.size(), kept.points_rover.size() * 9 / 10);
+}
+
+// Cells known only along a line (the edge of a shadow on blank ground) fit a plane of any
+// slope across the line; with tilt_margin_sigmas the tilt is rated from what the cells
+// determine, so a level line of cells is not a slope, while a dense 35 deg slope still is.
+TEST(TraversabilityMap, APlaneThroughALineOfCellsRatesNoTilt) {
+  MapOptions o;
+  o.footprint_radius_m = 0.3;
+  o.tilt_radius_m = 0.75;
+  o.max_tilt_deg = 30.0;
+  o.tilt_margin_sigmas = 2.0;
+  MapOptions plain = o;
+  plain.tilt_margin_sigmas = 0.0;
+  TraversabilityMap rated(o), fitted(plain);
+  // Points along y = 0.02 x (a line across the cells) with 2 cm height noise.
+  std::mt19937 rng(4);
+  std::normal_distribution<double> n(0.0, 0.02);
+  std::vector<Eigen::Vector3d> pts;
+  for (double x = 1.0; x < 5.0; x += 0.01) {
+    const double y = 0.3 + 0.05 * x;
+    pts.emplace_back(x, y, -n(rng));
+  }
+  rated.AddPoints(pts, std::vector<double>(pts.size(), 0.02));
+  fitted.AddPoints(pts, std::vector<double>(pts.size(), 0.02));
+  int fitted_unsafe = 0, rated_unsafe = 0;
+  for (double x = 1.5; x < 4.5; x += 0.2)
+    for (double y = -0.5; y <= 1.1; y += 0.2) {
+      fitted_unsafe += fitted.At(x, y).state == CellState::kUnsafe;
+      rated_unsafe += rated.At(x, y).state == CellState::kUnsafe;
+    }
+  EXPECT_EQ(rated_unsafe, 0);
+  EXPECT_GT(fitted_unsafe, 0);  // the bare fit finds a steep slope across the line
+
+  TraversabilityMap slope(o);
+  AddSurface(&slope, [](double x, double) { return std::tan(35.0 * kDeg) * x; }, 3.0, 0.0, 2.0, 0.01);
+  const Cell c = slope.At(3.0, 0.0);
+  EXPECT_EQ(c.state, CellState::kUnsafe);
+  EXPECT_NEAR(c.tilt_rad / kDeg, 35.0, 1.0);
+  MapOptions bad = o;
+  bad.tilt_margin_sigmas = -1;
+  EXPECT_THROW(TraversabilityMap{bad}, std::invalid_argument);
 }
 
 }  // namespace
