@@ -21,6 +21,8 @@ void BandCounts::Add(const BandCounts& o) {
   unknown_cells += o.unknown_cells;
   traversable_cells += o.traversable_cells;
   false_unsafe_cells += o.false_unsafe_cells;
+  unsafe_cells += o.unsafe_cells;
+  unsafe_found_cells += o.unsafe_found_cells;
 }
 
 BandCounts EvalResult::Within4m() const {
@@ -131,6 +133,10 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
         const std::size_t idx = static_cast<std::size_t>(i) * map.cols() + j;
         ++b.in_view_cells;
         if (mc[idx].state == tv::CellState::kUnknown) ++b.unknown_cells;
+        if (tc[idx].state == tv::CellState::kUnsafe) {
+          ++b.unsafe_cells;
+          if (mc[idx].state == tv::CellState::kUnsafe) ++b.unsafe_found_cells;
+        }
         if (tc[idx].state != tv::CellState::kUnknown && tc[idx].state != tv::CellState::kUnsafe) {
           ++b.traversable_cells;
           if (mc[idx].state == tv::CellState::kUnsafe) {
@@ -201,6 +207,11 @@ std::string FormatTable(const EvalResult& r, double rock_limit_m) {
   for (int k = 0; k < EvalResult::kBands; ++k) row(names[k], r.bands[k]);
   out << std::string(93, '-') << "\n";
   row("0-4 m", r.Within4m());
+  const BandCounts near = r.Within4m();
+  std::snprintf(line, sizeof line, "unsafe cells in truth (in view, 0-4 m): %d, marked unsafe by the map: %d %s\n",
+                near.unsafe_cells, near.unsafe_found_cells,
+                pct(near.unsafe_found_cells, near.unsafe_cells).c_str());
+  out << line;
   return out.str();
 }
 

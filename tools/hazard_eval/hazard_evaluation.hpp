@@ -10,6 +10,8 @@
 //   traversable cells (truth): in-view cells the TRUE terrain (each cell at the highest
 //             point of the exact surface in it), rated by the same plane fit and limits,
 //             does not make unsafe; "false unsafe" = the map marks them unsafe;
+//   unsafe cells (truth): in-view cells the true terrain makes unsafe (a slope over the
+//             tilt limit, a rock's step), and how many of them the map marks unsafe;
 //   unknown   in-view cells the map has no rating for (occluded, no stereo match).
 // Counts are summed over the poses.
 #pragma once
@@ -43,6 +45,7 @@ struct BandCounts {
   int rocks = 0, rocks_detected = 0;
   int in_view_cells = 0, unknown_cells = 0;
   int traversable_cells = 0, false_unsafe_cells = 0;
+  int unsafe_cells = 0, unsafe_found_cells = 0;
   void Add(const BandCounts& o);
 };
 
