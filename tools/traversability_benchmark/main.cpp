@@ -2,7 +2,9 @@
 // rectify, dense stereo, triangulate, bin, rate) on ONE core, at 512x512 and 1024x1024.
 //   traversability_benchmark [--world configs/worlds/rock_field.yaml]
 //                            [--rig configs/cameras/navcam_pinhole.yaml] [--pairs 20]
-//                            [--sizes 512,1024]
+//                            [--sizes 512,1024] [--map-options FILE.yaml]
+// --map-options: traversability::MapOptions keys, bare, under `traversability:`, or a rover
+// config's hazards.map.traversability (default: the options' defaults).
 // The pairs are rendered first (not timed) at poses 0.2 m apart along the world's start
 // heading; then each is added to one map, re-centred on its pose. Prints the median wall
 // and thread-CPU time per update (on a shared machine the CPU time is the one to trust) and
@@ -57,12 +59,14 @@ int main(int argc, char** argv) {
   std::string rig_path = "configs/cameras/navcam_pinhole.yaml";
   std::vector<int> sizes{512, 1024};
   int pairs = 20;
+  std::string map_path;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has = i + 1 < argc;
     std::vector<int> v;
     if (a == "--help" || a == "-h") {
-      std::cout << "usage: traversability_benchmark [--world WORLD.yaml] [--rig RIG.yaml] [--pairs N] [--sizes 512,1024]\n";
+      std::cout << "usage: traversability_benchmark [--world WORLD.yaml] [--rig RIG.yaml] [--pairs N] [--sizes 512,1024]\n"
+                   "       [--map-options FILE.yaml]\n";
       return 0;
     } else if (a == "--world") {
       if (!has) return Usage("--world: expected a world YAML file");
@@ -77,6 +81,9 @@ int main(int argc, char** argv) {
     } else if (a == "--sizes") {
       if (!has || !config::ParseIntList(argv[++i], 64, 4096, &sizes))
         return Usage("--sizes: expected image widths in pixels, e.g. 512,1024 (each in [64, 4096])");
+    } else if (a == "--map-options") {
+      if (!has) return Usage("--map-options: expected a YAML file of traversability map options");
+      map_path = argv[++i];
     } else {
       return Usage("unknown argument '" + a + "' (see --help)");
     }
@@ -84,6 +91,14 @@ int main(int argc, char** argv) {
   try {
     const terrain::World world(terrain::WorldOptions::LoadFile(world_path));
     const geometry::StereoRig rig = geometry::LoadStereoRigFile(rig_path);
+    traversability::MapOptions map_options;
+    if (!map_path.empty()) {
+      const config::ConfigNode m = config::ConfigNode::LoadFile(map_path);
+      if (m.Has("hazards") && m["hazards"].Has("map") && m["hazards"]["map"].Has("traversability"))
+        map_options = traversability::LoadMapOptions(m["hazards"]["map"]["traversability"]);
+      else
+        map_options = traversability::LoadMapOptions(m.Has("traversability") ? m["traversability"] : m);
+    }
     cv::setNumThreads(1);  // one core
     const auto& start = world.options().start;
     const double yaw = start.yaw_deg * M_PI / 180.0;
@@ -106,7 +121,7 @@ int main(int argc, char** argv) {
           images.push_back(renderer.RenderPair(world, rig, poses.back(), k + 1));
         }
       }
-      traversability::TraversabilityMap map(traversability::MapOptions{});
+      traversability::TraversabilityMap map(map_options);
       std::vector<double> total, cpu, rect, match, grid, points;
       for (int k = 0; k < pairs; ++k) {
         map.Recentre(poses[k].translation().x(), poses[k].translation().y());
