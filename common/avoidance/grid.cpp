@@ -17,6 +17,10 @@ std::string Grid::Problem() const {
   if (state.size() != n || goodness.size() != n || step_m.size() != n)
     return "cell arrays hold " + std::to_string(state.size()) + "/" + std::to_string(goodness.size()) + "/" +
            std::to_string(step_m.size()) + " values (expected " + std::to_string(n) + ")";
+  if (!tilt_deg.empty() && tilt_deg.size() != n)
+    return "tilt array holds " + std::to_string(tilt_deg.size()) + " values (expected 0 or " + std::to_string(n) + ")";
+  for (std::size_t k = 0; k < tilt_deg.size(); ++k)
+    if (!std::isfinite(tilt_deg[k])) return "cell " + std::to_string(k) + " has a non-finite tilt";
   for (std::size_t k = 0; k < n; ++k) {
     if (static_cast<int>(state[k]) > 3) return "cell " + std::to_string(k) + " has an unknown state";
     if (!std::isfinite(goodness[k]) || !std::isfinite(step_m[k])) return "cell " + std::to_string(k) + " is not finite";
@@ -159,6 +163,7 @@ Sweep SweepFootprint(const Grid& grid, const Footprint& fp, const std::vector<Po
             if (sw.first_unsafe_pose < 0) sw.first_unsafe_pose = static_cast<int>(n);
             if (sw.unsafe == 1 || grid.step_m[k] > sw.worst_step_m) {
               sw.worst_step_m = grid.step_m[k];
+              sw.worst_tilt_deg = grid.tilt_deg.empty() ? -1.0 : grid.tilt_deg[k];
               sw.worst_x = x;
               sw.worst_y = y;
             }

@@ -25,6 +25,9 @@ struct Grid {
   std::vector<CellClass> state;  // rows*cols
   std::vector<float> goodness;   // 0 (unsafe) .. 1 (ideal)
   std::vector<float> step_m;     // largest step height in the cell's patch
+  // Optional (empty: not known, as in a TRAVERSABILITY_MAP message): the tilt of each
+  // cell's plane, so that a refusal can say a slope, not only a step, was the hazard.
+  std::vector<float> tilt_deg;
 
   // "" when the sizes agree and the numbers are finite; otherwise what is wrong.
   std::string Problem() const;
@@ -75,6 +78,7 @@ struct Sweep {
   double min_goodness = 1.0;  // over known counted cells (unsafe = 0)
   // The worst unsafe cell: the highest step (or the first met if steps are equal).
   double worst_step_m = 0.0;
+  double worst_tilt_deg = -1.0;  // its tilt (< 0: the grid holds no tilts)
   double worst_x = 0.0, worst_y = 0.0;
   // The first path pose whose footprint meets an unsafe cell (-1: none), and what was met
   // before it: the lowest goodness of known cells and the unknown cells beyond the ring.

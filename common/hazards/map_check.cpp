@@ -123,7 +123,9 @@ SweptCheck CheckPathOnMap(const avoidance::Grid& grid, const avoidance::Footprin
     c.min_clearance_m = 0.0;
     c.worst_pose_index = s.first_unsafe_pose < 0 ? 0 : static_cast<std::size_t>(s.first_unsafe_pose);
     c.worst_pose = path[c.worst_pose_index];
-    c.detail = std::string(kMapZoneName) + ": step " + Fixed(s.worst_step_m) + " m at " + Fixed(s.worst_x) + "," +
+    c.detail = std::string(kMapZoneName) + ": step " + Fixed(s.worst_step_m) + " m" +
+               (s.worst_tilt_deg >= 0.0 ? ", tilt " + Fixed(s.worst_tilt_deg, 1) + " deg" : std::string()) + " at " +
+               Fixed(s.worst_x) + "," +
                Fixed(s.worst_y);
   } else if (s.UnknownFraction() > options.max_unknown_fraction) {
     c.verdict = Verdict::kUnknown;

@@ -93,10 +93,12 @@ class MapWorker {
     g.state.resize(cells.size());
     g.goodness.resize(cells.size());
     g.step_m.resize(cells.size());
+    g.tilt_deg.resize(cells.size());
     for (std::size_t k = 0; k < cells.size(); ++k) {
       g.state[k] = static_cast<avoidance::CellClass>(cells[k].state);
       g.goodness[k] = cells[k].goodness;
       g.step_m[k] = cells[k].step_m;
+      g.tilt_deg[k] = static_cast<float>(cells[k].tilt_rad * 180.0 / M_PI);
     }
     g.DistrustEdges();
     return g;

@@ -29,6 +29,24 @@ TEST(MapCheck, RockAheadIsUnsafeAndNamed) {
   EXPECT_EQ(short_step.verdict, Verdict::kSafe) << short_step.detail;
 }
 
+TEST(MapCheck, ASlopeTooSteepIsNamedByItsTilt) {
+  // A cell refused for its slope, not its step: with the cells' tilts known (the monitor's
+  // own map) the refusal gives both, so an operator does not read "step 0.05 m" alone.
+  Grid g = Grid::Filled(-5, -5, 0.2, 50, 50, CellClass::kSafe, 0.8f);
+  g.tilt_deg.assign(g.state.size(), 12.0f);
+  g.Paint(1.3, 0.0, 0.15, CellClass::kUnsafe, 0.0f, 0.05f);
+  g.tilt_deg[static_cast<std::size_t>(g.IndexAt(1.3, 0.0))] = 33.5f;
+  const auto c = CheckPathOnMap(g, avoidance::Footprint{}, Straight(0.6), MapCheckOptions{});
+  EXPECT_EQ(c.verdict, Verdict::kUnsafe);
+  EXPECT_NE(c.detail.find("hazard_map: step 0.05 m, tilt "), std::string::npos) << c.detail;
+  EXPECT_NE(c.detail.find(" deg at 1."), std::string::npos) << c.detail;
+  // A tilt array of the wrong size is a bad map: the check cannot decide.
+  g.tilt_deg.pop_back();
+  const auto bad = CheckPathOnMap(g, avoidance::Footprint{}, Straight(0.6), MapCheckOptions{});
+  EXPECT_EQ(bad.verdict, Verdict::kUnknown);
+  EXPECT_NE(bad.detail.find("tilt array holds"), std::string::npos) << bad.detail;
+}
+
 TEST(MapCheck, UnknownAheadCannotDecide) {
   const Grid u = Grid::Filled(-5, -5, 0.2, 50, 50, CellClass::kUnknown, 0.0f);
   const auto c = CheckPathOnMap(u, avoidance::Footprint{}, Straight(0.6), MapCheckOptions{});
