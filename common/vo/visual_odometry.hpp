@@ -228,9 +228,17 @@ struct VoOptions {
   // their difference under the pair's covariance. Beyond it the pair estimate is used and
   // the window restarts (20.06: the 99.7 % bound).
   double window_max_chi2 = 20.06;
-  // The window also estimates one disparity offset of the rig (right x, pixels; a zero-mean
-  // prior of this sigma), which scales every range and so every step; 0 = not estimated.
+  // The window also estimates one disparity offset of the rig (right x, pixels), which
+  // scales every range and so every step: one drive-wide estimate, a scalar filter fed by
+  // every full window (window.hpp), starting from a zero-mean prior of this sigma; 0 = not
+  // estimated. It may drift by window_disparity_offset_drift_px per full window, and is
+  // used only when it differs from zero by more than window_disparity_offset_min_sigmas
+  // sigmas, its sigma including window_disparity_offset_systematic_px (what the matcher's
+  // systematic disparity errors fake); else the window holds it at zero.
   double window_disparity_offset_sigma_px = 0.5;
+  double window_disparity_offset_drift_px = 0.0;
+  double window_disparity_offset_systematic_px = 0.05;
+  double window_disparity_offset_min_sigmas = 2.0;
   // Carried tracks closer than this to an older track are dropped (older tracks win), so
   // tracks stay spread; fresh corners keep feature_min_distance_px from every track.
   double track_min_distance_px = 10.0;

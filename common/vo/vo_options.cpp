@@ -59,7 +59,8 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "covariance_disparity_sigma_px", "covariance_cell_shift_sigma_px",
                   "covariance_cell_disparity_sigma_px",
                   "window_size", "window_max_iterations", "window_huber_sigmas", "window_max_chi2",
-                  "window_disparity_offset_sigma_px",
+                  "window_disparity_offset_sigma_px", "window_disparity_offset_drift_px",
+                  "window_disparity_offset_systematic_px", "window_disparity_offset_min_sigmas",
                   "track_min_distance_px", "keyframe_min_translation_m", "keyframe_min_rotation_deg"});
   node.Get("working_scale", o.working_scale, 0.0625, 1.0);
   node.Get("feature_harris_k", o.feature_harris_k, 0.0, 0.25);
@@ -127,6 +128,9 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   node.Get("window_huber_sigmas", o.window_huber_sigmas, 0.5, 100.0);
   node.Get("window_max_chi2", o.window_max_chi2, 0.0, kInf);
   node.Get("window_disparity_offset_sigma_px", o.window_disparity_offset_sigma_px, 0.0, 10.0);
+  node.Get("window_disparity_offset_drift_px", o.window_disparity_offset_drift_px, 0.0, 10.0);
+  node.Get("window_disparity_offset_systematic_px", o.window_disparity_offset_systematic_px, 0.0, 10.0);
+  node.Get("window_disparity_offset_min_sigmas", o.window_disparity_offset_min_sigmas, 0.0, 100.0);
   node.Get("track_min_distance_px", o.track_min_distance_px, 0.0, 1000.0);
   node.Get("keyframe_min_translation_m", o.keyframe_min_translation_m, 0.0, kInf);
   node.Get("keyframe_min_rotation_deg", o.keyframe_min_rotation_deg, 0.0, 180.0);

@@ -21,6 +21,7 @@ struct PointBlock {
   std::int64_t id = 0;
   Eigen::Vector3d X = Eigen::Vector3d::Zero();
   std::vector<std::pair<int, const WindowObservation*>> obs;  // (keyframe, observation)
+  std::vector<Eigen::Matrix4d> W;  // each observation's information
 };
 
 // Residual (measured minus predicted, left then right) and the Jacobians of the
@@ -53,6 +54,22 @@ Eigen::Matrix4d Information(const WindowObservation& z) {
   W.topLeftCorner<2, 2>() = z.Sigma_left.inverse();
   W.bottomRightCorner<2, 2>() = z.Sigma_right.inverse();
   return W;
+}
+
+// Information on the offset with which a full window holds it at the drive-wide value.
+constexpr double kHeldOffsetInfo = 1e8;
+
+// The offset filter's starting information: the zero-mean prior's.
+double FilterStartInfo(const WindowOptions& o) {
+  return o.disparity_offset_sigma_px > 0 ? 1.0 / (o.disparity_offset_sigma_px * o.disparity_offset_sigma_px) : 0.0;
+}
+
+// The offset the window uses: the filter's estimate when it differs from zero by more than
+// disparity_offset_min_sigmas of its sigma, the systematic part included; else zero.
+double AppliedOffset(const WindowOptions& o, double mean, double info) {
+  if (o.disparity_offset_min_sigmas <= 0 || info <= 0) return mean;
+  const double sigma = std::sqrt(1.0 / info + o.disparity_offset_systematic_px * o.disparity_offset_systematic_px);
+  return std::abs(mean) > o.disparity_offset_min_sigmas * sigma ? mean : 0.0;
 }
 
 // Huber: cost of a squared normalised residual e2, and the IRLS weight.
@@ -95,6 +112,11 @@ Eigen::Matrix<double, 6, 12> RelativePoseJacobian(const Eigen::Isometry3d& Ta, c
     J.col(i) = diff / (2 * h);
   }
   return J;
+}
+
+double SlidingWindow::disparity_offset_sigma_px() const {
+  const double info = offset_info_ > 0 ? offset_info_ : FilterStartInfo(o_);
+  return info > 0 ? 1.0 / std::sqrt(info) : 0.0;
 }
 
 void SlidingWindow::Reset() {
@@ -173,6 +195,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
         }
       }
     }
+    for (const auto& [i, z] : p.obs) p.W.push_back(Information(*z));
     used.push_back(std::move(p));
   }
   sol.points = static_cast<int>(used.size());
@@ -183,14 +206,15 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   auto cost_of = [&](const std::vector<Eigen::Isometry3d>& poses, const std::vector<Eigen::Vector3d>& X, double d) {
     double cost = 0;
     for (std::size_t j = 0; j < used.size(); ++j) {
-      for (const auto& [i, z] : used[j].obs) {
+      for (std::size_t k = 0; k < used[j].obs.size(); ++k) {
+        const auto& [i, z] = used[j].obs[k];
         Eigen::Vector4d r;
         if (!Linearise(rig, poses[static_cast<std::size_t>(i)], X[j], *z, &r, nullptr, nullptr)) {
           cost += 2 * o_.huber_sigmas * 100.0;  // behind a camera: a large, finite penalty
           continue;
         }
         r(2) -= d;
-        cost += HuberCost(r.dot(Information(*z) * r), o_.huber_sigmas, nullptr);
+        cost += HuberCost(r.dot(used[j].W[k] * r), o_.huber_sigmas, nullptr);
       }
     }
     return cost;
@@ -201,18 +225,21 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   std::vector<Eigen::Vector3d> X(used.size());
   for (std::size_t j = 0; j < used.size(); ++j) X[j] = used[j].X;
 
-  // The reduced variables: the free poses, then (optionally) the disparity offset.
-  // The offset is estimated only from a full window (a point then seen at several
-  // ranges); otherwise it is held at its last estimate. Its prior is centred on that
-  // estimate, with the information of the last solution (capped at that of a fifth of
-  // the prior sigma, since consecutive windows share observations).
+  // The reduced variables: the free poses, then (in a full window, where a point is seen
+  // at several ranges) the disparity offset. The window does not move the offset: it is
+  // held at the drive-wide value (AppliedOffset), so that one window's noise does not
+  // become the next one's offset; it is a variable only so that this window's estimate
+  // from its own data can be read off the reduced system and fed to the filter.
   const bool offset = o_.disparity_offset_sigma_px > 0 && M >= std::max(3, o_.max_frames);
-  const double offset_mean = disparity_offset_;
-  const double base_info = o_.disparity_offset_sigma_px > 0 ? 1.0 / (o_.disparity_offset_sigma_px * o_.disparity_offset_sigma_px) : 0.0;
-  const double prior_info = std::max(base_info, offset_prior_info_);
+  const double filter_mean = disparity_offset_;
+  const double filter_info = offset_info_ > 0 ? offset_info_ : FilterStartInfo(o_);
+  const double q = o_.disparity_offset_drift_px * o_.disparity_offset_drift_px;
+  const double prior_info = 1.0 / (1.0 / filter_info + q);
+  const double offset_mean = AppliedOffset(o_, filter_mean, prior_info);
+  const double hold_info = kHeldOffsetInfo;
   const int nc = dim + (offset ? 1 : 0);
   const int id = dim;  // index of the offset
-  double delta = disparity_offset_;
+  double delta = offset_mean;
   Eigen::MatrixXd S(nc, nc), Hcc(nc, nc);
   Eigen::VectorXd bs(nc), bc(nc);
   std::vector<Eigen::Matrix3d> Hxx_inv(used.size());
@@ -228,13 +255,14 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
       Eigen::Matrix3d Hxx = Eigen::Matrix3d::Zero();
       Eigen::Vector3d b = Eigen::Vector3d::Zero();
       Hcx[j].setZero(nc, 3);
-      for (const auto& [i, z] : used[j].obs) {
+      for (std::size_t n = 0; n < used[j].obs.size(); ++n) {
+        const auto& [i, z] = used[j].obs[n];
         Eigen::Vector4d r;
         Eigen::Matrix<double, 4, 6> Jp;
         Eigen::Matrix<double, 4, 3> Jx;
         if (!Linearise(rig, poses[static_cast<std::size_t>(i)], X[j], *z, &r, &Jp, &Jx)) continue;
         r(2) -= delta;
-        Eigen::Matrix4d W = Information(*z);
+        Eigen::Matrix4d W = used[j].W[n];
         double w = 1;
         HuberCost(r.dot(W * r), o_.huber_sigmas, &w);
         W *= w;
@@ -265,8 +293,8 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
       bx[j] = b;
     }
     if (offset) {
-      Hcc(id, id) += prior_info;
-      bc(id) -= prior_info * (delta - offset_mean);
+      Hcc(id, id) += hold_info;
+      bc(id) -= hold_info * (delta - offset_mean);
     }
     S = Hcc;
     S.diagonal() *= 1 + lambda;
@@ -279,7 +307,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   };
 
   auto total_cost = [&](const std::vector<Eigen::Isometry3d>& P, const std::vector<Eigen::Vector3d>& Xs, double d) {
-    const double prior = offset ? prior_info * (d - offset_mean) * (d - offset_mean) : 0.0;
+    const double prior = offset ? hold_info * (d - offset_mean) * (d - offset_mean) : 0.0;
     return cost_of(P, Xs, d) + prior;
   };
   double cost = total_cost(poses, X, delta);
@@ -347,9 +375,33 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   sol.T_prev_last = poses[static_cast<std::size_t>(a)].inverse() * poses[static_cast<std::size_t>(b)];
   sol.final_cost = cost;
   sol.variance_factor = cost / redundancy;
-  sol.disparity_offset_px = delta;
-  disparity_offset_ = delta;
-  if (offset && cov(id, id) > 0) offset_prior_info_ = std::min(25.0 * base_info, 1.0 / cov(id, id));
+  if (offset) {
+    // This window's offset from its data alone: one Gauss-Newton step from the solution
+    // with the hold taken out of the reduced system (the poses' uncertainty included).
+    // An observation stays in the window for max_frames windows, so each window adds
+    // 1/max_frames of its information to the drive-wide filter, which would otherwise
+    // count every observation that many times. The filter's prior is its last estimate
+    // with its information grown by one window's drift.
+    Eigen::MatrixXd S_data = S;
+    Eigen::VectorXd b_data = bs;
+    S_data(id, id) -= hold_info;
+    b_data(id) += hold_info * (delta - offset_mean);
+    const Eigen::LDLT<Eigen::MatrixXd> data(S_data);
+    if (data.info() == Eigen::Success) {
+      const Eigen::VectorXd step = data.solve(b_data);
+      Eigen::VectorXd e = Eigen::VectorXd::Zero(nc);
+      e(id) = 1.0;
+      const double var = data.solve(e)(id);
+      if (step.allFinite() && std::isfinite(var) && var > 0) {
+        sol.window_offset_px = delta + step(id);
+        sol.window_offset_sigma_px = std::sqrt(var);
+        const double add = 1.0 / (var * std::max(1, o_.max_frames));
+        disparity_offset_ = (prior_info * filter_mean + add * sol.window_offset_px) / (prior_info + add);
+        offset_info_ = prior_info + add;
+      }
+    }
+  }
+  sol.disparity_offset_px = AppliedOffset(o_, disparity_offset_, offset_info_ > 0 ? offset_info_ : FilterStartInfo(o_));
   sol.ok = true;
 
   for (int i = 0; i < M; ++i) frames_[static_cast<std::size_t>(i)].T_w = poses[static_cast<std::size_t>(i)];

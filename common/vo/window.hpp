@@ -42,10 +42,21 @@ struct WindowOptions {
   int max_iterations = 8;      // Levenberg-Marquardt iterations
   double huber_sigmas = 3.0;   // Huber threshold on an observation's normalised residual
   double tolerance = 1e-4;     // stop when the relative cost decrease is below this
-  // One disparity offset (right x, pixels) for every observation, estimated with the
-  // poses under a zero-mean prior of this sigma (the rig's calibration drifts with
-  // temperature; a disparity offset scales every range); 0 = not estimated.
+  // One disparity offset (right x, pixels) for every observation: a disparity offset
+  // scales every range. It is one drive-wide quantity: a scalar recursive filter starts
+  // from a zero-mean prior of this sigma and takes in every full window's estimate from
+  // that window's data alone (with 1/max_frames of its information: windows overlap);
+  // 0 = not estimated.
   double disparity_offset_sigma_px = 0.0;
+  // The filter's process noise: a random walk of this sigma per full window, so that a
+  // drift of the calibration (temperature) can still be followed.
+  double disparity_offset_drift_px = 0.0;
+  // The window uses the filter's estimate only when it differs from zero by more than
+  // disparity_offset_min_sigmas times sqrt(filter variance + systematic^2), else zero:
+  // `systematic` is the offset that the matcher's own systematic disparity errors can
+  // fake, which no number of windows averages away. min_sigmas 0 = always used.
+  double disparity_offset_systematic_px = 0.0;
+  double disparity_offset_min_sigmas = 0.0;
 };
 
 struct WindowSolution {
@@ -56,7 +67,10 @@ struct WindowSolution {
   double initial_cost = 0, final_cost = 0;
   // A-posteriori variance factor: final cost / (4 observations - 3 points - 6 poses).
   double variance_factor = 0;
-  double disparity_offset_px = 0;  // the estimated offset (0 when not estimated)
+  double disparity_offset_px = 0;  // the offset used from now on (AppliedOffset of the filter)
+  // This window's offset from its data alone (flat prior) and its sigma; 0 when the
+  // window did not estimate one.
+  double window_offset_px = 0, window_offset_sigma_px = 0;
   // The last keyframe's pose in the one before it, and the covariance of that delta
   // (x y z roll pitch yaw of the delta, as VoResult::covariance) from the inverse of the
   // reduced (Schur) normal matrix, in the units of the match covariances (not scaled by
@@ -75,6 +89,8 @@ class SlidingWindow {
   explicit SlidingWindow(WindowOptions options = {}) : o_(options) {}
 
   const WindowOptions& options() const { return o_; }
+  // New options for the next Refine (the window's contents and offset estimate stay).
+  void set_options(const WindowOptions& options) { o_ = options; }
   void Reset();
   // Appends a keyframe with its initial pose in the window frame; the oldest keyframe
   // leaves when the window is full (its pose is then the new fixed one).
@@ -83,7 +99,9 @@ class SlidingWindow {
   // Removes the newest keyframe and restores every pose to what it was before that
   // keyframe was added (a refinement that is refused leaves the window as it was).
   void PopNewest();
+  // The drive-wide offset filter's estimate and sigma.
   double disparity_offset_px() const { return disparity_offset_; }
+  double disparity_offset_sigma_px() const;
   int size() const { return static_cast<int>(frames_.size()); }
   const Eigen::Isometry3d& pose(int i) const { return frames_[static_cast<std::size_t>(i)].T_w; }
   std::int64_t frame_id(int i) const { return frames_[static_cast<std::size_t>(i)].id; }
@@ -105,8 +123,10 @@ class SlidingWindow {
   Frame dropped_;
   // Point estimates of the last refinement, by track id (a warm start).
   std::unordered_map<std::int64_t, Eigen::Vector3d> points_;
-  double disparity_offset_ = 0;  // the running estimate (held between windows)
-  double offset_prior_info_ = 0;
+  // The drive-wide offset filter: its estimate and information (0: not started, the
+  // prior's). Reset() keeps them: the rig is the same after a restart.
+  double disparity_offset_ = 0;
+  double offset_info_ = 0;
   // The newest pose's marginal covariance at the last refinement, for Cov(c).
   bool has_newest_cov_ = false;
   std::int64_t newest_id_ = 0;

@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 namespace rover::vo {
@@ -66,14 +68,16 @@ struct DriveResult {
   double end_error_m = 0;         // |composed - true| at the last frame
   double max_delta_error_m = 0;   // largest error of one published delta
   double last_offset_px = 0;
+  std::vector<double> offsets_px;  // the offset used after each refinement
+  std::vector<double> window_offsets_px;  // each full window's own estimate
+  double filter_offset_px = 0, filter_sigma_px = 0;  // the drive-wide filter at the end
 };
 
 // Runs a window of `size` keyframes along the scene (size 2: frame-to-frame), each new
 // pose started from the truth perturbed by a few centimetres and a few tenths of a
 // degree, and composes the published deltas as VO's users do.
 DriveResult Drive(const Scene& scene, int size, double sigma_px, double offset_px, double offset_sigma_px,
-                  unsigned seed) {
-  WindowOptions wo;
+                  unsigned seed, WindowOptions wo = {}) {
   wo.max_frames = size;
   wo.max_iterations = 15;
   wo.disparity_offset_sigma_px = offset_sigma_px;
@@ -99,7 +103,11 @@ DriveResult Drive(const Scene& scene, int size, double sigma_px, double offset_p
     last = window.pose(window.size() - 1);
     out.max_delta_error_m = std::max(out.max_delta_error_m, (delta.translation() - truth.translation()).norm());
     out.last_offset_px = w.disparity_offset_px;
+    out.offsets_px.push_back(w.disparity_offset_px);
+    if (w.window_offset_sigma_px > 0) out.window_offsets_px.push_back(w.window_offset_px);
   }
+  out.filter_offset_px = window.disparity_offset_px();
+  out.filter_sigma_px = window.disparity_offset_sigma_px();
   out.end_error_m = ((scene.poses[0] * last).translation() - scene.poses.back().translation()).norm();
   return out;
 }
@@ -128,6 +136,64 @@ TEST(SlidingWindow, EstimatesADisparityOffsetAndRemovesItsScaleError) {
   const DriveResult on = Drive(scene, 5, 0.1, 0.3, 0.5, 21);     // estimated
   EXPECT_NEAR(on.last_offset_px, 0.3, 0.05);
   EXPECT_LT(on.end_error_m, 0.5 * off.end_error_m) << on.end_error_m << " against " << off.end_error_m;
+}
+
+// The offset is one drive-wide estimate: over a drive it converges to an injected offset,
+// and to ~0 with none, instead of following each window's noise.
+TEST(SlidingWindow, DriveWideOffsetConvergesToTheInjectedOffsetAndToZeroWithNone) {
+  for (double injected : {0.0, 0.25}) {
+    for (unsigned seed : {41u, 42u, 43u}) {
+      const Scene scene(30, seed);
+      const DriveResult r = Drive(scene, 5, 0.3, injected, 0.5, seed);
+      ASSERT_GE(r.offsets_px.size(), 20u);
+      EXPECT_NEAR(r.filter_offset_px, injected, 0.04) << "seed " << seed;
+      EXPECT_LT(r.filter_sigma_px, 0.04);
+      // Converged, not following the windows: over the last ten windows it moves by a
+      // fraction of what their own estimates scatter.
+      const auto [lo, hi] = std::minmax_element(r.offsets_px.end() - 10, r.offsets_px.end());
+      const auto [wlo, whi] = std::minmax_element(r.window_offsets_px.end() - 10, r.window_offsets_px.end());
+      EXPECT_LT(*hi - *lo, 0.03) << "injected " << injected << " seed " << seed;
+      EXPECT_LT(*hi - *lo, 0.25 * (*whi - *wlo)) << "injected " << injected << " seed " << seed;
+    }
+  }
+}
+
+// Each window adds 1/window_size of its information (windows share observations): the
+// filter's sigma is then of the order of the spread of its estimates over noise draws,
+// not several times smaller.
+TEST(SlidingWindow, OffsetFilterSigmaMatchesTheSpreadOverNoiseDraws) {
+  const Scene scene(30, 51);
+  std::vector<double> est;
+  double sigma = 0;
+  for (unsigned seed = 60; seed < 72; ++seed) {
+    const DriveResult r = Drive(scene, 5, 0.3, 0.0, 0.5, seed);
+    est.push_back(r.filter_offset_px);
+    sigma += r.filter_sigma_px / 12;
+  }
+  double mean = 0, var = 0;
+  for (double e : est) mean += e / double(est.size());
+  for (double e : est) var += (e - mean) * (e - mean) / double(est.size() - 1);
+  const double spread = std::sqrt(var);
+  EXPECT_GT(sigma, 0.5 * spread) << "filter sigma " << sigma << " px, spread " << spread << " px";
+  EXPECT_LT(sigma, 6.0 * spread) << "filter sigma " << sigma << " px, spread " << spread << " px";
+}
+
+// An offset the filter cannot tell from the matcher's systematic disparity error is not
+// used (the window holds zero); a larger one is.
+TEST(SlidingWindow, OffsetWithinTheSystematicErrorIsNotUsed) {
+  WindowOptions wo;
+  wo.disparity_offset_systematic_px = 0.05;
+  wo.disparity_offset_min_sigmas = 2.0;
+  const Scene scene(25, 31);
+  const DriveResult small = Drive(scene, 5, 0.1, 0.06, 0.5, 31, wo);
+  EXPECT_NEAR(small.filter_offset_px, 0.06, 0.02);  // estimated ...
+  EXPECT_EQ(small.last_offset_px, 0.0);              // ... but not used
+  const DriveResult large = Drive(scene, 5, 0.1, 0.3, 0.5, 31, wo);
+  EXPECT_NEAR(large.last_offset_px, 0.3, 0.03);
+  EXPECT_EQ(large.last_offset_px, large.filter_offset_px);
+  // Used, the large offset's scale error is mostly removed.
+  const DriveResult ignored = Drive(scene, 5, 0.1, 0.3, 0.0, 31);
+  EXPECT_LT(large.end_error_m, 0.5 * ignored.end_error_m);
 }
 
 TEST(SlidingWindow, PopNewestRestoresThePosesAndTheOldestFrame) {
