@@ -289,6 +289,10 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
   // largest disparity matched in the interior of the nearby rows (where every disparity
   // can be matched) bounds what the border's pixels can truly have; a pixel left of that
   // bound is dropped. Rows with no interior match keep only what SGBM alone would match.
+  // So is every pixel within half a block (and the one pixel of SGBM's gradient prefilter)
+  // of the image's edges: its block runs off the image, SGBM matches a partial one there
+  // and its paths start there with nothing behind them; a top row of bland sand gave
+  // points a metre up, a shadow's edge leaving the image's right side 0.4 m.
   std::vector<int> min_column;
   if (o.drop_unseen_border) {
     const int h = disp16.rows, w = disp16.cols;
@@ -325,8 +329,10 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
     const float* mrx = r.map_rx.ptr<float>(v);
     const std::uint8_t* ep = edge.empty() ? nullptr : edge.ptr<std::uint8_t>(v);
     const std::uint8_t* bp = blank.empty() ? nullptr : blank.ptr<std::uint8_t>(v);
-    const int u_first = min_column.empty() ? 0 : min_column[v];
-    for (int u = 0; u < r.width; u += step) {
+    const int margin = min_column.empty() ? 0 : bs / 2 + 1;
+    if (v < margin || v >= r.height - margin) continue;
+    const int u_first = min_column.empty() ? 0 : std::max(margin, min_column[v]);
+    for (int u = 0; u < r.width - margin; u += step) {
       if (u < u_first) continue;  // its match may lie outside the right image
       if (dp[u] <= 0 || u - dp[u] / 16 < 0 || mlx[u] < -0.5f || mrx[u - dp[u] / 16] < -0.5f) continue;  // no match, or off the source images
       if (ep && ep[u]) continue;  // on a depth edge

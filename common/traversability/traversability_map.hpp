@@ -110,7 +110,8 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // padded right image: a pixel there whose true disparity exceeds its column has no match
   // in the right image, and SGBM's disparity there is wrong, too small (a point below the
   // ground). true: such pixels are dropped, bounded by the largest disparity matched in the
-  // interior of the nearby rows.
+  // interior of the nearby rows; so is every pixel within half a block (plus one) of the
+  // image's edges, whose matching block runs off the image.
   bool drop_unseen_border = false;
 };
 
