@@ -14,6 +14,9 @@ VisualOdometry::VisualOdometry(VoOptions options) : state_(std::make_unique<Stat
   w.max_iterations = options.window_max_iterations;
   w.huber_sigmas = options.window_huber_sigmas;
   w.disparity_offset_sigma_px = options.window_disparity_offset_sigma_px;
+  w.disparity_offset_drift_px = options.window_disparity_offset_drift_px;
+  w.disparity_offset_systematic_px = options.window_disparity_offset_systematic_px;
+  w.disparity_offset_min_sigmas = options.window_disparity_offset_min_sigmas;
   state_->window = SlidingWindow(w);
 }
 VisualOdometry::~VisualOdometry() = default;

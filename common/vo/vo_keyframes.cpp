@@ -50,12 +50,6 @@ std::vector<WindowObservation> Observations(const Pair& pair) {
 }
 
 void VisualOdometry::State::RestartWindow(Pair* pair) {
-  // The offset filter's drift and significance test (the constructor sets the rest).
-  WindowOptions wo = window.options();
-  wo.disparity_offset_drift_px = o.window_disparity_offset_drift_px;
-  wo.disparity_offset_systematic_px = o.window_disparity_offset_systematic_px;
-  wo.disparity_offset_min_sigmas = o.window_disparity_offset_min_sigmas;
-  window.set_options(wo);
   window.Reset();
   window.AddFrame(pair->frame_id, Eigen::Isometry3d::Identity(), Observations(*pair));
   T_w_last = Eigen::Isometry3d::Identity();

@@ -90,7 +90,6 @@ class SlidingWindow {
 
   const WindowOptions& options() const { return o_; }
   // New options for the next Refine (the window's contents and offset estimate stay).
-  void set_options(const WindowOptions& options) { o_ = options; }
   void Reset();
   // Appends a keyframe with its initial pose in the window frame; the oldest keyframe
   // leaves when the window is full (its pose is then the new fixed one).
