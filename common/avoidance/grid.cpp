@@ -116,9 +116,66 @@ std::vector<Pose2> SamplePath(const Pose2& start, double turn_rad, double distan
   return out;
 }
 
+namespace {
+
+// Unknown ground as wide as a hazard (SweepFootprint's hidden_patch_m): a morphological
+// opening of the unknown cells by a disc, evaluated where the sweep asks. Written by hand:
+// cv::morphologyEx would do the opening, but this library knows nothing of OpenCV, and the
+// sweep asks about a few dozen cells of a grid that moves with the rover.
+class HiddenGround {
+ public:
+  HiddenGround(const Grid& grid, const Footprint& fp, const Pose2& standing, double blind_margin_m,
+               double patch_m)
+      : grid_(grid), fp_(fp), standing_(standing), blind_margin_m_(blind_margin_m) {
+    const double r = 0.5 * patch_m / grid.cell_m;  // disc radius in cells
+    const int n = static_cast<int>(std::floor(r));
+    for (int di = -n; di <= n; ++di)
+      for (int dj = -n; dj <= n; ++dj)
+        if (di * di + dj * dj <= r * r + 1e-9) disc_.push_back({di, dj});
+  }
+
+  // Whether cell (i, j), on the grid or off it, lies in an all-unknown disc.
+  bool Hidden(long i, long j) const {
+    for (const auto& [di, dj] : disc_)
+      if (Deep(i - di, j - dj)) return true;
+    return false;
+  }
+
+ private:
+  bool Unknown(long i, long j) const {
+    const double x = grid_.origin_x + (i + 0.5) * grid_.cell_m, y = grid_.origin_y + (j + 0.5) * grid_.cell_m;
+    if (fp_.Contains(standing_, x, y, blind_margin_m_)) return false;  // under the rover, or its ring
+    if (i < 0 || j < 0 || i >= grid_.rows || j >= grid_.cols) return true;
+    return grid_.state[static_cast<std::size_t>(i) * grid_.cols + j] == CellClass::kUnknown;
+  }
+  // The disc centred on (i, j) is all unknown.
+  bool Deep(long i, long j) const {
+    for (const auto& [di, dj] : disc_)
+      if (!Unknown(i + di, j + dj)) return false;
+    return true;
+  }
+
+  const Grid& grid_;
+  const Footprint& fp_;
+  Pose2 standing_;
+  double blind_margin_m_;
+  std::vector<std::pair<int, int>> disc_;
+};
+
+}  // namespace
+
 Sweep SweepFootprint(const Grid& grid, const Footprint& fp, const std::vector<Pose2>& path,
-                     const Pose2& standing, double blind_margin_m) {
+                     const Pose2& standing, double blind_margin_m, double hidden_patch_m) {
   Sweep sw;
+  const bool find_hidden = hidden_patch_m > 0.0;
+  const HiddenGround hidden(grid, fp, standing, blind_margin_m, find_hidden ? hidden_patch_m : 0.0);
+  auto note_hidden = [&](long i, long j, double x, double y) {
+    if (!find_hidden || !hidden.Hidden(i, j)) return;
+    if (sw.hidden++ == 0) {
+      sw.hidden_x = x;
+      sw.hidden_y = y;
+    }
+  };
   const double cell = grid.cell_m;
   const double grow = 0.5 * cell;
   const double reach = std::hypot(0.5 * fp.length_m + std::abs(fp.center_forward_m), 0.5 * fp.width_m) + cell;
@@ -149,6 +206,7 @@ Sweep SweepFootprint(const Grid& grid, const Footprint& fp, const std::vector<Po
           ++sw.outside;
           blind ? ++sw.blind_unknown : ++sw.unknown;
           if (!blind && sw.first_unsafe_pose < 0) ++sw.clear_unknown;
+          if (!blind) note_hidden(i, j, x, y);
           continue;
         }
         const std::size_t k = static_cast<std::size_t>(i) * grid.cols + j;
@@ -156,6 +214,7 @@ Sweep SweepFootprint(const Grid& grid, const Footprint& fp, const std::vector<Po
           case CellClass::kUnknown:
             blind ? ++sw.blind_unknown : ++sw.unknown;
             if (!blind && sw.first_unsafe_pose < 0) ++sw.clear_unknown;
+            if (!blind) note_hidden(i, j, x, y);
             break;
           case CellClass::kUnsafe:
             ++sw.unsafe;

@@ -85,9 +85,21 @@ struct Sweep {
   int first_unsafe_pose = -1;
   double clear_min_goodness = 1.0;
   int clear_unknown = 0;
+  // Counted unknown cells beyond the ring that lie in unknown ground at least
+  // `hidden_patch_m` across (see SweepFootprint), and the first such cell's centre.
+  int hidden = 0;
+  double hidden_x = 0.0, hidden_y = 0.0;
   double UnknownFraction() const { return cells > 0 ? static_cast<double>(unknown) / cells : 0.0; }
 };
+//
+// hidden_patch_m > 0: also finds the unknown ground that could hide a hazard. A cell is
+// hidden when it lies in a disc of that diameter whose cells are all unknown (off the grid
+// counts as unknown), not counting as unknown the cells under the standing footprint and
+// in its blind ring: a rock there was in view from earlier stops and is wider than the
+// ring. Unknown cells in thin bands or specks (bland sand between textured grains, the
+// near edge of the view) cannot hold a rock that wide, whose visible flank the map would
+// rate; a patch that wide could.
 Sweep SweepFootprint(const Grid& grid, const Footprint& footprint, const std::vector<Pose2>& path,
-                     const Pose2& standing, double blind_margin_m);
+                     const Pose2& standing, double blind_margin_m, double hidden_patch_m = 0.0);
 
 }  // namespace rover::avoidance

@@ -22,16 +22,20 @@ void MapCheckOptions::Validate() const {
   if (!(max_unknown_fraction >= 0.0) || !(max_unknown_fraction <= 1.0))
     throw std::invalid_argument("hazards.map.max_unknown_fraction " + std::to_string(max_unknown_fraction) +
                                 " must be 0 to 1");
+  if (!(hidden_patch_m >= 0.0) || !(hidden_patch_m <= 5.0))
+    throw std::invalid_argument("hazards.map.hidden_patch_m " + std::to_string(hidden_patch_m) +
+                                " must be 0 to 5 m");
 }
 
 MapCheckOptions LoadMapCheckOptions(const config::ConfigNode& node, const std::vector<std::string>& extra_keys) {
   MapCheckOptions o;
-  std::vector<std::string> keys = {"enabled", "blind_margin_m", "max_unknown_fraction"};
+  std::vector<std::string> keys = {"enabled", "blind_margin_m", "max_unknown_fraction", "hidden_patch_m"};
   keys.insert(keys.end(), extra_keys.begin(), extra_keys.end());
   node.CheckKeys(keys);
   node.Get("enabled", o.enabled);
   node.Get("blind_margin_m", o.blind_margin_m, 0.0, 5.0);
   node.Get("max_unknown_fraction", o.max_unknown_fraction, 0.0, 1.0);
+  node.Get("hidden_patch_m", o.hidden_patch_m, 0.0, 5.0);
   return o;
 }
 
@@ -117,7 +121,8 @@ SweptCheck CheckPathOnMap(const avoidance::Grid& grid, const avoidance::Footprin
     c.detail = std::string(kMapZoneName) + ": the map is invalid: " + bad;
     return c;
   }
-  const avoidance::Sweep s = avoidance::SweepFootprint(grid, footprint, p, p.front(), options.blind_margin_m);
+  const avoidance::Sweep s =
+      avoidance::SweepFootprint(grid, footprint, p, p.front(), options.blind_margin_m, options.hidden_patch_m);
   if (s.unsafe > 0) {
     c.verdict = Verdict::kUnsafe;
     c.min_clearance_m = 0.0;
@@ -127,6 +132,11 @@ SweptCheck CheckPathOnMap(const avoidance::Grid& grid, const avoidance::Footprin
                (s.worst_tilt_deg >= 0.0 ? ", tilt " + Fixed(s.worst_tilt_deg, 1) + " deg" : std::string()) + " at " +
                Fixed(s.worst_x) + "," +
                Fixed(s.worst_y);
+  } else if (s.hidden > 0) {
+    c.verdict = Verdict::kUnknown;
+    c.detail = std::string(kMapZoneName) + ": unknown ground " + Fixed(options.hidden_patch_m) + " m across at " +
+               Fixed(s.hidden_x) + "," + Fixed(s.hidden_y) + " could hide a rock (" +
+               Fixed(100.0 * s.UnknownFraction(), 0) + " % of the cells the step crosses are unknown)";
   } else if (s.UnknownFraction() > options.max_unknown_fraction) {
     c.verdict = Verdict::kUnknown;
     c.detail = std::string(kMapZoneName) + ": unknown: " + Fixed(100.0 * s.UnknownFraction(), 0) +

@@ -103,11 +103,19 @@ bool VisualOdometry::State::CheckGeometry(Step* st) {
   Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
   for (int k : inliers) scatter += (st->corr[k].left - mean) * (st->corr[k].left - mean).transpose();
   scatter /= double(inliers.size());
-  const double spread = std::sqrt(std::max(0.0, scatter.selfadjointView<Eigen::Upper>().eigenvalues().minCoeff())) /
-                        std::min(c.width, c.height);
+  const Eigen::Vector2d ev = scatter.selfadjointView<Eigen::Upper>().eigenvalues().cwiseMax(0.0);
+  const double side = std::min(c.width, c.height);
+  const double spread = std::sqrt(ev.minCoeff()) / side;  // across the inliers' narrowest direction
+  const double patch = std::sqrt(std::sqrt(ev(0) * ev(1))) / side;  // the geometric mean of both
   if (spread < o.degenerate_min_spread) {
     return st->Refuse(VoStatus::kDegenerate, Format("inliers clustered: spread %.3f of the image (need %.3f)",
                                                     spread, o.degenerate_min_spread));
+  }
+  if (patch < o.degenerate_min_patch_spread) {
+    return st->Refuse(VoStatus::kDegenerate,
+                      Format("inliers clustered in one patch: spread %.3f by %.3f of the image", spread,
+                             std::sqrt(ev.maxCoeff()) / side) +
+                          Format(" (geometric mean %.3f, need %.3f)", patch, o.degenerate_min_patch_spread));
   }
   const Matrix6d& cov = st->res.covariance;
   const double sigma_t = std::sqrt(cov.topLeftCorner<3, 3>().trace());

@@ -53,7 +53,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "sanity_max_downslope_angle_deg",
                   "motion_min_overlap", "motion_max_translation_m", "motion_max_rotation_deg",
                   "shadow_check", "shadow_fixed_px", "shadow_min_predicted_px",
-                  "degenerate_min_spread", "degenerate_max_translation_sigma_m",
+                  "degenerate_min_spread", "degenerate_min_patch_spread", "degenerate_max_translation_sigma_m",
                   "degenerate_max_rotation_sigma_deg",
                   "covariance_cluster_grid", "covariance_field_sigma_px",
                   "covariance_disparity_sigma_px", "covariance_cell_shift_sigma_px",
@@ -116,6 +116,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   node.Get("shadow_fixed_px", o.shadow_fixed_px, 0.0, 1000.0);
   node.Get("shadow_min_predicted_px", o.shadow_min_predicted_px, 0.0, 10000.0);
   node.Get("degenerate_min_spread", o.degenerate_min_spread, 0.0, 1.0);
+  node.Get("degenerate_min_patch_spread", o.degenerate_min_patch_spread, 0.0, 1.0);
   node.Get("degenerate_max_translation_sigma_m", o.degenerate_max_translation_sigma_m, 0.0, kInf);
   node.Get("degenerate_max_rotation_sigma_deg", o.degenerate_max_rotation_sigma_deg, 0.0, 180.0);
   node.Get("covariance_cluster_grid", o.covariance_cluster_grid, 0, 16);

@@ -62,6 +62,50 @@ TEST(MapCheck, UnknownAheadCannotDecide) {
   EXPECT_EQ(CheckPathOnMap(u, avoidance::Footprint{}, Straight(0.6), go).verdict, Verdict::kSafe);
 }
 
+// Marks the cells whose centre lies in [x0, x1) x [y0, y1) unknown.
+void MarkUnknown(Grid* g, double x0, double x1, double y0, double y1) {
+  for (int i = 0; i < g->rows; ++i)
+    for (int j = 0; j < g->cols; ++j) {
+      const double x = g->CellCentreX(i), y = g->CellCentreY(j);
+      if (x >= x0 && x < x1 && y >= y0 && y < y1) g->state[static_cast<std::size_t>(i) * g->cols + j] = CellClass::kUnknown;
+    }
+}
+
+TEST(MapCheck, UnknownGroundWideEnoughToHideARockCannotDecide) {
+  MapCheckOptions o;
+  o.max_unknown_fraction = 0.5;
+  o.hidden_patch_m = 0.6;
+  // A 0.8 m square of unknown ground in the path, about a fifth of the cells the 1.2 m
+  // step crosses: under the fraction limit, but a rock over the step limit fits in it.
+  Grid block = Grid::Filled(-5, -5, 0.2, 50, 50, CellClass::kSafe, 0.8f);
+  MarkUnknown(&block, 1.6, 2.4, -0.4, 0.4);
+  const auto c = CheckPathOnMap(block, avoidance::Footprint{}, Straight(1.2), o);
+  EXPECT_EQ(c.verdict, Verdict::kUnknown) << c.detail;
+  EXPECT_NE(c.detail.find("hazard_map: unknown ground 0.60 m across at "), std::string::npos) << c.detail;
+  EXPECT_NE(c.detail.find("could hide a rock"), std::string::npos) << c.detail;
+  // The fraction alone lets the same step go.
+  MapCheckOptions fraction_only = o;
+  fraction_only.hidden_patch_m = 0.0;
+  EXPECT_EQ(CheckPathOnMap(block, avoidance::Footprint{}, Straight(1.2), fraction_only).verdict, Verdict::kSafe);
+
+  // Two bands, each two cells deep, across the whole path: twice the block's unknown
+  // cells, but neither wide enough to hold a rock the map would not see a flank of.
+  Grid bands = Grid::Filled(-5, -5, 0.2, 50, 50, CellClass::kSafe, 0.8f);
+  for (double x0 : {1.4, 2.0}) MarkUnknown(&bands, x0, x0 + 0.4, -1.0, 1.0);
+  const auto b = CheckPathOnMap(bands, avoidance::Footprint{}, Straight(1.2), o);
+  EXPECT_EQ(b.verdict, Verdict::kSafe) << b.detail;
+
+  // Unknown ground that joins the blind ring is not made wide by it: the ring (0.5 m
+  // beyond the standing body) was in view from earlier stops.
+  Grid ring = Grid::Filled(-5, -5, 0.2, 50, 50, CellClass::kSafe, 0.8f);
+  MarkUnknown(&ring, -1.3, 1.6, -1.2, 1.2);  // the body, its ring, and a 0.3 m band beyond
+  const auto r = CheckPathOnMap(ring, avoidance::Footprint{}, Straight(0.6), o);
+  EXPECT_EQ(r.verdict, Verdict::kSafe) << r.detail;
+  // A wider patch beyond the ring is not.
+  MarkUnknown(&ring, 1.2, 2.0, -1.2, 1.2);
+  EXPECT_EQ(CheckPathOnMap(ring, avoidance::Footprint{}, Straight(0.6), o).verdict, Verdict::kUnknown);
+}
+
 TEST(MapCheck, BadInputIsUnknown) {
   Grid g = Grid::Filled(-5, -5, 0.2, 50, 50, CellClass::kSafe, 0.8f);
   EXPECT_EQ(CheckPathOnMap(g, avoidance::Footprint{}, {}, MapCheckOptions{}).verdict, Verdict::kUnknown);
@@ -70,6 +114,9 @@ TEST(MapCheck, BadInputIsUnknown) {
   MapCheckOptions bad;
   bad.max_unknown_fraction = 2;
   EXPECT_THROW(bad.Validate(), std::invalid_argument);
+  MapCheckOptions negative;
+  negative.hidden_patch_m = -0.1;
+  EXPECT_THROW(negative.Validate(), std::invalid_argument);
 }
 
 TEST(MapCheck, TiltLimitTighterThanTheRoversIsNamed) {
