@@ -38,12 +38,17 @@ double Progress(const GoalField* field, const Pose2& pose, const std::vector<Pos
 // Judges one candidate: `step` is the motion driven, `look` the motion judged (step first).
 void Judge(const Grid& grid, const GoalField* field, const Pose2& pose, double gx, double gy, const VoteOptions& o,
            const std::vector<Pose2>& step, const std::vector<Pose2>& look, Candidate* c) {
-  c->step_sweep = SweepFootprint(grid, o.footprint, step, pose, o.blind_margin_m);
+  c->step_sweep = SweepFootprint(grid, o.footprint, step, pose, o.blind_margin_m, o.unknown.hidden_patch_m);
+  const UnknownVerdict unknown = JudgeUnknown(c->step_sweep, o.unknown);
   const Sweep& s = c->step_sweep;
   if (s.unsafe > 0) {
     c->vetoed = true;
     c->why = "step " + Fixed(s.worst_step_m) + " m at " + Fixed(s.worst_x) + "," + Fixed(s.worst_y);
-  } else if (s.UnknownFraction() > o.max_unknown_fraction) {
+  } else if (unknown == UnknownVerdict::kHidden) {
+    c->vetoed = true;
+    c->why = "unknown ground " + Fixed(o.unknown.hidden_patch_m) + " m across at " + Fixed(s.hidden_x) + "," +
+             Fixed(s.hidden_y) + " could hide a rock";
+  } else if (unknown == UnknownVerdict::kTooMuch) {
     c->vetoed = true;
     c->why = Fixed(100.0 * s.UnknownFraction(), 0) + " % of the cells crossed are unknown";
   } else if (c->kind == Candidate::Kind::kTurn && c->turn_rad * o.previous_turn_rad < 0.0) {
@@ -88,8 +93,10 @@ void VoteOptions::Validate() const {
   if (max_point_turn_rad > M_PI) throw std::invalid_argument("avoidance: max_point_turn_rad must be <= pi");
   if (!std::isfinite(previous_turn_rad)) throw std::invalid_argument("avoidance: previous_turn_rad must be finite");
   if (num_arcs < 1 || num_arcs > 101) throw std::invalid_argument("avoidance: num_arcs must be 1 to 101");
-  if (!(blind_margin_m >= 0.0) || !(backup_m >= 0.0) || !(max_unknown_fraction >= 0.0) ||
-      !(max_unknown_fraction <= 1.0) || !(unknown_goodness >= 0.0) || !(unknown_goodness <= 1.0) ||
+  const auto fraction = [](double f) { return f >= 0.0 && f <= 1.0; };
+  if (!(blind_margin_m >= 0.0) || !(backup_m >= 0.0) || !fraction(unknown.max_fraction) ||
+      !fraction(unknown.max_scattered_fraction) || !(unknown.hidden_patch_m >= 0.0) ||
+      !std::isfinite(unknown.hidden_patch_m) || !(unknown_goodness >= 0.0) || !(unknown_goodness <= 1.0) ||
       !(goodness_weight >= 0.0) || !(goal_weight >= 0.0) || !(turn_penalty >= 0.0))
     throw std::invalid_argument("avoidance: margins, fractions and weights must be finite and >= 0 (fractions <= 1)");
 }

@@ -9,8 +9,9 @@
 // when nothing else is allowed, backing up.
 //
 // A candidate is vetoed when the step itself (not the look-ahead) crosses an unsafe cell,
-// or when more than max_unknown_fraction of the new cells it crosses are unknown (outside
-// the blind ring round the rover, see grid.hpp). A look-ahead that meets an unsafe cell
+// or when the unknown cells it crosses (outside the blind ring round the rover) are too
+// many by `unknown` (JudgeUnknown in grid.hpp: their share, and whether they could hide a
+// rock). A look-ahead that meets an unsafe cell
 // leaves the candidate allowed, but its goodness is the worst cell met before that times
 // the fraction of the look-ahead that is clear, and its goal vote counts only the clear
 // part: arcs that run further through open ground win before the rover is close to an
@@ -42,7 +43,7 @@ struct VoteOptions {
   // driven is its first max_turn_rad. A rover whose way on lies 40 deg off sees it.
   double max_point_turn_rad = 90.0 * 3.14159265358979323846 / 180.0;
   double blind_margin_m = 0.5;
-  double max_unknown_fraction = 0.2;   // of the step's new cells beyond the blind ring
+  UnknownLimits unknown;               // the step's new cells beyond the blind ring (grid.hpp)
   double unknown_goodness = 0.5;       // what an unknown cell in the look-ahead is worth
   double goodness_weight = 1.0;
   double goal_weight = 1.0;

@@ -164,6 +164,18 @@ class HiddenGround {
 
 }  // namespace
 
+UnknownVerdict JudgeUnknown(const Sweep& s, const UnknownLimits& l) {
+  const double f = s.UnknownFraction();
+  if (f <= l.max_fraction) return UnknownVerdict::kAcceptable;
+  if (l.hidden_patch_m <= 0.0) return UnknownVerdict::kTooMuch;
+  if (s.hidden > 0) return UnknownVerdict::kHidden;
+  return f > UnknownLimit(l) ? UnknownVerdict::kTooMuch : UnknownVerdict::kAcceptable;
+}
+
+double UnknownLimit(const UnknownLimits& l) {
+  return l.hidden_patch_m > 0.0 ? std::max(l.max_fraction, l.max_scattered_fraction) : l.max_fraction;
+}
+
 Sweep SweepFootprint(const Grid& grid, const Footprint& fp, const std::vector<Pose2>& path,
                      const Pose2& standing, double blind_margin_m, double hidden_patch_m) {
   Sweep sw;

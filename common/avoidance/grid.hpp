@@ -102,4 +102,19 @@ struct Sweep {
 Sweep SweepFootprint(const Grid& grid, const Footprint& footprint, const std::vector<Pose2>& path,
                      const Pose2& standing, double blind_margin_m, double hidden_patch_m = 0.0);
 
+// How much unknown ground a step may cross. More than max_fraction of its counted cells
+// unknown is too much when hidden_patch_m is 0, or when some of it lies in unknown ground
+// hidden_patch_m across (room for a rock over the step limit). Unknown cells in specks and
+// thin bands only, which cannot hide such a rock, are too much over max_scattered_fraction.
+struct UnknownLimits {
+  double max_fraction = 0.2;
+  double hidden_patch_m = 0.0;  // 0: the fraction alone
+  double max_scattered_fraction = 0.5;
+};
+enum class UnknownVerdict { kAcceptable, kHidden, kTooMuch };
+// `s` was swept with limits.hidden_patch_m.
+UnknownVerdict JudgeUnknown(const Sweep& s, const UnknownLimits& limits);
+// The fraction over which a kTooMuch sweep was judged.
+double UnknownLimit(const UnknownLimits& limits);
+
 }  // namespace rover::avoidance

@@ -16,8 +16,11 @@ std::string First(std::initializer_list<std::string> problems) {
 
 std::string Finite(const char* field, const double* v, int n) {
   for (int i = 0; i < n; ++i)
-    if (!std::isfinite(v[i]))
-      return std::string(field) + (n > 1 ? "[" + std::to_string(i) + "]" : "") + " is not finite";
+    if (!std::isfinite(v[i])) {
+      std::string where(field);
+      if (n > 1) where.append("[").append(std::to_string(i)).append("]");
+      return where.append(" is not finite");
+    }
   return "";
 }
 std::string Finite(const char* field, double v) { return Finite(field, &v, 1); }
@@ -96,7 +99,10 @@ std::string Problem(const rover_msgs::traversability_map_t& m) {
                 Finite("footprint_center_forward_m", m.footprint_center_forward_m),
                 Finite("blind_margin_m", m.blind_margin_m), NonNegative("blind_margin_m", m.blind_margin_m),
                 Finite("max_unknown_fraction", m.max_unknown_fraction),
-                NonNegative("max_unknown_fraction", m.max_unknown_fraction)});
+                NonNegative("max_unknown_fraction", m.max_unknown_fraction),
+                Finite("hidden_patch_m", m.hidden_patch_m), NonNegative("hidden_patch_m", m.hidden_patch_m),
+                Finite("max_scattered_unknown_fraction", m.max_scattered_unknown_fraction),
+                NonNegative("max_scattered_unknown_fraction", m.max_scattered_unknown_fraction)});
 }
 
 std::string Problem(const rover_msgs::hazard_status_t& m) {

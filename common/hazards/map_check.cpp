@@ -22,6 +22,9 @@ void MapCheckOptions::Validate() const {
   if (!(max_unknown_fraction >= 0.0) || !(max_unknown_fraction <= 1.0))
     throw std::invalid_argument("hazards.map.max_unknown_fraction " + std::to_string(max_unknown_fraction) +
                                 " must be 0 to 1");
+  if (!(max_scattered_unknown_fraction >= 0.0) || !(max_scattered_unknown_fraction <= 1.0))
+    throw std::invalid_argument("hazards.map.max_scattered_unknown_fraction " +
+                                std::to_string(max_scattered_unknown_fraction) + " must be 0 to 1");
   if (!(hidden_patch_m >= 0.0) || !(hidden_patch_m <= 5.0))
     throw std::invalid_argument("hazards.map.hidden_patch_m " + std::to_string(hidden_patch_m) +
                                 " must be 0 to 5 m");
@@ -29,13 +32,15 @@ void MapCheckOptions::Validate() const {
 
 MapCheckOptions LoadMapCheckOptions(const config::ConfigNode& node, const std::vector<std::string>& extra_keys) {
   MapCheckOptions o;
-  std::vector<std::string> keys = {"enabled", "blind_margin_m", "max_unknown_fraction", "hidden_patch_m"};
+  std::vector<std::string> keys = {"enabled", "blind_margin_m", "max_unknown_fraction", "hidden_patch_m",
+                                   "max_scattered_unknown_fraction"};
   keys.insert(keys.end(), extra_keys.begin(), extra_keys.end());
   node.CheckKeys(keys);
   node.Get("enabled", o.enabled);
   node.Get("blind_margin_m", o.blind_margin_m, 0.0, 5.0);
   node.Get("max_unknown_fraction", o.max_unknown_fraction, 0.0, 1.0);
   node.Get("hidden_patch_m", o.hidden_patch_m, 0.0, 5.0);
+  node.Get("max_scattered_unknown_fraction", o.max_scattered_unknown_fraction, 0.0, 1.0);
   return o;
 }
 
@@ -132,16 +137,22 @@ SweptCheck CheckPathOnMap(const avoidance::Grid& grid, const avoidance::Footprin
                (s.worst_tilt_deg >= 0.0 ? ", tilt " + Fixed(s.worst_tilt_deg, 1) + " deg" : std::string()) + " at " +
                Fixed(s.worst_x) + "," +
                Fixed(s.worst_y);
-  } else if (s.hidden > 0) {
-    c.verdict = Verdict::kUnknown;
-    c.detail = std::string(kMapZoneName) + ": unknown ground " + Fixed(options.hidden_patch_m) + " m across at " +
-               Fixed(s.hidden_x) + "," + Fixed(s.hidden_y) + " could hide a rock (" +
-               Fixed(100.0 * s.UnknownFraction(), 0) + " % of the cells the step crosses are unknown)";
-  } else if (s.UnknownFraction() > options.max_unknown_fraction) {
-    c.verdict = Verdict::kUnknown;
-    c.detail = std::string(kMapZoneName) + ": unknown: " + Fixed(100.0 * s.UnknownFraction(), 0) +
-               " % of the cells the step crosses are unknown (limit " +
-               Fixed(100.0 * options.max_unknown_fraction, 0) + " %)";
+    return c;
+  }
+  const std::string share = Fixed(100.0 * s.UnknownFraction(), 0) + " % of the cells the step crosses are unknown";
+  switch (avoidance::JudgeUnknown(s, options.Unknown())) {
+    case avoidance::UnknownVerdict::kAcceptable: break;
+    case avoidance::UnknownVerdict::kHidden:
+      c.verdict = Verdict::kUnknown;
+      c.detail = std::string(kMapZoneName) + ": unknown ground " + Fixed(options.hidden_patch_m) + " m across at " +
+                 Fixed(s.hidden_x) + "," + Fixed(s.hidden_y) + " could hide a rock (" + share + ", limit " +
+                 Fixed(100.0 * options.max_unknown_fraction, 0) + " %)";
+      break;
+    case avoidance::UnknownVerdict::kTooMuch:
+      c.verdict = Verdict::kUnknown;
+      c.detail = std::string(kMapZoneName) + ": unknown: " + share + " (limit " +
+                 Fixed(100.0 * avoidance::UnknownLimit(options.Unknown()), 0) + " %)";
+      break;
   }
   return c;
 }

@@ -13,11 +13,12 @@
 // the previous stops, and a rock taller than the step limit is wider than the ring
 // (MER-like rocks are 2.5 times as wide as they are tall), so part of it is seen.
 //
-// hidden_patch_m > 0 judges unknown ground by its shape as well: a step that crosses
-// unknown ground at least that wide (a disc of it, beyond the ring) is UNKNOWN whatever
-// the fraction, since a rock over the step limit could sit there unseen; scattered
-// unknown cells and thin bands cannot hold one, and the fraction limit then only catches a
-// map that knows too little overall.
+// hidden_patch_m > 0 judges unknown ground by its shape as well. A step over
+// max_unknown_fraction unknown is UNKNOWN when some of that ground is at least
+// hidden_patch_m wide (a disc of it, beyond the ring), since a rock over the step limit
+// could sit there unseen; unknown cells in specks and thin bands cannot hold one (bland
+// sand between textured grains, the bottom edge of the view), and only more than
+// max_scattered_unknown_fraction of them is UNKNOWN: the map knows too little.
 #pragma once
 
 #include "avoidance/grid.hpp"
@@ -37,11 +38,16 @@ struct MapCheckOptions {
   double blind_margin_m = 0.5;
   double max_unknown_fraction = 0.2;
   double hidden_patch_m = 0.0;  // 0: the fraction alone
+  double max_scattered_unknown_fraction = 0.5;  // with hidden_patch_m: specks and thin bands
+  avoidance::UnknownLimits Unknown() const {
+    return {max_unknown_fraction, hidden_patch_m, max_scattered_unknown_fraction};
+  }
   // Throws std::invalid_argument naming the field.
   void Validate() const;
 };
 
-// Reads `enabled`, `blind_margin_m`, `max_unknown_fraction`, `hidden_patch_m` of a `hazards.map` section;
+// Reads `enabled`, `blind_margin_m`, `max_unknown_fraction`, `hidden_patch_m`,
+// `max_scattered_unknown_fraction` of a `hazards.map` section;
 // `extra_keys` are keys the caller reads itself (the grid's own options).
 MapCheckOptions LoadMapCheckOptions(const config::ConfigNode& node, const std::vector<std::string>& extra_keys = {});
 
@@ -51,7 +57,7 @@ inline constexpr const char* kMapZoneName = "hazard_map";
 // Judges the swept path (first pose: where the rover stands) on `grid`: UNSAFE with detail
 // "hazard_map: step 0.35 m at 4.10,0.30" (the worst unsafe cell), UNKNOWN with detail
 // "hazard_map: unknown: 45 % of the cells the step crosses are unknown (limit 20 %)" or
-// "hazard_map: unknown ground 0.60 m across at 4.10,0.30 could hide a rock", otherwise
+// "hazard_map: unknown ground 0.60 m across at 4.10,0.30 could hide a rock (...)", otherwise
 // SAFE. An empty or non-finite path, or a bad grid, is UNKNOWN.
 SweptCheck CheckPathOnMap(const avoidance::Grid& grid, const avoidance::Footprint& footprint,
                           const std::vector<Pose2>& path, const MapCheckOptions& options);

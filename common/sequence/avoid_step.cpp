@@ -59,7 +59,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.step_m = StepLength();
   o.max_turn_rad = MaxTurn();
   o.blind_margin_m = map_->blind_margin_m;
-  o.max_unknown_fraction = map_->max_unknown_fraction;
+  o.unknown = {map_->max_unknown_fraction, map_->hidden_patch_m, map_->max_scattered_unknown_fraction};
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
   o.previous_turn_rad = last_turn_rad_;
   // Near the goal (inside the look-ahead) with a clear line to it: steer straight at it as
@@ -74,9 +74,11 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
                                                  turn ? 0.0 : direct.step.distance_m, 0.0);
     const double bearing = std::atan2(goto_.target.y() - p.y, goto_.target.x() - p.x);
     const auto line = avoidance::SamplePath(here, geometry::WrapAngle(bearing - p.yaw), remaining, 0.0);
-    const auto s = avoidance::SweepFootprint(map_->grid, o.footprint, step_path, here, o.blind_margin_m);
+    const auto s =
+        avoidance::SweepFootprint(map_->grid, o.footprint, step_path, here, o.blind_margin_m, o.unknown.hidden_patch_m);
     const auto l = avoidance::SweepFootprint(map_->grid, o.footprint, line, here, o.blind_margin_m);
-    if (s.unsafe == 0 && s.UnknownFraction() <= o.max_unknown_fraction && l.unsafe == 0) {
+    if (s.unsafe == 0 && avoidance::JudgeUnknown(s, o.unknown) == avoidance::UnknownVerdict::kAcceptable &&
+        l.unsafe == 0) {
       *step = direct.step;
       detail_ = "avoid: the goal is in reach and the way to it clear: steering straight at it (" +
                 Fixed(remaining) + " m to go)";

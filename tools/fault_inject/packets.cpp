@@ -370,6 +370,8 @@ Bytes Sample(const std::string& channel, std::int64_t now) {
     m.footprint_length_m = 1.6;
     m.footprint_width_m = 1.2;
     m.max_unknown_fraction = 0.2;
+    m.hidden_patch_m = 0.6;
+    m.max_scattered_unknown_fraction = 0.5;
     return Encode(m);
   }
   throw std::invalid_argument("no sample for channel " + channel);

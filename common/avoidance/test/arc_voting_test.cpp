@@ -171,6 +171,35 @@ TEST(ArcVoting, UnknownAheadAllowsOnlyTheBlindRing) {
   EXPECT_GT(vetoed, 10);
 }
 
+// Unknown ground wide enough to hide a rock, straight ahead: with hidden_patch_m the
+// straight arc is vetoed by it, though its share of the step's cells is under the limit
+// for scattered unknown cells; a step round the patch is chosen. Under the fraction limit
+// the straight arc wins.
+TEST(ArcVoting, UnknownGroundWideEnoughToHideARockIsSteeredRound) {
+  Grid g = Open();
+  g.Paint(1.7, 0.0, 0.4, CellClass::kUnknown, 0.0f, 0.0f);  // 0.8 m across, the ring its near edge
+  VoteOptions o;
+  o.unknown.max_fraction = 0.5;
+  const Choice fraction_only = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o);
+  ASSERT_TRUE(fraction_only.found);
+  const auto straight = [](const Choice& c) -> const Candidate* {
+    for (const auto& k : c.candidates)
+      if (k.kind == Candidate::Kind::kArc && k.curvature_per_m == 0.0) return &k;
+    return nullptr;
+  };
+  ASSERT_NE(straight(fraction_only), nullptr);
+  EXPECT_FALSE(straight(fraction_only)->vetoed) << straight(fraction_only)->why;
+
+  o.unknown = {0.05, 0.6, 0.5};
+  const Choice c = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o);
+  ASSERT_NE(straight(c), nullptr);
+  EXPECT_TRUE(straight(c)->vetoed);
+  EXPECT_NE(straight(c)->why.find("unknown ground 0.60 m across at "), std::string::npos) << straight(c)->why;
+  ASSERT_TRUE(c.found);
+  EXPECT_EQ(c.best.step_sweep.hidden, 0);
+  EXPECT_FALSE(c.best.kind == Candidate::Kind::kArc && c.best.curvature_per_m == 0.0);
+}
+
 // A rock just off the rover's nose, a little to its left, and the goal ahead and 45 deg to
 // the right: every step ahead crosses the rock, and so does a turn left. The way on is a
 // turn right of more than one step's 18 deg; it is judged whole and its first part driven.

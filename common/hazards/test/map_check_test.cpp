@@ -73,20 +73,21 @@ void MarkUnknown(Grid* g, double x0, double x1, double y0, double y1) {
 
 TEST(MapCheck, UnknownGroundWideEnoughToHideARockCannotDecide) {
   MapCheckOptions o;
-  o.max_unknown_fraction = 0.5;
+  o.max_unknown_fraction = 0.1;
   o.hidden_patch_m = 0.6;
+  o.max_scattered_unknown_fraction = 0.5;
   // A 0.8 m square of unknown ground in the path, about a fifth of the cells the 1.2 m
-  // step crosses: under the fraction limit, but a rock over the step limit fits in it.
+  // step crosses: a rock over the step limit fits in it.
   Grid block = Grid::Filled(-5, -5, 0.2, 50, 50, CellClass::kSafe, 0.8f);
   MarkUnknown(&block, 1.6, 2.4, -0.4, 0.4);
   const auto c = CheckPathOnMap(block, avoidance::Footprint{}, Straight(1.2), o);
   EXPECT_EQ(c.verdict, Verdict::kUnknown) << c.detail;
   EXPECT_NE(c.detail.find("hazard_map: unknown ground 0.60 m across at "), std::string::npos) << c.detail;
   EXPECT_NE(c.detail.find("could hide a rock"), std::string::npos) << c.detail;
-  // The fraction alone lets the same step go.
-  MapCheckOptions fraction_only = o;
-  fraction_only.hidden_patch_m = 0.0;
-  EXPECT_EQ(CheckPathOnMap(block, avoidance::Footprint{}, Straight(1.2), fraction_only).verdict, Verdict::kSafe);
+  // Under max_unknown_fraction, the same patch is tolerated, as by the fraction alone.
+  MapCheckOptions loose = o;
+  loose.max_unknown_fraction = 0.3;
+  EXPECT_EQ(CheckPathOnMap(block, avoidance::Footprint{}, Straight(1.2), loose).verdict, Verdict::kSafe);
 
   // Two bands, each two cells deep, across the whole path: twice the block's unknown
   // cells, but neither wide enough to hold a rock the map would not see a flank of.
@@ -94,6 +95,18 @@ TEST(MapCheck, UnknownGroundWideEnoughToHideARockCannotDecide) {
   for (double x0 : {1.4, 2.0}) MarkUnknown(&bands, x0, x0 + 0.4, -1.0, 1.0);
   const auto b = CheckPathOnMap(bands, avoidance::Footprint{}, Straight(1.2), o);
   EXPECT_EQ(b.verdict, Verdict::kSafe) << b.detail;
+  // The fraction alone refuses them; and more than max_scattered_unknown_fraction of
+  // scattered unknown cells is a map that knows too little.
+  MapCheckOptions fraction_only = o;
+  fraction_only.hidden_patch_m = 0.0;
+  const auto f = CheckPathOnMap(bands, avoidance::Footprint{}, Straight(1.2), fraction_only);
+  EXPECT_EQ(f.verdict, Verdict::kUnknown);
+  EXPECT_NE(f.detail.find("(limit 10 %)"), std::string::npos) << f.detail;
+  MapCheckOptions strict = o;
+  strict.max_scattered_unknown_fraction = 0.2;
+  const auto t = CheckPathOnMap(bands, avoidance::Footprint{}, Straight(1.2), strict);
+  EXPECT_EQ(t.verdict, Verdict::kUnknown);
+  EXPECT_NE(t.detail.find("(limit 20 %)"), std::string::npos) << t.detail;
 
   // Unknown ground that joins the blind ring is not made wide by it: the ring (0.5 m
   // beyond the standing body) was in view from earlier stops.
@@ -117,6 +130,9 @@ TEST(MapCheck, BadInputIsUnknown) {
   MapCheckOptions negative;
   negative.hidden_patch_m = -0.1;
   EXPECT_THROW(negative.Validate(), std::invalid_argument);
+  MapCheckOptions scattered;
+  scattered.max_scattered_unknown_fraction = 1.5;
+  EXPECT_THROW(scattered.Validate(), std::invalid_argument);
 }
 
 TEST(MapCheck, TiltLimitTighterThanTheRoversIsNamed) {
