@@ -235,6 +235,35 @@ bool Template::ExtractSubpixel(const cv::Mat& band, double x, double y, int side
   return true;
 }
 
+bool Template::ExtractWarped(const cv::Mat& band, double x, double y, const Eigen::Matrix2d& warp, int side) {
+  const int h = side / 2;
+  // The template's corners bound where it samples.
+  const double reach_x = h * (std::abs(warp(0, 0)) + std::abs(warp(0, 1)));
+  const double reach_y = h * (std::abs(warp(1, 0)) + std::abs(warp(1, 1)));
+  if (!std::isfinite(reach_x) || !std::isfinite(reach_y) || x - reach_x < 0 || y - reach_y < 0 ||
+      x + reach_x + 1 >= band.cols || y + reach_y + 1 >= band.rows) {
+    return false;
+  }
+  n = side;
+  pixels.resize(static_cast<std::size_t>(n) * n);
+  double ss = 0;
+  for (int r = 0; r < n; ++r) {
+    for (int c = 0; c < n; ++c) {
+      const double sx = x + warp(0, 0) * (c - h) + warp(0, 1) * (r - h);
+      const double sy = y + warp(1, 0) * (c - h) + warp(1, 1) * (r - h);
+      const int ix = static_cast<int>(std::floor(sx)), iy = static_cast<int>(std::floor(sy));
+      const float fx = static_cast<float>(sx - ix), fy = static_cast<float>(sy - iy);
+      const float* a = band.ptr<float>(iy) + ix;
+      const float* b = band.ptr<float>(iy + 1) + ix;
+      const float v = (1 - fx) * (1 - fy) * a[0] + fx * (1 - fy) * a[1] + (1 - fx) * fy * b[0] + fx * fy * b[1];
+      pixels[static_cast<std::size_t>(r) * n + c] = v;
+      ss += static_cast<double>(v) * v;
+    }
+  }
+  sum_sq = ss;
+  return true;
+}
+
 // Cross term sum(ab) for K adjacent centres on one row, the K sums held in registers
 // (vectorised across the centres). Two sets (even and odd template rows) keep twice as
 // many independent add chains in flight.

@@ -29,6 +29,10 @@ struct Template {
   bool Extract(const cv::Mat& band, int x, int y, int side);
   // Bilinear, at a sub-pixel centre.
   bool ExtractSubpixel(const cv::Mat& band, double x, double y, int side);
+  // Bilinear, at a sub-pixel centre, template pixel (dx, dy) from the centre taken at
+  // centre + warp * (dx, dy) in the band: the patch as a camera that sees it distorted by
+  // warp^-1 would see it.
+  bool ExtractWarped(const cv::Mat& band, double x, double y, const Eigen::Matrix2d& warp, int side);
 };
 
 // Scores for centres (x0..x0+count-1, y). All centres must leave the template inside

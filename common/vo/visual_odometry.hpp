@@ -130,6 +130,13 @@ struct VoOptions {
   double track_stereo_margin_px = 3.0;
   // Chi-square gate (3 dof) on |Pc - prior(Pp)| against Sigma_c + R Sigma_p R^T + prior.
   double track_max_chi2 = 16.27;
+  // Warp the finest level's template by the change of perspective the prior predicts for
+  // the ground round the feature (the plane of the reference rover's x and y axes), so
+  // that a tracked point does not lag the true one as the rover nears it. Off: the
+  // template is cut unwarped, and a point tracked over several pairs drifts (measured on
+  // rendered drives: -0.07 px at age 3, -0.22 px at age 7), which the window reads as a
+  // disparity offset.
+  bool track_warp_template = false;
   // Minimum tracked features for an estimate.
   int min_tracked = 12;
   // Minimum stereo-matched features in a pair for it to be used.

@@ -44,7 +44,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "track_window_sigmas", "track_min_radius_px", "track_max_radius_px",
                   "track_pyramid_levels", "track_coarse_radius_px", "track_coarse_template_px",
                   "track_min_score",
-                  "track_stereo_margin_px", "track_max_chi2", "min_tracked", "min_features",
+                  "track_stereo_margin_px", "track_max_chi2", "track_warp_template", "min_tracked", "min_features",
                   "ransac_iterations", "ransac_sample_size", "ransac_inlier_px", "ransac_seed",
                   "min_inliers",
                   "ml_max_iterations", "ml_tolerance", "ml_outlier_chi2",
@@ -92,6 +92,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   node.Get("track_min_score", o.track_min_score, -1.0, 1.0);
   node.Get("track_stereo_margin_px", o.track_stereo_margin_px, 0.0, 1000.0);
   node.Get("track_max_chi2", o.track_max_chi2, 0.0, kInf);
+  node.Get("track_warp_template", o.track_warp_template);
   node.Get("min_tracked", o.min_tracked, 3, 100000);
   node.Get("min_features", o.min_features, 3, 100000);
   node.Get("ransac_iterations", o.ransac_iterations, 1, 1000000);

@@ -118,6 +118,10 @@ struct Prediction {
   Eigen::Matrix3d Sigma;  // the point's covariance plus the prior's
   Eigen::Vector2d u;      // its pixel in the new left image
   int radius = 0;         // the search half-window (pixels at the working resolution)
+  // track_warp_template: new-image pixel offsets to reference-image ones round the
+  // feature, for the ground plane through it (none: the template is cut unwarped).
+  bool warped = false;
+  Eigen::Matrix2d warp = Eigen::Matrix2d::Identity();
 };
 
 // One call of Process: its inputs, the result being filled, and what each stage hands to

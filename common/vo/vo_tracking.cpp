@@ -51,6 +51,26 @@ bool Predict(const Feature& f, const PriorMap& prior, const Pair& c, const VoOpt
   return true;
 }
 
+// The change of perspective the prior predicts round the feature, for the ground plane
+// through it (the reference rover's x and y axes): d(new pixel) = A d(reference pixel),
+// and p->warp = A^-1. Left unwarped when either view sees that plane edge-on or the
+// change is implausible (a scale outside 1/2 to 2).
+void PredictWarp(const Feature& f, const PriorMap& prior, const Pair& ref, const Pair& c, Prediction* p) {
+  Eigen::Vector2d u;
+  Eigen::Matrix<double, 2, 3> J_ref, J_cur;
+  if (!ref.rig.left->Project(f.P, &u, &J_ref) || !c.rig.left->Project(p->P, &u, &J_cur)) return;
+  Eigen::Matrix<double, 3, 2> ground = Eigen::Matrix<double, 3, 2>::Zero();
+  ground(0, 0) = ground(1, 1) = 1.0;
+  const Eigen::Matrix2d D_ref = J_ref * ground;
+  const Eigen::Matrix2d D_cur = J_cur * prior.R_cp * ground;
+  if (std::abs(D_ref.determinant()) < 1e-9 * D_ref.squaredNorm()) return;
+  const Eigen::Matrix2d A = D_cur * D_ref.inverse();
+  const double det = A.determinant();
+  if (!std::isfinite(det) || det < 0.25 || det > 4.0) return;
+  p->warp = A.inverse();
+  p->warped = true;
+}
+
 }  // namespace
 
 bool VisualOdometry::State::CheckPriorMotion(Step* st) {
@@ -83,6 +103,7 @@ void VisualOdometry::State::TrackFeatures(Step* st) {
   for (const int fi : TopToBottom(n, at)) {
     Prediction p;
     if (!Predict(ref.features[fi], prior, c, o, &p)) continue;
+    if (o.track_warp_template) PredictWarp(ref.features[fi], prior, ref, c, &p);
     ++st->predicted_inside;
     ok[fi] = TrackFeature(*st, fi, p, levels, &stereo_ms, &tracked[fi],
                           Windowed() ? &st->carried[fi] : nullptr, &fixed[fi]);
@@ -161,8 +182,10 @@ bool VisualOdometry::State::SearchTracked(const Feature& f, const Pair& from, co
     const int side = l == 0 ? o.match_template_px : o.track_coarse_template_px;
     // A track's position is sub-pixel: its template is cut at the nearest pixel (not
     // resampled, which would blur it a little more every pair) and the match moved by
-    // the same sub-pixel offset afterwards.
-    if (!tmpl.Extract(from.left_band[l], tx, ty, side)) {
+    // the same sub-pixel offset afterwards; a warped one is resampled at the position.
+    const bool warp = l == 0 && p.warped;
+    if (!(warp ? tmpl.ExtractWarped(from.left_band[0], f.left.x(), f.left.y(), p.warp, side)
+               : tmpl.Extract(from.left_band[l], tx, ty, side))) {
       ok = false;
       break;
     }
@@ -183,7 +206,7 @@ bool VisualOdometry::State::SearchTracked(const Feature& f, const Pair& from, co
   if (!m.ok || m.score < o.track_min_score) return false;
   correlator.Iterate(tmpl, to.left_band[0], o.match_subpixel_iterations, o.match_covariance_scale,
                      o.match_min_sigma_px, &m);
-  m.position += f.left - Eigen::Vector2d(std::lround(f.left.x()), std::lround(f.left.y()));
+  if (!p.warped) m.position += f.left - Eigen::Vector2d(std::lround(f.left.x()), std::lround(f.left.y()));
   *out = m;
   return true;
 }

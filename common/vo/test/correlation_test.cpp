@@ -104,6 +104,47 @@ TEST(PseudoNormalizedCorrelation, VO3_SubpixelPeakOnShiftedTextureUnderATenthPix
   EXPECT_LT(worst, 0.25);
 }
 
+// VO-6 track_warp_template: a patch seen foreshortened and sheared in the new image (as the
+// ground is when the rover nears it) is found where it is by the warped template, and
+// matched better than by the unwarped one.
+TEST(PseudoNormalizedCorrelation, VO6_WarpedTemplateFindsAForeshortenedPatch) {
+  const cv::Mat a = BandPass(Texture(96, 96, 0, 0, 11), 0.8, 9);
+  Eigen::Matrix2d W;  // new-image offsets to reference-image ones
+  W << 1.15, 0.12, 0.0, 1.25;
+  const Eigen::Vector2d c1(47.3, 46.6), c2(45.0, 48.0);
+  // b(p) = a(c1 + W (p - c2)).
+  const Eigen::Vector2d o = c1 - W * c2;
+  const cv::Mat M = (cv::Mat_<double>(2, 3) << W(0, 0), W(0, 1), o.x(), W(1, 0), W(1, 1), o.y());
+  cv::Mat b;
+  cv::warpAffine(a, b, M, a.size(), cv::INTER_CUBIC | cv::WARP_INVERSE_MAP, cv::BORDER_REFLECT);
+
+  Template identity, subpixel;
+  ASSERT_TRUE(identity.ExtractWarped(a, c1.x(), c1.y(), Eigen::Matrix2d::Identity(), 11));
+  ASSERT_TRUE(subpixel.ExtractSubpixel(a, c1.x(), c1.y(), 11));
+  for (std::size_t i = 0; i < identity.pixels.size(); ++i) EXPECT_NEAR(identity.pixels[i], subpixel.pixels[i], 1e-6);
+
+  Correlator correlator;
+  auto find = [&](const Template& t, MatchResult* m) {
+    int bx, by;
+    float score;
+    ASSERT_TRUE(correlator.SearchWindow(t, b, 39, 51, 42, 54, &bx, &by, &score));
+    *m = Correlator::Refine(t, b, bx, by, 0.01, 0.0);
+    ASSERT_TRUE(m->ok);
+  };
+  Template warped, plain;
+  ASSERT_TRUE(warped.ExtractWarped(a, c1.x(), c1.y(), W, 11));
+  ASSERT_TRUE(plain.ExtractSubpixel(a, c1.x(), c1.y(), 11));
+  MatchResult mw, mp;
+  find(warped, &mw);
+  find(plain, &mp);
+  EXPECT_GT(mw.score, 0.97);
+  EXPECT_GT(mw.score, mp.score + 0.05);
+  EXPECT_LT((mw.position - c2).norm(), 0.1);
+  // A warp that reaches outside the image is refused, not read out of bounds.
+  Template outside;
+  EXPECT_FALSE(outside.ExtractWarped(a, 4.0, 48.0, W, 11));
+}
+
 TEST(PseudoNormalizedCorrelation, VO3_BiquadraticRecoversAnExactQuadraticPeak) {
   // f = 1 - 0.3 (x-0.2)^2 - 0.1 (y+0.3)^2 - 0.05 (x-0.2)(y+0.3): peak at (0.2, -0.3).
   float s[3][3];
