@@ -257,9 +257,10 @@ std::string InstanceName(const std::string& program) {
   for (char& c : name) {
     if (c < 0x21 || c > 0x7e) c = '_';
   }
-  const std::string pid = ":" + std::to_string(::getpid());
+  std::string pid(":");
+  pid.append(std::to_string(::getpid()));
   if (name.size() + pid.size() > kMaxSenderLength) name.resize(kMaxSenderLength - pid.size());
-  return name + pid;
+  return name.append(pid);
 }
 
 std::string PrintableName(const std::string& name) {
