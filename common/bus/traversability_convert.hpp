@@ -13,9 +13,7 @@ namespace rover::bus {
 struct MapRules {
   avoidance::Footprint footprint;
   double blind_margin_m = 0.5;
-  double max_unknown_fraction = 0.2;
-  double hidden_patch_m = 0.0;
-  double max_scattered_unknown_fraction = 0.5;
+  avoidance::UnknownLimits unknown;
 };
 
 inline rover_msgs::traversability_map_t MapToMsg(const avoidance::Grid& g, const MapRules& rules,
@@ -37,9 +35,9 @@ inline rover_msgs::traversability_map_t MapToMsg(const avoidance::Grid& g, const
   m.footprint_width_m = rules.footprint.width_m;
   m.footprint_center_forward_m = rules.footprint.center_forward_m;
   m.blind_margin_m = rules.blind_margin_m;
-  m.max_unknown_fraction = rules.max_unknown_fraction;
-  m.hidden_patch_m = rules.hidden_patch_m;
-  m.max_scattered_unknown_fraction = rules.max_scattered_unknown_fraction;
+  m.max_unknown_fraction = rules.unknown.max_fraction;
+  m.hidden_patch_m = rules.unknown.hidden_patch_m;
+  m.max_scattered_unknown_fraction = rules.unknown.max_scattered_fraction;
   return m;
 }
 
@@ -60,9 +58,7 @@ inline avoidance::Grid GridFromMsg(const rover_msgs::traversability_map_t& m, Ma
     rules->footprint.width_m = m.footprint_width_m;
     rules->footprint.center_forward_m = m.footprint_center_forward_m;
     rules->blind_margin_m = m.blind_margin_m;
-    rules->max_unknown_fraction = m.max_unknown_fraction;
-    rules->hidden_patch_m = m.hidden_patch_m;
-    rules->max_scattered_unknown_fraction = m.max_scattered_unknown_fraction;
+    rules->unknown = {m.max_unknown_fraction, m.hidden_patch_m, m.max_scattered_unknown_fraction};
   }
   return g;
 }

@@ -59,7 +59,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.step_m = StepLength();
   o.max_turn_rad = MaxTurn();
   o.blind_margin_m = map_->blind_margin_m;
-  o.unknown = {map_->max_unknown_fraction, map_->hidden_patch_m, map_->max_scattered_unknown_fraction};
+  o.unknown = map_->unknown;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
   o.previous_turn_rad = last_turn_rad_;
   // Near the goal (inside the look-ahead) with a clear line to it: steer straight at it as

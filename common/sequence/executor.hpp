@@ -163,9 +163,7 @@ struct TraversabilityMap {  // traversability_map_t (hazard_monitor)
   avoidance::Grid grid;
   avoidance::Footprint footprint;  // what the monitor sweeps along a step
   double blind_margin_m = 0.5;
-  double max_unknown_fraction = 0.2;
-  double hidden_patch_m = 0.0;  // avoidance::UnknownLimits
-  double max_scattered_unknown_fraction = 0.5;
+  avoidance::UnknownLimits unknown;  // how much unknown ground a step may cross
 };
 
 struct HazardReply {  // hazard_reply_t

@@ -77,9 +77,7 @@ int main(int argc, char** argv) {
     bus::MapRules rules;
     rules.footprint = hazards::GridFootprint(options.footprint);
     rules.blind_margin_m = map_check.blind_margin_m;
-    rules.max_unknown_fraction = map_check.max_unknown_fraction;
-    rules.hidden_patch_m = map_check.hidden_patch_m;
-    rules.max_scattered_unknown_fraction = map_check.max_scattered_unknown_fraction;
+    rules.unknown = map_check.Unknown();
     avoidance::Grid grid;  // the map as the checks see it: the worker's newest
     int64_t last_frame_id = -1;
     if (map) grid = map->Initial();

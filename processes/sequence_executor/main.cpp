@@ -334,9 +334,7 @@ int main(int argc, char** argv) {
           t.grid = bus::GridFromMsg(m, &rules);
           t.footprint = rules.footprint;
           t.blind_margin_m = rules.blind_margin_m;
-          t.max_unknown_fraction = rules.max_unknown_fraction;
-          t.hidden_patch_m = rules.hidden_patch_m;
-          t.max_scattered_unknown_fraction = rules.max_scattered_unknown_fraction;
+          t.unknown = rules.unknown;
           executor.OnTraversabilityMap(t);
           flush();
         }, 4);
