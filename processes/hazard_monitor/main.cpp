@@ -177,8 +177,9 @@ int main(int argc, char** argv) {
           4);
     }
     // A query that comes while a pair is being mapped waits for that map (answered on a
-    // later tick): the step is judged on a map holding every pair taken before it.
-    std::vector<rover_msgs::hazard_query_t> held;
+    // later tick): the step is judged on a map holding every pair taken before it. Pairs
+    // that come after the query do not hold it back.
+    std::vector<std::pair<rover_msgs::hazard_query_t, std::uint64_t>> held;  // and the pairs it waits for
     auto answer = [&](const rover_msgs::hazard_query_t& q) {
       rover_msgs::hazard_reply_t r{};
       r.utime = proc.now();
@@ -222,13 +223,15 @@ int main(int argc, char** argv) {
     };
     auto answer_held = [&] {
       if (take_map()) publish_map();
-      if (map && map->Busy()) return;
-      for (const auto& q : held) answer(q);
-      held.clear();
+      std::erase_if(held, [&](const auto& h) {
+        if (map && !map->Mapped(h.second)) return false;
+        answer(h.first);
+        return true;
+      });
     };
     proc.bus().Subscribe<rover_msgs::hazard_query_t>(
         channels::kHazardQuery, [&](const rover_msgs::hazard_query_t& q) {
-          held.push_back(q);
+          held.emplace_back(q, map ? map->Added() : 0);
           answer_held();
         });
 

@@ -3,8 +3,10 @@
 // monitor's bus loop must not wait for it, or its status and replies would stall and
 // the messages queued behind it would be judged against a stale rover clock. Pairs are
 // mapped in the order they came; the bus loop takes each finished grid (Take) and holds
-// back any hazard query that arrives while a pair is still being mapped (Busy), so a step
-// is always judged on a map that includes every pair taken before it was asked about.
+// back a hazard query until every pair added before it is mapped (Added, Mapped), so a
+// step is always judged on a map that includes every pair taken before it was asked
+// about; pairs added later, or a flood of them, do not hold it back (at most kMaxQueued
+// wait; older ones are dropped).
 #pragma once
 
 #include "avoidance/grid.hpp"
@@ -44,17 +46,34 @@ class MapWorker {
   MapWorker(const MapWorker&) = delete;
   MapWorker& operator=(const MapWorker&) = delete;
 
+  // Queues a pair. When more than kMaxQueued wait (pairs come faster than they are
+  // mapped: a flood, or a starved machine), the oldest waiting one is dropped, so the
+  // queue, and the wait of a query held for it, stay bounded.
+  static constexpr std::size_t kMaxQueued = 2;
   void Add(Job job) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
+      ++added_;
+      if (jobs_.size() >= kMaxQueued) {
+        notes_ += "hazard_monitor: STEREO_FRAME " + std::to_string(jobs_.front().frame_id) +
+                  " dropped: pairs come faster than they are mapped\n";
+        jobs_.pop_front();
+        ++done_;
+      }
       jobs_.push_back(std::move(job));
     }
     cv_.notify_all();
   }
-  // A pair queued, being mapped, or mapped and not yet taken.
-  bool Busy() const {
+  // How many pairs have been added: a query asked now waits for these (Mapped).
+  std::uint64_t Added() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return !jobs_.empty() || running_ || fresh_;
+    return added_;
+  }
+  // Whether the first `added` pairs are mapped (or dropped) and the grid holding them
+  // has been taken. Pairs added later do not hold the answer back.
+  bool Mapped(std::uint64_t added) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return done_ >= added && !fresh_;
   }
   // The newest grid when one was finished since the last call; `notes` gets one line per
   // mapped or refused pair.
@@ -75,6 +94,7 @@ class MapWorker {
   // source restarted, a new site frame). The next Take gives the empty grid.
   void Clear() {
     std::lock_guard<std::mutex> lock(mutex_);
+    done_ += jobs_.size();
     jobs_.clear();
     ++generation_;
     grid_ = initial_;
@@ -115,7 +135,6 @@ class MapWorker {
         if (stop_) return;
         job = std::move(jobs_.front());
         jobs_.pop_front();
-        running_ = true;
         generation = generation_;
       }
       std::string note;
@@ -138,7 +157,7 @@ class MapWorker {
       }
       avoidance::Grid grid = ok ? ToGrid(map_) : avoidance::Grid{};
       std::lock_guard<std::mutex> lock(mutex_);
-      running_ = false;
+      ++done_;
       notes_ += note;
       if (generation != generation_) {
         notes_ += "hazard_monitor: frame " + std::to_string(job.frame_id) + " dropped: the map was cleared meanwhile\n";
@@ -156,8 +175,9 @@ class MapWorker {
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   std::deque<Job> jobs_;
-  bool running_ = false, fresh_ = false, stop_ = false;
+  bool fresh_ = false, stop_ = false;
   std::uint64_t generation_ = 0;  // Clear() counts up
+  std::uint64_t added_ = 0, done_ = 0;  // pairs added; pairs mapped, dropped or cleared
   avoidance::Grid grid_;
   int64_t last_frame_id_ = -1;
   std::string notes_;
