@@ -10,21 +10,20 @@ namespace rover::vo {
 
 namespace {
 
-// The refined delta's covariance: the pair's VO-13 covariance, not shrunk by the window
-// (tracked features share errors over pairs that the window's own inverse normal matrix
-// does not see: it was overconfident on rendered sand, NEES 35), plus the previous pose's
-// correction (WindowSolution::correction), scaled like the fit part of VO-13 (the larger
-// of the variance and cluster factors). The window's model of that correction sees match
-// noise only; it is scaled by how much the pair's full VO-13 covariance exceeds its own
-// match-noise model, tr(H C) / 6. False when the window's delta disagrees with the pair's
-// beyond max_chi2.
+// The refined delta's covariance, built as VO-13 builds a pair's: the window's own
+// (WindowSolution::covariance: its inverse reduced normal matrix, with the previous pose's
+// correction, in the units of the match covariances) scaled by the pair's variance factor
+// (the larger of s0^2 and the cluster factor), plus the errors the pair's features share,
+// which no fit sees (SharedErrors). Before the tracker warped its templates (VO-6,
+// track_warp_template) tracked features carried a lag that every pair of a track shared,
+// and this covariance was overconfident on rendered sand (NEES 35); the pair's own
+// covariance was published instead, and with the lag gone that one overstated the error
+// (rendered NEES 2.6-3.4). False when the window's delta disagrees with the pair's beyond
+// max_chi2 (chi-square of their difference under the pair's covariance).
 bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
                        const Eigen::Isometry3d& T_ref_cur, const Matrix6d& pair_cov, double max_chi2,
                        Matrix6d* out) {
-  const double factor = std::max({1.0, u.variance_factor, u.cluster_factor});
-  const Eigen::LDLT<Matrix6d> Hp(u.inverse_normal);
-  const double excess = Hp.info() == Eigen::Success ? Hp.solve(pair_cov).trace() / 6.0 : factor;
-  Matrix6d cov = pair_cov + std::max(factor, excess) * w.correction;
+  Matrix6d cov = std::max(u.variance_factor, u.cluster_factor) * w.covariance + u.shared;
   cov = 0.5 * (cov + cov.transpose()).eval();
   const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
   const geometry::Vector6d b = geometry::XyzRpyFromPose(T_ref_cur);
