@@ -138,8 +138,8 @@ struct VoOptions {
   // that a tracked point does not lag the true one as the rover nears it. Off: the
   // template is cut unwarped, and a point tracked over several pairs drifts (measured on
   // rendered drives: -0.07 px at age 3, -0.22 px at age 7), which the window reads as a
-  // disparity offset.
-  bool track_warp_template = false;
+  // disparity offset. On by default (configs/vo.yaml has the figures).
+  bool track_warp_template = true;
   // Minimum tracked features for an estimate.
   int min_tracked = 12;
   // Minimum stereo-matched features in a pair for it to be used.
