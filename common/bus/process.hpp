@@ -54,7 +54,8 @@ class Process {
   void SetHealth(std::int8_t state, std::string detail);
 
   // Loops until SIGINT/SIGTERM or Stop(): dispatches messages, publishes the heartbeat
-  // once a wall second, and calls `on_tick` every `tick_ms` of wall time.
+  // once a wall second, and calls `on_tick` every `tick_ms` of wall time, after handling
+  // the messages already received (up to 50 ms of them), so a tick after a stall sees them.
   void Run(const std::function<void()>& on_tick = nullptr, int tick_ms = 50);
   void Stop() { stop_requested_ = true; }
   bool stopping() const;

@@ -142,6 +142,34 @@ TEST(Bus, NonFiniteAndUnknownValuesAreDropped) {
   EXPECT_NE(bus.last_drop().find("source 7 is unknown"), std::string::npos) << bus.last_drop();
 }
 
+// A tick after a stall must see what arrived during it: the messages already received are
+// handled before the tick (the executor's heartbeat watch once judged live peers lost
+// from heartbeats still waiting in the socket on a starved machine).
+TEST(Process, ATickSeesEveryMessageReceivedBeforeIt) {
+  const char* argv[] = {"test_process", "--lcm-url", "memq://"};
+  rover::bus::Process proc("test_process", "test", 3, const_cast<char**>(argv));
+  int peer_beats = 0;
+  proc.bus().Subscribe<rover_msgs::heartbeat_t>(rover::channels::kHeartbeat,
+                                                [&](const rover_msgs::heartbeat_t& hb) {
+                                                  if (hb.process == "peer") ++peer_beats;
+                                                });
+  // memq is per bus instance: the peer's heartbeats are published on the process's bus.
+  for (int i = 0; i < 5; ++i) {
+    rover_msgs::heartbeat_t hb{};
+    hb.process = "peer";
+    hb.seq = i;
+    proc.bus().Publish(rover::channels::kHeartbeat, hb);
+  }
+  int seen_at_first_tick = -1;
+  proc.Run(
+      [&] {
+        seen_at_first_tick = peer_beats;
+        proc.Stop();
+      },
+      25);
+  EXPECT_EQ(seen_at_first_tick, 5);
+}
+
 TEST(Bus, PublishStampsPublisherAndCountPerChannel) {
   Bus bus("memq://");
   bus.set_publisher("state_estimator");
