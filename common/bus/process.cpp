@@ -170,10 +170,13 @@ void Process::PublishHeartbeat() {
   bus_.Publish(channels::kHeartbeat, hb);
 }
 
-namespace {
-// Longest a tick waits for the messages already received to be handled (Run).
-constexpr int kDrainBeforeTickMs = 50;
-}  // namespace
+int Process::HandleReceived(int max_ms) {
+  using Clock = std::chrono::steady_clock;
+  const auto until = Clock::now() + std::chrono::milliseconds(max_ms);
+  int handled = 0;
+  while (Clock::now() < until && bus_.Handle(0)) ++handled;
+  return handled;
+}
 
 void Process::Run(const std::function<void()>& on_tick, int tick_ms) {
   using Clock = std::chrono::steady_clock;
@@ -187,14 +190,6 @@ void Process::Run(const std::function<void()>& on_tick, int tick_ms) {
                                  std::chrono::duration<double>(heartbeat_period_s_));
     }
     if (on_tick && now >= next_tick) {
-      // Everything already received is handled first, so that the tick judges from the
-      // latest state: after a stall (a process starved on a busy machine) messages wait
-      // in the socket, and a tick ahead of them sees the peers' heartbeats as old as the
-      // stall (the executor called live peers lost). Bounded, so a flood cannot hold the
-      // tick back for long.
-      const auto drain_until = Clock::now() + std::chrono::milliseconds(kDrainBeforeTickMs);
-      while (Clock::now() < drain_until && bus_.Handle(0)) {
-      }
       on_tick();
       next_tick = now + std::chrono::milliseconds(tick_ms);
     }

@@ -54,10 +54,14 @@ class Process {
   void SetHealth(std::int8_t state, std::string detail);
 
   // Loops until SIGINT/SIGTERM or Stop(): dispatches messages, publishes the heartbeat
-  // once a wall second, and calls `on_tick` every `tick_ms` of wall time, after handling
-  // the messages already received (up to 50 ms of them), so a tick after a stall sees them.
+  // once a wall second, and calls `on_tick` every `tick_ms` of wall time.
   void Run(const std::function<void()>& on_tick = nullptr, int tick_ms = 50);
   void Stop() { stop_requested_ = true; }
+  // Handles the messages already received, for at most max_ms; returns how many. A tick
+  // that judges peers by their last messages calls it first: after a stall (a process
+  // starved on a busy machine) they wait in the socket, and a tick ahead of them sees
+  // them as old as the stall.
+  int HandleReceived(int max_ms);
   bool stopping() const;
   void PublishHeartbeat();
   // Wall seconds between heartbeats in Run (1 by default). The commander of a motion beats

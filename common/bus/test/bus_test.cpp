@@ -142,10 +142,10 @@ TEST(Bus, NonFiniteAndUnknownValuesAreDropped) {
   EXPECT_NE(bus.last_drop().find("source 7 is unknown"), std::string::npos) << bus.last_drop();
 }
 
-// A tick after a stall must see what arrived during it: the messages already received are
-// handled before the tick (the executor's heartbeat watch once judged live peers lost
-// from heartbeats still waiting in the socket on a starved machine).
-TEST(Process, ATickSeesEveryMessageReceivedBeforeIt) {
+// A tick after a stall must see what arrived during it: HandleReceived handles the
+// messages already received first (the executor's heartbeat watch once judged live peers
+// lost from heartbeats still waiting in the socket on a starved machine).
+TEST(Process, HandleReceivedLetsATickSeeEveryMessageReceivedBeforeIt) {
   const char* argv[] = {"test_process", "--lcm-url", "memq://"};
   rover::bus::Process proc("test_process", "test", 3, const_cast<char**>(argv));
   int peer_beats = 0;
@@ -163,6 +163,7 @@ TEST(Process, ATickSeesEveryMessageReceivedBeforeIt) {
   int seen_at_first_tick = -1;
   proc.Run(
       [&] {
+        EXPECT_GE(proc.HandleReceived(50), 5);
         seen_at_first_tick = peer_beats;
         proc.Stop();
       },
