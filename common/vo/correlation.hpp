@@ -31,7 +31,10 @@ struct Template {
   bool ExtractSubpixel(const cv::Mat& band, double x, double y, int side);
   // Bilinear, at a sub-pixel centre, template pixel (dx, dy) from the centre taken at
   // centre + warp * (dx, dy) in the band: the patch as a camera that sees it distorted by
-  // warp^-1 would see it.
+  // warp^-1 would see it. Sampled by hand, not with cv::warpAffine (or cv::remap), which
+  // rounds the sampling position to 1/32 px (measured: a shift of 0.01 px gives no change,
+  // 0.02 px gives 0.031 px): a tracked point is wanted to a few hundredths of a pixel. It
+  // costs the same (0.9 us against 1.3 us for an 11x11 template).
   bool ExtractWarped(const cv::Mat& band, double x, double y, const Eigen::Matrix2d& warp, int side);
 };
 

@@ -285,7 +285,7 @@ MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c
     out.shared += Gc * cell_var.asDiagonal() * Gc.transpose();
   }
   out.shared = 0.5 * (out.shared + out.shared.transpose()).eval();
-  out.covariance = std::max(out.variance_factor, out.cluster_factor) * out.inverse_normal + out.shared;
+  out.covariance = out.Scaled(out.inverse_normal);
   out.ok = true;
   return out;
 }

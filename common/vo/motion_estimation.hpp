@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -140,6 +141,13 @@ struct MotionUncertainty {
   double cluster_factor = 0;       // k (0 with fewer than two clusters)
   int redundancy = 0;              // 3n - 6
   int clusters = 0;                // clusters holding features
+
+  // VO-13's covariance of a fit whose inverse normal matrix is `fit`: scaled by the larger
+  // factor, plus the shared errors (`covariance` is Scaled(inverse_normal); the sliding
+  // window's refined delta is Scaled of the window's own).
+  Eigen::Matrix<double, 6, 6> Scaled(const Eigen::Matrix<double, 6, 6>& fit) const {
+    return std::max(variance_factor, cluster_factor) * fit + shared;
+  }
 };
 
 // `cluster` gives each correspondence's cluster, in [0, num_clusters) (indexed like `c`);

@@ -23,7 +23,7 @@ namespace {
 bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
                        const Eigen::Isometry3d& T_ref_cur, const Matrix6d& pair_cov, double max_chi2,
                        Matrix6d* out) {
-  Matrix6d cov = std::max(u.variance_factor, u.cluster_factor) * w.covariance + u.shared;
+  Matrix6d cov = u.Scaled(w.covariance);
   cov = 0.5 * (cov + cov.transpose()).eval();
   const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
   const geometry::Vector6d b = geometry::XyzRpyFromPose(T_ref_cur);

@@ -365,8 +365,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
     const Eigen::SelfAdjointEigenSolver<Matrix6d> es(newest_cov_ - joint.topLeftCorner<6, 6>());
     const Matrix6d correction =
         es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
-    sol.correction = J.leftCols<6>() * correction * J.leftCols<6>().transpose();
-    sol.covariance += sol.correction;
+    sol.covariance += J.leftCols<6>() * correction * J.leftCols<6>().transpose();
   }
   has_newest_cov_ = true;
   newest_id_ = frames_[static_cast<std::size_t>(b)].id;

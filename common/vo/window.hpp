@@ -80,8 +80,6 @@ struct WindowSolution {
   // (the smoother's correction is orthogonal to its error), carried into the delta.
   Eigen::Isometry3d T_prev_last = Eigen::Isometry3d::Identity();
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
-  // Of which the previous pose's correction (included in `covariance`).
-  Eigen::Matrix<double, 6, 6> correction = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 class SlidingWindow {
