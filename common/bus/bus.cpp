@@ -1,5 +1,6 @@
 #include "bus/bus.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <iostream>
 
@@ -40,6 +41,44 @@ void Bus::Drop(const std::string& channel, const std::string& type, const std::s
   last_drop_ = channel + ": " + why;
   log_.Report(channel, "bus: " + channel + ": dropped a " + type + ": " + why + " (" +
                            std::to_string(dropped_) + " dropped so far)");
+}
+
+}  // namespace rover::bus
+
+namespace rover::bus {
+
+void Bus::NoteReceived(const std::string& channel, std::uint32_t publisher, std::int64_t count) {
+  auto& seen = received_[channel][publisher];
+  seen = std::max(seen, count + 1);
+}
+
+simtime::SyncReport Bus::SyncState(const std::string& process, std::int64_t utime, bool busy) const {
+  simtime::SyncReport r;
+  r.process = process;
+  r.utime = utime;
+  r.busy = busy;
+  r.subscribed = subscribed_;
+  for (const auto& [channel, count] : published_) r.published[channel] = count;
+  r.received = received_;
+  return r;
+}
+
+void Bus::set_deferred(bool on, std::set<std::string> immediate) {
+  deferred_ = on;
+  immediate_ = std::move(immediate);
+}
+
+void Bus::SealBatch() {
+  for (auto& h : inbox_) sealed_.push_back(std::move(h));
+  inbox_.clear();
+}
+
+int Bus::DispatchBatch() {
+  std::vector<Held> batch;
+  batch.swap(sealed_);
+  std::sort(batch.begin(), batch.end(), [](const Held& a, const Held& b) { return a.key < b.key; });
+  for (auto& h : batch) h.deliver();  // Deliver catches and reports a callback's failure
+  return static_cast<int>(batch.size());
 }
 
 }  // namespace rover::bus

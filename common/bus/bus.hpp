@@ -16,8 +16,10 @@
 // log checker can find every lost message, and signs command messages when a key is set.
 #pragma once
 
+#include "bus/channels.hpp"
 #include "bus/guard.hpp"
 #include "bus/validate.hpp"
+#include "simtime/barrier.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -25,7 +27,10 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
+#include <set>
 #include <stdexcept>
+#include <tuple>
 #include <string>
 #include <vector>
 
@@ -40,6 +45,20 @@ inline constexpr const char* kDefaultLcmUrl =
 // The id a publisher stamps into the high 32 bits of pub_seq: FNV-1a of its name, so the
 // same process publishes the same bytes in every run (replays compare byte for byte).
 std::uint32_t PublisherId(const std::string& name);
+
+// Who published a message and its count on the channel: pub_seq, or a heartbeat's process
+// and seq. Virtual time counts messages in flight with these (simtime/barrier.hpp).
+template <class Msg>
+std::optional<std::pair<std::uint32_t, std::int64_t>> StampOf(const Msg& m) {
+  if constexpr (requires { m.pub_seq; }) {
+    const auto bits = static_cast<std::uint64_t>(m.pub_seq);
+    return std::make_pair(static_cast<std::uint32_t>(bits >> 32), static_cast<std::int64_t>(bits & 0xffffffffu));
+  } else if constexpr (requires { m.process; m.seq; }) {
+    return std::make_pair(PublisherId(m.process), static_cast<std::int64_t>(m.seq));
+  } else {
+    return std::nullopt;
+  }
+}
 
 class Bus {
  public:
@@ -78,6 +97,22 @@ class Bus {
   const std::string& url() const { return url_; }
   lcm::LCM& lcm() { return lcm_; }
 
+  // Virtual time: what this bus has subscribed to, published and received (counted as each
+  // message arrives, before it is judged), for the sync report a simulated process sends.
+  simtime::SyncReport SyncState(const std::string& process, std::int64_t utime, bool busy) const;
+  // Deferred delivery (virtual time): messages are held as they arrive and handed to their
+  // callbacks only by DispatchBatch, sorted by channel, publisher and count, so the order in
+  // which the messages of one instant happened to arrive cannot change what a process does.
+  // Channels named in `immediate` (the clock) are always delivered at once.
+  void set_deferred(bool on, std::set<std::string> immediate = {});
+  bool deferred() const { return deferred_; }
+  // The messages held so far become the next batch (called when the clock moves on).
+  void SealBatch();
+  // Hands the sealed batch to the callbacks; returns how many messages it held.
+  int DispatchBatch();
+  // Messages held, sealed or not.
+  std::size_t held() const { return inbox_.size() + sealed_.size(); }
+
   // Authentication: a signer for what this process publishes and a verifier for what it
   // receives, on command channels (see bus/signing.hpp). Type-erased so that the Bus does
   // not depend on the crypto library.
@@ -105,7 +140,14 @@ class Bus {
     Bus* bus;
     std::function<void(const Msg&)> callback;
     void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+    void Deliver(const Msg& msg, const std::string& channel);
   };
+  struct Held {
+    std::tuple<std::string, std::uint32_t, std::int64_t, std::uint64_t> key;  // channel, publisher, count, arrival
+    std::function<void()> deliver;
+  };
+  void NoteReceived(const std::string& channel, std::uint32_t publisher, std::int64_t count);
+  bool Defers(const std::string& channel) const { return deferred_ && !immediate_.count(channel); }
 
   template <class Msg>
   std::string Admit(const std::string& channel, const lcm::ReceiveBuffer* rbuf, Msg* msg);
@@ -126,6 +168,12 @@ class Bus {
   std::string last_drop_;
   Auth auth_;
   bool has_auth_ = false;
+  std::set<std::string> subscribed_;
+  std::map<std::string, std::map<std::uint32_t, std::int64_t>> received_;
+  bool deferred_ = false;
+  std::set<std::string> immediate_;
+  std::vector<Held> inbox_, sealed_;
+  std::uint64_t arrivals_ = 0;
 };
 
 template <class Msg>
@@ -161,6 +209,7 @@ void Bus::Sign(Msg* msg) {
 template <class Msg>
 void Bus::Publish(const std::string& channel, const Msg& msg) {
   int status = 0;
+  if constexpr (!requires { msg.pub_seq; }) ++published_[channel];  // counted by its own seq
   if constexpr (requires { msg.pub_seq; } || requires { msg.auth; }) {
     Msg stamped = msg;
     if constexpr (requires { msg.pub_seq; }) {
@@ -191,11 +240,12 @@ std::string Bus::Admit(const std::string& channel, const lcm::ReceiveBuffer* rbu
   } catch (const std::exception& e) {
     return std::string("does not decode (a length field out of bounds: ") + e.what() + ")";
   }
+  if (const auto stamp = StampOf(*msg)) NoteReceived(channel, stamp->first, stamp->second);
   if constexpr (requires { Problem(*msg); }) {
     if (std::string p = Problem(*msg); !p.empty()) return p;
   }
   if constexpr (requires { msg->utime; }) {
-    if (TimeChecked(channel)) {
+    if (TimeChecked(channel) && channel != channels::kClock) {  // the clock: RoverClock::AcceptClock
       if (std::string p = clock_.Judge(msg->utime, RoverClock::WallClock::now()); !p.empty()) return p;
     }
   }
@@ -205,11 +255,24 @@ std::string Bus::Admit(const std::string& channel, const lcm::ReceiveBuffer* rbu
 
 template <class Msg>
 void Bus::TypedHandler<Msg>::OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-  Msg msg;
-  if (std::string why = bus->Admit(channel, rbuf, &msg); !why.empty()) {
+  auto msg = std::make_shared<Msg>();
+  if (std::string why = bus->Admit(channel, rbuf, msg.get()); !why.empty()) {
     bus->Drop(channel, Msg::getTypeName(), why);
     return;
   }
+  if (bus->Defers(channel)) {
+    const auto stamp = StampOf(*msg);
+    Held h;
+    h.key = {channel, stamp ? stamp->first : 0u, stamp ? stamp->second : 0, bus->arrivals_++};
+    h.deliver = [this, msg, channel] { Deliver(*msg, channel); };
+    bus->inbox_.push_back(std::move(h));
+    return;
+  }
+  Deliver(*msg, channel);
+}
+
+template <class Msg>
+void Bus::TypedHandler<Msg>::Deliver(const Msg& msg, const std::string& channel) {
   try {
     callback(msg);
   } catch (const std::exception& e) {
@@ -230,6 +293,7 @@ void Bus::Subscribe(const std::string& channel, std::function<void(const Msg&)> 
   if (sub == nullptr) throw std::runtime_error("LCM subscribe failed on channel " + channel);
   sub->setQueueCapacity(queue_capacity);
   handlers_.push_back(std::move(handler));
+  subscribed_.insert(channel);
 }
 
 }  // namespace rover::bus

@@ -2,6 +2,7 @@
 
 #include "bus/channels.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -86,9 +87,48 @@ void RoverClock::Observe(std::int64_t utime, WallClock::time_point wall) {
   if (utime > extrapolated) Anchor(utime, wall);
 }
 
+std::string RoverClock::AcceptClock(std::int64_t utime, std::int64_t count, double rate,
+                                    bool virtual_mode, WallClock::time_point wall) {
+  if (clock_taken_ && utime < clock_utime_) {
+    return "utime " + std::to_string(utime) + " is " + Seconds((clock_utime_ - utime) * 1e-6) +
+           " behind the rover clock (a clock never goes back)";
+  }
+  if (virtual_mode && clock_taken_ && utime - clock_utime_ > window_.max_clock_step_s * 1e6) {
+    const bool confirmed = candidate_ && count == candidate_->second + 1 && utime > candidate_->first &&
+                           utime - candidate_->first <= window_.max_clock_step_s * 1e6;
+    if (!confirmed) {
+      candidate_ = std::make_pair(utime, count);
+      return "utime " + std::to_string(utime) + " is " + Seconds((utime - clock_utime_) * 1e-6) +
+             " ahead of the rover clock (expected at most " + Seconds(window_.max_clock_step_s) +
+             " a clock message, unless the next one confirms it)";
+    }
+  }
+  if (!virtual_mode && clock_taken_) {
+    if (std::string p = Judge(utime, wall); !p.empty()) return p;
+  }
+  candidate_.reset();
+  clock_taken_ = true;
+  clock_utime_ = utime;
+  ObserveClock(utime, rate, wall);
+  return "";
+}
+
 std::string RoverClock::Judge(std::int64_t utime, WallClock::time_point wall) {
   if (!anchored_) {
     behind_streak_ = 0;
+    return "";
+  }
+  const double t = static_cast<double>(utime);
+  if (virtual_) {  // rover time only: the wall clock says nothing about a virtual clock
+    const double ahead = t - std::max(newest_, clock_utime_);
+    if (ahead > window_.max_ahead_rover_s * 1e6) {
+      return "utime " + std::to_string(utime) + " is " + Seconds(ahead * 1e-6) +
+             " ahead of the rover clock (expected within " + Seconds(window_.max_ahead_rover_s) + " of rover time)";
+    }
+    if (t < newest_ - window_.max_behind_rover_s * 1e6) {
+      return "utime " + std::to_string(utime) + " is " + Seconds((newest_ - t) * 1e-6) +
+             " behind the rover clock (expected within " + Seconds(window_.max_behind_rover_s) + " of rover time)";
+    }
     return "";
   }
   const double since_anchor_s = std::chrono::duration<double>(wall - anchor_wall_).count();
@@ -96,7 +136,6 @@ std::string RoverClock::Judge(std::int64_t utime, WallClock::time_point wall) {
                              (window_.max_ahead_wall_s * rate_ + window_.max_ahead_rover_s) * 1e6;
   const double behind_limit =
       newest_ - (window_.max_behind_wall_s * rate_ + window_.max_behind_rover_s) * 1e6;
-  const double t = static_cast<double>(utime);
   if (t > ahead_limit) {
     return "utime " + std::to_string(utime) + " is " +
            Seconds((t - anchor_utime_) * 1e-6 - since_anchor_s * rate_) +

@@ -11,8 +11,10 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <unordered_map>
+#include <utility>
 
 namespace rover::bus {
 
@@ -52,6 +54,9 @@ struct TimeWindow {
   // it forgets the anchor and takes the next message's time.
   double resync_wall_s = 3.0;
   int resync_count = 50;
+  // Virtual time: the largest step a clock message may take past the last one (the clock
+  // ticks 0.1 s); a bigger one is taken only when the next clock message confirms it.
+  double max_clock_step_s = 5.0;
 };
 
 // The receiver's view of rover time, for judging a message's utime.
@@ -65,6 +70,20 @@ class RoverClock {
 
   // A ROVER_CLOCK message: the clock's anchor and rate.
   void ObserveClock(std::int64_t utime, double rate, WallClock::time_point wall);
+  // A ROVER_CLOCK message from the deployment's time source (the caller checks who sent
+  // it). "" when taken (ObserveClock), else why not, for the drop line. The clock never
+  // goes back. In virtual time it moves at most max_clock_step_s a message, unless the
+  // next message of the source (`count` + 1) confirms a longer step (after a stall, when
+  // clock messages were lost); in real time a message ahead of the clock extrapolated at
+  // its rate is refused as Judge refuses any other.
+  std::string AcceptClock(std::int64_t utime, std::int64_t count, double rate, bool virtual_mode,
+                          WallClock::time_point wall);
+  // The newest ROVER_CLOCK taken (0 before any).
+  std::int64_t clock_utime() const { return clock_utime_; }
+  // Virtual time: rover time moves only with the clock's messages, so nothing is judged
+  // against the wall clock.
+  void set_virtual(bool on) { virtual_ = on; }
+  bool virtual_time() const { return virtual_; }
   // Any trusted utime (the process accepted the message that carried it).
   void Observe(std::int64_t utime, WallClock::time_point wall);
 
@@ -87,6 +106,10 @@ class RoverClock {
   std::int64_t newest_ = 0;
   int behind_streak_ = 0;
   WallClock::time_point behind_streak_start_{};
+  bool virtual_ = false;
+  bool clock_taken_ = false;
+  std::int64_t clock_utime_ = 0;
+  std::optional<std::pair<std::int64_t, std::int64_t>> candidate_;  // utime, count
 };
 
 // Prints one line per problem, rate-limited per channel: the first few, then one every

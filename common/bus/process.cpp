@@ -95,7 +95,9 @@ std::map<std::string, std::string> ParseArgs(const std::string& name, const std:
 TimeWindow LoadTimeWindow(const config::ConfigNode& section) {
   TimeWindow w;
   section.CheckKeys({"max_ahead_wall_s", "max_ahead_rover_s", "max_behind_wall_s",
-                     "max_behind_rover_s", "resync_wall_s", "resync_count"});
+                     "max_behind_rover_s", "resync_wall_s", "resync_count", "max_clock_step_s",
+                     "time", "time_source", "heartbeat_period_s"});
+  section.Get("max_clock_step_s", w.max_clock_step_s, 0.001, 3600.0);
   section.Get("max_ahead_wall_s", w.max_ahead_wall_s, 0.0, 3600.0);
   section.Get("max_ahead_rover_s", w.max_ahead_rover_s, 0.0, 86400.0);
   section.Get("max_behind_wall_s", w.max_behind_wall_s, 0.0, 3600.0);
@@ -105,12 +107,26 @@ TimeWindow LoadTimeWindow(const config::ConfigNode& section) {
   return w;
 }
 
+// The `compute:` section (simtime/compute_profile.hpp): a named profile, any figure of
+// which may be set on its own.
+simtime::ComputeProfile LoadComputeProfile(const config::ConfigNode& section) {
+  section.CheckKeys({"profile", "capture_s", "vo_s", "map_s", "plan_s"});
+  std::string name = "embedded";
+  section.GetEnum("profile", name, {"instant", "embedded", "mer"});
+  simtime::ComputeProfile p = simtime::NamedProfile(name);
+  section.Get("capture_s", p.capture_s, 0.0, 3600.0);
+  section.Get("vo_s", p.vo_s, 0.0, 3600.0);
+  section.Get("map_s", p.map_s, 0.0, 3600.0);
+  section.Get("plan_s", p.plan_s, 0.0, 3600.0);
+  return p;
+}
+
 }  // namespace
 
 const std::vector<std::string>& KnownConfigSections() {
   static const std::vector<std::string> sections = {
-      "mobility", "sensors",  "sim",    "estimator",       "hazards",
-      "executor", "vo",       "camera", "visual_odometry", "capture", "bus", "auth"};
+      "mobility", "sensors",  "sim",    "estimator",       "hazards", "executor", "vo",
+      "camera",   "visual_odometry",    "capture",         "bus",     "auth",     "compute"};
   return sections;
 }
 
@@ -129,17 +145,129 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
     config_ = config::ConfigNode::FromString("{}", "(no config)");
   }
   bus_.set_publisher(name_);
-  bus_.clock().set_window(LoadTimeWindow(config_["bus"]));
+  const auto bus_section = config_["bus"];
+  bus_.clock().set_window(LoadTimeWindow(bus_section));
+  // Real or virtual time: `bus.time`, else $ROVER_TIME (the launcher and the scenario
+  // runner set it for a simulated set, so every process of the set agrees), else real.
+  std::string time_mode = "real";
+  if (const char* env = std::getenv("ROVER_TIME"); env != nullptr && *env != '\0') {
+    time_mode = env;
+    if (time_mode != "real" && time_mode != "virtual") {
+      throw config::ConfigError(name_ + ": $ROVER_TIME: \"" + time_mode + "\": expected real or virtual");
+    }
+  }
+  bus_section.GetEnum("time", time_mode, {"real", "virtual"});
+  bus_section.Get("time_source", time_source_);
+  bus_section.Get("heartbeat_period_s", heartbeat_period_s_, 0.01, 60.0);
+  compute_ = LoadComputeProfile(config_["compute"]);
+  virtual_ = time_mode == "virtual";
+  if (virtual_) {
+    bus_.clock().set_virtual(true);
+    // Every message waits for the tick it belongs to; the clock itself is acted on at once.
+    bus_.set_deferred(true, {channels::kClock});
+    sync_ = std::make_unique<SyncSender>(bus_.url());
+  }
   // Commands this process publishes are signed, and those it receives checked, when it
   // holds the deployment's key (bus/signing.hpp).
   if (const AuthSettings auth = LoadAuthSettings(config_, option("--key"), name_); auth.key) {
     bus_.set_auth(MakeBusAuth(*auth.key, name_));
   }
   InstallSignalHandlers();
+  // The clock is taken only from the deployment's time source (`bus.time_source`), in the
+  // mode this process runs in, never backwards (RoverClock::AcceptClock), and, with a
+  // key, only signed by the time source (the Bus has checked the tag and its counter).
   bus_.Subscribe<rover_msgs::rover_clock_t>(
-      channels::kClock, [this](const rover_msgs::rover_clock_t& msg) {
-        bus_.clock().ObserveClock(msg.utime, msg.rate, std::chrono::steady_clock::now());
-      });
+      channels::kClock,
+      [this](const rover_msgs::rover_clock_t& msg) {
+        const char* type = rover_msgs::rover_clock_t::getTypeName();
+        const auto stamp = StampOf(msg);
+        if (stamp->first != PublisherId(time_source_)) {
+          bus_.Drop(channels::kClock, type, "not from the time source '" + time_source_ + "' (bus.time_source)");
+          return;
+        }
+        if (bus_.has_auth() && msg.auth.sender.rfind(time_source_ + "@", 0) != 0) {
+          bus_.Drop(channels::kClock, type,
+                    "signed by '" + msg.auth.sender + "', not by the time source '" + time_source_ + "'");
+          return;
+        }
+        const bool virtual_clock = msg.mode == rover_msgs::rover_clock_t::MODE_VIRTUAL;
+        if (virtual_clock != virtual_) {
+          bus_.Drop(channels::kClock, type,
+                    std::string(virtual_clock ? "a virtual" : "a real-time") + " clock, and this process runs in " +
+                        (virtual_ ? "virtual" : "real") + " time (bus.time)");
+          return;
+        }
+        if (const std::string why = bus_.clock().AcceptClock(msg.utime, stamp->second, msg.rate, virtual_clock,
+                                                             std::chrono::steady_clock::now());
+            !why.empty()) {
+          bus_.Drop(channels::kClock, type, why);
+          return;
+        }
+        // A new instant: the messages received so far belong to the one before it.
+        if (virtual_ && msg.utime > last_tick_utime_) {
+          bus_.SealBatch();
+          clock_moved_ = true;
+        }
+      },
+      1000);
+}
+
+double Process::guard_seconds() const { return virtual_ ? static_cast<double>(now()) * 1e-6 : wall_seconds(); }
+
+std::int64_t Process::DueAt(std::int64_t start_utime, double seconds) const {
+  return virtual_ ? start_utime + static_cast<std::int64_t>(std::llround(seconds * 1e6)) : start_utime;
+}
+
+void Process::SendSync(bool busy) {
+  if (!sync_) return;
+  sync_->Send(bus_.SyncState(name_, last_tick_utime_, busy));
+}
+
+void Process::RunVirtualTick(const std::function<void()>& on_tick, std::int64_t tick_us) {
+  const std::int64_t t = bus_.clock().clock_utime();
+  last_tick_utime_ = t;
+  bus_.DispatchBatch();
+  if (t >= next_heartbeat_utime_) {
+    PublishHeartbeat();
+    next_heartbeat_utime_ = t + static_cast<std::int64_t>(heartbeat_period_s_ * 1e6);
+  }
+  if (on_tick && t >= next_tick_utime_) {
+    on_tick();
+    next_tick_utime_ = t + tick_us;
+  }
+}
+
+// Virtual time: nothing here reads the wall clock except to say "alive" (a sync report
+// every 0.25 s of wall time, busy or not): the clock's liveness limit is the only wall
+// time rule in simulation.
+void Process::RunVirtual(const std::function<void()>& on_tick, int tick_ms) {
+  using Clock = std::chrono::steady_clock;
+  const std::int64_t tick_us = std::int64_t{tick_ms} * 1000;
+  auto last_sync = Clock::now() - std::chrono::seconds(10);
+  bool changed = true, was_busy = false;
+  while (!stopping()) {
+    if (clock_moved_) {
+      clock_moved_ = false;
+      RunVirtualTick(on_tick, tick_us);
+      changed = true;
+    }
+    const bool busy = last_tick_utime_ >= 0 && pending_work_ && pending_work_();
+    const auto now = Clock::now();
+    if (changed || busy != was_busy || now - last_sync > std::chrono::milliseconds(250)) {
+      SendSync(busy);
+      last_sync = now;
+      was_busy = busy;
+      changed = false;
+    }
+    // One message at a time, so that a clock message is acted on before those behind it.
+    // A burst is bounded (20 ms), so that a flood cannot hold back the sync report.
+    if (bus_.Handle(busy ? 2 : 50)) {
+      changed = true;
+      const auto burst_end = Clock::now() + std::chrono::milliseconds(20);
+      while (!clock_moved_ && Clock::now() < burst_end && bus_.Handle(0)) {
+      }
+    }
+  }
 }
 
 std::optional<std::string> Process::option(const std::string& flag) const {
@@ -171,6 +299,7 @@ void Process::PublishHeartbeat() {
 }
 
 int Process::HandleReceived(int max_ms) {
+  if (virtual_) return 0;  // messages wait for their tick; a stall changes nothing
   using Clock = std::chrono::steady_clock;
   const auto until = Clock::now() + std::chrono::milliseconds(max_ms);
   int handled = 0;
@@ -179,6 +308,7 @@ int Process::HandleReceived(int max_ms) {
 }
 
 void Process::Run(const std::function<void()>& on_tick, int tick_ms) {
+  if (virtual_) return RunVirtual(on_tick, tick_ms);
   using Clock = std::chrono::steady_clock;
   auto next_heartbeat = Clock::now();
   auto next_tick = Clock::now();
@@ -193,6 +323,7 @@ void Process::Run(const std::function<void()>& on_tick, int tick_ms) {
       on_tick();
       next_tick = now + std::chrono::milliseconds(tick_ms);
     }
+    if (pending_work_) pending_work_();
     const auto wait = std::min(next_heartbeat, on_tick ? next_tick : next_heartbeat) - Clock::now();
     const int wait_ms = static_cast<int>(
         std::max<long>(0, std::chrono::duration_cast<std::chrono::milliseconds>(wait).count()));

@@ -6,13 +6,16 @@
 #pragma once
 
 #include "bus/bus.hpp"
+#include "bus/virtual_time.hpp"
 #include "config/yaml_config.hpp"
+#include "simtime/compute_profile.hpp"
 
 #include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -45,6 +48,15 @@ class Process {
   // Rover time in microseconds: the latest ROVER_CLOCK message, or any utime observed.
   // The Bus judges every message's utime against this clock (bus/guard.hpp).
   std::int64_t now() const { return bus_.clock().now(); }
+  // Virtual time (`bus.time: virtual`, README "Simulated time"): rover time moves only
+  // when every process of the set has finished the current instant. Messages are handed
+  // to the callbacks once per clock tick, in one canonical order; ticks and heartbeats
+  // run on rover time; and after each tick this process sends its sync report.
+  bool virtual_time() const { return virtual_; }
+  // The one clock every guard reads (dead-man, heartbeat loss, waits for answers): rover
+  // seconds in virtual time, wall seconds otherwise (a real rover, where a limit on a
+  // silent peer means wall time).
+  double guard_seconds() const;
   void ObserveTime(std::int64_t utime) {
     bus_.clock().Observe(utime, std::chrono::steady_clock::now());
   }
@@ -54,8 +66,19 @@ class Process {
   void SetHealth(std::int8_t state, std::string detail);
 
   // Loops until SIGINT/SIGTERM or Stop(): dispatches messages, publishes the heartbeat
-  // once a wall second, and calls `on_tick` every `tick_ms` of wall time.
+  // every heartbeat period, and calls `on_tick` every `tick_ms`: of wall time on a
+  // rover, of rover time in virtual time.
   void Run(const std::function<void()>& on_tick = nullptr, int tick_ms = 50);
+  // Work in hand beyond the callbacks (a render or a map update on a worker thread, an
+  // answer held until its compute time has passed): called on every pass of the loop, it
+  // publishes what has become due and returns true while work due by now is unfinished.
+  // In virtual time the clock waits for it (the process says it is busy, and alive).
+  void set_pending_work(std::function<bool()> poll) { pending_work_ = std::move(poll); }
+  // Rover time a result of work started at `start_utime` is due, with the compute
+  // profile's `seconds` (simtime/compute_profile.hpp): charged in virtual time only.
+  std::int64_t DueAt(std::int64_t start_utime, double seconds) const;
+  // The compute profile (the `compute:` section).
+  const simtime::ComputeProfile& compute() const { return compute_; }
   void Stop() { stop_requested_ = true; }
   // Handles the messages already received, for at most max_ms; returns how many. A tick
   // that judges peers by their last messages calls it first: after a stall (a process
@@ -64,9 +87,13 @@ class Process {
   int HandleReceived(int max_ms);
   bool stopping() const;
   void PublishHeartbeat();
-  // Wall seconds between heartbeats in Run (1 by default). The commander of a motion beats
-  // faster, so that a mobility dead-man of 1.5 s tolerates a stall of over a second.
+  // Seconds between heartbeats in Run (0.25 by default; `bus.heartbeat_period_s`): of
+  // wall time on a rover, where a peer silent for a second is taken for dead or hung, of
+  // rover time in virtual time.
   void set_heartbeat_period(double seconds) { heartbeat_period_s_ = seconds; }
+  // Virtual time: sends this process's sync report for the current instant (Run does; a
+  // process with a loop of its own calls it after handling each tick).
+  void SendSync(bool busy);
 
  private:
   std::string name_;
@@ -74,8 +101,21 @@ class Process {
   config::ConfigNode config_;
   std::map<std::string, std::string> options_;
   Bus bus_;
+  // One tick of virtual time: the batch of messages, heartbeat, on_tick, pending work.
+  void RunVirtualTick(const std::function<void()>& on_tick, std::int64_t tick_us);
+  void RunVirtual(const std::function<void()>& on_tick, int tick_ms);
+
   std::int64_t heartbeat_seq_ = 0;
-  double heartbeat_period_s_ = 1.0;
+  double heartbeat_period_s_ = 0.25;
+  bool virtual_ = false;
+  std::string time_source_ = "rover_sim";
+  std::function<bool()> pending_work_;
+  simtime::ComputeProfile compute_;
+  std::unique_ptr<SyncSender> sync_;
+  std::int64_t sync_seq_ = 0;
+  bool clock_moved_ = false;        // a new instant: its batch is sealed, its tick not yet run
+  std::int64_t last_tick_utime_ = -1;
+  std::int64_t next_tick_utime_ = 0, next_heartbeat_utime_ = 0;
   std::int8_t health_state_ = 0;
   std::string health_detail_;
   std::atomic<bool> stop_requested_{false};

@@ -155,8 +155,9 @@ std::string Problem(const rover_msgs::pose_t& m) {
 }
 
 std::string Problem(const rover_msgs::rover_clock_t& m) {
-  if (!(m.rate > 0) || !std::isfinite(m.rate) || m.rate > 1e4) return "rate is out of range (expected > 0 and at most 10000)";
-  return "";
+  if (!(m.rate >= 0) || !std::isfinite(m.rate) || m.rate > 1e4)
+    return "rate is out of range (expected 0, as fast as the barrier allows, to 10000)";
+  return Enum("mode", m.mode, 0, 1);
 }
 
 std::string Problem(const rover_msgs::sequence_control_t& m) { return Enum("action", m.action, 0, 2); }

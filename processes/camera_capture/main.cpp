@@ -50,6 +50,10 @@ class ImageSource {
   virtual bool Ready(std::int64_t request_utime) const = 0;
   virtual CapturedPair Capture(std::int64_t frame_id) = 0;
   virtual void OnTruth(const rover_msgs::sim_truth_t&) {}
+  // Called on the bus thread when a capture is decided, before Capture runs on a worker:
+  // the moment of exposure (the sim source takes the truth of this instant, not of
+  // whatever instant the worker happens to start in).
+  virtual void Expose() {}
 };
 
 class SimulatedCameras : public ImageSource {
@@ -67,11 +71,15 @@ class SimulatedCameras : public ImageSource {
     std::lock_guard<std::mutex> lock(mutex_);
     truth_ = t;
   }
+  void Expose() override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    exposed_ = truth_;
+  }
   CapturedPair Capture(std::int64_t frame_id) override {
     rover_msgs::sim_truth_t truth;
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      truth = *truth_;
+      truth = exposed_ ? *exposed_ : *truth_;
     }
     geometry::Pose T = geometry::Pose::Identity();
     T.linear() = bus::QuaternionFromArray(truth.orientation).toRotationMatrix();
@@ -85,7 +93,7 @@ class SimulatedCameras : public ImageSource {
   geometry::StereoRig rig_;
   render::StereoRenderer renderer_;
   mutable std::mutex mutex_;  // truth arrives on the bus thread while a render runs
-  std::optional<rover_msgs::sim_truth_t> truth_;
+  std::optional<rover_msgs::sim_truth_t> truth_, exposed_;
 };
 
 // What a dataset image's PNG header says; throws ConfigError naming the file when it is
@@ -273,24 +281,35 @@ int main(int argc, char** argv) {
       frame.pose_at_capture = pose;
       return frame;
     };
+    // The frame is published when the render is done and, in virtual time, not before the
+    // compute profile's capture time has passed since the request (Process::DueAt).
+    std::int64_t job_due = 0;
     auto start = [&](const rover_msgs::capture_request_t& request) {
       rover_msgs::pose_t at_capture{};
       at_capture.orientation[0] = 1.0;
       if (pose) at_capture = *pose;
+      cameras->Expose();
       job = std::async(std::launch::async, capture_frame, request, at_capture, proc.now());
+      job_due = proc.DueAt(proc.now(), proc.compute().capture_s);
     };
+    // Publishes a finished frame that is due; true while a frame due by now is unfinished.
+    auto finish = [&]() -> bool {
+      if (!job.valid() || proc.now() < job_due) return false;
+      if (job.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return true;
+      try {
+        proc.bus().Publish(channels::kStereoFrame, job.get());  // rethrows a capture error
+      } catch (const std::exception& e) {
+        // No frame for this request: the executor counts a VO failure; the process goes on.
+        std::cerr << "camera_capture: capture failed, no frame sent: " << e.what() << "\n";
+      }
+      return false;
+    };
+    proc.set_pending_work(finish);
 
     proc.Run(
         [&] {
-          if (job.valid()) {
-            if (job.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
-            try {
-              proc.bus().Publish(channels::kStereoFrame, job.get());  // rethrows a capture error
-            } catch (const std::exception& e) {
-              // No frame for this request: the executor counts a VO failure; the process goes on.
-              std::cerr << "camera_capture: capture failed, no frame sent: " << e.what() << "\n";
-            }
-          }
+          finish();
+          if (job.valid()) return;
           if (!pending.empty() && cameras->Ready(pending.front().utime)) {
             start(pending.front());
             pending.pop_front();

@@ -26,7 +26,10 @@
 #include <rover_msgs/keepout_zones_t.hpp>
 #include <rover_msgs/pose_t.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <deque>
+#include <optional>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
@@ -102,6 +105,12 @@ int main(int argc, char** argv) {
     std::uint32_t last_pose_count = 0;
     std::int32_t last_site = 0;
     const std::vector<hazards::KeepOutZone> config_zones = options.zones;
+    // Virtual time: one pair at a time goes to the worker, and its map is taken when the
+    // compute profile's map time has passed since the pair came (never earlier, whatever
+    // this machine's speed), so a query is answered at the same rover time in every run.
+    std::deque<std::pair<std::int64_t, MapWorker::Job>> waiting_jobs;  // due, pair
+    std::optional<std::int64_t> in_work_due;
+    std::uint64_t frames_received = 0, frames_mapped = 0;
     std::string zone_error;  // non-empty: the last zone set was invalid -> UNKNOWN
 
     proc.bus().Subscribe<rover_msgs::pose_t>(channels::kPose, [&](const rover_msgs::pose_t& m) {
@@ -172,7 +181,13 @@ int main(int argc, char** argv) {
             job.T_site_rover = bus::PoseFromMsg(frame.pose_at_capture);
             job.covariance = bus::CovarianceFromArray(frame.pose_at_capture.covariance);
             job.frame_id = frame.frame_id;
-            map->Add(std::move(job));
+            if (proc.virtual_time()) {
+              ++frames_received;
+              waiting_jobs.emplace_back(proc.DueAt(std::max(proc.now(), frame.utime), proc.compute().map_s),
+                                        std::move(job));
+            } else {
+              map->Add(std::move(job));
+            }
           },
           4);
     }
@@ -222,18 +237,36 @@ int main(int argc, char** argv) {
       proc.bus().Publish(channels::kHazardReply, r);
     };
     auto answer_held = [&] {
-      if (take_map()) publish_map();
+      if (!proc.virtual_time() && take_map()) publish_map();
       std::erase_if(held, [&](const auto& h) {
-        if (map && !map->Mapped(h.second)) return false;
+        if (map && (proc.virtual_time() ? frames_mapped < h.second : !map->Mapped(h.second))) return false;
         answer(h.first);
         return true;
       });
     };
     proc.bus().Subscribe<rover_msgs::hazard_query_t>(
         channels::kHazardQuery, [&](const rover_msgs::hazard_query_t& q) {
-          held.emplace_back(q, map ? map->Added() : 0);
+          held.emplace_back(q, !map ? 0 : proc.virtual_time() ? frames_received : map->Added());
           answer_held();
         });
+    // Virtual time: true while a pair due by now is still being mapped.
+    proc.set_pending_work([&]() -> bool {
+      if (!map || !proc.virtual_time()) return false;
+      if (in_work_due) {
+        if (proc.now() < *in_work_due) return false;
+        if (map->Done() < map->Added()) return true;
+        if (take_map()) publish_map();
+        in_work_due.reset();
+        ++frames_mapped;
+        answer_held();
+      }
+      if (!waiting_jobs.empty()) {
+        in_work_due = std::max(waiting_jobs.front().first, proc.now());
+        map->Add(std::move(waiting_jobs.front().second));
+        waiting_jobs.pop_front();
+      }
+      return false;
+    });
 
     int ticks = 0;
     proc.Run(

@@ -69,6 +69,11 @@ class MapWorker {
     std::lock_guard<std::mutex> lock(mutex_);
     return added_;
   }
+  // Pairs mapped, refused, dropped or cleared (Done() == Added(): the worker is idle).
+  std::uint64_t Done() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return done_;
+  }
   // Whether the first `added` pairs are mapped (or dropped) and the grid holding them
   // has been taken. Pairs added later do not hold the answer back.
   bool Mapped(std::uint64_t added) const {

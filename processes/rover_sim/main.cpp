@@ -3,14 +3,22 @@
 // Reads MOBILITY_COMMAND; writes ROVER_CLOCK, IMU, WHEEL_ODOMETRY, MOBILITY_STATUS and
 // SIM_TRUTH (truth: read only by tests and evaluation).
 // The dead-man (common/mobility/deadman.hpp): a motion stops by itself when the
-// sequence_executor's HEARTBEAT and MOBILITY_COMMAND have both been silent
-// for mobility.deadman_s of WALL time.
+// sequence_executor's HEARTBEAT and MOBILITY_COMMAND have both been silent for
+// mobility.deadman_s (of wall time on a real clock, of rover time in virtual time).
+//
+// Virtual time (README, "Simulated time"; common/simtime/barrier.hpp): the clock moves
+// by sim.tick_s only when every process of --hold-for has finished the current instant
+// and nothing between them is in flight, and at most `rate` times as fast as the wall
+// clock (`--rate max`: as fast as the barrier allows). A process that holds the clock and
+// says nothing for sim.barrier_timeout_s of wall time is declared lost: the rover stops
+// and the clock runs on without it, so the executor finds it lost.
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
+#include "bus/virtual_time.hpp"
 #include "mobility/deadman.hpp"
-#include "mobility/lockstep.hpp"
 #include "mobility/rover_simulator.hpp"
+#include "simtime/barrier.hpp"
 #include "terrain/world.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
@@ -29,6 +37,8 @@
 #include <sstream>
 #include <thread>
 
+#include <poll.h>
+
 using namespace rover;
 
 namespace {
@@ -37,28 +47,27 @@ namespace {
 constexpr double kMinRate = 0.1, kMaxRate = 10000.0;
 
 struct SimOptions {
-  double rate = 50.0;        // rover seconds per wall second
+  double rate = 50.0;        // rover seconds per wall second; 0: as fast as the barrier allows
   double step_s = 0.01;      // rover time per simulation step
   double truth_hz = 20.0;    // SIM_TRUTH
-  double clock_hz = 50.0;    // ROVER_CLOCK
+  double clock_hz = 50.0;    // ROVER_CLOCK (real time)
   double status_hz = 4.0;    // periodic MOBILITY_STATUS (changes are sent at once)
   std::int64_t start_utime = 1000000;
-  // Lockstep with the estimator (common/mobility/lockstep.hpp): the clock runs at most
-  // max_lead_s of rover time ahead of the latest POSE of a live estimator, waiting up to
-  // lead_wait_s of wall time for it. Faster than real time,
-  // a lagging consumer would otherwise see its inputs age by (lag x rate) and trip the
-  // staleness checks; a dead one is still caught, by heartbeats and by those checks.
-  double max_lead_s = 0.5;
-  double lead_wait_s = 0.5;
+  double tick_s = 0.1;             // virtual time: one instant of the barrier
+  double barrier_timeout_s = 3.0;  // virtual time: wall seconds before a silent process is lost
 };
 
 SimOptions LoadSimOptions(const config::ConfigNode& section) {
   SimOptions o;
-  section.CheckKeys({"rate", "step_s", "truth_hz", "clock_hz", "status_hz", "start_utime",
-                     "max_lead_s", "lead_wait_s"});
-  section.Get("max_lead_s", o.max_lead_s, 0.0, 3600.0);
-  section.Get("lead_wait_s", o.lead_wait_s, 0.0, 60.0);
-  section.Get("rate", o.rate, kMinRate, kMaxRate);
+  section.CheckKeys({"rate", "step_s", "truth_hz", "clock_hz", "status_hz", "start_utime", "tick_s",
+                     "barrier_timeout_s"});
+  section.Get("tick_s", o.tick_s, 0.01, 1.0);
+  section.Get("barrier_timeout_s", o.barrier_timeout_s, 0.1, 600.0);
+  if (section.Has("rate") && section["rate"].AsString() == "max") {
+    o.rate = 0;
+  } else {
+    section.Get("rate", o.rate, 0.0, kMaxRate);
+  }
   section.Get("step_s", o.step_s, 0.001, 0.1);
   section.Get("truth_hz", o.truth_hz, 1.0, 1000.0);
   section.Get("clock_hz", o.clock_hz, 1.0, 1000.0);
@@ -78,6 +87,30 @@ rover_msgs::mobility_status_t ToMsg(const mobility::MobilityStatus& s) {
   return m;
 }
 
+// Waits up to `ms` for a message on either bus and handles what has arrived.
+void HandleEither(lcm::LCM& a, lcm::LCM* b, int ms) {
+  pollfd fds[2] = {{a.getFileno(), POLLIN, 0}, {b ? b->getFileno() : -1, POLLIN, 0}};
+  if (::poll(fds, b ? 2 : 1, ms) <= 0) return;
+  if (fds[0].revents & POLLIN) a.handleTimeout(0);
+  if (b && (fds[1].revents & POLLIN)) b->handleTimeout(0);
+}
+
+// The sync reports of the set, into the barrier (on the sync bus: bus/virtual_time.hpp).
+struct SyncListener {
+  simtime::Barrier* barrier;
+  const bus::Process* proc;
+  void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    rover_msgs::sim_sync_t m;
+    try {
+      bus::DecodeAllocationCap cap(16 * static_cast<std::size_t>(rbuf->data_size) + 65536);
+      if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) return;
+    } catch (const std::exception&) {
+      return;  // a hostile packet on the sync port: not a member's report
+    }
+    barrier->Report(bus::FromMsg(m), proc->wall_seconds());
+  }
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -86,21 +119,30 @@ int main(int argc, char** argv) {
                       "The simulated rover: arcs and turns on a height field with slip, IMU and\n"
                       "wheel encoders. Owns the rover clock. Reads MOBILITY_COMMAND; writes\n"
                       "ROVER_CLOCK, IMU, WHEEL_ODOMETRY, MOBILITY_STATUS, SIM_TRUTH.\n"
-                      "Config: `mobility:`, `sensors:` and `sim:` sections (configs/rover.yaml).",
+                      "Config: `mobility:`, `sensors:` and `sim:` sections (configs/rover.yaml).\n"
+                      "In virtual time ($ROVER_TIME=virtual or bus.time) the clock waits for every\n"
+                      "process of --hold-for to finish each instant (README, \"Simulated time\").",
                       argc, argv,
                       {{"--world", "FILE", "world YAML (configs/worlds/)"},
                        {"--start", "X,Y,YAW_DEG", "start pose (default: the world's start)"},
-                       {"--rate", "R", "rover seconds per wall second (overrides sim.rate)"},
-                       {"--hold-for", "NAMES", "comma-separated processes whose heartbeats must be heard before the clock starts"}});
+                       {"--rate", "R|max", "rover seconds per wall second (overrides sim.rate); max: as fast as the barrier allows (virtual time)"},
+                       {"--hold-for", "NAMES", "comma-separated processes the clock waits for: before it starts, and in virtual time at every instant"}});
     SimOptions options = LoadSimOptions(proc.config()["sim"]);
     if (auto r = proc.option("--rate")) {  // the same range as sim.rate
-      options.rate = bus::ParseNumberList(*r, 1, "rover_sim: argument --rate")[0];
-      if (!(options.rate >= kMinRate && options.rate <= kMaxRate)) {
-        std::ostringstream range;
-        range << "[" << kMinRate << ", " << kMaxRate << "]";
-        throw config::ConfigError("rover_sim: argument --rate: \"" + *r + "\": expected a number in " +
-                                  range.str());
+      if (*r == "max") {
+        options.rate = 0;
+      } else {
+        options.rate = bus::ParseNumberList(*r, 1, "rover_sim: argument --rate")[0];
+        if (!(options.rate >= kMinRate && options.rate <= kMaxRate)) {
+          std::ostringstream range;
+          range << "[" << kMinRate << ", " << kMaxRate << "]";
+          throw config::ConfigError("rover_sim: argument --rate: \"" + *r + "\": expected max or a number in " +
+                                    range.str());
+        }
       }
+    }
+    if (options.rate <= 0 && !proc.virtual_time()) {
+      throw config::ConfigError("rover_sim: rate max (0) needs virtual time (expected $ROVER_TIME=virtual or bus.time: virtual, or a rate > 0)");
     }
     const auto world_path = proc.option("--world");
     if (!world_path) throw config::ConfigError("rover_sim: missing argument --world FILE (expected a world YAML)");
@@ -124,7 +166,7 @@ int main(int argc, char** argv) {
 
     proc.bus().Subscribe<rover_msgs::mobility_command_t>(
         channels::kMobilityCommand, [&](const rover_msgs::mobility_command_t& m) {
-          deadman.OnCommanderMessage(proc.wall_seconds());
+          deadman.OnCommanderMessage(proc.guard_seconds());
           mobility::MotionCommand c;
           c.id = m.command_id;
           c.distance_m = m.distance_m;
@@ -159,67 +201,23 @@ int main(int argc, char** argv) {
           }
         });
 
-    // Hold the clock until the listed processes are up, so that they see every message
-    // from the first one (a replay of the log then reproduces their outputs exactly).
-    std::set<std::string> waiting;
+    std::vector<std::string> members;
     if (auto names = proc.option("--hold-for")) {
       std::stringstream ss(*names);
       for (std::string n; std::getline(ss, n, ',');)
-        if (!n.empty()) waiting.insert(n);
+        if (!n.empty() && n != "rover_sim") members.push_back(n);
     }
-    mobility::EstimatorLockstep lockstep(options.max_lead_s, /*alive_s=*/2.0);
+    std::set<std::string> waiting(members.begin(), members.end());  // real time: heartbeats before start
     proc.bus().Subscribe<rover_msgs::heartbeat_t>(
         channels::kHeartbeat, [&](const rover_msgs::heartbeat_t& hb) {
           waiting.erase(hb.process);
-          deadman.OnHeartbeat(hb.process, proc.wall_seconds());
-          lockstep.OnHeartbeat(hb.process, hb.seq, proc.wall_seconds());
-        });
-    const auto hold_start = std::chrono::steady_clock::now();
-    double next_hold_heartbeat_wall = 0;
-    while (!waiting.empty() && !proc.stopping()) {
-      // Once a wall second, as everywhere: every heartbeat on the bus (this one included)
-      // wakes Handle(), so sending one per wake-up floods the bus.
-      if (proc.wall_seconds() >= next_hold_heartbeat_wall) {
-        proc.PublishHeartbeat();
-        next_hold_heartbeat_wall = proc.wall_seconds() + 1.0;
-      }
-      proc.bus().Handle(200);
-      if (std::chrono::steady_clock::now() - hold_start > std::chrono::seconds(30)) {
-        std::string list;
-        for (const auto& n : waiting) list += " " + n;
-        throw std::runtime_error("--hold-for: no heartbeat within 30 s from:" + list);
-      }
-    }
+          deadman.OnHeartbeat(hb.process, proc.guard_seconds());
+        }, 1000);
 
+    // What one simulation step produced, on the bus.
     const auto period = [](double hz) { return static_cast<std::int64_t>(1e6 / hz); };
-    std::int64_t next_truth = sim->utime(), next_clock = sim->utime(), next_status = sim->utime();
-    const auto wall_start = std::chrono::steady_clock::now();
-    const std::int64_t rover_start = sim->utime();
-    double next_heartbeat_wall = 0;
-
-    proc.bus().Subscribe<rover_msgs::pose_t>(channels::kPose, [&](const rover_msgs::pose_t& m) {
-      lockstep.OnPose(m.utime);
-    }, 1000);
-
-    while (!proc.stopping()) {
-      while (proc.bus().Handle(0)) {
-      }
-      const double wait_start = proc.wall_seconds();
-      while (lockstep.ShouldWait(sim->utime(), proc.wall_seconds()) && !proc.stopping() &&
-             proc.wall_seconds() - wait_start < options.lead_wait_s) {
-        if (proc.wall_seconds() >= next_heartbeat_wall) {  // alive while it waits
-          proc.PublishHeartbeat();
-          next_heartbeat_wall = proc.wall_seconds() + 1.0;
-        }
-        proc.bus().Handle(2);
-      }
-      if (const auto why = deadman.Check(sim->moving(), proc.wall_seconds())) {
-        std::cerr << "rover_sim: command " << sim->status().command_id << ": " << *why << "\n";
-        sim->Halt(*why);
-      }
-      const auto& out = sim->Step(options.step_s);
-      const std::int64_t now = sim->utime();
-      proc.ObserveTime(now);
+    std::int64_t next_truth = sim->utime(), next_status = sim->utime();
+    auto publish_step = [&](const mobility::StepOutput& out) {
       for (const auto& s : out.imu) {
         rover_msgs::imu_t m{};
         m.utime = s.utime;
@@ -241,6 +239,7 @@ int main(int argc, char** argv) {
         proc.bus().Publish(channels::kWheelOdometry, m);
       }
       for (const auto& s : out.status) proc.bus().Publish(channels::kMobilityStatus, ToMsg(s));
+      const std::int64_t now = sim->utime();
       if (now >= next_status) {
         auto st = sim->status();
         st.utime = now;
@@ -263,19 +262,128 @@ int main(int argc, char** argv) {
         proc.bus().Publish(channels::kSimTruth, m);
         next_truth += period(options.truth_hz);
       }
+    };
+    auto publish_clock = [&](std::int64_t now) {
+      rover_msgs::rover_clock_t m{};
+      m.utime = now;
+      m.rate = options.rate;
+      m.mode = proc.virtual_time() ? rover_msgs::rover_clock_t::MODE_VIRTUAL : rover_msgs::rover_clock_t::MODE_REAL;
+      proc.bus().Publish(channels::kClock, m);
+    };
+    auto check_deadman = [&] {
+      if (const auto why = deadman.Check(sim->moving(), proc.guard_seconds())) {
+        std::cerr << "rover_sim: command " << sim->status().command_id << ": " << *why << "\n";
+        sim->Halt(*why);
+      }
+    };
+
+    if (proc.virtual_time()) {
+      // ---- Virtual time: one instant at a time, when the whole set has finished it. ----
+      simtime::Barrier barrier(members, options.barrier_timeout_s);
+      lcm::LCM sync_bus(bus::SyncUrl(proc.bus().url()));
+      if (!sync_bus.good()) throw std::runtime_error("cannot open the sync bus " + bus::SyncUrl(proc.bus().url()));
+      SyncListener listener{&barrier, &proc};
+      sync_bus.subscribe(bus::kSimSyncChannel, &SyncListener::OnMessage, &listener)->setQueueCapacity(10000);
+      const double hold_start = proc.wall_seconds();
+      while (!barrier.AllHeard() && !proc.stopping()) {
+        HandleEither(proc.bus().lcm(), &sync_bus, 50);
+        if (proc.wall_seconds() - hold_start > 30) {
+          throw std::runtime_error("--hold-for: no sync report within 30 s from: " + barrier.Holding(-1));
+        }
+      }
+      std::int64_t t = sim->utime();
+      const std::int64_t tick_us = static_cast<std::int64_t>(std::llround(options.tick_s * 1e6));
+      const std::int64_t rover_start = t;
+      const double wall_start = proc.wall_seconds();
+      std::int64_t next_heartbeat = t;
+      auto begin_instant = [&] {
+        proc.ObserveTime(t);
+        publish_clock(t);
+        if (t >= next_heartbeat) {
+          proc.PublishHeartbeat();
+          next_heartbeat = t + static_cast<std::int64_t>(0.25e6);
+        }
+      };
+      begin_instant();
+      double tick_wall = proc.wall_seconds(), last_note = tick_wall;
+      while (!proc.stopping()) {
+        // 1. Everyone has finished instant t, and nothing is in flight.
+        while (!proc.stopping()) {
+          barrier.Report(proc.bus().SyncState("rover_sim", t, false), proc.wall_seconds());
+          if (barrier.Finished(t)) break;
+          for (const auto& name : barrier.DeclareLost(t, proc.wall_seconds(), tick_wall)) {
+            const std::string why = "process " + name + " lost: it held the clock for " +
+                                    std::to_string(options.barrier_timeout_s) +
+                                    " s of wall time without a word (sim.barrier_timeout_s)";
+            std::cerr << "rover_sim: " << why << "; the rover stops and the clock runs on without it\n";
+            sim->Halt(why);
+          }
+          if (proc.wall_seconds() - last_note > 10.0) {
+            std::cerr << "rover_sim: the clock waits at " << t << ": " << barrier.Holding(t) << "\n";
+            last_note = proc.wall_seconds();
+          }
+          HandleEither(proc.bus().lcm(), &sync_bus, 2);
+        }
+        // 2. No faster than `rate` times the wall clock.
+        if (options.rate > 0) {
+          const double due = wall_start + (t + tick_us - rover_start) * 1e-6 / options.rate;
+          while (!proc.stopping() && proc.wall_seconds() < due) {
+            HandleEither(proc.bus().lcm(), &sync_bus, std::max(1, static_cast<int>((due - proc.wall_seconds()) * 1000)));
+          }
+        }
+        // 3. The next instant: what came during this one acts first (commands, heartbeats).
+        proc.bus().SealBatch();
+        proc.bus().DispatchBatch();
+        const std::int64_t until = t + tick_us;
+        while (sim->utime() < until) {
+          check_deadman();
+          publish_step(sim->Step(options.step_s));
+        }
+        t = sim->utime();
+        begin_instant();
+        tick_wall = proc.wall_seconds();
+      }
+      return 0;
+    }
+
+    // ---- Real time: the clock runs at `rate` times the wall clock, as on a rover. ----
+    const auto hold_start = std::chrono::steady_clock::now();
+    double next_hold_heartbeat_wall = 0;
+    while (!waiting.empty() && !proc.stopping()) {
+      // Once a wall second, as everywhere: every heartbeat on the bus (this one included)
+      // wakes Handle(), so sending one per wake-up floods the bus.
+      if (proc.wall_seconds() >= next_hold_heartbeat_wall) {
+        proc.PublishHeartbeat();
+        next_hold_heartbeat_wall = proc.wall_seconds() + 1.0;
+      }
+      proc.bus().Handle(200);
+      if (std::chrono::steady_clock::now() - hold_start > std::chrono::seconds(30)) {
+        std::string list;
+        for (const auto& n : waiting) list += " " + n;
+        throw std::runtime_error("--hold-for: no heartbeat within 30 s from:" + list);
+      }
+    }
+    std::int64_t next_clock = sim->utime();
+    const auto wall_start = std::chrono::steady_clock::now();
+    const std::int64_t rover_start = sim->utime();
+    double next_heartbeat_wall = 0;
+    while (!proc.stopping()) {
+      while (proc.bus().Handle(0)) {
+      }
+      check_deadman();
+      publish_step(sim->Step(options.step_s));
+      const std::int64_t now = sim->utime();
+      proc.ObserveTime(now);
       if (now >= next_clock) {
-        rover_msgs::rover_clock_t m{};
-        m.utime = now;
-        m.rate = options.rate;
-        proc.bus().Publish(channels::kClock, m);
+        publish_clock(now);
         next_clock += period(options.clock_hz);
+      }
+      if (proc.wall_seconds() >= next_heartbeat_wall) {
+        proc.PublishHeartbeat();
+        next_heartbeat_wall = proc.wall_seconds() + 0.25;
       }
       // Pace rover time at `rate` times the wall clock.
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-      if (proc.wall_seconds() >= next_heartbeat_wall) {
-        proc.PublishHeartbeat();
-        next_heartbeat_wall = proc.wall_seconds() + 1.0;
-      }
       const double ahead_s = (now - rover_start) * 1e-6 / options.rate - wall;
       if (ahead_s > 0) {
         proc.bus().Handle(static_cast<int>(ahead_s * 1000.0));

@@ -202,10 +202,14 @@ int main(int argc, char** argv) {
                                   " (expected a writable path: executor.state_file or --state-file)");
       }
     }
-    // Ids must never repeat across restarts of this process.
-    const auto first_id = std::chrono::duration_cast<std::chrono::milliseconds>(
-                              std::chrono::system_clock::now().time_since_epoch())
-                              .count();
+    // Ids must never repeat across restarts of this process: from the wall clock, except in
+    // virtual time on a fresh start, where the same run must give the same messages.
+    const bool restarted = interrupted.has_value() || stop_unknown || written.submission_id >= 0;
+    const auto first_id = proc.virtual_time() && !restarted
+                              ? std::int64_t{1}
+                              : std::chrono::duration_cast<std::chrono::milliseconds>(
+                                    std::chrono::system_clock::now().time_since_epoch())
+                                    .count();
     seq::SequenceExecutor executor(options, first_id);
     OutputPublisher publisher(proc);
     bool write_failing = false;
@@ -229,7 +233,7 @@ int main(int argc, char** argv) {
     };
     auto report_interrupted = [&] {
       if (!interrupted && !stop_unknown) return;
-      executor.Tick(proc.now(), proc.wall_seconds());
+      executor.Tick(proc.now(), proc.guard_seconds());
       if (stop_unknown) executor.Abort("");  // nothing active: STOP only
       stop_unknown = false;
       if (interrupted) {
@@ -345,20 +349,18 @@ int main(int argc, char** argv) {
         }, 2);
     proc.bus().Subscribe<rover_msgs::heartbeat_t>(channels::kHeartbeat,
                                                   [&](const rover_msgs::heartbeat_t& m) {
-                                                    executor.OnHeartbeat(m.process, proc.wall_seconds());
+                                                    executor.OnHeartbeat(m.process, proc.guard_seconds());
                                                     flush();
                                                   }, 100);
-    // rover_sim's dead-man stops a motion when this process is silent for
-    // mobility.deadman_s (1.5 s): beat four times a second so a busy moment is not silence.
-    proc.set_heartbeat_period(0.25);
     proc.Run(
         [&] {
           // The heartbeats that arrived while this process was starved count before the
-          // tick judges its peers lost (at most 50 ms of them, so a flood cannot stall it).
+          // tick judges its peers lost (at most 50 ms of them, so a flood cannot stall it;
+          // in virtual time nothing is starved: they came in this tick's batch).
           proc.HandleReceived(50);
-          executor.Tick(proc.now(), proc.wall_seconds());
+          executor.Tick(proc.now(), proc.guard_seconds());
           flush();
-          if (proc.now() > 0 || proc.wall_seconds() > 2.0) report_interrupted();
+          if (proc.now() > 0 || (!proc.virtual_time() && proc.wall_seconds() > 2.0)) report_interrupted();
           proc.SetHealth(0, seq::ToString(executor.state()));
         },
         25);

@@ -19,7 +19,9 @@
 #include <rover_msgs/stereo_frame_t.hpp>
 #include <rover_msgs/vo_update_t.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <deque>
 #include <iostream>
 #include <optional>
 
@@ -47,6 +49,16 @@ int main(int argc, char** argv) {
 
     std::optional<rover_msgs::stereo_frame_t> previous;  // images dropped; pose and ids kept
     int failures = 0;
+    // Answers wait until the compute profile's VO time has passed since their frame came
+    // (virtual time; on a rover they go at once): the rover's computer is not this one.
+    std::deque<std::pair<std::int64_t, rover_msgs::vo_update_t>> answers;
+    proc.set_pending_work([&] {
+      while (!answers.empty() && proc.now() >= answers.front().first) {
+        proc.bus().Publish(channels::kVoUpdate, answers.front().second);
+        answers.pop_front();
+      }
+      return false;
+    });
 
     proc.bus().Subscribe<rover_msgs::stereo_frame_t>(
         channels::kStereoFrame,
@@ -121,7 +133,11 @@ int main(int argc, char** argv) {
           out.ms_ransac = result.times.ransac_ms;
           out.ms_ml = result.times.ml_ms;
           out.ms_total = result.times.total_ms;
-          proc.bus().Publish(channels::kVoUpdate, out);
+          answers.emplace_back(proc.DueAt(std::max(proc.now(), frame.utime), proc.compute().vo_s), out);
+          if (!proc.virtual_time()) {
+            proc.bus().Publish(channels::kVoUpdate, out);
+            answers.clear();
+          }
           // A bad frame does not become the reference for the next one.
           if (result.status != vo::VoStatus::kBadInput) {
             previous = frame;

@@ -71,6 +71,7 @@ int main(int argc, char** argv) {
     if (url.empty()) url = deployment.lcm_url;
     std::vector<std::string> env;
     if (!url.empty()) env.push_back("ROVER_LCM_URL=" + url);
+    env.push_back("ROVER_TIME=" + deployment.time);
     // The bus the processes will open (bus/process.hpp: --lcm-url, else the environment).
     const char* env_url = std::getenv("ROVER_LCM_URL");
     const std::string bus_url =

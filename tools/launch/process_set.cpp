@@ -34,10 +34,12 @@ bool ValidHostName(const std::string& name) {
 
 Deployment LoadDeployment(const std::string& path) {
   const auto root = config::ConfigNode::LoadFile(path);
-  root.CheckKeys({"lcm_url", "processes", "description"});
+  root.CheckKeys({"lcm_url", "processes", "description", "time"});
   Deployment d;
   d.source = path;
   root.Get("lcm_url", d.lcm_url);
+  std::string time;
+  root.GetEnum("time", time, {"virtual", "real"});
   const auto list = root["processes"];
   if (!list.IsSequence() || list.size() == 0) {
     list.Fail("expected a non-empty list of processes (name, args)");
@@ -72,6 +74,22 @@ Deployment LoadDeployment(const std::string& path) {
       d.hosts.push_back(spec.host);
     }
     d.processes.push_back(spec);
+  }
+  // A set with the simulator runs in virtual time unless the file says `time: real`.
+  bool simulated = false;
+  for (const auto& p : d.processes) simulated = simulated || p.name == "rover_sim";
+  d.time = !time.empty() ? time : simulated ? "virtual" : "real";
+  if (d.time == "virtual" && !simulated) root["time"].Fail("virtual time needs rover_sim in the set (its clock)");
+  if (d.time == "virtual") {
+    // The clock waits for every other process of the set, on every host.
+    std::string members;
+    for (const auto& p : d.processes)
+      if (p.name != "rover_sim") members += (members.empty() ? "" : ",") + p.name;
+    for (auto& p : d.processes) {
+      if (p.name != "rover_sim" || std::find(p.args.begin(), p.args.end(), "--hold-for") != p.args.end()) continue;
+      p.args.push_back("--hold-for");
+      p.args.push_back(members);
+    }
   }
   return d;
 }

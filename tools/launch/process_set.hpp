@@ -27,6 +27,10 @@ struct Deployment {
   // when the file names none (the whole set runs on one host). Either every process has
   // `host:` or none has.
   std::vector<std::string> hosts;
+  // "virtual" (a set with rover_sim, unless the file's `time:` says "real") or "real":
+  // every process gets it as $ROVER_TIME (README, "Simulated time"), and in virtual time
+  // rover_sim gets `--hold-for` with every other process of the set, its barrier.
+  std::string time = "real";
 };
 
 // Reads configs/deploy/*.yaml. Throws config::ConfigError naming the file and key.

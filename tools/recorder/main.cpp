@@ -12,10 +12,18 @@
 //
 // It publishes a heartbeat (process "rover_recorder") once a wall second, like the rover's
 // processes: `dropped` counts messages it had to drop, the detail says what it wrote and lost.
+//
+// In virtual time ($ROVER_TIME=virtual: README, "Simulated time") it is a member of the
+// simulated set: it sends a sync report after what it received, so the clock waits until
+// every message of an instant has reached the log, and it writes each instant's messages in
+// one canonical order (channel, publisher, count), stamped with the instant's rover time,
+// and beats once a rover second. The same run then gives the same log, byte for byte,
+// however busy the machine was.
 // SIGINT or SIGTERM stops it: it dispatches what LCM already holds, writes everything queued,
 // flushes, prints counts per channel and exits 0 (1 if the log could not be written).
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
+#include "bus/virtual_time.hpp"
 #include "logcheck/log_check.hpp"
 
 #include <lcm/lcm-cpp.hpp>
@@ -35,7 +43,11 @@
 #include <string>
 #include <sys/stat.h>
 #include <thread>
+#include <tuple>
 #include <vector>
+#include <algorithm>
+#include <map>
+#include <memory>
 
 namespace {
 
@@ -98,24 +110,104 @@ class EventQueue {
   bool closed_ = false;
 };
 
-// LCM's dispatch thread: copies each message into the queue and nothing else.
+// LCM's dispatch thread: copies each message into the queue and nothing else (in virtual
+// time: into the instant's batch, written sorted when the clock moves on).
 class Receiver {
  public:
-  Receiver(lcm::LCM& lcm, EventQueue& queue) : queue_(queue) {
+  Receiver(lcm::LCM& lcm, EventQueue& queue, bool virtual_time, const std::string& url)
+      : lcm_(lcm), queue_(queue), virtual_(virtual_time) {
     lcm::Subscription* sub = lcm.subscribe(".*", &Receiver::OnMessage, this);
     if (sub == nullptr) throw std::runtime_error("LCM subscribe to \".*\" failed");
     sub->setQueueCapacity(kLcmQueueCapacity);
+    if (virtual_) sync_ = std::make_unique<rover::bus::SyncSender>(url);
   }
   void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     const auto* p = static_cast<const std::uint8_t*>(rbuf->data);
     Event e{rbuf->recv_utime, channel, std::vector<std::uint8_t>(p, p + rbuf->data_size)};
-    if (!queue_.Push(std::move(e))) ++dropped_;
+    if (!virtual_) {
+      if (!queue_.Push(std::move(e))) ++dropped_;
+      return;
+    }
+    ++received_total_;
+    changed_ = true;
+    Held h{{channel, 0u, 0, arrivals_++}, std::move(e)};
+    if (const auto* type = rover::logcheck::FindChannel(channel)) {
+      const auto read = rover::logcheck::ReadStamp(*type, h.event.data.data(), h.event.data.size());
+      if (read.stamp) {
+        auto& seen = received_[channel][read.stamp->publisher_id];
+        seen = std::max(seen, read.stamp->count + 1);
+        h.key = {channel, read.stamp->publisher_id, read.stamp->count, 0};
+        if (channel == rover::channels::kClock && read.stamp->publisher_id == rover::bus::PublisherId("rover_sim") &&
+            read.stamp->utime > instant_) {
+          FlushInstant(read.stamp->utime);
+        }
+      }
+    }
+    held_.push_back(std::move(h));
   }
+  // Virtual time, on the receive thread after each burst: the sync report when something
+  // came, and at least every 0.25 s of wall time (alive).
+  void AfterBurst() {
+    if (!virtual_) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (!changed_ && now - last_sync_ < std::chrono::milliseconds(250)) return;
+    rover::simtime::SyncReport r;
+    r.process = "rover_recorder";
+    r.utime = instant_ > 0 ? instant_ : -1;
+    r.subscribes_all = true;
+    r.received = received_;
+    if (heartbeats_ > 0) r.published[rover::channels::kHeartbeat] = heartbeats_;
+    sync_->Send(r);
+    changed_ = false;
+    last_sync_ = now;
+  }
+  // Virtual time, at the end: the last instant was not finished (the clock stopped in
+  // it), so what came of it may be partial: it is left out, and the log ends with the last
+  // whole instant, the same in every run.
+  void Finish() {
+    if (virtual_) held_.clear();
+  }
+  bool virtual_time() const { return virtual_; }
   std::int64_t dropped() const { return dropped_; }
 
  private:
+  struct Held {
+    std::tuple<std::string, std::uint32_t, std::int64_t, std::uint64_t> key;  // channel, publisher, count, arrival
+    Event event;
+  };
+  // Writes the held batch, sorted, stamped with its instant, and moves to `next`.
+  void FlushInstant(std::int64_t next) {
+    std::sort(held_.begin(), held_.end(), [](const Held& a, const Held& b) { return a.key < b.key; });
+    for (auto& h : held_) {
+      h.event.timestamp = instant_ > 0 ? instant_ : next;
+      if (!queue_.Push(std::move(h.event))) ++dropped_;
+    }
+    held_.clear();
+    instant_ = next;
+    if (instant_ >= next_heartbeat_) {  // once a rover second, from what it has received
+      rover_msgs::heartbeat_t hb{};
+      hb.utime = instant_;
+      hb.process = "rover_recorder";
+      hb.seq = heartbeats_++;
+      hb.state = dropped_ > 0 ? rover_msgs::heartbeat_t::STATE_DEGRADED : rover_msgs::heartbeat_t::STATE_OK;
+      hb.detail = "received " + std::to_string(received_total_) + " messages, " + std::to_string(dropped_) + " dropped";
+      hb.dropped = dropped_;
+      lcm_.publish(rover::channels::kHeartbeat, &hb);
+      next_heartbeat_ = instant_ + 1000000;
+    }
+  }
+
+  lcm::LCM& lcm_;
   EventQueue& queue_;
+  bool virtual_;
   std::atomic<std::int64_t> dropped_{0};
+  std::unique_ptr<rover::bus::SyncSender> sync_;
+  std::vector<Held> held_;
+  std::map<std::string, std::map<std::uint32_t, std::int64_t>> received_;
+  std::int64_t instant_ = 0, next_heartbeat_ = 0, heartbeats_ = 0, received_total_ = 0;
+  std::uint64_t arrivals_ = 0;
+  bool changed_ = true;
+  std::chrono::steady_clock::time_point last_sync_{};
 };
 
 // The writer thread: writes each event, follows the publishers' counts, reports losses.
@@ -292,7 +384,9 @@ int main(int argc, char** argv) {
     if (!lcm.good()) throw std::runtime_error("cannot open the LCM bus " + args->url);
     EventQueue queue;
     Writer writer(args->output, queue);
-    Receiver receiver(lcm, queue);
+    const char* time_env = std::getenv("ROVER_TIME");
+    const bool virtual_time = time_env != nullptr && std::string(time_env) == "virtual";
+    Receiver receiver(lcm, queue, virtual_time, args->url);
     std::signal(SIGINT, OnSignal);
     std::signal(SIGTERM, OnSignal);
 
@@ -301,16 +395,23 @@ int main(int argc, char** argv) {
     std::thread receive_thread([&] {
       bool reported = false;
       while (receiving) {
-        if (lcm.handleTimeout(100) < 0 && errno != EINTR) {
+        const int status = lcm.handleTimeout(receiver.virtual_time() ? 50 : 100);
+        if (status < 0 && errno != EINTR) {
           if (!reported) std::cerr << "rover_recorder: LCM handle failed on " << args->url << "\n";
           reported = true;
           std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        } else if (status > 0) {  // a burst, bounded so that a flood cannot hold back the sync report
+          const auto burst_end = std::chrono::steady_clock::now() + std::chrono::milliseconds(20);
+          while (std::chrono::steady_clock::now() < burst_end && lcm.handleTimeout(0) > 0) {
+          }
         }
+        receiver.AfterBurst();
       }
       // Stopping: dispatch what LCM already holds (bounded, as a live bus never goes quiet).
       const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
       while (lcm.handleTimeout(0) > 0 && std::chrono::steady_clock::now() < until) {
       }
+      receiver.Finish();
     });
     std::thread write_thread([&] { writer.Run(); });
     std::cerr << "rover_recorder: recording " << args->url << " to " << args->output << "\n";
@@ -318,7 +419,7 @@ int main(int argc, char** argv) {
     std::int64_t seq = 0;
     auto next_heartbeat = std::chrono::steady_clock::now();
     while (!g_stop) {
-      if (std::chrono::steady_clock::now() >= next_heartbeat) {
+      if (!virtual_time && std::chrono::steady_clock::now() >= next_heartbeat) {
         PublishHeartbeat(lcm, seq++, writer, receiver);
         next_heartbeat += std::chrono::seconds(1);
       }

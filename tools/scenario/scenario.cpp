@@ -592,6 +592,7 @@ std::string SummaryJson(const ScenarioSummary& s) {
   WriteFigure(j, s, "rover_time_s", s.rover_time_s);
   j.Field("wall_time_s", s.wall_time_s);
   WriteLogCheck(j, s.log);
+  if (!s.log_digest.empty()) j.Field("log_digest", s.log_digest);
   j.Key("process_events").BeginArray();
   for (const auto& e : s.process_events) j.Value(e);
   j.EndArray();
@@ -643,6 +644,7 @@ std::string SummaryText(const ScenarioSummary& s) {
   for (const auto& e : s.process_events) os << "  " << e << "\n";
   os << "  log: " << s.log.messages << " messages, " << s.log.lost << " lost; complete: "
      << (s.log.complete ? "yes" : "no (" + s.log.verdict_reason + ")") << "\n";
+  if (!s.log_digest.empty()) os << "  log digest: " << s.log_digest << " (sha256, less VO's ms_* wall times)\n";
   for (const auto& w : s.log.warnings) os << "  log warning: " << w << "\n";
   std::map<std::string, std::string> figures_by_reason;  // one line per reason
   for (const auto& [key, why] : s.missing) {

@@ -106,6 +106,9 @@ struct ScenarioSummary {
   std::map<std::string, std::string> missing;
   // Whether the log lost anything (tools/logcheck): counts and gaps per channel.
   logcheck::LogReport log;
+  // SHA-256 of the log less its wall-time fields (logcheck/log_digest.hpp): two runs of the
+  // same scenario and seeds in virtual time give the same digest.
+  std::string log_digest;
 };
 
 // Reads an LCM log of a run and computes the summary. The footprint is used for the

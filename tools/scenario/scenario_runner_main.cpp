@@ -12,14 +12,17 @@
 #include "bus/channels.hpp"
 #include "bus/process.hpp"
 #include "bus/signing.hpp"
+#include "bus/virtual_time.hpp"
 #include "config/file_read.hpp"
 #include "config/yaml_config.hpp"
 #include "launch/process_set.hpp"
+#include "logcheck/log_digest.hpp"
 #include "scenario/scenario.hpp"
 #include "hazards/hazard_assessor.hpp"
 #include "terrain/world.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
+#include <rover_msgs/rover_clock_t.hpp>
 #include <rover_msgs/sequence_status_t.hpp>
 #include <rover_msgs/sequence_submit_t.hpp>
 #include <rover_msgs/step_report_t.hpp>
@@ -217,20 +220,32 @@ int main(int argc, char** argv) {
           }
         });
 
-    const std::vector<std::string> env = {"ROVER_LCM_URL=" + url};
+    // Virtual time (README, "Simulated time"): the runner and the recorder are members of
+    // the set too, so that the sequence goes in at the first instant and the log holds
+    // every message of every instant, whatever the machine's load.
+    const bool virtual_time = deployment.time == "virtual";
+    if (virtual_time) bus.clock().set_virtual(true);
+    const std::vector<std::string> env = {"ROVER_LCM_URL=" + url, "ROVER_TIME=" + deployment.time};
+    rover::bus::SyncSender sync(url);
+    std::int64_t instant = -1;  // the rover time the runner has finished (-1: before the clock)
+    std::int64_t clock_seen = -1;
+    bus.Subscribe<rover_msgs::rover_clock_t>(rover::channels::kClock, [&](const rover_msgs::rover_clock_t& c) {
+      if (rover::bus::StampOf(c)->first == rover::bus::PublisherId("rover_sim")) clock_seen = std::max(clock_seen, c.utime);
+    }, 10000);
+    auto send_sync = [&] { sync.Send(bus.SyncState("scenario_runner", instant, false)); };
     // The recorder first, and heard on the bus before any process starts, so that the log
     // holds every publisher from its first message (the completeness check expects each
     // count to start at 0). It stops last, after the processes, and flushes.
     rover::launch::ProcessSet recorder(rover::launch::BinDir(), out_dir, false);
     recorder.Start({"rover_recorder", "rover_recorder", {"--lcm-url", url, log_path}}, env);
-    while (!alive.count("rover_recorder") && !g_stop && wall() < 10) {
+    while (!virtual_time && !alive.count("rover_recorder") && !g_stop && wall() < 10) {
       bus.Handle(50);
       for (const auto& [name, how] : recorder.Poll(0)) {
         throw std::runtime_error("rover_recorder " + how + " at start (see " + out_dir +
                                  "/rover_recorder.log)");
       }
     }
-    if (!alive.count("rover_recorder")) {
+    if (!virtual_time && !alive.count("rover_recorder")) {
       throw std::runtime_error("rover_recorder sent no heartbeat within 10 s");
     }
     rover::launch::ProcessSet set(rover::launch::BinDir(), out_dir, false);
@@ -245,7 +260,7 @@ int main(int argc, char** argv) {
         SetOption(p.args, "--start",
                   Num(spec.start_x) + "," + Num(spec.start_y) + "," + Num(spec.start_yaw_deg));
         SetOption(p.args, "--rate", Num(spec.sim_rate));
-        SetOption(p.args, "--hold-for", others);
+        SetOption(p.args, "--hold-for", virtual_time ? others + ",rover_recorder,scenario_runner" : others);
       } else if (p.name == "camera_capture") {
         SetOption(p.args, "--world", configs.world);
       } else if (p.name == "sequence_executor") {
@@ -268,9 +283,21 @@ int main(int argc, char** argv) {
       partial.process_events.push_back(e);
       std::cout << e << "\n" << std::flush;
     };
-    // Wait until every process has said it is alive.
+    // Wait until every process has said it is alive (in virtual time: until the clock
+    // starts, which it does when every member, this runner included, has reported).
     bool ready = false;
-    while (!ready && !g_stop && wall() < 30) {
+    auto last_hello = wall() - 1;
+    while (virtual_time && clock_seen < 0 && !g_stop && wall() < 30) {
+      if (wall() - last_hello > 0.2) {
+        send_sync();
+        last_hello = wall();
+      }
+      bus.Handle(20);
+      for (const auto& [name, how] : set.Poll(0)) note(name + " " + how + " at start");
+    }
+    if (virtual_time && clock_seen < 0) note("the clock did not start within 30 s (see rover_sim.log)");
+    if (virtual_time) ready = true;
+    while (!virtual_time && !ready && !g_stop && wall() < 30) {
       bus.Handle(50);
       for (const auto& [name, how] : set.Poll(0)) note(name + " " + how + " at start");
       ready = true;
@@ -286,8 +313,30 @@ int main(int argc, char** argv) {
 
     bool killed = false;
     std::optional<double> done_at;
+    std::optional<std::int64_t> final_utime;
+    auto last_sync = wall();
     while (!g_stop && wall() < spec.timeout_s) {
-      bus.Handle(20);
+      if (virtual_time) {
+        // One instant at a time: what came in it is counted, then the runner reports it
+        // finished. It ends 2 s of rover time after the final status (the last messages:
+        // stop, final pose, truth) by not finishing that instant: the clock stops there.
+        bool moved = false;
+        if (bus.Handle(20)) {
+          const auto burst_end = wall() + 0.02;
+          while (wall() < burst_end && bus.Handle(0)) {
+          }
+          moved = true;
+        }
+        if (final_status && !final_utime) final_utime = clock_seen;
+        if (final_utime && clock_seen >= *final_utime + 2000000) break;
+        if (moved || wall() - last_sync > 0.25) {
+          instant = clock_seen;
+          send_sync();
+          last_sync = wall();
+        }
+      } else {
+        bus.Handle(20);
+      }
       for (const auto& [name, how] : set.Poll(0)) {
         if (killed && name == spec.kill_process) continue;
         note(name + " " + how + " unexpectedly");
@@ -301,9 +350,13 @@ int main(int argc, char** argv) {
       }
       if (final_status && !done_at) done_at = wall();
       // Let the last messages (stop, final pose, truth) reach the log.
-      if (done_at && wall() - *done_at > 1.0) break;
+      if (!virtual_time && done_at && wall() - *done_at > 1.0) break;
     }
     if (!final_status) note("no final status within " + Num(spec.timeout_s) + " s");
+    // The clock first, so that nothing moves while the others stop (in virtual time it
+    // waits for this runner, which has stopped reporting: the log ends at one instant).
+    set.Signal("rover_sim", SIGTERM);
+    for (const double until = wall() + 5; set.Running("rover_sim") && wall() < until;) set.Poll(20);
     set.StopAll();
     recorder.Signal("rover_recorder", SIGTERM);  // it writes what it holds, then exits
     for (const double until = wall() + 10; recorder.Running("rover_recorder") && wall() < until;) {
@@ -316,6 +369,7 @@ int main(int argc, char** argv) {
     recorder.StopAll();
 
     auto summary = rover::tools::SummarizeLog(log_path, footprint);
+    summary.log_digest = rover::logcheck::DigestLog(log_path).sha256_hex;
     {
       // Truth clearance to the rocks the rover cannot drive over (the simulator faults on them).
       double max_height_m = 0.3;

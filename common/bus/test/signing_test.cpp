@@ -4,6 +4,8 @@
 #include "bus/channels.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
+#include <rover_msgs/imu_t.hpp>
+#include <rover_msgs/rover_clock_t.hpp>
 #include <rover_msgs/keepout_zones_t.hpp>
 #include <rover_msgs/mobility_command_t.hpp>
 #include <rover_msgs/new_site_t.hpp>
@@ -56,7 +58,9 @@ static_assert(rover::bus::Authenticated<rover_msgs::sequence_control_t>);
 static_assert(rover::bus::Authenticated<rover_msgs::mobility_command_t>);
 static_assert(rover::bus::Authenticated<rover_msgs::keepout_zones_t>);
 static_assert(rover::bus::Authenticated<rover_msgs::new_site_t>);
-static_assert(!rover::bus::Authenticated<rover_msgs::heartbeat_t>);
+static_assert(rover::bus::Authenticated<rover_msgs::heartbeat_t>);  // evidence of life: a replay must not pass
+static_assert(rover::bus::Authenticated<rover_msgs::rover_clock_t>);  // time: only the time source
+static_assert(!rover::bus::Authenticated<rover_msgs::imu_t>);
 
 TEST(Signing, SignedMessageVerifiesAfterTheWireOnce) {
   Signer signer(TestKey(), "rover_seq");

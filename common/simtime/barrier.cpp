@@ -1,0 +1,122 @@
+#include "simtime/barrier.hpp"
+
+#include <algorithm>
+#include <sstream>
+
+namespace rover::simtime {
+
+std::uint32_t PublisherIdOf(const std::string& name) {
+  std::uint32_t h = 2166136261u;  // FNV-1a, 32 bits
+  for (unsigned char c : name) {
+    h ^= c;
+    h *= 16777619u;
+  }
+  return h;
+}
+
+Barrier::Barrier(std::vector<std::string> members, double liveness_s) : liveness_s_(liveness_s) {
+  for (auto& name : members) members_[name].id = PublisherIdOf(name);
+}
+
+void Barrier::Report(const SyncReport& report, double wall_s) {
+  auto it = members_.find(report.process);
+  if (it == members_.end()) return;
+  Member& m = it->second;
+  const bool rejoining = m.lost;
+  m.last = report;
+  m.heard = true;
+  m.lost = false;  // a lost member that speaks again is waited for again
+  m.last_wall_s = wall_s;
+  if (rejoining) {
+    m.excused.clear();
+    for (const auto& [pub_name, pub] : members_) {
+      if (!pub.heard) continue;
+      for (const auto& entry : pub.last.published) {
+        const std::string& channel = entry.first;
+        const std::int64_t missing = Missing(m, channel, pub);
+        if (missing > 0) m.excused[channel][pub.id] = missing;
+      }
+    }
+  }
+}
+
+std::int64_t Barrier::Missing(const Member& m, const std::string& channel, const Member& pub) const {
+  auto p = pub.last.published.find(channel);
+  if (p == pub.last.published.end() || p->second <= 0) return 0;
+  if (!m.last.subscribes_all && !m.last.subscribed.count(channel)) return 0;
+  std::int64_t got = 0;
+  if (auto c = m.last.received.find(channel); c != m.last.received.end()) {
+    if (auto r = c->second.find(pub.id); r != c->second.end()) got = r->second;
+  }
+  if (auto c = m.excused.find(channel); c != m.excused.end()) {
+    if (auto r = c->second.find(pub.id); r != c->second.end()) got += r->second;
+  }
+  return p->second - got;
+}
+
+bool Barrier::AllHeard() const {
+  for (const auto& [name, m] : members_)
+    if (!m.heard) return false;
+  return true;
+}
+
+std::string Barrier::Holds(const std::string& name, const Member& m, std::int64_t utime) const {
+  if (m.lost) return "";
+  if (!m.heard) return name + " has not reported";
+  if (m.last.utime < utime) {
+    return name + " has finished only " + std::to_string(m.last.utime) + " (clock " + std::to_string(utime) + ")";
+  }
+  if (m.last.busy) return name + " is still working";
+  // Every message a live member published on a channel this member reads has reached it.
+  for (const auto& [pub_name, pub] : members_) {
+    if (!pub.heard) continue;
+    for (const auto& [channel, count] : pub.last.published) {
+      if (const std::int64_t missing = Missing(m, channel, pub); missing > 0) {
+        return name + " has received " + std::to_string(count - missing) + " of " + std::to_string(count) +
+               " " + channel + " from " + pub_name;
+      }
+    }
+  }
+  return "";
+}
+
+bool Barrier::Finished(std::int64_t utime) const {
+  for (const auto& [name, m] : members_)
+    if (!Holds(name, m, utime).empty()) return false;
+  return true;
+}
+
+std::string Barrier::Holding(std::int64_t utime) const {
+  std::ostringstream os;
+  for (const auto& [name, m] : members_) {
+    const std::string why = Holds(name, m, utime);
+    if (why.empty()) continue;
+    if (os.tellp() > 0) os << "; ";
+    os << why;
+  }
+  return os.str();
+}
+
+std::vector<std::string> Barrier::DeclareLost(std::int64_t utime, double wall_s, double tick_wall_s) {
+  std::vector<std::string> lost;
+  for (auto& [name, m] : members_) {
+    if (Holds(name, m, utime).empty()) continue;
+    const double since = wall_s - std::max(m.heard ? m.last_wall_s : tick_wall_s, tick_wall_s);
+    if (since > liveness_s_) {
+      m.lost = true;
+      lost.push_back(name);
+    }
+  }
+  return lost;
+}
+
+std::vector<std::string> Barrier::Lost() const {
+  std::vector<std::string> out;
+  for (const auto& [name, m] : members_)
+    if (m.lost) out.push_back(name);
+  return out;
+}
+
+std::uint32_t Barrier::Id(const std::string& process) const { return PublisherIdOf(process); }
+
+}  // namespace rover::simtime

@@ -1,0 +1,87 @@
+// Virtual time for a simulated process set (README, "Simulated time").
+//
+// In simulation rover time is virtual and conservative: the clock (rover_sim) moves from
+// rover time t to the next tick only when every member of the set has finished all the
+// work due at t and no message between members is still in flight. Each member says so
+// with a sync report after it has handled everything it received: the rover time it has
+// finished, what it has published per channel, and what it has received per channel and
+// publisher (the pub_seq counts every message carries). A message is in flight while a
+// subscriber of its channel has not yet counted it.
+//
+// This is Chandy-Misra-style conservative simulation with one global time step, chosen
+// over a per-process lookahead scheme because the processes stay the deployed ones: they
+// only have to report counts, not predict their own output times.
+//
+// The one wall-clock rule left: a member that holds the clock and says nothing for
+// `liveness_s` of wall time (a hung or dead process) is declared lost and left out
+// until it reports again, so the clock runs on and the executor finds it lost.
+// No LCM here: the messages are converted in common/bus.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace rover::simtime {
+
+struct SyncReport {
+  std::string process;
+  std::int64_t utime = 0;     // rover time whose work is finished
+  bool busy = false;          // alive, still working on work due at `utime`
+  bool subscribes_all = false;  // a recorder: counts as a subscriber of every channel
+  std::set<std::string> subscribed;
+  std::map<std::string, std::int64_t> published;  // channel -> messages published
+  // channel -> publisher id -> messages received (the highest count seen + 1)
+  std::map<std::string, std::map<std::uint32_t, std::int64_t>> received;
+};
+
+class Barrier {
+ public:
+  // `members`: the processes the clock waits for (names as they report themselves).
+  Barrier(std::vector<std::string> members, double liveness_s);
+
+  // A report from a process; reports from non-members are ignored. Wall seconds are for
+  // liveness only.
+  void Report(const SyncReport& report, double wall_s);
+
+  // Every member has reported at least once (the clock may start).
+  bool AllHeard() const;
+  // Whether the work due at `utime` is finished: every member that is not lost has
+  // finished `utime` (and is not busy), and every message a member published has been
+  // counted by every member subscribed to its channel.
+  bool Finished(std::int64_t utime) const;
+  // One line: who holds the clock at `utime` and why (for diagnostics and the lost line).
+  std::string Holding(std::int64_t utime) const;
+  // Members that hold the clock at `utime` and have sent nothing for liveness_s of wall
+  // time since the later of their last report and `tick_wall_s` (when the clock reached
+  // `utime`): declared lost now (returned once each) until they report again.
+  std::vector<std::string> DeclareLost(std::int64_t utime, double wall_s, double tick_wall_s);
+  // Members currently lost.
+  std::vector<std::string> Lost() const;
+  std::uint32_t Id(const std::string& process) const;
+
+ private:
+  struct Member {
+    std::uint32_t id = 0;
+    SyncReport last;
+    bool heard = false;
+    bool lost = false;
+    double last_wall_s = 0.0;
+    // Messages a member lost while it was declared lost (its socket overflowed during a
+    // freeze): forgiven when it rejoins, so that it does not hold the clock for them.
+    std::map<std::string, std::map<std::uint32_t, std::int64_t>> excused;
+  };
+  std::int64_t Missing(const Member& m, const std::string& channel, const Member& pub) const;
+  // "" when `name` does not hold the clock at `utime`, else why it does.
+  std::string Holds(const std::string& name, const Member& m, std::int64_t utime) const;
+
+  std::map<std::string, Member> members_;
+  double liveness_s_;
+};
+
+// The publisher id Bus::Publish stamps in pub_seq's high 32 bits (FNV-1a of the name).
+std::uint32_t PublisherIdOf(const std::string& name);
+
+}  // namespace rover::simtime
