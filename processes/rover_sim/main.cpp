@@ -266,7 +266,9 @@ int main(int argc, char** argv) {
     auto publish_clock = [&](std::int64_t now) {
       rover_msgs::rover_clock_t m{};
       m.utime = now;
-      m.rate = options.rate;
+      // Virtual time has no fixed ratio to the wall clock (the pacing is only a ceiling): 0,
+      // so that a run at 50x and one as fast as possible publish the same bytes.
+      m.rate = proc.virtual_time() ? 0.0 : options.rate;
       m.mode = proc.virtual_time() ? rover_msgs::rover_clock_t::MODE_VIRTUAL : rover_msgs::rover_clock_t::MODE_REAL;
       proc.bus().Publish(channels::kClock, m);
     };

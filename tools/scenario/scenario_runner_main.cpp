@@ -129,17 +129,20 @@ void RunPlot(const std::string& out_dir) {
 
 int main(int argc, char** argv) {
   return rover::bus::RunMain("scenario_runner", [&]() -> int {
-    std::string scenario_path, out_dir, url;
+    std::string scenario_path, out_dir, url, rate_arg;
     bool quiet = false, plot = true;
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
       if (arg == "--help" || arg == "-h") {
-        std::cout << "usage: scenario_runner SCENARIO.yaml --out DIR [--lcm-url URL] [--quiet] [--no-plot]\n\n"
+        std::cout << "usage: scenario_runner SCENARIO.yaml --out DIR [--lcm-url URL] [--rate R|max] [--quiet] [--no-plot]\n\n"
                      "Runs a scenario (configs/scenarios/) on a fresh bus, records DIR/log.lcm\n"
                      "with rover_recorder, checks that the log lost nothing and writes\n"
                      "DIR/summary.json. Exit status 1 when the run did not end as the\n"
                      "scenario's `expect:` says. Then draws the run's pictures in DIR with\n"
-                     "rover_plot (traverse.png, error.png, slip.png, vo_steps/) unless --no-plot.\n";
+                     "rover_plot (traverse.png, error.png, slip.png, vo_steps/) unless --no-plot.\n"
+                     "--rate overrides the scenario's sim_rate (max: as fast as the barrier allows).\n"
+                     "It prints the log's digest: the same scenario and seeds give the same digest\n"
+                     "on any load and at any rate (README, \"Simulated time\").\n";
         return 0;
       } else if (arg == "--out" && i + 1 < argc) {
         out_dir = argv[++i];
@@ -149,6 +152,8 @@ int main(int argc, char** argv) {
         quiet = true;
       } else if (arg == "--no-plot") {
         plot = false;
+      } else if (arg == "--rate" && i + 1 < argc) {
+        rate_arg = argv[++i];  // rover_sim checks it (a number, or max)
       } else if (scenario_path.empty() && arg.rfind("--", 0) != 0) {
         scenario_path = arg;
       } else {
@@ -259,7 +264,7 @@ int main(int argc, char** argv) {
         SetOption(p.args, "--world", configs.world);
         SetOption(p.args, "--start",
                   Num(spec.start_x) + "," + Num(spec.start_y) + "," + Num(spec.start_yaw_deg));
-        SetOption(p.args, "--rate", Num(spec.sim_rate));
+        SetOption(p.args, "--rate", rate_arg.empty() ? Num(spec.sim_rate) : rate_arg);
         SetOption(p.args, "--hold-for", virtual_time ? others + ",rover_recorder,scenario_runner" : others);
       } else if (p.name == "camera_capture") {
         SetOption(p.args, "--world", configs.world);
@@ -327,7 +332,7 @@ int main(int argc, char** argv) {
           }
           moved = true;
         }
-        if (final_status && !final_utime) final_utime = clock_seen;
+        if (final_status && !final_utime) final_utime = final_status->utime;  // the executor's instant
         if (final_utime && clock_seen >= *final_utime + 2000000) break;
         if (moved || wall() - last_sync > 0.25) {
           instant = clock_seen;
