@@ -66,7 +66,7 @@ SimOptions LoadSimOptions(const config::ConfigNode& section) {
   if (section.Has("rate") && section["rate"].AsString() == "max") {
     o.rate = 0;
   } else {
-    section.Get("rate", o.rate, 0.0, kMaxRate);
+    section.Get("rate", o.rate, kMinRate, kMaxRate);  // or max (above)
   }
   section.Get("step_s", o.step_s, 0.001, 0.1);
   section.Get("truth_hz", o.truth_hz, 1.0, 1000.0);

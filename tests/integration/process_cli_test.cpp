@@ -81,7 +81,7 @@ TEST(ProcessCli, BadConfigNamesFileKeyAndExpectation) {
 TEST(ProcessCli, CommandLineRangesAreTheConfigRanges) {
   const auto r = RunCommand(Bin("rover_sim") + " --rate 1e12 --world configs/worlds/flat_rock_course.yaml");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_EQ(r.output, "rover_sim: argument --rate: \"1e12\": expected a number in [0.1, 10000]\n");
+  EXPECT_EQ(r.output, "rover_sim: argument --rate: \"1e12\": expected max or a number in [0.1, 10000]\n");
   const std::string dir = OutDir("process_cli_rate");
   std::ofstream(dir + "/rate.yaml") << "sim:\n  rate: 1e12\n";
   const auto y = RunCommand(Bin("rover_sim") + " --config " + dir + "/rate.yaml --world configs/worlds/flat_rock_course.yaml");
