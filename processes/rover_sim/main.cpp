@@ -281,12 +281,16 @@ int main(int argc, char** argv) {
 
     if (proc.virtual_time()) {
       // ---- Virtual time: one instant at a time, when the whole set has finished it. ----
-      simtime::Barrier barrier(members, options.barrier_timeout_s);
+      // rover_sim is a member too: the clock must also wait for the commands sent to it.
+      std::vector<std::string> with_clock = members;
+      with_clock.push_back("rover_sim");
+      simtime::Barrier barrier(with_clock, options.barrier_timeout_s);
       lcm::LCM sync_bus(bus::SyncUrl(proc.bus().url()));
       if (!sync_bus.good()) throw std::runtime_error("cannot open the sync bus " + bus::SyncUrl(proc.bus().url()));
       SyncListener listener{&barrier, &proc};
       sync_bus.subscribe(bus::kSimSyncChannel, &SyncListener::OnMessage, &listener)->setQueueCapacity(10000);
       const double hold_start = proc.wall_seconds();
+      barrier.Report(proc.bus().SyncState("rover_sim", -1, false), proc.wall_seconds());
       while (!barrier.AllHeard() && !proc.stopping()) {
         HandleEither(proc.bus().lcm(), &sync_bus, 50);
         if (proc.wall_seconds() - hold_start > 30) {
@@ -320,7 +324,7 @@ int main(int argc, char** argv) {
             std::cerr << "rover_sim: " << why << "; the rover stops and the clock runs on without it\n";
             sim->Halt(why);
           }
-          if (proc.wall_seconds() - last_note > 10.0) {
+          if (proc.wall_seconds() - std::max(last_note, tick_wall) > 10.0) {
             std::cerr << "rover_sim: the clock waits at " << t << ": " << barrier.Holding(t) << "\n";
             last_note = proc.wall_seconds();
           }

@@ -99,7 +99,7 @@ int main(int argc, char** argv) {
     std::signal(SIGTERM, OnSignal);
     rover::launch::ProcessSet set(rover::launch::BinDir(), "", true);
     for (const auto& spec : processes) {
-      set.Start(spec, env);
+      set.Start(rover::launch::WithBarrier(deployment, spec), env);
       std::cout << "launcher: started " << spec.name << "\n";
     }
     int code = 0;

@@ -80,18 +80,24 @@ Deployment LoadDeployment(const std::string& path) {
   for (const auto& p : d.processes) simulated = simulated || p.name == "rover_sim";
   d.time = !time.empty() ? time : simulated ? "virtual" : "real";
   if (d.time == "virtual" && !simulated) root["time"].Fail("virtual time needs rover_sim in the set (its clock)");
-  if (d.time == "virtual") {
-    // The clock waits for every other process of the set, on every host.
-    std::string members;
-    for (const auto& p : d.processes)
-      if (p.name != "rover_sim") members += (members.empty() ? "" : ",") + p.name;
-    for (auto& p : d.processes) {
-      if (p.name != "rover_sim" || std::find(p.args.begin(), p.args.end(), "--hold-for") != p.args.end()) continue;
-      p.args.push_back("--hold-for");
-      p.args.push_back(members);
-    }
-  }
+
   return d;
+}
+
+std::string BarrierMembers(const Deployment& d) {
+  std::string members;
+  for (const auto& p : d.processes)
+    if (p.name != "rover_sim") members += (members.empty() ? "" : ",") + p.name;
+  return members;
+}
+
+ProcessSpec WithBarrier(const Deployment& d, ProcessSpec spec) {
+  if (d.time != "virtual" || spec.name != "rover_sim" ||
+      std::find(spec.args.begin(), spec.args.end(), "--hold-for") != spec.args.end())
+    return spec;
+  spec.args.push_back("--hold-for");
+  spec.args.push_back(BarrierMembers(d));
+  return spec;
 }
 
 std::vector<ProcessSpec> ProcessesOnHost(const Deployment& deployment, const std::string& host) {

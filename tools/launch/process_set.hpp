@@ -28,10 +28,15 @@ struct Deployment {
   // `host:` or none has.
   std::vector<std::string> hosts;
   // "virtual" (a set with rover_sim, unless the file's `time:` says "real") or "real":
-  // every process gets it as $ROVER_TIME (README, "Simulated time"), and in virtual time
-  // rover_sim gets `--hold-for` with every other process of the set, its barrier.
+  // every process gets it as $ROVER_TIME (README, "Simulated time").
   std::string time = "real";
 };
+
+// Every process of the set but rover_sim, comma-separated: the clock's barrier.
+std::string BarrierMembers(const Deployment& d);
+// `spec` as started: in virtual time rover_sim gets `--hold-for` with the barrier's
+// members (every other process of the set, on every host) unless the file gives one.
+ProcessSpec WithBarrier(const Deployment& d, ProcessSpec spec);
 
 // Reads configs/deploy/*.yaml. Throws config::ConfigError naming the file and key.
 Deployment LoadDeployment(const std::string& path);
