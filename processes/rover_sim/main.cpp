@@ -330,12 +330,14 @@ int main(int argc, char** argv) {
           }
           HandleEither(proc.bus().lcm(), &sync_bus, 2);
         }
+        if (proc.stopping()) break;  // stopped while waiting: the instant is not finished
         // 2. No faster than `rate` times the wall clock.
         if (options.rate > 0) {
           const double due = wall_start + (t + tick_us - rover_start) * 1e-6 / options.rate;
           while (!proc.stopping() && proc.wall_seconds() < due) {
             HandleEither(proc.bus().lcm(), &sync_bus, std::max(1, static_cast<int>((due - proc.wall_seconds()) * 1000)));
           }
+          if (proc.stopping()) break;
         }
         // 3. The next instant: what came during this one acts first (commands, heartbeats).
         proc.bus().SealBatch();
