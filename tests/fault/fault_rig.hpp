@@ -142,6 +142,12 @@ class FaultRig {
     Note("kill -9 " + process);
   }
 
+  // Sends SIGSTOP or SIGCONT to a process: a frozen process is hung, not dead.
+  void Freeze(const std::string& process, bool frozen) {
+    set_->Signal(labels_.at(process), frozen ? SIGSTOP : SIGCONT);
+    Note(std::string(frozen ? "SIGSTOP " : "SIGCONT ") + process);
+  }
+
   std::int64_t Submit(const std::string& text) {
     rover_msgs::sequence_submit_t m{};
     m.utime = now_utime_;

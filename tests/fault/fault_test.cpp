@@ -184,6 +184,42 @@ void RunKill(const std::string& process) {
   rig.Report();
 }
 
+// Freezes `process` with SIGSTOP for 5 s while the rover drives on a real clock at rate 1:
+// a hung process must stop the rover within 2 s of wall time, as a dead one does (the
+// executor hears its heartbeat stop; the executor's own hang, the mobility dead-man), and
+// after SIGCONT the stack runs a new sequence.
+void RunFreeze(const std::string& process) {
+  FaultRig rig(TestName());
+  ASSERT_TRUE(rig.StartAll(1));
+  const auto drive = rig.Submit(DriveSequence("drive 2 m", 50));
+  ASSERT_TRUE(rig.WaitMoving(120)) << "the rover was never seen moving";
+  const auto frozen_at = Clock::now();
+  rig.Freeze(process, true);
+  const double bound = 2.0;
+  const auto latency = rig.StopLatency(frozen_at, 5.0);
+  rig.Freeze(process, false);
+  if (latency) {
+    rig.Note("the rover stopped " + std::to_string(*latency) + " s after SIGSTOP");
+    EXPECT_LE(*latency, bound) << "the rover stopped " << *latency << " s after SIGSTOP " << process
+                               << " (expected within " << bound << " s; " << rig.mobility_detail() << ")";
+    if (*latency <= bound) ++rig.counts().safe_stops;
+  } else {
+    ADD_FAILURE() << "the rover still moved 5 s after SIGSTOP " << process << " (" << rig.mobility_detail() << ")";
+  }
+  const auto final = rig.WaitFinal(drive, 30);
+  EXPECT_TRUE(final && final->state == kAborted)
+      << "the drive did not end aborted after " << process << " hung: " << Describe(final);
+  EXPECT_TRUE(rig.deaths().empty()) << "a process died:" << Lines(rig.deaths());
+  ExpectNewSequenceCompletes(rig, "drive 1 m");
+  rig.Report();
+}
+
+TEST(FaultFreeze, SequenceExecutorHungStopsTheRoverWithinTwoSeconds) { RunFreeze("sequence_executor"); }
+TEST(FaultFreeze, StateEstimatorHungStopsTheRoverWithinTwoSeconds) { RunFreeze("state_estimator"); }
+TEST(FaultFreeze, HazardMonitorHungStopsTheRoverWithinTwoSeconds) { RunFreeze("hazard_monitor"); }
+TEST(FaultFreeze, VisualOdometryHungStopsTheRoverWithinTwoSeconds) { RunFreeze("visual_odometry"); }
+TEST(FaultFreeze, CameraCaptureHungStopsTheRoverWithinTwoSeconds) { RunFreeze("camera_capture"); }
+
 TEST(FaultKill, SequenceExecutorMidDriveStopsTheRoverWithinTwoSeconds) { RunKill("sequence_executor"); }
 TEST(FaultKill, RoverSimMidDrive) { RunKill("rover_sim"); }
 TEST(FaultKill, StateEstimatorMidDrive) { RunKill("state_estimator"); }

@@ -593,6 +593,19 @@ std::string SummaryJson(const ScenarioSummary& s) {
   j.Field("wall_time_s", s.wall_time_s);
   WriteLogCheck(j, s.log);
   if (!s.log_digest.empty()) j.Field("log_digest", s.log_digest);
+  // Rover time by activity (scenario/rover_time.hpp); null on a real-clock log.
+  j.Key("rover_time_breakdown");
+  if (s.rover_time.virtual_time) {
+    const auto& b = s.rover_time;
+    j.BeginObject();
+    j.Field("span_s", b.span_s).Field("driving_s", b.driving_s).Field("imaging_s", b.imaging_s);
+    j.Field("vo_s", b.vo_s).Field("mapping_s", b.mapping_s).Field("busy_s", b.busy_s).Field("waiting_s", b.waiting_s);
+    j.Key("planning_s").Null();
+    j.Field("planning_s_reason", "planning time is not modelled yet");
+    j.EndObject();
+  } else {
+    j.Null();
+  }
   j.Key("process_events").BeginArray();
   for (const auto& e : s.process_events) j.Value(e);
   j.EndArray();
@@ -644,6 +657,14 @@ std::string SummaryText(const ScenarioSummary& s) {
   for (const auto& e : s.process_events) os << "  " << e << "\n";
   os << "  log: " << s.log.messages << " messages, " << s.log.lost << " lost; complete: "
      << (s.log.complete ? "yes" : "no (" + s.log.verdict_reason + ")") << "\n";
+  if (s.rover_time.virtual_time) {
+    const auto& b = s.rover_time;
+    os << std::setprecision(1) << "  rover time of the sequence: " << b.span_s << " s: driving " << b.driving_s
+       << " s, imaging " << b.imaging_s << " s, VO " << b.vo_s << " s, mapping " << b.mapping_s
+       << " s (VO and mapping at once), waiting " << b.waiting_s << " s";
+    if (b.span_s > 0) os << "; drive rate " << s.distance_travelled_m / (b.span_s / 3600.0) << " m/h of rover time";
+    os << "\n" << std::setprecision(3);
+  }
   if (!s.log_digest.empty()) os << "  log digest: " << s.log_digest << " (sha256, less VO's ms_* wall times)\n";
   for (const auto& w : s.log.warnings) os << "  log warning: " << w << "\n";
   std::map<std::string, std::string> figures_by_reason;  // one line per reason

@@ -4,6 +4,7 @@
 
 #include "hazards/keepout.hpp"
 #include "logcheck/log_check.hpp"
+#include "scenario/rover_time.hpp"
 #include "scenario/scenario_overrides.hpp"
 #include "scenario/vo_truth.hpp"
 
@@ -109,6 +110,8 @@ struct ScenarioSummary {
   // SHA-256 of the log less its wall-time fields (logcheck/log_digest.hpp): two runs of the
   // same scenario and seeds in virtual time give the same digest.
   std::string log_digest;
+  // Where the sequence's rover time went (virtual-time logs only).
+  RoverTimeBreakdown rover_time;
 };
 
 // Reads an LCM log of a run and computes the summary. The footprint is used for the

@@ -1,6 +1,6 @@
 // ./rover campaign SCENARIO.yaml --variants N [--out DIR] [--seed S] [--min-pass PCT]
 //
-// Runs N seeded variants of one scenario, one after the other, each through scenario_runner
+// Runs N seeded variants of one scenario (--jobs at once), each through scenario_runner
 // on its own bus: new world, mobility-noise and render-noise seeds, the start pose moved by
 // up to the scenario's `campaign:` jitter, and the world's first slope changed by up to
 // +/- slope_jitter_deg. Prints a table with each variant's outcome and the pass rate (a
@@ -44,6 +44,7 @@ struct Variant {
   double position_error_pct = 0;
   int vo_accepted = 0, false_updates = 0, steps = 0;
   std::string blind_slide;  // empty: none
+  std::string log_digest;   // the run's log less its wall-time fields (README, "Simulated time")
   bool passed() const { return exit_code == 0 && blind_slide.empty(); }
 };
 
@@ -99,8 +100,8 @@ void WriteVariantScenario(const rover::tools::ScenarioSpec& spec, const Variant&
   if (!out) throw ConfigError(path + ": cannot write the variant scenario");
 }
 
-// Runs `argv` with stdout and stderr to `log_path`; returns its exit status (128 + signal).
-int RunLogged(const std::vector<std::string>& argv, const std::string& log_path) {
+// Starts `argv` with stdout and stderr to `log_path`; returns its pid.
+pid_t StartLogged(const std::vector<std::string>& argv, const std::string& log_path) {
   std::fflush(nullptr);
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error("fork failed");
@@ -117,10 +118,17 @@ int RunLogged(const std::vector<std::string>& argv, const std::string& log_path)
     execv(args[0], args.data());
     _exit(127);
   }
+  return pid;
+}
+
+// Waits for any child; returns its pid and exit status (128 + signal).
+std::pair<pid_t, int> WaitAny() {
   int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  pid_t pid = -1;
+  while ((pid = waitpid(-1, &status, 0)) < 0 && errno == EINTR) {
   }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  if (pid < 0) throw std::runtime_error("waitpid failed");
+  return {pid, WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status)};
 }
 
 // A blind slide: after `window` arc steps in a row whose true progress along the commanded
@@ -172,6 +180,7 @@ void ReadResults(Variant& v, int window, double fraction) {
   if (s["vo_updates_accepted"]) v.vo_accepted = s["vo_updates_accepted"].as<int>();
   if (s["false_updates"]) v.false_updates = s["false_updates"].as<int>();
   v.steps = static_cast<int>(s["steps"].size());
+  if (s["log_digest"]) v.log_digest = s["log_digest"].as<std::string>();
   v.blind_slide = BlindSlide(s, window, fraction);
 }
 
@@ -186,7 +195,7 @@ std::string Fixed(double v, int digits) {
 int main(int argc, char** argv) {
   return rover::bus::RunMain("scenario_campaign", [&]() -> int {
     std::string scenario_path, out_dir;
-    int variants = 0, window = 2;
+    int variants = 0, window = 2, jobs = 1;
     std::uint64_t seed = 1;
     double min_pass_pct = 95.0, slide_pct = 10.0;
     bool plot = true;
@@ -203,14 +212,16 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
       if (arg == "--help" || arg == "-h") {
-        std::cout << "usage: scenario_campaign SCENARIO.yaml --variants N [--out DIR] [--seed S]\n"
+        std::cout << "usage: scenario_campaign SCENARIO.yaml --variants N [--out DIR] [--seed S] [--jobs N]\n"
                      "                         [--min-pass PCT] [--slide-window N] [--slide-progress PCT] [--no-plot]\n\n"
                      "Runs N seeded variants of a scenario (seeds, start pose, slope; the scenario's\n"
                      "`campaign:` section sets the jitter), prints a table and the pass rate, and\n"
                      "writes DIR/campaign.json (default DIR: out/campaign/NAME). Exit 1 when the\n"
                      "pass rate is below --min-pass (default 95 %) or a variant slid blind: drove on\n"
                      "after --slide-window (2) arc steps with true progress below --slide-progress\n"
-                     "(10 %) of the commanded. --no-plot skips each variant's pictures (about 4 s each).\n";
+                     "(10 %) of the commanded. --no-plot skips each variant's pictures (about 4 s each).\n"
+                     "--jobs N runs N variants at once, each on its own private bus; in virtual time\n"
+                     "each variant's result and log digest are the same as with --jobs 1.\n";
         return 0;
       } else if (arg == "--variants") {
         const double n = number(i, arg);
@@ -233,6 +244,10 @@ int main(int argc, char** argv) {
         window = static_cast<int>(n);
       } else if (arg == "--no-plot") {
         plot = false;
+      } else if (arg == "--jobs") {
+        const double n = number(i, arg);
+        if (n < 1 || n > 64 || n != std::floor(n)) throw ConfigError("scenario_campaign: --jobs: expected a whole number in [1, 64]");
+        jobs = static_cast<int>(n);
       } else if (arg == "--slide-progress") {
         slide_pct = number(i, arg);
       } else if (scenario_path.empty() && arg.rfind("--", 0) != 0) {
@@ -259,19 +274,15 @@ int main(int argc, char** argv) {
     std::cout << std::left << std::setw(4) << "var" << std::setw(22) << " seeds w/m/r" << std::setw(24)
               << " start x, y, yaw" << std::setw(7) << " slope" << std::setw(11) << " outcome" << std::setw(20)
               << " reason" << std::setw(10) << " clear m" << std::setw(8) << " err %" << std::setw(10)
-              << " VO ok/fls" << " result\n" << std::flush;
+              << " VO ok/fls" << std::setw(14) << " log digest" << " result\n" << std::flush;
 
-    std::vector<Variant> results;
-    for (int k = 1; k <= variants; ++k) {
-      Variant v = MakeVariant(spec, slope, seed, k);
-      v.dir = out_dir + "/v" + std::to_string(k);
-      fs::create_directories(v.dir);
-      const std::string variant_yaml = v.dir + "/scenario.yaml";
-      WriteVariantScenario(spec, v, variant_yaml);
-      std::vector<std::string> runner_args = {runner, variant_yaml, "--out", v.dir, "--quiet"};
-      if (!plot) runner_args.push_back("--no-plot");
-      v.exit_code = RunLogged(runner_args, v.dir + "/runner.log");
-      ReadResults(v, window, slide_pct / 100.0);
+    // Up to `jobs` variants run at once (each scenario_runner opens its own private bus);
+    // rows are printed in variant order as soon as each one and those before it are done.
+    std::vector<Variant> results(static_cast<std::size_t>(variants));
+    std::map<pid_t, int> running;  // pid -> variant index (0-based)
+    int next = 0, printed = 0;
+    std::vector<bool> done(static_cast<std::size_t>(variants), false);
+    auto print_row = [&](int k, const Variant& v) {
       std::ostringstream seeds, start;
       seeds << v.world_seed << "/" << v.mobility_seed << "/" << v.render_seed;
       start << Fixed(v.x, 2) << ", " << Fixed(v.y, 2) << ", " << Fixed(v.yaw_deg, 1);
@@ -281,10 +292,37 @@ int main(int argc, char** argv) {
                 << " " << std::setw(9) << (v.clearance_m ? Fixed(*v.clearance_m, 3) : "-") << " " << std::setw(7)
                 << Fixed(v.position_error_pct, 2) << " " << std::setw(9)
                 << (std::to_string(v.vo_accepted) + "/" + std::to_string(v.false_updates)) << " "
+                << std::setw(13) << (v.log_digest.empty() ? "-" : v.log_digest.substr(0, 12)) << " "
                 << (v.passed() ? "pass" : v.exit_code == 0 ? "FAIL (blind slide: " + v.blind_slide + ")"
                                                           : "FAIL (see " + v.dir + "/runner.log)")
                 << "\n" << std::flush;
-      results.push_back(v);
+    };
+    while (printed < variants) {
+      while (next < variants && static_cast<int>(running.size()) < jobs) {
+        const int k = next + 1;
+        Variant v = MakeVariant(spec, slope, seed, k);
+        v.dir = out_dir + "/v" + std::to_string(k);
+        fs::create_directories(v.dir);
+        const std::string variant_yaml = v.dir + "/scenario.yaml";
+        WriteVariantScenario(spec, v, variant_yaml);
+        std::vector<std::string> runner_args = {runner, variant_yaml, "--out", v.dir, "--quiet"};
+        if (!plot) runner_args.push_back("--no-plot");
+        results[static_cast<std::size_t>(next)] = v;
+        running[StartLogged(runner_args, v.dir + "/runner.log")] = next;
+        ++next;
+      }
+      const auto [pid, code] = WaitAny();
+      const auto it = running.find(pid);
+      if (it == running.end()) continue;
+      Variant& v = results[static_cast<std::size_t>(it->second)];
+      v.exit_code = code;
+      ReadResults(v, window, slide_pct / 100.0);
+      done[static_cast<std::size_t>(it->second)] = true;
+      running.erase(it);
+      while (printed < variants && done[static_cast<std::size_t>(printed)]) {
+        print_row(printed + 1, results[static_cast<std::size_t>(printed)]);
+        ++printed;
+      }
     }
 
     int passed = 0, slides = 0, accepted = 0, false_updates = 0;
@@ -328,6 +366,7 @@ int main(int argc, char** argv) {
       }
       j.Field("position_error_pct", v.position_error_pct).Field("steps", v.steps);
       j.Field("vo_updates_accepted", v.vo_accepted).Field("false_updates", v.false_updates);
+      j.Field("log_digest", v.log_digest);
       j.Field("blind_slide", v.blind_slide).Field("runner_exit", v.exit_code).Field("passed", v.passed());
       j.EndObject();
     }

@@ -63,7 +63,7 @@ std::string Num(double v) {
 
 // Two buses on LCM 1.3.1 must differ by port: each run picks its own from its pid.
 std::string PrivateUrl() {
-  const int port = 20000 + static_cast<int>(getpid() % 20000);
+  const int port = 20000 + 2 * static_cast<int>(getpid() % 10000);  // even: the sync reports use port + 1
   return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=8388608";
 }
 
@@ -375,6 +375,7 @@ int main(int argc, char** argv) {
 
     auto summary = rover::tools::SummarizeLog(log_path, footprint);
     summary.log_digest = rover::logcheck::DigestLog(log_path).sha256_hex;
+    summary.rover_time = rover::tools::BreakdownFromLog(log_path);
     {
       // Truth clearance to the rocks the rover cannot drive over (the simulator faults on them).
       double max_height_m = 0.3;
