@@ -265,11 +265,34 @@ int main(int argc, char** argv) {
       return httplib::Server::HandlerResponse::Unhandled;
     });
 
-    server.Get("/", [](const httplib::Request&, httplib::Response& res) {
+    // httplib's own refusals (no route, no Content-Length, too large) get a line too.
+    server.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
+      if (!res.body.empty()) return;
+      std::string line = "HTTP " + std::to_string(res.status);
+      if (res.status == 404) {
+        line = "not found: " + req.path + " (expected /, /api/state, /api/events, /api/image.png, or a POST to "
+               "/api/submit, /api/pause, /api/resume, /api/abort)";
+      } else if (res.status == 413) {
+        line = "request too large (a sequence is at most " + std::to_string(rover::config::kMaxSequenceFileBytes) + " bytes)";
+      } else if (res.status == 400) {
+        line = "bad request (a POST needs a Content-Length header and a body, which may be empty)";
+      }
+      Text(res, res.status, line);
+    });
+    server.Get("/", [&](const httplib::Request&, httplib::Response& res) {
+      // The page carries the state it was served with (in a JSON data block, which no
+      // browser runs), so its first picture needs no round trip. '<' never appears in JSON
+      // outside strings, and as \u003c no string can close the block.
+      std::string json = state.StateJson(Now());
+      std::string escaped;
+      escaped.reserve(json.size());
+      for (char c : json) escaped += c == '<' ? std::string("\\u003c") : std::string(1, c);
+      std::string html = rover::web::kIndexHtml;
+      if (const auto at = html.find("{{STATE}}"); at != std::string::npos) html.replace(at, 9, escaped);
       res.set_header("Content-Security-Policy",
                      "default-src 'none'; script-src 'self'; connect-src 'self'; img-src 'self'; "
                      "style-src 'unsafe-inline'; frame-ancestors 'none'");
-      res.set_content(rover::web::kIndexHtml, "text/html; charset=utf-8");
+      res.set_content(html, "text/html; charset=utf-8");
     });
     server.Get("/app.js", [](const httplib::Request&, httplib::Response& res) {
       res.set_content(rover::web::kAppJs, "text/javascript; charset=utf-8");

@@ -171,7 +171,7 @@ function drawSequence(s) {
   const detail = document.createElement('div');
   detail.textContent = st.detail;
   head.appendChild(detail);
-  const lines = s.sequence_text !== null ? s.sequence_text.split('\n')
+  const lines = s.sequence_text !== null ? s.sequence_text.replace(/\n$/, '').split('\n')
                                          : (st.command_text ? ['(text not heard) line ' + st.command_line + ': ' + st.command_text] : []);
   lines.forEach((l, i) => {
     const span = document.createElement('span');
@@ -201,7 +201,8 @@ function drawTables(s) {
 
   const v = s.vo, h = s.hazard, r = [];
   if (v) {
-    r.push(['VO', v.status + '  frames ' + v.from_frame + ' -> ' + v.to_frame + '  inliers ' + v.inliers + ' of ' + v.tracked +
+    const tail = (id) => '...' + String(id).slice(-3);
+    r.push(['VO', v.status + '  frames ' + tail(v.from_frame) + ' -> ' + tail(v.to_frame) + '  inliers ' + v.inliers + ' of ' + v.tracked +
             ' tracked  ' + fix(v.ms_total, 0) + ' ms', v.status === 'ok' || v.status === 'baseline' ? 'ok' : 'warn']);
     r.push(['', 'updates ok ' + v.ok + ', failed ' + v.failed + (v.reason ? '  ' + v.reason : '')]);
   } else r.push(['VO', 'no VO_UPDATE heard']);
@@ -240,6 +241,7 @@ function drawTables(s) {
   if (s.image && s.image.frame_id !== imageFrame) {
     imageFrame = s.image.frame_id;
     $('navcam').src = 'api/image.png?frame=' + encodeURIComponent(imageFrame);
+    $('navcam').hidden = false;
     $('imginfo').textContent = 'frame ' + s.image.frame_id + ' (' + s.image.purpose + '), ' + s.image.width + 'x' +
         s.image.height + ' ' + s.image.encoding;
   }
@@ -286,4 +288,5 @@ $('pause').onclick = () => command('api/pause', '');
 $('resume').onclick = () => command('api/resume', '');
 $('abort').onclick = () => { if (confirm('Abort the running sequence? The rover stops.')) command('api/abort', ''); };
 window.addEventListener('resize', () => { if (last) drawMap(last); });
+try { render(JSON.parse($('initial-state').textContent)); } catch (e) { /* the events will draw it */ }
 connect();

@@ -27,6 +27,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -46,6 +47,11 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using rover_msgs::sequence_status_t;
+// LCM declares its constants without defining them: copies, so gtest may take references.
+constexpr std::int8_t kRunning = sequence_status_t::STATE_RUNNING;
+constexpr std::int8_t kPaused = sequence_status_t::STATE_PAUSED;
+constexpr std::int8_t kCompleted = sequence_status_t::STATE_COMPLETED;
+constexpr std::int8_t kAborted = sequence_status_t::STATE_ABORTED;
 
 double Seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
 
@@ -204,6 +210,8 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
                     << "\n" << ReadText(dir + "/rover_web.log");
   EXPECT_EQ(page->status, 200);
   EXPECT_NE(page->body.find("<canvas id=\"map\""), std::string::npos);
+  EXPECT_NE(page->body.find("id=\"initial-state\">{\"bus\":"), std::string::npos) << "no state in the page";
+  EXPECT_EQ(page->body.find("{{STATE}}"), std::string::npos);
   EXPECT_NE(page->get_header_value("Content-Security-Policy").find("script-src 'self'"), std::string::npos);
   auto script = http.Get("/app.js");
   ASSERT_TRUE(script);
@@ -239,8 +247,11 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
   ASSERT_TRUE(unsigned_submit);
   EXPECT_EQ(unsigned_submit->status, 403);
 
-  // A drive of 8 steps, submitted from the page, ending in a goto (its disc is drawn).
-  const std::string text = "vo on step 40 cm\ndrive 3.2 m\ngoto 3.2 m 0.6 m within 0.3 m\n";
+  // A drive of 4 steps, submitted from the page, with a keep-out zone (the demo's
+  // Humphrey), then a goto (its disc is drawn).
+  const std::string text =
+      "vo on step 40 cm\nkeepout humphrey circle 3 m -2.8 m radius 0.7 m\ndrive 1.6 m\n"
+      "goto 2.2 m 0.8 m within 0.3 m avoid on\n";
   auto submitted = http.Post("/api/submit?name=web_test.seq", with_secret, text, "text/plain");
   ASSERT_TRUE(submitted);
   ASSERT_EQ(submitted->status, 200) << submitted->body;
@@ -256,7 +267,7 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
     }
     set.Poll(100);
   }
-  ASSERT_TRUE(heard.HasState(id, sequence_status_t::STATE_RUNNING)) << "the submitted sequence did not run";
+  ASSERT_TRUE(heard.HasState(id, kRunning)) << "the submitted sequence did not run";
   auto no_secret = http.Post("/api/pause", "", "text/plain");
   ASSERT_TRUE(no_secret);
   EXPECT_EQ(no_secret->status, 403);
@@ -271,23 +282,28 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
     EXPECT_EQ(s["sequence_text"].as<std::string>(""), text);
     EXPECT_EQ(s["status"]["submission_id"].as<std::int64_t>(), id);
   }
-  set.Poll(1500);  // a refused pause leaves the drive going: more steps come
+  // A refused pause leaves the drive going: the next step comes, and no pause.
   int steps_before_pause = 0;
-  {
-    std::lock_guard<std::mutex> lock(heard.mutex);
-    steps_before_pause = heard.steps;
+  const auto t_refused = Clock::now();
+  while (Seconds(t_refused) < 60) {
+    {
+      std::lock_guard<std::mutex> lock(heard.mutex);
+      steps_before_pause = heard.steps;
+    }
+    if (steps_before_pause >= 2) break;
+    set.Poll(100);
   }
-  EXPECT_FALSE(heard.HasState(id, sequence_status_t::STATE_PAUSED)) << "a pause without the secret was obeyed";
+  EXPECT_GE(steps_before_pause, 2) << "no step after the refused pauses";
+  EXPECT_FALSE(heard.HasState(id, kPaused)) << "a pause without the secret was obeyed";
 
   // With the secret: signed, published, and the executor pauses between steps.
   auto paused = http.Post("/api/pause", with_secret, "test pause", "text/plain");
   ASSERT_TRUE(paused);
   EXPECT_EQ(paused->status, 200) << paused->body;
   const auto t1 = Clock::now();
-  while (!heard.HasState(id, sequence_status_t::STATE_PAUSED) && Seconds(t1) < 60) set.Poll(100);
-  ASSERT_TRUE(heard.HasState(id, sequence_status_t::STATE_PAUSED)) << "the executor did not pause";
-  ASSERT_EQ(heard.LastState(id), sequence_status_t::STATE_PAUSED);
-  EXPECT_GT(steps_before_pause, 1);
+  while (!heard.HasState(id, kPaused) && Seconds(t1) < 60) set.Poll(100);
+  ASSERT_TRUE(heard.HasState(id, kPaused)) << "the executor did not pause";
+  ASSERT_EQ(heard.LastState(id), kPaused);
   set.Poll(1000);
   {
     const YAML::Node s = state();
@@ -303,6 +319,9 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
     EXPECT_TRUE(s["vo"] && !s["vo"].IsNull());
     EXPECT_TRUE(s["hazard"] && !s["hazard"].IsNull());
     EXPECT_GE(s["processes"].size(), 7u);
+    ASSERT_EQ(s["zones"].size(), 1u);
+    EXPECT_EQ(s["zones"][0]["name"].as<std::string>(), "humphrey");
+    EXPECT_NEAR(s["zones"][0]["radius_m"].as<double>(), 0.7, 1e-6);
     ASSERT_TRUE(s["map"] && !s["map"].IsNull()) << "no TRAVERSABILITY_MAP on the page";
     EXPECT_EQ(s["map"]["cells"].as<std::string>().size(),
               static_cast<std::size_t>(s["map"]["rows"].as<int>() * s["map"]["cols"].as<int>()));
@@ -330,21 +349,28 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
   } else {
     const std::string shot = dir + "/screenshot.png";
     const auto r = RunCommand("timeout 90 chromium --headless --no-sandbox --disable-gpu --hide-scrollbars "
-                              "--user-data-dir=" + dir + "/chromium --window-size=1400,1000 "
-                              "--virtual-time-budget=4000 --screenshot=" + shot + " http://127.0.0.1:" +
-                              std::to_string(port) + "/");
+                              "--user-data-dir=" + dir + "/chromium --window-size=1400,1000 --screenshot=" + shot +
+                              " http://127.0.0.1:" + std::to_string(port) + "/");
     ASSERT_TRUE(fs::exists(shot)) << "chromium wrote no screenshot:\n" << r.output;
     const cv::Mat img = cv::imread(shot, cv::IMREAD_COLOR);
-    ASSERT_FALSE(img.empty());
-    // The estimate's colour (#4ea1ff, the rover and its path) is drawn on the canvas.
-    int blue = 0;
-    for (int y = 0; y < img.rows; ++y)
-      for (int x = 0; x < img.cols; ++x) {
+    ASSERT_EQ(img.cols, 1400) << shot;
+    // In the traverse's canvas (the page's top left; the legend's swatches lie below it):
+    // the estimate's colour (#4ea1ff: the rover, its path, the ellipse's edge) and the
+    // map's safe cells (#2f6b3a).
+    int blue = 0, safe = 0;
+    for (int y = 0; y < img.rows * 70 / 100; ++y)
+      for (int x = 0; x < img.cols * 64 / 100; ++x) {
         const auto& p = img.at<cv::Vec3b>(y, x);  // BGR
-        if (std::abs(p[0] - 255) < 20 && std::abs(p[1] - 161) < 20 && std::abs(p[2] - 78) < 20) ++blue;
+        auto near = [&p](int r, int g, int b) {
+          return std::abs(p[0] - b) < 12 && std::abs(p[1] - g) < 12 && std::abs(p[2] - r) < 12;
+        };
+        blue += near(0x4e, 0xa1, 0xff);
+        safe += near(0x2f, 0x6b, 0x3a);
       }
-    EXPECT_GT(blue, 50) << "the page in " << shot << " shows no estimate (chromium: " << r.output << ")";
-    std::cout << "screenshot: " << shot << " (" << blue << " pixels of the estimate's colour)\n";
+    EXPECT_GT(blue, 60) << "the page in " << shot << " shows no estimate";
+    EXPECT_GT(safe, 2000) << "the page in " << shot << " shows no safe map cells";
+    std::cout << "screenshot: " << shot << " (" << blue << " pixels of the estimate's colour, " << safe
+              << " of safe cells)\n";
   }
 
   // Resume: the sequence goes on to its end (the goto inside its disc).
@@ -355,19 +381,19 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
   const auto t2 = Clock::now();
   while (Seconds(t2) < 240) {
     const auto last = heard.LastState(id);
-    if (last == sequence_status_t::STATE_COMPLETED || last == sequence_status_t::STATE_ABORTED) break;
+    if (last == kCompleted || last == kAborted) break;
     if (!goal_seen) {
       const YAML::Node s = state();
       if (s && s["goal"] && !s["goal"].IsNull()) {
         goal_seen = true;
-        EXPECT_NEAR(s["goal"]["x"].as<double>(), 3.2, 1e-6);
-        EXPECT_NEAR(s["goal"]["y"].as<double>(), 0.6, 1e-6);
+        EXPECT_NEAR(s["goal"]["x"].as<double>(), 2.2, 1e-6);
+        EXPECT_NEAR(s["goal"]["y"].as<double>(), 0.8, 1e-6);
         EXPECT_NEAR(s["goal"]["radius_m"].as<double>(), 0.3, 1e-6);
       }
     }
     set.Poll(200);
   }
-  EXPECT_EQ(heard.LastState(id), sequence_status_t::STATE_COMPLETED);
+  EXPECT_EQ(heard.LastState(id), kCompleted);
   EXPECT_TRUE(goal_seen) << "the goto's disc never showed on /api/state";
   EXPECT_EQ(state()["status"]["state"].as<std::string>(""), "completed");
   expect_pose_matches("after the drive");
