@@ -1,7 +1,7 @@
 // rover_web on the real process set (configs/deploy/sim_vo_auth.yaml on a private bus,
 // with a key made here, so the executor obeys only signed commands), checked over HTTP
 // with cpp-httplib's client, as a browser would see it:
-//   - /api/state reports the rover where POSE puts it (1 cm), before and during a drive;
+//   - /api/state reports the rover where POSE puts it (1 cm): before, paused mid-drive, after;
 //   - a sequence submitted from the page runs; a bad one gets 400 and the checker's line;
 //   - pause without the secret, or with a wrong one, is refused (403) and the drive goes
 //     on; with it the executor pauses (so the pause was signed with the deployment key),
@@ -135,7 +135,6 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
   ASSERT_EQ(chmod(secret_file.c_str(), 0600), 0);
 
   const std::string url = PrivateUrl(57);
-  const int port = 20000 + static_cast<int>(getpid() % 20000);
   const auto deployment = launch::LoadDeployment(DeploymentWithKey(dir, key));
   fs::current_path(SourceDir());
 
@@ -154,7 +153,7 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
   launch::ProcessSpec web;
   web.name = "rover_web";
   web.program = "rover_web";
-  web.args = {"--port", std::to_string(port), "--secret-file", secret_file, "--key", key};
+  web.args = {"--port", "0", "--secret-file", secret_file, "--key", key};  // any free port
   set.Start(web, {"ROVER_LCM_URL=" + url});
 
   const auto start = Clock::now();
@@ -167,6 +166,16 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
   }
   ASSERT_EQ(count_alive(), deployment.processes.size() + 1) << "not every process sent a heartbeat";
 
+  // The port rover_web chose, from its first line.
+  int port = 0;
+  const std::string listening = "listening on http://127.0.0.1:";
+  const auto t_listen = Clock::now();
+  while (port == 0 && Seconds(t_listen) < 30) {
+    set.Poll(100);
+    const std::string log = ReadText(dir + "/rover_web.log");
+    if (const auto at = log.find(listening); at != std::string::npos) port = std::atoi(log.c_str() + at + listening.size());
+  }
+  ASSERT_GT(port, 0) << "rover_web did not say where it listens:\n" << ReadText(dir + "/rover_web.log");
   httplib::Client http("127.0.0.1", port);
   http.set_connection_timeout(5);
   http.set_read_timeout(10);
