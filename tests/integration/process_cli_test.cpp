@@ -165,13 +165,15 @@ TEST(OperatorCommandLine, SubmitFollowsToTheEndAndAbortStopsTheDrive) {
 // status says paused, and resume takes it to the end.
 TEST(OperatorCommandLine, PauseHoldsTheDriveAndResumeFinishesIt) {
   const std::string dir = OutDir("operator_pause");
-  std::ofstream(dir + "/long.seq") << "vo off step 50 cm\ndrive 4 m\n";
+  // Ten short steps, short of the rock Adirondack (4.2 m north): blind, they go by at
+  // several a second, so the pause follows the submit closely.
+  std::ofstream(dir + "/long.seq") << "vo off step 25 cm\ndrive 2.5 m\n";
   const std::string url = PrivateUrl(61);
   const std::string seq = Bin("rover_seq");
   const auto r = RunCommand(
       "export ROVER_LCM_URL='" + url + "'; " + Bin("launcher") + " configs/deploy/sim.yaml > " + dir +
       "/launch.log 2>&1 & L=$!; sleep 2; " +
-      "timeout 10 " + seq + " submit " + dir + "/long.seq --no-follow; sleep 1; " +
+      "timeout 10 " + seq + " submit " + dir + "/long.seq --no-follow; sleep 0.5; " +
       seq + " pause 'hold for the test'; echo \"pause rc=$?\"; sleep 4; " +
       "echo once:; timeout 10 " + seq + " status --once; " +
       seq + " resume; echo \"resume rc=$?\"; " +

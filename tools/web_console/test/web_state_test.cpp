@@ -226,7 +226,29 @@ TEST(WebState, LeftImageIsAReducedPng) {
   EXPECT_LT(img.at<std::uint8_t>(24, 2), 30);
   EXPECT_GT(img.at<std::uint8_t>(24, 61), 220);
 
+  // A PNG-encoded frame (camera_capture's `png`), 16-bit: reduced and made 8-bit.
+  cv::Mat wide(96, 128, CV_16UC1);
+  for (int r = 0; r < 96; ++r)
+    for (int c = 0; c < 128; ++c) wide.at<std::uint16_t>(r, c) = static_cast<std::uint16_t>(c < 64 ? 1000 : 60000);
+  std::vector<unsigned char> encoded;
+  ASSERT_TRUE(cv::imencode(".png", wide, encoded));
+  f.frame_id = 9;
+  f.left.encoding = rover_msgs::image_t::ENCODING_PNG;
+  f.left.width = 128;
+  f.left.height = 96;
+  f.left.data.assign(encoded.begin(), encoded.end());
+  f.left.size = static_cast<std::int32_t>(encoded.size());
+  state.On(f, 0);
+  const std::string png16 = state.LeftImagePng(64, &why);
+  ASSERT_FALSE(png16.empty()) << why;
+  const cv::Mat img16 = cv::imdecode(std::vector<unsigned char>(png16.begin(), png16.end()), cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(img16.type(), CV_8UC1);
+  EXPECT_EQ(img16.cols, 64);
+  EXPECT_LT(img16.at<std::uint8_t>(10, 5), 10);
+  EXPECT_GT(img16.at<std::uint8_t>(10, 60), 220);
+
   // A frame whose bytes do not match its declared size: a reason, no image, no crash.
+  f.left.encoding = rover_msgs::image_t::ENCODING_GRAY8;
   f.frame_id = 8;
   f.left.data.resize(100);
   f.left.size = 100;
