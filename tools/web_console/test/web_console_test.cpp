@@ -191,7 +191,7 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
   auto expect_pose_matches = [&](const char* when) {
     rover_msgs::pose_t before, after;
     YAML::Node s;
-    for (int attempt = 0; attempt < 20; ++attempt) {
+    for (int attempt = 0; attempt < 100; ++attempt) {  // up to 10 s
       {
         std::lock_guard<std::mutex> lock(heard.mutex);
         before = heard.pose;
