@@ -5,7 +5,7 @@
 //   - a sequence submitted from the page runs; a bad one gets 400 and the checker's line;
 //   - pause without the secret, or with a wrong one, is refused (403) and the drive goes
 //     on; with it the executor pauses (so the pause was signed with the deployment key),
-//     and resume finishes the sequence;
+//     and resume finishes the sequence; abort from the page aborts a second one;
 //   - the page, its script, the NAVCAM image (a PNG) and the traversability map are served;
 //   - a request naming another Host (DNS rebinding) is refused;
 //   - with chromium installed, a headless screenshot of the page shows the estimate drawn
@@ -407,6 +407,26 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
   EXPECT_EQ(state()["status"]["state"].as<std::string>(""), "completed");
   expect_pose_matches("after the drive");
 
+  // Abort from the page: a second sequence, aborted while it runs, with the page's reason.
+  auto second = http.Post("/api/submit?name=turns.seq", with_secret, "vo on\nturn 90 deg\nturn -90 deg\n", "text/plain");
+  ASSERT_TRUE(second);
+  ASSERT_EQ(second->status, 200) << second->body;
+  const std::int64_t id2 = YAML::Load(second->body)["submission_id"].as<std::int64_t>();
+  const auto t3 = Clock::now();
+  while (!heard.HasState(id2, kRunning) && Seconds(t3) < 60) set.Poll(100);
+  ASSERT_TRUE(heard.HasState(id2, kRunning));
+  auto aborted = http.Post("/api/abort", with_secret, "web test abort", "text/plain");
+  ASSERT_TRUE(aborted);
+  EXPECT_EQ(aborted->status, 200) << aborted->body;
+  while (heard.LastState(id2) != kAborted && Seconds(t3) < 60) set.Poll(100);
+  ASSERT_EQ(heard.LastState(id2), kAborted);
+  {
+    const YAML::Node s = state();
+    EXPECT_EQ(s["status"]["abort_reason"].as<std::string>(""), "operator");
+    EXPECT_NE(s["status"]["detail"].as<std::string>("").find("web test abort"), std::string::npos)
+        << s["status"]["detail"].as<std::string>("");
+  }
+
   EXPECT_EQ(set.RunningNames().size(), deployment.processes.size() + 1);
   set.StopAll();
   // rover_web logged the refused guess and each command it sent, signed.
@@ -414,6 +434,7 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
   EXPECT_NE(log.find("wrong operator secret"), std::string::npos) << log;
   EXPECT_NE(log.find("pause sent (signed)"), std::string::npos) << log;
   EXPECT_NE(log.find("resume sent (signed)"), std::string::npos) << log;
+  EXPECT_NE(log.find("abort sent (signed): web test abort"), std::string::npos) << log;
   // The executor refused nothing from rover_web (its commands were signed with the key).
   const std::string executor_log = ReadText(dir + "/sequence_executor.log");
   EXPECT_EQ(executor_log.find("SEQUENCE_CONTROL: dropped"), std::string::npos) << executor_log;
