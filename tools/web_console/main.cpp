@@ -243,11 +243,10 @@ int main(int argc, char** argv) {
     std::atomic<std::int64_t> last_submission{0};
 
     httplib::Server server;
-    server.set_payload_max_length(rover::config::kMaxSequenceFileBytes + 1);
+    server.set_payload_max_length(rover::config::kMaxSequenceFileBytes);  // larger: 413
     server.set_read_timeout(5, 0);
     server.set_write_timeout(5, 0);
     server.set_keep_alive_timeout(1);
-    const std::string port_text = ":" + std::to_string(listen.port);
     std::vector<std::string> allowed_hosts;  // filled once the port is known
     server.set_pre_routing_handler([&](const httplib::Request& req, httplib::Response& res) {
       // A page from another site that a DNS name re-pointed at 127.0.0.1 sends its own
@@ -418,8 +417,10 @@ int main(int argc, char** argv) {
       throw ConfigError("rover_web: cannot listen on " + listen.host + ":" + std::to_string(port) +
                         " (in use, or not an address of this host; choose another with --port or --listen)");
     }
-    for (const char* h : {"127.0.0.1", "localhost", "[::1]"}) allowed_hosts.push_back(std::string(h) + ":" + std::to_string(port));
-    allowed_hosts.push_back(listen.host + ":" + std::to_string(port));
+    for (const std::string& h : {std::string("127.0.0.1"), std::string("localhost"), std::string("[::1]"), listen.host}) {
+      allowed_hosts.push_back(h + ":" + std::to_string(port));
+      if (port == 80) allowed_hosts.push_back(h);  // browsers leave the default port out
+    }
     std::thread http([&] { server.listen_after_bind(); });
     std::cout << "rover_web: listening on http://" << listen.host << ":" << port << "/ (bus " << bus.url()
               << "; commands " << (secret.empty() ? "off: no operator secret" : "need the operator secret")
