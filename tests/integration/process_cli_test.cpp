@@ -161,6 +161,53 @@ TEST(OperatorCommandLine, SubmitFollowsToTheEndAndAbortStopsTheDrive) {
   EXPECT_NE(r.output.find("status rc=1"), std::string::npos) << r.output;  // aborted
 }
 
+// Pause and resume from the operator's command line: the drive holds between steps,
+// status says paused, and resume takes it to the end.
+TEST(OperatorCommandLine, PauseHoldsTheDriveAndResumeFinishesIt) {
+  const std::string dir = OutDir("operator_pause");
+  // Ten short steps, short of the rock Adirondack (4.2 m north): blind, they go by at
+  // several a second, so the pause follows the submit closely.
+  std::ofstream(dir + "/long.seq") << "vo off step 25 cm\ndrive 2.5 m\n";
+  const std::string url = PrivateUrl(61);
+  const std::string seq = Bin("rover_seq");
+  const auto r = RunCommand(
+      "export ROVER_LCM_URL='" + url + "'; " + Bin("launcher") + " configs/deploy/sim.yaml > " + dir +
+      "/launch.log 2>&1 & L=$!; sleep 2; " +
+      "timeout 10 " + seq + " submit " + dir + "/long.seq --no-follow; sleep 0.5; " +
+      seq + " pause 'hold for the test'; echo \"pause rc=$?\"; sleep 4; " +
+      "echo once:; timeout 10 " + seq + " status --once; " +
+      seq + " resume; echo \"resume rc=$?\"; " +
+      "timeout 60 " + seq + " status; echo \"status rc=$?\"; kill -TERM $L; wait $L");
+  EXPECT_NE(r.output.find("pause sent: hold for the test"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("pause rc=0"), std::string::npos) << r.output;
+  const auto once = r.output.find("once:\n");
+  ASSERT_NE(once, std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("[paused", once), once + 6) << r.output;  // still paused 4 s later
+  EXPECT_NE(r.output.find("resume rc=0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("[completed"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("status rc=0"), std::string::npos) << r.output;
+}
+
+// Every rover_seq subcommand answers --help with its own usage; misuse is one line.
+TEST(ProcessCli, RoverSeqSubcommandsAnswerHelp) {
+  for (const std::string sub : {"submit", "status", "abort", "pause", "resume", "keygen"}) {
+    const auto r = RunCommand(Bin("rover_seq") + " " + sub + " --help");
+    EXPECT_EQ(r.exit_code, 0) << sub << ": " << r.output;
+    EXPECT_EQ(r.output.rfind("usage: rover_seq " + sub, 0), 0u) << sub << ": " << r.output;
+  }
+  const auto all = RunCommand(Bin("rover_seq") + " --help");
+  EXPECT_EQ(all.exit_code, 0);
+  EXPECT_NE(all.output.find("pause [REASON]"), std::string::npos) << all.output;
+  for (const std::string bad : {"", "pause two words", "bogus"}) {
+    const auto r = RunCommand(Bin("rover_seq") + " " + bad);
+    EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << bad << ": " << r.output;
+  }
+  const auto wrapper = RunCommand("./rover seq --help");
+  EXPECT_EQ(wrapper.exit_code, 0) << wrapper.output;
+  EXPECT_NE(wrapper.output.find("usage: rover_seq"), std::string::npos) << wrapper.output;
+}
+
 // A zone that cannot be built (negative radius) neither crashes the hazard monitor nor
 // is ignored: the monitor cannot decide, says UNKNOWN, and the executor would stop.
 TEST(HazardMonitor, InvalidZoneMessageGivesUnknownAndKeepsRunning) {

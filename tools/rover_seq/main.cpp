@@ -2,9 +2,11 @@
 //   rover_seq submit FILE [--no-follow]   check FILE locally, submit it, follow it to the end
 //   rover_seq status [--once]             follow the running sequence (or print one status)
 //   rover_seq abort [REASON]              abort the running sequence; the rover stops
+//   rover_seq pause [REASON]              pause the running sequence between steps
+//   rover_seq resume [REASON]             resume a paused sequence
 //   rover_seq keygen FILE                 write a new deployment key (mode 0600)
 // Uses --lcm-url, else $ROVER_LCM_URL, else the default bus. With --key FILE, else
-// $ROVER_KEY_FILE, submit and abort are signed with the deployment's key (common/auth),
+// $ROVER_KEY_FILE, submit, abort, pause and resume are signed with the deployment's key (common/auth),
 // as an executor with `auth:` in its config requires.
 // A submit that no executor answers within 4 s ends with exit 3 and one line naming the
 // URL and the likely causes (README, "Several hosts"): ttl=0, no multicast route on the
@@ -178,13 +180,63 @@ std::unique_ptr<rover::bus::Bus> OpenBus(const std::string& url,
   return bus;
 }
 
+// The usage of one subcommand, or of all ("" or an unknown name).
+std::string Usage(const std::string& sub) {
+  const std::string common =
+      "\nThe bus: --lcm-url URL, else $ROVER_LCM_URL, else the default bus.\n";
+  const std::string keyed =
+      "--key FILE (else $ROVER_KEY_FILE): sign with the deployment's key (an executor that\n"
+      "holds a key refuses unsigned commands).\n";
+  if (sub == "submit") {
+    return "usage: rover_seq submit FILE [--no-follow] [--key FILE] [--lcm-url URL]\n\n"
+           "Checks FILE (one line on the first error, exit 1), submits it to the running\n"
+           "sequence_executor and follows it to the end: exit 0 when it completed, 1 when it was\n"
+           "aborted or rejected, 3 when no executor answers within 4 s (the likely causes are\n"
+           "named). --no-follow: submit and exit 0.\n" + keyed + common;
+  }
+  if (sub == "status") {
+    return "usage: rover_seq status [--once] [--lcm-url URL]\n\n"
+           "Follows the running sequence, one line per change, until it ends (exit 0 completed,\n"
+           "1 aborted or rejected, 3 silence for 5 s). --once: print the first status heard.\n" + common;
+  }
+  if (sub == "abort") {
+    return "usage: rover_seq abort [REASON] [--key FILE] [--lcm-url URL]\n\n"
+           "Aborts the running sequence: the executor commands STOP and skips the rest\n"
+           "(reason \"operator\"; REASON, default \"operator abort\", goes in its detail).\n" + keyed + common;
+  }
+  if (sub == "pause") {
+    return "usage: rover_seq pause [REASON] [--key FILE] [--lcm-url URL]\n\n"
+           "Pauses the running sequence between steps: the current step finishes first, then\n"
+           "the executor holds (state paused) until resume or abort.\n" + keyed + common;
+  }
+  if (sub == "resume") {
+    return "usage: rover_seq resume [REASON] [--key FILE] [--lcm-url URL]\n\n"
+           "Resumes a paused sequence at its next step (the executor aborts with process_lost\n"
+           "if a process it needs has gone silent meanwhile).\n" + keyed + common;
+  }
+  if (sub == "keygen") {
+    return "usage: rover_seq keygen FILE\n\n"
+           "Writes a new random deployment key to FILE, mode 0600; never replaces a file.\n"
+           "Give every computer and operator of the deployment a copy.\n";
+  }
+  return "usage: rover_seq SUBCOMMAND [ARGS] [--lcm-url URL] [--key FILE]\n\n"
+         "  submit FILE [--no-follow]   check FILE, submit it, follow it to the end\n"
+         "  status [--once]             follow the running sequence\n"
+         "  abort [REASON]              abort the running sequence (the rover stops)\n"
+         "  pause [REASON]              pause the running sequence between steps\n"
+         "  resume [REASON]             resume a paused sequence\n"
+         "  keygen FILE                 write a new deployment key (mode 0600)\n\n"
+         "rover_seq SUBCOMMAND --help describes one. submit exits 3 when no executor answers\n"
+         "within 4 s, naming the likely causes.\n" + keyed + common;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   return rover::bus::RunMain("rover_seq", [&]() -> int {
     std::vector<std::string> args(argv + 1, argv + argc);
     std::string url, key_flag;
-    bool once = false, follow = true;
+    bool once = false, follow = true, help = false;
     std::vector<std::string> positional;
     for (std::size_t i = 0; i < args.size(); ++i) {
       if (args[i] == "--lcm-url" && i + 1 < args.size()) {
@@ -197,19 +249,17 @@ int main(int argc, char** argv) {
       } else if (args[i] == "--no-follow") {
         follow = false;
       } else if (args[i] == "--help" || args[i] == "-h") {
-        std::cout << "usage: rover_seq submit FILE [--no-follow] | status [--once] | abort [REASON]"
-                     " | keygen FILE\n"
-                     "                 [--lcm-url URL] [--key FILE]\n\n"
-                     "submit exits 3 when no executor answers within 4 s, naming the likely causes.\n"
-                     "--key FILE (else $ROVER_KEY_FILE): sign submit and abort with the deployment's\n"
-                     "key. keygen writes a new random key, mode 0600, and never replaces a file.\n";
-        return 0;
+        help = true;
       } else {
         positional.push_back(args[i]);
       }
     }
+    if (help) {
+      std::cout << Usage(positional.empty() ? "" : positional[0]);
+      return 0;
+    }
     if (positional.empty()) {
-      throw ConfigError("rover_seq: missing subcommand (expected submit, status, abort or keygen)");
+      throw ConfigError("rover_seq: missing subcommand (expected submit, status, abort, pause, resume or keygen; see --help)");
     }
     if (url.empty()) {
       const char* env = std::getenv("ROVER_LCM_URL");
@@ -259,17 +309,25 @@ int main(int argc, char** argv) {
       auto bus = OpenBus(url, std::nullopt);
       return Follow(*bus, -1, once, 5.0, false);
     }
-    if (sub == "abort") {
+    if (sub == "abort" || sub == "pause" || sub == "resume") {
+      if (positional.size() > 2) {
+        throw ConfigError("rover_seq " + sub + ": expected at most one REASON (quote it), got " +
+                          std::to_string(positional.size() - 1) + " words");
+      }
       const auto key = LoadKey(key_flag);
       auto bus = OpenBus(url, key);
       rover_msgs::sequence_control_t msg{};
-      msg.action = rover_msgs::sequence_control_t::ACTION_ABORT;
-      msg.reason = positional.size() > 1 ? positional[1] : "operator abort";
+      msg.action = sub == "abort"   ? rover_msgs::sequence_control_t::ACTION_ABORT
+                   : sub == "pause" ? rover_msgs::sequence_control_t::ACTION_PAUSE
+                                    : rover_msgs::sequence_control_t::ACTION_RESUME;
+      msg.reason = positional.size() > 1 ? positional[1] : "operator " + sub;
       bus->Publish(rover::channels::kSequenceControl, msg);
-      std::cout << (key ? "abort sent (signed): " : "abort sent: ") << msg.reason << "\n";
+      std::cout << sub << (key ? " sent (signed): " : " sent: ") << msg.reason;
+      if (sub == "pause") std::cout << " (takes effect between steps: the current step finishes first)";
+      std::cout << "\n";
       return 0;
     }
     throw ConfigError("rover_seq: unknown subcommand " + sub +
-                      " (expected submit, status, abort or keygen)");
+                      " (expected submit, status, abort, pause, resume or keygen; see --help)");
   });
 }

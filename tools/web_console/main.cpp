@@ -1,0 +1,455 @@
+// rover_web: the live web console (./rover console --web). One process on the bus (a
+// bus::Process: validated messages, a heartbeat, --key signing) and an HTTP server
+// (cpp-httplib) on 127.0.0.1 by default:
+//
+//   GET  /                 the page (static/index.html, static/app.js, embedded at build time)
+//   GET  /api/state        the whole picture, one JSON object (web_state.hpp)
+//   GET  /api/events       the same as Server-Sent Events, twice a second
+//   GET  /api/image.png    the newest NAVCAM left image, reduced (?width=N, 32 to 1024)
+//   POST /api/submit       body: a sequence's text (?name=NAME); checked here first (400 with
+//                          the checker's line), then published on SEQUENCE_SUBMIT
+//   POST /api/pause, /api/resume, /api/abort   body: an optional one-line reason
+//
+// Every POST needs the operator secret in the X-Rover-Secret header (403 otherwise), and
+// is signed with the deployment's key when one is held (--key, auth.key_file,
+// $ROVER_KEY_FILE), through the same Bus signing as every process and rover_seq.
+// Requests whose Host header is not this console's (DNS rebinding) are refused.
+#include "bus/bus.hpp"
+#include "bus/channels.hpp"
+#include "bus/process.hpp"
+#include "config/file_read.hpp"
+#include "config/yaml_config.hpp"
+#include "sequence/parser.hpp"
+#include "web_console/static_files.hpp"
+#include "web_console/web_state.hpp"
+
+#include <httplib.h>
+
+#include <rover_msgs/rover_clock_t.hpp>
+#include <rover_msgs/sequence_control_t.hpp>
+
+#include <arpa/inet.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <deque>
+#include <future>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+using rover::config::ConfigError;
+
+namespace {
+
+constexpr const char* kSecretHeader = "X-Rover-Secret";
+constexpr std::size_t kMaxReasonBytes = 200;
+constexpr std::size_t kMinSecretBytes = 12;
+
+double Now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+struct Listen {
+  std::string host = "127.0.0.1";
+  int port = 8080;
+};
+
+int ParsePort(const std::string& text, const std::string& flag) {
+  try {
+    std::size_t used = 0;
+    const long v = std::stol(text, &used);
+    if (used == text.size() && v >= 0 && v <= 65535) return static_cast<int>(v);
+  } catch (const std::exception&) {
+  }
+  throw ConfigError("rover_web: argument " + flag + ": \"" + text + "\": expected a port number, 0 to 65535 (0: any free port)");
+}
+
+Listen ParseListen(const std::string& text) {
+  const auto colon = text.rfind(':');
+  if (colon == std::string::npos || colon == 0) {
+    throw ConfigError("rover_web: argument --listen: \"" + text + "\": expected ADDR:PORT, e.g. 127.0.0.1:8080");
+  }
+  Listen l;
+  l.host = text.substr(0, colon);
+  if (l.host == "localhost") l.host = "127.0.0.1";
+  in_addr addr{};
+  if (inet_pton(AF_INET, l.host.c_str(), &addr) != 1) {
+    throw ConfigError("rover_web: argument --listen: \"" + text + "\": expected an IPv4 address (such as 127.0.0.1) before the colon");
+  }
+  l.port = ParsePort(text.substr(colon + 1), "--listen");
+  return l;
+}
+
+bool IsLoopback(const std::string& host) { return host.rfind("127.", 0) == 0; }
+
+// The operator secret from --secret-file (a regular file no other user can read) or
+// --secret; "" when neither is given (commands are then refused).
+std::string LoadSecret(const std::optional<std::string>& file, const std::optional<std::string>& literal) {
+  if (file && literal) throw ConfigError("rover_web: --secret and --secret-file: expected one of them, not both");
+  std::string secret;
+  std::string where;
+  if (file) {
+    where = "rover_web: argument --secret-file: " + *file + ": ";
+    try {
+      secret = rover::config::ReadBoundedRegularFile(*file, 4096, "secret file");
+    } catch (const std::exception& e) {
+      throw ConfigError(std::string("rover_web: argument --secret-file: ") + e.what());
+    }
+    struct stat st {};
+    if (stat(file->c_str(), &st) == 0 && (st.st_mode & S_IRWXO) != 0) {
+      throw ConfigError(where + "other users can read it (expected mode 0600 or 0640: chmod o-rwx)");
+    }
+    while (!secret.empty() && (secret.back() == '\n' || secret.back() == '\r' || secret.back() == ' '))
+      secret.pop_back();
+  } else if (literal) {
+    where = "rover_web: argument --secret: ";
+    secret = *literal;
+  } else {
+    return "";
+  }
+  if (secret.size() < kMinSecretBytes) {
+    throw ConfigError(where + "the secret is " + std::to_string(secret.size()) + " characters (expected at least " +
+                      std::to_string(kMinSecretBytes) + ")");
+  }
+  for (unsigned char c : secret) {
+    if (c < 0x21 || c > 0x7e) throw ConfigError(where + "expected printable ASCII without spaces (it goes in an HTTP header)");
+  }
+  return secret;
+}
+
+// Compares in time independent of where the strings differ.
+bool SameSecret(const std::string& a, const std::string& b) {
+  unsigned diff = a.size() == b.size() ? 0u : 1u;
+  const std::size_t n = std::max(a.size(), b.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    const unsigned char x = i < a.size() ? a[i] : 0, y = i < b.size() ? b[i] : 0;
+    diff |= static_cast<unsigned>(x ^ y);
+  }
+  return diff == 0;
+}
+
+// A command from a page, published by the bus thread (the Bus is not thread-safe).
+struct Pending {
+  enum Kind { kSubmit, kControl } kind = kSubmit;
+  rover_msgs::sequence_submit_t submit{};
+  rover_msgs::sequence_control_t control{};
+  std::promise<std::string> done;  // "" or why publishing failed
+};
+
+class CommandQueue {
+ public:
+  std::future<std::string> Push(std::shared_ptr<Pending> p) {
+    auto f = p->done.get_future();
+    std::lock_guard<std::mutex> lock(mutex_);
+    queue_.push_back(std::move(p));
+    return f;
+  }
+  std::deque<std::shared_ptr<Pending>> Take() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::deque<std::shared_ptr<Pending>> out;
+    out.swap(queue_);
+    return out;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::deque<std::shared_ptr<Pending>> queue_;
+};
+
+void Text(httplib::Response& res, int status, const std::string& line) {
+  res.status = status;
+  res.set_content(line + "\n", "text/plain; charset=utf-8");
+}
+
+// A one-line reason from a page: printable, at most kMaxReasonBytes.
+std::string CheckReason(const std::string& body, std::string* reason) {
+  std::string r = body;
+  while (!r.empty() && (r.back() == '\n' || r.back() == '\r')) r.pop_back();
+  if (r.size() > kMaxReasonBytes) return "reason: " + std::to_string(r.size()) + " bytes (expected at most " + std::to_string(kMaxReasonBytes) + ")";
+  for (unsigned char c : r) {
+    if (c < 0x20 || c == 0x7f) return "reason: a control character (expected one line of text)";
+  }
+  *reason = r;
+  return "";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return rover::bus::RunMain("rover_web", [&]() -> int {
+    rover::bus::Process proc(
+        "rover_web",
+        "The live web console: the traverse on the traversability map, keep-out zones, the goal\n"
+        "of a goto, the estimate with its 3-sigma ellipse, truth in simulation, the step table,\n"
+        "VO, hazards, every process's heartbeat, the sequence and its current line, and the\n"
+        "newest NAVCAM left image. Open http://ADDR:PORT/ in a browser.\n"
+        "Commands (submit, pause, resume, abort) need the operator secret (--secret-file or\n"
+        "--secret; the page asks for it and sends it in the X-Rover-Secret header); without one\n"
+        "the console is read-only. With the deployment's key (--key) they are signed.\n"
+        "Listens on 127.0.0.1 unless told otherwise: anyone who can reach the port sees the bus.",
+        argc, argv,
+        {{"--listen", "ADDR:PORT", "where to listen (default 127.0.0.1:8080; port 0: any free port)"},
+         {"--port", "P", "the port on 127.0.0.1 (short for --listen 127.0.0.1:P)"},
+         {"--secret-file", "FILE", "the operator secret for commands: a file no other user can read"},
+         {"--secret", "TOKEN", "the operator secret on the command line (other local users may see it in ps)"},
+         {"--image-width", "PX", "width of the NAVCAM image served (default 256, 32 to 1024)"}});
+
+    Listen listen;
+    if (auto l = proc.option("--listen")) listen = ParseListen(*l);
+    if (auto p = proc.option("--port")) {
+      if (proc.option("--listen")) throw ConfigError("rover_web: --port and --listen: expected one of them, not both");
+      listen.port = ParsePort(*p, "--port");
+    }
+    int image_width = 256;
+    if (auto w = proc.option("--image-width")) {
+      image_width = ParsePort(*w, "--image-width");
+      if (image_width < 32 || image_width > 1024) {
+        throw ConfigError("rover_web: argument --image-width: \"" + *w + "\": expected 32 to 1024");
+      }
+    }
+    const std::string secret = LoadSecret(proc.option("--secret-file"), proc.option("--secret"));
+
+    rover::web::WebStateOptions options;
+    options.bus_url = proc.bus().url();
+    options.commands_enabled = !secret.empty();
+    options.signing = proc.bus().has_auth();
+    rover::web::WebState state(options);
+
+    namespace ch = rover::channels;
+    auto& bus = proc.bus();
+    auto feed = [&state](const auto& m) { state.On(m, Now()); };
+    bus.Subscribe<rover_msgs::pose_t>(ch::kPose, feed, 100);
+    bus.Subscribe<rover_msgs::sim_truth_t>(ch::kSimTruth, feed, 100);
+    bus.Subscribe<rover_msgs::traversability_map_t>(ch::kTraversabilityMap, feed, 10);
+    bus.Subscribe<rover_msgs::keepout_zones_t>(ch::kKeepOutZones, feed, 10);
+    bus.Subscribe<rover_msgs::sequence_status_t>(ch::kSequenceStatus, feed, 50);
+    bus.Subscribe<rover_msgs::sequence_submit_t>(ch::kSequenceSubmit, feed, 10);
+    bus.Subscribe<rover_msgs::step_report_t>(ch::kStepReport, feed, 50);
+    bus.Subscribe<rover_msgs::vo_update_t>(ch::kVoUpdate, feed, 50);
+    bus.Subscribe<rover_msgs::hazard_status_t>(ch::kHazardStatus, feed, 50);
+    bus.Subscribe<rover_msgs::heartbeat_t>(ch::kHeartbeat, feed, 100);
+    bus.Subscribe<rover_msgs::stereo_frame_t>(ch::kStereoFrame, feed, 4);
+    bus.Subscribe<rover_msgs::rover_clock_t>(ch::kClock, [&state](const rover_msgs::rover_clock_t& m) {
+      state.OnRoverClock(m.utime);
+    });
+
+    CommandQueue commands;
+    std::atomic<bool> stopping{false};
+    std::atomic<std::int64_t> last_submission{0};
+
+    httplib::Server server;
+    server.set_payload_max_length(rover::config::kMaxSequenceFileBytes);  // larger: 413
+    server.set_read_timeout(5, 0);
+    server.set_write_timeout(5, 0);
+    server.set_keep_alive_timeout(1);
+    std::vector<std::string> allowed_hosts;  // filled once the port is known
+    server.set_pre_routing_handler([&](const httplib::Request& req, httplib::Response& res) {
+      // A page from another site that a DNS name re-pointed at 127.0.0.1 sends its own
+      // name in Host: refuse it, so no other site can read the bus through the browser.
+      if (IsLoopback(listen.host)) {
+        const std::string host = req.get_header_value("Host");
+        if (std::find(allowed_hosts.begin(), allowed_hosts.end(), host) == allowed_hosts.end()) {
+          Text(res, 403, "refused: Host \"" + host + "\" is not this console (expected 127.0.0.1 or localhost with its port)");
+          return httplib::Server::HandlerResponse::Handled;
+        }
+      }
+      res.set_header("Cache-Control", "no-store");
+      res.set_header("X-Content-Type-Options", "nosniff");
+      res.set_header("X-Frame-Options", "DENY");
+      return httplib::Server::HandlerResponse::Unhandled;
+    });
+
+    // httplib's own refusals (no route, no Content-Length, too large) get a line too.
+    server.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
+      if (!res.body.empty()) return;
+      std::string line = "HTTP " + std::to_string(res.status);
+      if (res.status == 404) {
+        line = "not found: " + req.path + " (expected /, /api/state, /api/events, /api/image.png, or a POST to "
+               "/api/submit, /api/pause, /api/resume, /api/abort)";
+      } else if (res.status == 413) {
+        line = "request too large (a sequence is at most " + std::to_string(rover::config::kMaxSequenceFileBytes) + " bytes)";
+      } else if (res.status == 400) {
+        line = "bad request (a POST needs a Content-Length header and a body, which may be empty)";
+      }
+      Text(res, res.status, line);
+    });
+    server.Get("/", [&](const httplib::Request&, httplib::Response& res) {
+      // The page carries the state it was served with (in a JSON data block, which no
+      // browser runs), so its first picture needs no round trip. '<' never appears in JSON
+      // outside strings, and as \u003c no string can close the block.
+      std::string json = state.StateJson(Now());
+      std::string escaped;
+      escaped.reserve(json.size());
+      for (char c : json) escaped += c == '<' ? std::string("\\u003c") : std::string(1, c);
+      std::string html = rover::web::kIndexHtml;
+      if (const auto at = html.find("{{STATE}}"); at != std::string::npos) html.replace(at, 9, escaped);
+      res.set_header("Content-Security-Policy",
+                     "default-src 'none'; script-src 'self'; connect-src 'self'; img-src 'self'; "
+                     "style-src 'unsafe-inline'; frame-ancestors 'none'");
+      res.set_content(html, "text/html; charset=utf-8");
+    });
+    server.Get("/app.js", [](const httplib::Request&, httplib::Response& res) {
+      res.set_content(rover::web::kAppJs, "text/javascript; charset=utf-8");
+    });
+    server.Get("/api/state", [&](const httplib::Request&, httplib::Response& res) {
+      res.set_content(state.StateJson(Now()), "application/json");
+    });
+    server.Get("/api/events", [&](const httplib::Request&, httplib::Response& res) {
+      res.set_chunked_content_provider("text/event-stream", [&](std::size_t, httplib::DataSink& sink) {
+        const std::string event = "data: " + state.StateJson(Now()) + "\n\n";
+        if (!sink.write(event.data(), event.size())) return false;
+        for (int i = 0; i < 10 && !stopping; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        if (stopping) {
+          sink.done();
+          return true;
+        }
+        return true;
+      });
+    });
+    server.Get("/api/image.png", [&](const httplib::Request& req, httplib::Response& res) {
+      int width = image_width;
+      if (req.has_param("width")) {
+        try {
+          width = ParsePort(req.get_param_value("width"), "width");
+        } catch (const ConfigError&) {
+          width = -1;
+        }
+        if (width < 32 || width > 1024) return Text(res, 400, "width: expected a number of pixels, 32 to 1024");
+      }
+      std::string why;
+      std::string png = state.LeftImagePng(width, &why);
+      if (png.empty()) return Text(res, 404, why);
+      res.set_content(png, "image/png");
+    });
+
+    // Commands: the secret, then the input, then the bus thread publishes (and signs).
+    auto authorised = [&](const httplib::Request& req, httplib::Response& res) {
+      if (secret.empty()) {
+        Text(res, 403, "refused: rover_web was started without --secret-file or --secret, so commands are off");
+        return false;
+      }
+      if (!req.has_header(kSecretHeader)) {
+        Text(res, 403, std::string("refused: this command needs the operator secret (header ") + kSecretHeader + ")");
+        return false;
+      }
+      if (!SameSecret(req.get_header_value(kSecretHeader), secret)) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(250));  // slows guessing
+        Text(res, 403, "refused: wrong operator secret");
+        std::cerr << "rover_web: refused a command from " << req.remote_addr << ": wrong operator secret\n";
+        return false;
+      }
+      return true;
+    };
+    auto publish = [&](std::shared_ptr<Pending> p, httplib::Response& res) {
+      auto done = commands.Push(p);
+      if (done.wait_for(std::chrono::seconds(3)) != std::future_status::ready) {
+        Text(res, 503, "the bus did not take the command within 3 s (rover_web is stopping or stalled)");
+        return false;
+      }
+      if (std::string why = done.get(); !why.empty()) {
+        Text(res, 500, "publishing failed: " + why);
+        return false;
+      }
+      return true;
+    };
+    server.Post("/api/submit", [&](const httplib::Request& req, httplib::Response& res) {
+      if (!authorised(req, res)) return;
+      std::string name = req.has_param("name") ? req.get_param_value("name") : "web";
+      if (name.empty() || name.size() > 200) return Text(res, 400, "name: expected 1 to 200 characters");
+      for (unsigned char c : name) {
+        if (c < 0x20 || c == 0x7f) return Text(res, 400, "name: a control character (expected one line of text)");
+      }
+      if (req.body.empty()) return Text(res, 400, "empty body (expected the sequence's text)");
+      const auto check = rover::sequence::ParseSequence(req.body, name);
+      if (!check.ok()) return Text(res, 400, check.errors.front().ToString());
+      auto p = std::make_shared<Pending>();
+      p->kind = Pending::kSubmit;
+      std::int64_t id = static_cast<std::int64_t>(std::chrono::duration<double>(
+                                                      std::chrono::system_clock::now().time_since_epoch()).count() * 1e3);
+      std::int64_t prev = last_submission.load();
+      while (true) {  // strictly increasing even for two submits in one millisecond
+        const std::int64_t next = std::max(id, prev + 1);
+        if (last_submission.compare_exchange_weak(prev, next)) {
+          id = next;
+          break;
+        }
+      }
+      p->submit.submission_id = id;
+      p->submit.name = name;
+      p->submit.text = req.body;
+      if (!publish(p, res)) return;
+      std::cout << "rover_web: submitted " << name << " as " << id << (options.signing ? " (signed)" : "")
+                << " for " << req.remote_addr << "\n" << std::flush;
+      res.set_content("{\"submission_id\":" + std::to_string(id) + ",\"signed\":" +
+                          (options.signing ? "true" : "false") + "}\n",
+                      "application/json");
+    });
+    auto control = [&](const char* path, std::int8_t action, const std::string& verb) {
+      server.Post(path, [&, action, verb](const httplib::Request& req, httplib::Response& res) {
+        if (!authorised(req, res)) return;
+        std::string reason;
+        if (std::string bad = CheckReason(req.body, &reason); !bad.empty()) return Text(res, 400, bad);
+        auto p = std::make_shared<Pending>();
+        p->kind = Pending::kControl;
+        p->control.action = action;
+        p->control.reason = reason.empty() ? "operator " + verb + " (web console)" : reason;
+        if (!publish(p, res)) return;
+        std::cout << "rover_web: " << verb << " sent" << (options.signing ? " (signed)" : "") << ": "
+                  << p->control.reason << "\n" << std::flush;
+        res.set_content("{\"sent\":\"" + verb + "\",\"signed\":" + (options.signing ? "true" : "false") + "}\n",
+                        "application/json");
+      });
+    };
+    control("/api/pause", rover_msgs::sequence_control_t::ACTION_PAUSE, "pause");
+    control("/api/resume", rover_msgs::sequence_control_t::ACTION_RESUME, "resume");
+    control("/api/abort", rover_msgs::sequence_control_t::ACTION_ABORT, "abort");
+
+    int port = listen.port;
+    if (port == 0) {
+      port = server.bind_to_any_port(listen.host);
+      if (port < 0) throw std::runtime_error("cannot listen on " + listen.host + " (any port)");
+    } else if (!server.bind_to_port(listen.host, port)) {
+      throw ConfigError("rover_web: cannot listen on " + listen.host + ":" + std::to_string(port) +
+                        " (in use, or not an address of this host; choose another with --port or --listen)");
+    }
+    for (const std::string& h : {std::string("127.0.0.1"), std::string("localhost"), std::string("[::1]"), listen.host}) {
+      allowed_hosts.push_back(h + ":" + std::to_string(port));
+      if (port == 80) allowed_hosts.push_back(h);  // browsers leave the default port out
+    }
+    std::thread http([&] { server.listen_after_bind(); });
+    std::cout << "rover_web: listening on http://" << listen.host << ":" << port << "/ (bus " << bus.url()
+              << "; commands " << (secret.empty() ? "off: no operator secret" : "need the operator secret")
+              << (options.signing ? ", signed with the deployment's key" : ", unsigned (no key)") << ")\n"
+              << std::flush;
+    if (!IsLoopback(listen.host)) {
+      std::cout << "rover_web: warning: listening on " << listen.host
+                << ", not loopback: anyone who reaches this port reads the bus (plain HTTP, no TLS)\n";
+    }
+
+    proc.Run([&] {
+      for (auto& p : commands.Take()) {
+        try {
+          if (p->kind == Pending::kSubmit) {
+            bus.Publish(ch::kSequenceSubmit, p->submit);
+          } else {
+            bus.Publish(ch::kSequenceControl, p->control);
+          }
+          p->done.set_value("");
+        } catch (const std::exception& e) {
+          p->done.set_value(e.what());
+        }
+      }
+    }, 20);
+
+    stopping = true;
+    server.stop();
+    http.join();
+    for (auto& p : commands.Take()) p->done.set_value("rover_web is stopping");
+    return 0;
+  });
+}
