@@ -43,7 +43,7 @@ struct GenicamOptions {
   // synchronised, PTP/IEEE 1588, or for cameras sharing one clock); host: when each buffer
   // arrived on this computer (always comparable, but includes transfer jitter).
   std::string timestamps = "host";
-  int max_advances = 2;     // older frames skipped before a pair is rejected
+  int max_advances = 2;     // free-running: older frames skipped before a pair is rejected
   double timeout_ms = 2000; // one capture's whole budget, triggers and transfers included
   int buffers = 4;          // stream buffers per camera
   bool fake_interface = false;  // also search Aravis's in-process Fake interface (tests)

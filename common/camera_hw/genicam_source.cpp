@@ -7,6 +7,8 @@
 #include <chrono>
 #include <cstdio>
 #include <mutex>
+#include <thread>
+#include <vector>
 
 namespace rover::camera_hw {
 
@@ -58,20 +60,18 @@ struct Camera {
   std::atomic<bool> lost{false};
   int width = 0, height = 0;
 
-  // `answering`: false when the camera is gone, so nothing is sent to it (each command to a
-  // vanished GigE camera waits out Aravis's retries).
-  void Close(bool answering) {
-    if (camera != nullptr && answering) arv_camera_stop_acquisition(camera, nullptr);
-    if (stream != nullptr) g_object_unref(stream);
-    stream = nullptr;
-    if (camera != nullptr) {
-      if (lost_handler != 0) g_signal_handler_disconnect(arv_camera_get_device(camera), lost_handler);
-      g_object_unref(camera);
-    }
-    camera = nullptr;
-    lost_handler = 0;
-  }
+  bool answering = true;  // false once a command to it failed: nothing more is sent to it
 };
+
+// Gives up one camera's Aravis objects. A camera that no longer answers is sent nothing
+// (each command to a vanished GigE camera waits out Aravis's retries, seconds), and even
+// so dropping the device waits for its "leave control" command: the caller runs this on
+// a thread of its own, so that a failed capture returns at once.
+void Release(ArvCamera* camera, ArvStream* stream, bool answering) {
+  if (camera != nullptr && answering) arv_camera_stop_acquisition(camera, nullptr);
+  if (stream != nullptr) g_object_unref(stream);
+  if (camera != nullptr) g_object_unref(camera);
+}
 
 class GenicamStereo : public StereoSource {
  public:
@@ -82,11 +82,13 @@ class GenicamStereo : public StereoSource {
     cameras_[0].name = "genicam: left camera (" + options_.left.Describe() + ")";
     cameras_[1].name = "genicam: right camera (" + options_.right.Describe() + ")";
   }
-  ~GenicamStereo() override { CloseAll(); }
+  ~GenicamStereo() override {
+    CloseAll();
+    for (auto& t : closers_) t.join();
+  }
 
   StereoFrames Capture() override {
     std::lock_guard<std::mutex> lock(mutex_);
-    const auto deadline = Clock::now() + std::chrono::microseconds(static_cast<std::int64_t>(options_.timeout_ms * 1e3));
     if (!open_) {
       try {
         Open(cameras_[0], options_.left, true);
@@ -98,6 +100,8 @@ class GenicamStereo : public StereoSource {
       }
     }
     reopen_ = false;
+    // The budget starts once the cameras are open (finding them takes a discovery).
+    const auto deadline = Clock::now() + std::chrono::microseconds(static_cast<std::int64_t>(options_.timeout_ms * 1e3));
     try {
       return CaptureOpen(deadline);
     } catch (const CaptureError&) {
@@ -128,6 +132,7 @@ class GenicamStereo : public StereoSource {
     Check(error, cam.name + ": cannot open " + device);
     if (cam.camera == nullptr) throw CaptureError(cam.name + ": cannot open " + device);
     cam.lost = false;
+    cam.answering = true;
     cam.lost_handler = g_signal_connect(arv_camera_get_device(cam.camera), "control-lost",
                                         G_CALLBACK(OnControlLost), &cam.lost);
     ArvCamera* c = cam.camera;
@@ -243,7 +248,15 @@ class GenicamStereo : public StereoSource {
   }
 
   void CloseAll() {
-    for (auto& cam : cameras_) cam.Close(!cam.lost);
+    for (auto& cam : cameras_) {
+      if (cam.camera == nullptr) continue;
+      // The flag belongs to `cam`, which the next Open() reuses: no callback may reach it.
+      if (cam.lost_handler != 0) g_signal_handler_disconnect(arv_camera_get_device(cam.camera), cam.lost_handler);
+      closers_.emplace_back(Release, cam.camera, cam.stream, cam.answering && !cam.lost);
+      cam.camera = nullptr;
+      cam.stream = nullptr;
+      cam.lost_handler = 0;
+    }
     open_ = false;
   }
 
@@ -267,13 +280,16 @@ class GenicamStereo : public StereoSource {
       // millisecond on a direct link). A hardware trigger line makes it exact.
       for (auto& cam : cameras_) {
         arv_camera_software_trigger(cam.camera, &error);
-        if (error != nullptr) reopen_ = true;
+        if (error != nullptr) reopen_ = true, cam.answering = false;
         Check(error, cam.name + ": software trigger failed");
       }
     }
     auto next = [&](Side side) { return Pop(cameras_[side == Side::kLeft ? 0 : 1], deadline); };
-    return PairFrames(next, static_cast<std::int64_t>(options_.pairing_tolerance_ms * 1e6), options_.max_advances,
-                      "genicam");
+    // Triggered, each camera takes exactly one frame per request: a later one would never
+    // come, so a pair that disagrees is rejected at once. Free-running, the side behind
+    // takes its next frame.
+    const int advances = options_.trigger == "free" ? options_.max_advances : 0;
+    return PairFrames(next, static_cast<std::int64_t>(options_.pairing_tolerance_ms * 1e6), advances, "genicam");
   }
 
   void ShareExposureAndGain() {
@@ -295,27 +311,37 @@ class GenicamStereo : public StereoSource {
   }
 
   Frame Pop(Camera& cam, Clock::time_point deadline) {
-    const auto left_us = std::chrono::duration_cast<std::chrono::microseconds>(deadline - Clock::now()).count();
-    ArvBuffer* buffer = arv_stream_timeout_pop_buffer(cam.stream, left_us > 0 ? static_cast<guint64>(left_us) : 0);
-    if (buffer == nullptr) {
-      // A camera that stopped answering, or a stream that stalled: both are reopened.
-      reopen_ = true;
-      if (cam.lost) throw CaptureError(cam.name + ": stopped answering (control lost); reopening at the next capture");
-      throw CaptureError(cam.name + ": no frame within " + Ms(options_.timeout_ms) + " ms (trigger " +
-                         options_.trigger + "); reopening at the next capture");
+    std::string dropped;  // the last incomplete frame, free-running
+    int drops = 0;
+    for (;;) {
+      const auto left_us = std::chrono::duration_cast<std::chrono::microseconds>(deadline - Clock::now()).count();
+      ArvBuffer* buffer = arv_stream_timeout_pop_buffer(cam.stream, left_us > 0 ? static_cast<guint64>(left_us) : 0);
+      if (buffer == nullptr) {
+        // A camera that stopped answering, or a stream that stalled: both are reopened.
+        reopen_ = true;
+        if (cam.lost) throw CaptureError(cam.name + ": stopped answering (control lost); reopening at the next capture");
+        throw CaptureError(cam.name + ": no frame within " + Ms(options_.timeout_ms) + " ms (trigger " +
+                           options_.trigger + (drops > 0 ? ", " + std::to_string(drops) + " dropped, last " + dropped : "") +
+                           "); reopening at the next capture");
+      }
+      const ArvBufferStatus status = arv_buffer_get_status(buffer);
+      if (status == ARV_BUFFER_STATUS_SUCCESS) return Convert(cam, buffer);
+      dropped = "frame " + std::to_string(arv_buffer_get_frame_id(buffer)) + " dropped: " + StatusName(status);
+      arv_stream_push_buffer(cam.stream, buffer);
+      // Triggered, the dropped frame was this request's: the capture fails. Free-running,
+      // the next frame will do.
+      if (options_.trigger != "free") throw CaptureError(cam.name + ": " + dropped);
+      ++drops;
     }
-    // The buffer goes back to the stream whatever happens below.
+  }
+
+  // The image of a complete buffer, which goes back to the stream.
+  Frame Convert(Camera& cam, ArvBuffer* buffer) {
     struct GiveBack {
       ArvStream* s;
       ArvBuffer* b;
       ~GiveBack() { arv_stream_push_buffer(s, b); }
     } give_back{cam.stream, buffer};
-
-    const ArvBufferStatus status = arv_buffer_get_status(buffer);
-    if (status != ARV_BUFFER_STATUS_SUCCESS) {
-      throw CaptureError(cam.name + ": frame " + std::to_string(arv_buffer_get_frame_id(buffer)) +
-                         " dropped: " + StatusName(status));
-    }
     if (arv_buffer_get_payload_type(buffer) != ARV_BUFFER_PAYLOAD_TYPE_IMAGE) {
       throw CaptureError(cam.name + ": frame " + std::to_string(arv_buffer_get_frame_id(buffer)) + " is not an image");
     }
@@ -355,6 +381,7 @@ class GenicamStereo : public StereoSource {
   Camera cameras_[2];
   bool open_ = false;
   bool reopen_ = false;  // set by a failure that the next capture should reopen the cameras for
+  std::vector<std::thread> closers_;  // releasing cameras given up (see Release)
 };
 
 }  // namespace
