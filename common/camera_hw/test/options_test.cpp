@@ -107,3 +107,19 @@ TEST(GstreamerOptions, PipelinesMustEndInAnAppsink) {
                 "cams.yaml: gstreamer.rigth: unknown key", 0),
             0u);
 }
+
+// The example configs in configs/cameras/ load (camera_capture reads the capture: section).
+TEST(CameraHwOptions, ExampleConfigsLoad) {
+  const std::string dir = std::string(ROVER_SOURCE_DIR) + "/configs/cameras/";
+  const auto genicam = ConfigNode::LoadFile(dir + "capture_genicam.yaml")["capture"];
+  EXPECT_EQ(genicam["source"].AsString(), "genicam");
+  const auto g = GenicamOptions::Load(genicam["genicam"]);
+  EXPECT_EQ(g.left.serial, "NAVL0001");
+  EXPECT_EQ(g.roi_width, 1024);
+  EXPECT_TRUE(g.exposure_auto);
+  const auto gstreamer = ConfigNode::LoadFile(dir + "capture_gstreamer.yaml")["capture"];
+  EXPECT_EQ(gstreamer["source"].AsString(), "gstreamer");
+  const auto s = GstreamerOptions::Load(gstreamer["gstreamer"]);
+  EXPECT_NE(s.left_pipeline.find("videotestsrc"), std::string::npos);
+  EXPECT_DOUBLE_EQ(s.pairing_tolerance_ms, 34.0);
+}

@@ -1,0 +1,84 @@
+// camera_capture with a hardware source (README "Camera hardware"): the gstreamer source
+// on GStreamer's test pattern publishes STEREO_FRAMEs on request, and a bad hardware
+// config is one line and exit 2. (The genicam source's own tests, on Aravis's fake
+// cameras, are in common/camera_hw/test/.)
+#include "bus/bus.hpp"
+#include "bus/channels.hpp"
+#include "camera_hw/sources.hpp"
+#include "integration/run_support.hpp"
+#include "launch/process_set.hpp"
+
+#include <rover_msgs/capture_request_t.hpp>
+#include <rover_msgs/stereo_frame_t.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <optional>
+
+namespace rover::test {
+namespace {
+
+TEST(CameraCaptureHardware, GstreamerSourcePublishesRequestedPairs) {
+  if (!camera_hw::GstreamerAvailable()) GTEST_SKIP() << "built without GStreamer (libgstreamer1.0-dev)";
+  const std::string dir = OutDir("camera_hw_gstreamer");
+  const std::string url = PrivateUrl(11);
+  bus::Bus bus(url);
+  std::optional<rover_msgs::stereo_frame_t> frame;
+  bus.Subscribe<rover_msgs::stereo_frame_t>(channels::kStereoFrame,
+                                            [&](const rover_msgs::stereo_frame_t& f) { frame = f; });
+  launch::ProcessSet set(std::string(ROVER_BINARY_DIR) + "/bin", dir, false);
+  // The example config: two live 1024x1024 test-pattern pipelines and the NAVCAM rig.
+  set.Start({"camera_capture", "camera_capture", {"--config", SourceDir() + "/configs/cameras/capture_gstreamer.yaml"}},
+            {"ROVER_LCM_URL=" + url});
+  rover_msgs::capture_request_t request{};
+  request.frame_id = 7;
+  request.purpose = "vo";
+  const auto start = std::chrono::steady_clock::now();
+  // Asked again every second until camera_capture has subscribed and answered.
+  auto next_request = start;
+  while (!frame && std::chrono::steady_clock::now() - start < std::chrono::seconds(30)) {
+    if (std::chrono::steady_clock::now() >= next_request) {
+      bus.Publish(channels::kCaptureRequest, request);
+      next_request += std::chrono::seconds(1);
+    }
+    bus.Handle(100);
+  }
+  ASSERT_TRUE(frame.has_value()) << "no STEREO_FRAME within 30 s";
+  EXPECT_EQ(frame->frame_id, 7);
+  EXPECT_EQ(frame->purpose, "vo");
+  for (const auto* image : {&frame->left, &frame->right}) {
+    EXPECT_EQ(image->width, 1024);
+    EXPECT_EQ(image->height, 1024);
+    EXPECT_EQ(image->encoding, rover_msgs::image_t::ENCODING_PNG);
+    EXPECT_GT(image->size, 0);
+  }
+  EXPECT_EQ(frame->left_model.width, 1024);  // the rig file's models travel with the pair
+  EXPECT_TRUE(set.Running("camera_capture"));
+  set.StopAll();
+}
+
+TEST(CameraCaptureHardware, BadHardwareConfigIsOneLineAndExitTwo) {
+  const std::string dir = OutDir("camera_hw_bad_config");
+  const std::string bad = dir + "/bad.yaml";
+  std::ofstream(bad) << "capture:\n  source: genicam\n  rig: " << SourceDir()
+                     << "/configs/cameras/navcam_pinhole.yaml\n  genicam:\n    left: {serial: A}\n"
+                        "    right: {serial: B}\n    exposre_us: 100\n";
+  auto r = RunCommand(Bin("camera_capture") + " --config " + bad);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output.rfind(bad + ": capture.genicam.exposre_us: unknown key (expected one of: left, right, ", 0), 0u)
+      << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+
+  std::ofstream(bad) << "capture:\n  source: gstreamer\n  gstreamer:\n    left: videotestsrc ! fakesink\n"
+                        "    right: videotestsrc ! appsink\n";
+  r = RunCommand(Bin("camera_capture") + " --config " + bad);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, bad + ": capture.gstreamer.left: expected a pipeline ending in appsink, got one ending in "
+                            "\"fakesink\"\n");
+}
+
+}  // namespace
+}  // namespace rover::test
