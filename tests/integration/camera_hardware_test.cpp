@@ -52,7 +52,7 @@ TEST(CameraCaptureHardware, GstreamerSourcePublishesRequestedPairs) {
   for (const auto* image : {&frame->left, &frame->right}) {
     EXPECT_EQ(image->width, 1024);
     EXPECT_EQ(image->height, 1024);
-    EXPECT_EQ(image->encoding, rover_msgs::image_t::ENCODING_PNG);
+    EXPECT_EQ(image->encoding, +rover_msgs::image_t::ENCODING_PNG);  // (+: a value, not the header's static member)
     EXPECT_GT(image->size, 0);
   }
   EXPECT_EQ(frame->left_model.width, 1024);  // the rig file's models travel with the pair
