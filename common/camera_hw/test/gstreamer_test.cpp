@@ -115,16 +115,17 @@ TEST(Gstreamer, PairsApartBeyondToleranceAreRejected) {
 
 TEST(Gstreamer, LivePipelinesPairWithinTolerance) {
   // Two live 30 frames/s sources start up to one frame apart; advancing the older side
-  // brings them within half a frame (16.7 ms).
+  // brings them within half a frame (16.7 ms), plus the scheduling jitter of a busy
+  // machine: 25 ms, still under the 33 ms a frame behind would be.
   const std::string p = "videotestsrc is-live=true ! video/x-raw,format=GRAY8,width=64,height=48,framerate=30/1 "
                         "! appsink max-buffers=1 drop=true";
   std::string skip;
-  auto source = Make(p, p, skip, 17.0, 5);
+  auto source = Make(p, p, skip, 25.0, 5);
   if (!source) GTEST_SKIP() << skip;
   std::int64_t previous = 0;
   for (int i = 0; i < 5; ++i) {
     const auto pair = source->Capture();
-    EXPECT_LE(std::llabs(pair.left.timestamp_ns - pair.right.timestamp_ns), 17'000'000);
+    EXPECT_LE(std::llabs(pair.left.timestamp_ns - pair.right.timestamp_ns), 25'000'000);
     EXPECT_GT(pair.left.timestamp_ns, previous);  // each capture is a newer pair
     previous = pair.left.timestamp_ns;
   }
