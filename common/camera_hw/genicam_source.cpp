@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -84,7 +85,7 @@ class GenicamStereo : public StereoSource {
   }
   ~GenicamStereo() override {
     CloseAll();
-    for (auto& t : closers_) t.join();
+    for (auto& c : closers_) c.thread.join();
   }
 
   StereoFrames Capture() override {
@@ -248,11 +249,27 @@ class GenicamStereo : public StereoSource {
   }
 
   void CloseAll() {
+    // Threads that have finished releasing are joined, so that a camera that comes and
+    // goes all mission long does not pile them up.
+    for (auto it = closers_.begin(); it != closers_.end();) {
+      if (it->done->load()) {
+        it->thread.join();
+        it = closers_.erase(it);
+      } else {
+        ++it;
+      }
+    }
     for (auto& cam : cameras_) {
       if (cam.camera == nullptr) continue;
       // The flag belongs to `cam`, which the next Open() reuses: no callback may reach it.
       if (cam.lost_handler != 0) g_signal_handler_disconnect(arv_camera_get_device(cam.camera), cam.lost_handler);
-      closers_.emplace_back(Release, cam.camera, cam.stream, cam.answering && !cam.lost);
+      auto done = std::make_shared<std::atomic<bool>>(false);
+      closers_.push_back({std::thread([camera = cam.camera, stream = cam.stream, answering = cam.answering && !cam.lost,
+                                       done] {
+                            Release(camera, stream, answering);
+                            done->store(true);
+                          }),
+                          done});
       cam.camera = nullptr;
       cam.stream = nullptr;
       cam.lost_handler = 0;
@@ -381,7 +398,11 @@ class GenicamStereo : public StereoSource {
   Camera cameras_[2];
   bool open_ = false;
   bool reopen_ = false;  // set by a failure that the next capture should reopen the cameras for
-  std::vector<std::thread> closers_;  // releasing cameras given up (see Release)
+  struct Closer {
+    std::thread thread;
+    std::shared_ptr<std::atomic<bool>> done;
+  };
+  std::vector<Closer> closers_;  // releasing cameras given up (see Release)
 };
 
 }  // namespace

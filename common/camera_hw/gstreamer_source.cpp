@@ -68,26 +68,18 @@ class GstreamerStereo : public StereoSource {
     if (!init_error.empty()) throw CaptureError("gstreamer: cannot start GStreamer: " + init_error);
     Build(pipelines_[0], "gstreamer: left pipeline", options_.left_pipeline);
     Build(pipelines_[1], "gstreamer: right pipeline", options_.right_pipeline);
-    // One clock and one base time for both pipelines, so that their buffer times (base
-    // time + running time) are instants on one clock and can be compared, live or not.
-    GstClock* clock = gst_system_clock_obtain();
-    const GstClockTime base = gst_clock_get_time(clock);
-    for (auto& p : pipelines_) {
-      gst_pipeline_use_clock(GST_PIPELINE(p.pipeline), clock);
-      gst_element_set_start_time(p.pipeline, GST_CLOCK_TIME_NONE);  // keep the base time set here
-      gst_element_set_base_time(p.pipeline, base);
-    }
-    gst_object_unref(clock);
-    for (auto& p : pipelines_) {
-      if (gst_element_set_state(p.pipeline, GST_STATE_PLAYING) == GST_STATE_CHANGE_FAILURE) {
-        const std::string why = BusError(p.pipeline);
-        throw CaptureError(p.name + ": cannot start" + (why.empty() ? "" : ": " + why));
-      }
-    }
+    Play();
   }
 
   StereoFrames Capture() override {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (restart_) {
+      // After an error, an end of stream or a stall: both pipelines start again together
+      // (a camera unplugged and plugged back is opened anew by its source element).
+      for (auto& p : pipelines_) gst_element_set_state(p.pipeline, GST_STATE_NULL);
+      Play();
+      restart_ = false;
+    }
     const GstClockTime start = gst_util_get_timestamp();
     const GstClockTime budget = static_cast<GstClockTime>(options_.timeout_ms * 1e6);
     auto next = [&](Side side) {
@@ -100,6 +92,26 @@ class GstreamerStereo : public StereoSource {
   }
 
  private:
+  // Both pipelines to PLAYING on one clock with one base time, so that their buffer times
+  // (base time + running time) are instants on one clock and can be compared, live or not.
+  void Play() {
+    GstClock* clock = gst_system_clock_obtain();
+    const GstClockTime base = gst_clock_get_time(clock);
+    for (auto& p : pipelines_) {
+      gst_pipeline_use_clock(GST_PIPELINE(p.pipeline), clock);
+      gst_element_set_start_time(p.pipeline, GST_CLOCK_TIME_NONE);  // keep the base time set here
+      gst_element_set_base_time(p.pipeline, base);
+    }
+    gst_object_unref(clock);
+    for (auto& p : pipelines_) {
+      if (gst_element_set_state(p.pipeline, GST_STATE_PLAYING) == GST_STATE_CHANGE_FAILURE) {
+        const std::string why = BusError(p.pipeline);
+        restart_ = true;
+        throw CaptureError(p.name + ": cannot start" + (why.empty() ? "" : ": " + why));
+      }
+    }
+  }
+
   static void Build(Pipeline& p, const std::string& name, const std::string& text) {
     p.name = name;
     GError* error = nullptr;
@@ -128,6 +140,7 @@ class GstreamerStereo : public StereoSource {
   Frame Pull(Pipeline& p, GstClockTime timeout) {
     GstSample* sample = gst_app_sink_try_pull_sample(p.sink, timeout);
     if (sample == nullptr) {
+      restart_ = true;
       const std::string why = BusError(p.pipeline);
       if (!why.empty()) throw CaptureError(p.name + ": " + why);
       if (gst_app_sink_is_eos(p.sink)) throw CaptureError(p.name + ": ended (end of stream)");
@@ -178,6 +191,7 @@ class GstreamerStereo : public StereoSource {
   GstreamerOptions options_;
   std::mutex mutex_;
   Pipeline pipelines_[2];
+  bool restart_ = false;  // a pipeline failed: both start again at the next capture
 };
 
 }  // namespace

@@ -160,6 +160,8 @@ TEST(Gstreamer, EndOfStreamAndBadPipelinesAreOneLine) {
   } catch (const CaptureError& e) {
     EXPECT_STREQ(e.what(), "gstreamer: left pipeline: ended (end of stream)");
   }
+  // Both pipelines start again at the next capture (as after a camera came back).
+  EXPECT_NO_THROW(source->Capture());
   try {
     Make("nosuchsrc ! appsink", p, skip);
     FAIL() << "a pipeline with an unknown element";
