@@ -31,6 +31,7 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <tuple>
 
 using namespace rover;
 namespace fs = std::filesystem;
@@ -183,11 +184,13 @@ class HardwareCameras : public ImageSource {
   bool Ready(std::int64_t) const override { return true; }
   CapturedPair Capture(std::int64_t) override {
     auto frames = source_->Capture();
-    for (const auto* m : {&frames.left.image, &frames.right.image}) {
-      if (m->cols != rig_.left->width() || m->rows != rig_.left->height()) {
-        throw std::runtime_error("camera image is " + std::to_string(m->cols) + "x" + std::to_string(m->rows) +
-                                 " but the rig's camera models are " + std::to_string(rig_.left->width()) + "x" +
-                                 std::to_string(rig_.left->height()) + " (capture.rig against the region and binning)");
+    for (const auto& [image, model, side] : {std::tuple{&frames.left.image, rig_.left.get(), "left"},
+                                             std::tuple{&frames.right.image, rig_.right.get(), "right"}}) {
+      if (image->cols != model->width() || image->rows != model->height()) {
+        throw std::runtime_error(std::string(side) + " image is " + std::to_string(image->cols) + "x" +
+                                 std::to_string(image->rows) + " but its camera model is " +
+                                 std::to_string(model->width()) + "x" + std::to_string(model->height()) +
+                                 " (capture.rig against the region and binning)");
       }
     }
     return {frames.left.image, frames.right.image, rig_, 0};  // stamped with the bus time of the request

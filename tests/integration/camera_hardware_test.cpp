@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <iterator>
 #include <optional>
 
 namespace rover::test {
@@ -58,6 +59,41 @@ TEST(CameraCaptureHardware, GstreamerSourcePublishesRequestedPairs) {
   EXPECT_EQ(frame->left_model.width, 1024);  // the rig file's models travel with the pair
   EXPECT_TRUE(set.Running("camera_capture"));
   set.StopAll();
+}
+
+TEST(CameraCaptureHardware, ImagesOfAnotherSizeThanTheRigAreRefusedInOneLine) {
+  if (!camera_hw::GstreamerAvailable()) GTEST_SKIP() << "built without GStreamer (libgstreamer1.0-dev)";
+  const std::string dir = OutDir("camera_hw_rig_size");
+  const std::string config = dir + "/small.yaml";
+  // 64x48 images against the 1024x1024 NAVCAM models.
+  const std::string pipeline = "videotestsrc ! video/x-raw,format=GRAY8,width=64,height=48,framerate=10/1 ! appsink";
+  std::ofstream(config) << "capture:\n  source: gstreamer\n  rig: " << SourceDir()
+                        << "/configs/cameras/navcam_pinhole.yaml\n  gstreamer:\n    left: \"" << pipeline
+                        << "\"\n    right: \"" << pipeline << "\"\n";
+  const std::string url = PrivateUrl(12);
+  bus::Bus bus(url);
+  int frames = 0;
+  bus.Subscribe<rover_msgs::stereo_frame_t>(channels::kStereoFrame, [&](const rover_msgs::stereo_frame_t&) { ++frames; });
+  {
+    launch::ProcessSet set(std::string(ROVER_BINARY_DIR) + "/bin", dir, false);
+    set.Start({"camera_capture", "camera_capture", {"--config", config}}, {"ROVER_LCM_URL=" + url});
+    rover_msgs::capture_request_t request{};
+    request.frame_id = 1;
+    request.purpose = "vo";
+    for (int i = 0; i < 5; ++i) {
+      bus.Publish(channels::kCaptureRequest, request);
+      bus.Handle(1000);
+    }
+    EXPECT_TRUE(set.Running("camera_capture"));  // a refused pair is not a crash
+    set.StopAll();
+  }
+  EXPECT_EQ(frames, 0);
+  std::ifstream log(dir + "/camera_capture.log");
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("camera_capture: capture failed, no frame sent: left image is 64x48 but its camera model is "
+                      "1024x1024 (capture.rig against the region and binning)\n"),
+            std::string::npos)
+      << text;
 }
 
 TEST(CameraCaptureHardware, BadHardwareConfigIsOneLineAndExitTwo) {
