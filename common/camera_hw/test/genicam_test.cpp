@@ -39,12 +39,19 @@ std::string SkipReason() {
 GenicamOptions FakeInterfaceOptions() {
   GenicamOptions o;
   // Each opening of Fake_1 is its own simulated camera, so two openings make a pair. The
-  // in-process fake ignores the trigger and runs at 25 frames/s, all fakes on one 40 ms grid.
+  // in-process fake has no software trigger (it runs free whatever the trigger), so it is
+  // used free-running, at 25 frames/s: its frames fall on one 40 ms grid of the monotonic
+  // clock, but are stamped when its thread wakes, which on a loaded machine has been seen
+  // 190 ms late. These tests are about what the cameras deliver (pixels, sizes, formats,
+  // gain); the pairing rule is tested in pairing_test.cpp and on the GigE fakes below.
   o.left.device_id = "Fake_1";
   o.right.device_id = "Fake_1";
   o.fake_interface = true;
+  o.trigger = "free";
+  o.frame_rate_hz = 25.0;
+  o.max_advances = 3;
   o.timestamps = "device";
-  o.pairing_tolerance_ms = 5.0;
+  o.pairing_tolerance_ms = 500.0;
   o.roi_width = 320;
   o.roi_height = 240;
   o.timeout_ms = 1000;
@@ -134,7 +141,7 @@ TEST(FakeInterface, PairHasTheFakeCamerasRampAndSize) {
       ASSERT_EQ(f->image.type(), CV_8UC1);
       EXPECT_EQ(RampMismatches8(*f, 1.0), 0) << "frame " << f->frame_id;
     }
-    EXPECT_LE(std::llabs(pair.left.timestamp_ns - pair.right.timestamp_ns), 5'000'000);
+    EXPECT_LE(std::llabs(pair.left.timestamp_ns - pair.right.timestamp_ns), 500'000'000);
   }
 }
 
@@ -240,7 +247,7 @@ TEST_F(FakeGv, PairsAgreeWithinTolerance) {
     std::int64_t worst = 0;
     double slowest = 0;
     int advances = 0;
-    std::uint64_t previous = 0;
+    std::int64_t previous = 0;
     for (int i = 0; i < 10; ++i) {
       const auto start = Clock::now();
       const auto pair = source->Capture();
@@ -249,10 +256,10 @@ TEST_F(FakeGv, PairsAgreeWithinTolerance) {
       advances += pair.advances;
       EXPECT_EQ(RampMismatches8(pair.left, 1.0), 0);
       EXPECT_EQ(RampMismatches8(pair.right, 1.0), 0);
-      if (i > 0) {
-        EXPECT_GT(pair.left.frame_id, previous);  // a new pair each time
-      }
-      previous = pair.left.frame_id;
+      // A new pair each time. (Not by frame id: GigE Vision's 16-bit block ids wrap, and
+      // the fake starts them at 65400 to show it.)
+      EXPECT_GT(pair.left.timestamp_ns, previous);
+      previous = pair.left.timestamp_ns;
     }
     EXPECT_LE(worst, options.pairing_tolerance_ms * 1e6);
     std::printf("%s timestamps, free-running: largest left-right difference over 10 pairs %.3f ms, %d advances, "
