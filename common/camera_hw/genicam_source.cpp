@@ -92,6 +92,8 @@ class GenicamStereo : public StereoSource {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!open_) {
       try {
+        // One discovery for both cameras (each takes about a second on GigE Vision).
+        if (!options_.left.serial.empty() || !options_.right.serial.empty()) arv_update_device_list();
         Open(cameras_[0], options_.left, true);
         Open(cameras_[1], options_.right, false);
         open_ = true;
@@ -114,7 +116,6 @@ class GenicamStereo : public StereoSource {
  private:
   std::string ResolveDeviceId(const Camera& cam, const CameraId& id) {
     if (!id.device_id.empty()) return id.device_id;
-    arv_update_device_list();
     std::string seen;
     for (unsigned i = 0; i < arv_get_n_devices(); ++i) {
       const char* serial = arv_get_device_serial_nbr(i);
