@@ -28,7 +28,9 @@ std::string BusError(GstElement* pipeline) {
       GError* error = nullptr;
       gchar* debug = nullptr;
       gst_message_parse_error(m, &error, &debug);
-      text = OneLine(error ? error->message : "unknown error");
+      // The element that failed ("v4l2src0: Cannot identify device ..."), as gst-launch says.
+      const char* element = GST_MESSAGE_SRC_NAME(m);
+      text = OneLine(std::string(element ? element : "?") + ": " + (error ? error->message : "unknown error"));
       if (error) g_error_free(error);
       g_free(debug);
     }
@@ -68,7 +70,14 @@ class GstreamerStereo : public StereoSource {
     if (!init_error.empty()) throw CaptureError("gstreamer: cannot start GStreamer: " + init_error);
     Build(pipelines_[0], "gstreamer: left pipeline", options_.left_pipeline);
     Build(pipelines_[1], "gstreamer: right pipeline", options_.right_pipeline);
-    Play();
+    // A pipeline that parsed but cannot start yet (a camera not plugged in) is tried again
+    // at each capture, as the genicam source opens its cameras: the process may start
+    // before its cameras.
+    try {
+      Play();
+    } catch (const CaptureError&) {
+      restart_ = true;
+    }
   }
 
   StereoFrames Capture() override {

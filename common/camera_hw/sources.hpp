@@ -16,7 +16,8 @@ bool GstreamerAvailable();
 // Opens nothing yet: the cameras are opened by the first Capture(), and again after one
 // vanished, so a process may start before its cameras are powered.
 std::unique_ptr<StereoSource> MakeGenicamSource(const GenicamOptions& options);
-// Builds and starts both pipelines; a pipeline that does not parse or start is a CaptureError.
+// Builds and starts both pipelines; a pipeline that does not parse is a CaptureError. One
+// that parses but cannot start (its camera absent) is started again at each Capture().
 std::unique_ptr<StereoSource> MakeGstreamerSource(const GstreamerOptions& options);
 
 }  // namespace rover::camera_hw

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdio>
 
 using namespace rover::camera_hw;
 
@@ -146,6 +147,29 @@ TEST(Gstreamer, StalledPipelineTimesOutInOneLine) {
     EXPECT_STREQ(e.what(), "gstreamer: right pipeline: no frame within 300 ms");
   }
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(2));
+}
+
+TEST(Gstreamer, PipelineThatCannotStartFailsEachCaptureInOneLine) {
+  // Its source cannot open (as a camera not plugged in): the source is made all the same,
+  // and each capture tries again and fails in one line, never hanging.
+  const std::string p = "videotestsrc ! " + Caps("GRAY8") + " ! appsink sync=false max-buffers=1";
+  std::string skip;
+  auto source = Make(p, "filesrc location=/nonexistent/camera ! appsink", skip);
+  if (!source) GTEST_SKIP() << skip;
+  for (int i = 0; i < 2; ++i) {
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      source->Capture();
+      FAIL() << "a pair from a pipeline that cannot start";
+    } catch (const CaptureError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind("gstreamer: right pipeline: cannot start", 0), 0u) << what;
+      EXPECT_NE(what.find("filesrc0: "), std::string::npos) << what;  // the element that failed
+      std::printf("%s\n", what.c_str());
+      EXPECT_EQ(what.find('\n'), std::string::npos);
+    }
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(2));
+  }
 }
 
 TEST(Gstreamer, EndOfStreamAndBadPipelinesAreOneLine) {
