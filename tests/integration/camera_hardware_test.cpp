@@ -116,5 +116,37 @@ TEST(CameraCaptureHardware, BadHardwareConfigIsOneLineAndExitTwo) {
                             "\"fakesink\"\n");
 }
 
+TEST(CameraTools, CameraCheckTakesPairsWithNoBus) {
+  if (!camera_hw::GstreamerAvailable()) GTEST_SKIP() << "built without GStreamer (libgstreamer1.0-dev)";
+  const std::string dir = OutDir("camera_check");
+  auto r = RunCommand(Bin("camera_check") + " --config configs/cameras/capture_gstreamer.yaml --pairs 3 --out " + dir);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("pair 0: 1024x1024 8-bit, frames 0/0, left-right "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("3 pairs: 3 taken, 0 failed; left-right at most "), std::string::npos) << r.output;
+  for (const char* name : {"/left_000.png", "/right_002.png"}) {
+    EXPECT_TRUE(std::ifstream(dir + name).good()) << name;
+  }
+  r = RunCommand(Bin("camera_check") + " --config configs/rover.yaml");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, "configs/rover.yaml: capture.source: expected genicam or gstreamer (camera_check takes pictures "
+                      "from real cameras), got \"sim\"\n");
+  r = RunCommand(Bin("camera_check") + " --config configs/cameras/capture_gstreamer.yaml --pairs 0");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, "camera_check: argument --pairs: \"0\": expected an integer in [1, 100000]\n");
+}
+
+TEST(CameraTools, CalibImportArgumentsAreOneLine) {
+  auto r = RunCommand(Bin("calib_import") + " --opencv x.yaml --left-rpy 0,0,0 --out /dev/null");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, "calib_import: missing argument --left-position X,Y,Z (the left camera's centre, rover frame, m)\n");
+  r = RunCommand(Bin("calib_import") + " --opencv /nonexistent.yaml --left-position 0,0,0 --left-rpy 0,0 --out /dev/null");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, "calib_import: argument --left-rpy: \"0,0\": expected 3 finite numbers separated by commas\n");
+  r = RunCommand(Bin("calib_import") + " --opencv /nonexistent.yaml --left-position 0,0,0 --left-rpy 0,0,0 --out /dev/null");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_EQ(r.output.rfind("/nonexistent.yaml: ", 0), 0u) << r.output;
+}
+
 }  // namespace
 }  // namespace rover::test
