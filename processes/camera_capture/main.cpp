@@ -3,10 +3,11 @@
 // capture. Sources:
 //   sim      render the world at the TRUE pose (SIM_TRUTH); nothing else comes from truth
 //   dataset  a KITTI-layout directory (image_0/, image_1/, calib.txt), played in order
-// A hardware source implements ImageSource (see README, "Camera hardware").
+//   genicam, gstreamer  real cameras (common/camera_hw; README "Camera hardware")
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
+#include "camera_hw/sources.hpp"
 #include "config/file_read.hpp"
 #include "geometry/camera_io.hpp"
 #include "geometry/kitti_calib.hpp"
@@ -30,6 +31,7 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <tuple>
 
 using namespace rover;
 namespace fs = std::filesystem;
@@ -181,6 +183,32 @@ class DatasetCameras : public ImageSource {
   geometry::StereoRig rig_;
 };
 
+// Real cameras (camera_hw): a pair is taken when asked, so a source is always ready. The
+// rig file's models must be for the images the cameras deliver (region and binning).
+class HardwareCameras : public ImageSource {
+ public:
+  HardwareCameras(std::unique_ptr<camera_hw::StereoSource> source, geometry::StereoRig rig)
+      : source_(std::move(source)), rig_(std::move(rig)) {}
+  bool Ready(std::int64_t) const override { return true; }
+  CapturedPair Capture(std::int64_t) override {
+    auto frames = source_->Capture();
+    for (const auto& [image, model, side] : {std::tuple{&frames.left.image, rig_.left.get(), "left"},
+                                             std::tuple{&frames.right.image, rig_.right.get(), "right"}}) {
+      if (image->cols != model->width() || image->rows != model->height()) {
+        throw std::runtime_error(std::string(side) + " image is " + std::to_string(image->cols) + "x" +
+                                 std::to_string(image->rows) + " but its camera model is " +
+                                 std::to_string(model->width()) + "x" + std::to_string(model->height()) +
+                                 " (capture.rig against the region and binning)");
+      }
+    }
+    return {frames.left.image, frames.right.image, rig_, 0};  // stamped with the bus time of the request
+  }
+
+ private:
+  std::unique_ptr<camera_hw::StereoSource> source_;
+  geometry::StereoRig rig_;
+};
+
 rover_msgs::image_t EncodeImage(const cv::Mat& img, bool png) {
   rover_msgs::image_t out{};
   out.width = img.cols;
@@ -223,10 +251,10 @@ int main(int argc, char** argv) {
                       {{"--world", "FILE", "world YAML (sim source)"},
                        {"--dataset", "DIR", "KITTI-layout directory (dataset source)"}});
     const auto section = proc.config()["capture"];
-    section.CheckKeys({"source", "rig", "encoding", "rate_hz", "render"});
+    section.CheckKeys({"source", "rig", "encoding", "rate_hz", "render", "genicam", "gstreamer"});
     std::string source = "sim", rig_path = "configs/cameras/navcam_pinhole.yaml", encoding = "png";
     double rate_hz = 0.0;
-    section.GetEnum("source", source, {"sim", "dataset"});
+    section.GetEnum("source", source, {"sim", "dataset", "genicam", "gstreamer"});
     section.Get("rig", rig_path);
     section.GetEnum("encoding", encoding, {"png", "raw"});
     section.Get("rate_hz", rate_hz, 0.0, 100.0);
@@ -243,6 +271,11 @@ int main(int argc, char** argv) {
       if (!world) throw config::ConfigError("camera_capture: missing argument --world FILE (expected the world the simulator drives on)");
       cameras = std::make_unique<SimulatedCameras>(*world, geometry::LoadStereoRigFile(rig_path),
                                                    render::LoadRenderOptions(section["render"]));
+    } else if (source == "genicam" || source == "gstreamer") {
+      auto hardware = source == "genicam"
+                          ? camera_hw::MakeGenicamSource(camera_hw::GenicamOptions::Load(section["genicam"]))
+                          : camera_hw::MakeGstreamerSource(camera_hw::GstreamerOptions::Load(section["gstreamer"]));
+      cameras = std::make_unique<HardwareCameras>(std::move(hardware), geometry::LoadStereoRigFile(rig_path));
     } else {
       const auto dir = proc.option("--dataset");
       if (!dir) throw config::ConfigError("camera_capture: missing argument --dataset DIR (expected a KITTI-layout directory)");

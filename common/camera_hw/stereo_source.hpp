@@ -1,0 +1,54 @@
+// Stereo pairs from real cameras, behind one small interface. Knows nothing of LCM:
+// processes/camera_capture wraps a StereoSource in its ImageSource (README, "Camera
+// hardware"; docs/HARDWARE.md).
+//
+// Every failure (a dropped or incomplete frame, a timeout, a pair whose two timestamps do
+// not agree, a camera that vanished) is a CaptureError whose what() is one line; a capture
+// never waits longer than its timeout. A source that lost a camera reopens it on a later
+// Capture(), so a camera that comes back is used again without restarting the process.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+namespace rover::camera_hw {
+
+class CaptureError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Frame {
+  cv::Mat image;                 // CV_8UC1 (Mono8, GRAY8) or CV_16UC1 (Mono16, GRAY16_LE)
+  std::int64_t timestamp_ns = 0; // the clock the pairing compares (see the sources' options)
+  std::uint64_t frame_id = 0;    // the camera's frame counter (GenICam) or sample count
+};
+
+struct StereoFrames {
+  Frame left, right;
+  int advances = 0;  // frames skipped on the older side before the two agreed
+};
+
+class StereoSource {
+ public:
+  virtual ~StereoSource() = default;
+  // One pair taken at once. Throws CaptureError (one line) and never hangs.
+  virtual StereoFrames Capture() = 0;
+};
+
+enum class Side { kLeft, kRight };
+inline const char* SideName(Side s) { return s == Side::kLeft ? "left" : "right"; }
+
+// The pairing rule every source shares: a pair is accepted only when the two timestamps
+// agree within `tolerance_ns`. When they do not, the side that is behind takes its next
+// frame (free-running cameras and pipelines drift in and out of step), at most
+// `max_advances` times; then the capture fails with one line naming both timestamps.
+// `next(side)` returns that side's next frame or throws CaptureError.
+StereoFrames PairFrames(const std::function<Frame(Side)>& next, std::int64_t tolerance_ns,
+                        int max_advances, const std::string& source_name);
+
+}  // namespace rover::camera_hw

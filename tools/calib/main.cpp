@@ -1,0 +1,114 @@
+// calib_import: writes a rig file (configs/cameras/*.yaml) from a stereo calibration made
+// by OpenCV's stereoCalibrate or ROS's camera_calibration (tools/calib/calib_import.hpp).
+#include "calib/calib_import.hpp"
+#include "config/number_list.hpp"
+#include "config/yaml_config.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+
+using namespace rover;
+
+namespace {
+
+const char* kUsage =
+    "usage: calib_import (--opencv FILE [--t-unit m|cm|mm] [--size WxH] | --ros-left FILE --ros-right FILE)\n"
+    "                    --left-position X,Y,Z --left-rpy ROLL,PITCH,YAW --out RIG.yaml\n\n"
+    "Writes the rig file camera_capture's capture.rig reads: both cameras as pinhole models with\n"
+    "OpenCV distortion, in the rover frame (X forward, Y right, Z down), the left camera at its\n"
+    "mount (metres; body roll, pitch, yaw in degrees, as rpy_deg in a rig file) and the right one\n"
+    "where the calibration puts it.\n"
+    "  --opencv FILE   cv::FileStorage YAML with K1|M1, D1, K2|M2, D2, R, T (X_right = R X_left + T)\n"
+    "                  and image_width/image_height or imageSize (else --size)\n"
+    "  --t-unit U      the unit of T (the calibration target's): m (default), cm or mm\n"
+    "  --ros-left/--ros-right FILE   ROS camera_info YAML of each camera (camera_calibration)\n";
+
+struct BadArgument : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+Eigen::Vector3d Triple(const std::string& option, const std::string& text) {
+  std::vector<double> v;
+  if (!config::ParseNumberList(text, &v) || v.size() != 3) {
+    throw BadArgument("argument " + option + ": \"" + text + "\": expected 3 finite numbers separated by commas");
+  }
+  return {v[0], v[1], v[2]};
+}
+
+int Run(int argc, char** argv) {
+  std::string opencv, ros_left, ros_right, out, unit = "m";
+  bool have_position = false, have_rpy = false;
+  int width = 0, height = 0;
+  calib::Mount mount;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw BadArgument("argument " + arg + ": missing value");
+      return argv[++i];
+    };
+    if (arg == "--help" || arg == "-h") {
+      std::cout << kUsage;
+      return 0;
+    } else if (arg == "--opencv") {
+      opencv = value();
+    } else if (arg == "--ros-left") {
+      ros_left = value();
+    } else if (arg == "--ros-right") {
+      ros_right = value();
+    } else if (arg == "--out") {
+      out = value();
+    } else if (arg == "--t-unit") {
+      unit = value();
+      if (unit != "m" && unit != "cm" && unit != "mm") {
+        throw BadArgument("argument --t-unit: \"" + unit + "\": expected m, cm or mm");
+      }
+    } else if (arg == "--size") {
+      const std::string v = value();
+      if (std::sscanf(v.c_str(), "%dx%d", &width, &height) != 2 || width <= 0 || height <= 0) {
+        throw BadArgument("argument --size: \"" + v + "\": expected WIDTHxHEIGHT in pixels, e.g. 1024x1024");
+      }
+    } else if (arg == "--left-position") {
+      mount.position = Triple(arg, value());
+      have_position = true;
+    } else if (arg == "--left-rpy") {
+      mount.rpy_deg = Triple(arg, value());
+      have_rpy = true;
+    } else {
+      throw BadArgument("argument " + arg + ": unknown option (expected one of the options in --help)");
+    }
+  }
+  if (opencv.empty() == (ros_left.empty() && ros_right.empty())) {
+    throw BadArgument("expected either --opencv FILE or --ros-left FILE --ros-right FILE");
+  }
+  if (opencv.empty() && (ros_left.empty() || ros_right.empty())) {
+    throw BadArgument("missing argument " + std::string(ros_left.empty() ? "--ros-left" : "--ros-right") + " FILE");
+  }
+  // Where the cameras sit on the rover is not in a calibration: it must be said, not assumed.
+  if (!have_position) throw BadArgument("missing argument --left-position X,Y,Z (the left camera's centre, rover frame, m)");
+  if (!have_rpy) throw BadArgument("missing argument --left-rpy ROLL,PITCH,YAW (the left camera's body angles, deg)");
+  if (out.empty()) throw BadArgument("missing argument --out RIG.yaml");
+  const double scale = unit == "mm" ? 1e-3 : unit == "cm" ? 1e-2 : 1.0;
+  const auto cal = opencv.empty() ? calib::LoadRosCameraInfoPair(ros_left, ros_right)
+                                  : calib::LoadOpenCvStereo(opencv, scale, width, height);
+  std::ofstream file(out);
+  file << calib::RigYaml(cal, mount);
+  if (!file) throw BadArgument("cannot write " + out);
+  std::cout << "calib_import: wrote " << out << " (baseline " << cal.T.norm() << " m)\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return Run(argc, argv);
+  } catch (const BadArgument& e) {
+    std::cerr << "calib_import: " << e.what() << "\n";
+  } catch (const config::ConfigError& e) {
+    std::cerr << e.what() << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "calib_import: " << e.what() << "\n";
+  }
+  return 2;
+}
