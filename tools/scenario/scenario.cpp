@@ -605,6 +605,8 @@ std::string SummaryJson(const ScenarioSummary& s) {
     j.EndObject();
   } else {
     j.Null();
+    j.Field("rover_time_breakdown_reason",
+            "not a virtual-time log: on a real clock its stamps are wall times (README, \"Simulated time\")");
   }
   j.Key("process_events").BeginArray();
   for (const auto& e : s.process_events) j.Value(e);

@@ -198,7 +198,7 @@ int main(int argc, char** argv) {
     int variants = 0, window = 2, jobs = 1;
     std::uint64_t seed = 1;
     double min_pass_pct = 95.0, slide_pct = 10.0;
-    bool plot = true;
+    bool plot = true, prepare_only = false;
     auto number = [&](int& i, const std::string& flag) -> double {
       if (i + 1 >= argc) throw ConfigError("scenario_campaign: " + flag + ": missing value");
       const std::string v = argv[++i];
@@ -221,7 +221,9 @@ int main(int argc, char** argv) {
                      "after --slide-window (2) arc steps with true progress below --slide-progress\n"
                      "(10 %) of the commanded. --no-plot skips each variant's pictures (about 4 s each).\n"
                      "--jobs N runs N variants at once, each on its own private bus; in virtual time\n"
-                     "each variant's result and log digest are the same as with --jobs 1.\n";
+                     "each variant's result and log digest are the same as with --jobs 1.\n"
+                     "--prepare writes DIR/vK/scenario.yaml for every variant and runs none (to spread\n"
+                     "a campaign over several machines: README, \"Campaigns scale out\").\n";
         return 0;
       } else if (arg == "--variants") {
         const double n = number(i, arg);
@@ -244,6 +246,8 @@ int main(int argc, char** argv) {
         window = static_cast<int>(n);
       } else if (arg == "--no-plot") {
         plot = false;
+      } else if (arg == "--prepare") {
+        prepare_only = true;
       } else if (arg == "--jobs") {
         const double n = number(i, arg);
         if (n < 1 || n > 64 || n != std::floor(n)) throw ConfigError("scenario_campaign: --jobs: expected a whole number in [1, 64]");
@@ -278,6 +282,17 @@ int main(int argc, char** argv) {
 
     // Up to `jobs` variants run at once (each scenario_runner opens its own private bus);
     // rows are printed in variant order as soon as each one and those before it are done.
+    if (prepare_only) {
+      for (int k = 1; k <= variants; ++k) {
+        Variant v = MakeVariant(spec, slope, seed, k);
+        v.dir = out_dir + "/v" + std::to_string(k);
+        fs::create_directories(v.dir);
+        WriteVariantScenario(spec, v, v.dir + "/scenario.yaml");
+      }
+      std::cout << "wrote " << variants << " variant scenarios: " << out_dir << "/v1/scenario.yaml ... v"
+                << variants << "/scenario.yaml\n";
+      return 0;
+    }
     std::vector<Variant> results(static_cast<std::size_t>(variants));
     std::map<pid_t, int> running;  // pid -> variant index (0-based)
     int next = 0, printed = 0;
