@@ -94,7 +94,7 @@ std::string RoverClock::AcceptClock(std::int64_t utime, std::int64_t count, doub
            " behind the rover clock (a clock never goes back)";
   }
   if (virtual_mode && clock_taken_ && utime - clock_utime_ > window_.max_clock_step_s * 1e6) {
-    const bool confirmed = candidate_ && count == candidate_->second + 1 && utime > candidate_->first &&
+    const bool confirmed = candidate_ && count == candidate_->second + 1 && utime >= candidate_->first &&
                            utime - candidate_->first <= window_.max_clock_step_s * 1e6;
     if (!confirmed) {
       candidate_ = std::make_pair(utime, count);

@@ -73,8 +73,9 @@ class RoverClock {
   // A ROVER_CLOCK message from the deployment's time source (the caller checks who sent
   // it). "" when taken (ObserveClock), else why not, for the drop line. The clock never
   // goes back. In virtual time it moves at most max_clock_step_s a message, unless the
-  // next message of the source (`count` + 1) confirms a longer step (after a stall, when
-  // clock messages were lost); in real time a message ahead of the clock extrapolated at
+  // next message of the source (`count` + 1, at the same instant or later) confirms a
+  // longer step (after a stall, when clock messages were lost: rover_sim announces the
+  // instant again while such a process holds it); in real time a message ahead of the clock extrapolated at
   // its rate is refused as Judge refuses any other.
   std::string AcceptClock(std::int64_t utime, std::int64_t count, double rate, bool virtual_mode,
                           WallClock::time_point wall);

@@ -29,13 +29,17 @@ void Barrier::Report(const SyncReport& report, double wall_s) {
   m.last_wall_s = wall_s;
   if (rejoining) {
     m.excused.clear();
-    for (const auto& [pub_name, pub] : members_) {
-      if (!pub.heard) continue;
-      for (const auto& entry : pub.last.published) {
-        const std::string& channel = entry.first;
-        const std::int64_t missing = Missing(m, channel, pub);
-        if (missing > 0) m.excused[channel][pub.id] = missing;
-      }
+    ForgiveMissing(m);
+  }
+}
+
+void Barrier::ForgiveMissing(Member& m) {
+  for (const auto& [pub_name, pub] : members_) {
+    if (!pub.heard) continue;
+    for (const auto& entry : pub.last.published) {
+      const std::string& channel = entry.first;
+      const std::int64_t missing = Missing(m, channel, pub);
+      if (missing > 0) m.excused[channel][pub.id] += missing;
     }
   }
 }
@@ -97,17 +101,28 @@ std::string Barrier::Holding(std::int64_t utime) const {
   return os.str();
 }
 
-std::vector<std::string> Barrier::DeclareLost(std::int64_t utime, double wall_s, double tick_wall_s) {
+std::vector<std::string> Barrier::DeclareLost(std::int64_t utime, double wall_s, double tick_wall_s,
+                                              std::vector<std::string>* forgiven) {
   std::vector<std::string> lost;
   for (auto& [name, m] : members_) {
-    if (Holds(name, m, utime).empty()) continue;
+    const std::string why = Holds(name, m, utime);
+    if (why.empty()) continue;
     const double since = wall_s - std::max(m.heard ? m.last_wall_s : tick_wall_s, tick_wall_s);
     if (since > liveness_s_) {
       m.lost = true;
       lost.push_back(name);
+    } else if (wall_s - tick_wall_s > liveness_s_ && m.heard && m.last.utime >= utime && !m.last.busy) {
+      if (forgiven) forgiven->push_back(why);
+      ForgiveMissing(m);
     }
   }
   return lost;
+}
+
+bool Barrier::FarBehind(std::int64_t utime, std::int64_t by_us) const {
+  for (const auto& [name, m] : members_)
+    if (m.heard && !m.lost && m.last.utime >= 0 && m.last.utime < utime - by_us) return true;
+  return false;
 }
 
 std::vector<std::string> Barrier::Lost() const {

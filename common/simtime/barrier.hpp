@@ -57,7 +57,16 @@ class Barrier {
   // Members that hold the clock at `utime` and have sent nothing for liveness_s of wall
   // time since the later of their last report and `tick_wall_s` (when the clock reached
   // `utime`): declared lost now (returned once each) until they report again.
-  std::vector<std::string> DeclareLost(std::int64_t utime, double wall_s, double tick_wall_s);
+  // A member that is alive and has finished the instant but still misses messages
+  // liveness_s after the clock reached it never gets them (its socket overflowed): they
+  // are forgiven, one line each in `forgiven` (when given), so the clock does not wait
+  // for them forever.
+  std::vector<std::string> DeclareLost(std::int64_t utime, double wall_s, double tick_wall_s,
+                                       std::vector<std::string>* forgiven = nullptr);
+  // Whether a member that has started reports an instant more than `by_us` behind
+  // `utime`: one that was declared lost and lost clock messages meanwhile. Only a fault
+  // does this (a member is otherwise at most one instant behind).
+  bool FarBehind(std::int64_t utime, std::int64_t by_us) const;
   // Members currently lost.
   std::vector<std::string> Lost() const;
   std::uint32_t Id(const std::string& process) const;
@@ -74,6 +83,8 @@ class Barrier {
     std::map<std::string, std::map<std::uint32_t, std::int64_t>> excused;
   };
   std::int64_t Missing(const Member& m, const std::string& channel, const Member& pub) const;
+  // Forgives every message `m` misses now (adds it to `excused`).
+  void ForgiveMissing(Member& m);
   // "" when `name` does not hold the clock at `utime`, else why it does.
   std::string Holds(const std::string& name, const Member& m, std::int64_t utime) const;
 

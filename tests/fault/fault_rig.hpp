@@ -82,6 +82,8 @@ class FaultRig {
       bus_.set_auth(bus::MakeBusAuth(auth::Key::LoadFile(key_), "fault_test"));
     }
     bus_.lcm().subscribe(channels::kMobilityCommand, &FaultRig::OnRawCommand, this);
+    bus_.lcm().subscribe(channels::kClock, &FaultRig::OnRawClock, this);
+    bus_.lcm().subscribe(channels::kHeartbeat, &FaultRig::OnRawHeartbeat, this);
     const YAML::Node rover = YAML::LoadFile(SourceDir() + "/configs/rover.yaml");
     heartbeat_timeout_s_ = rover["executor"]["heartbeat_timeout_s"].as<double>();
     Watch();
@@ -89,6 +91,17 @@ class FaultRig {
   ~FaultRig() { StopAll(); }
 
   const std::string& url() const { return url_; }
+  // Virtual time (README, "Simulated time"): every process started from now on gets
+  // ROVER_TIME=virtual, and rover_sim's --hold-for makes them the clock's barrier.
+  void set_virtual(bool on) { virtual_ = on; }
+  // The last ROVER_CLOCK rover_sim sent, as sent (for a replay), and the last HEARTBEAT a
+  // process sent.
+  const std::vector<std::uint8_t>& last_clock_bytes() const { return last_clock_; }
+  const std::vector<std::uint8_t>& last_heartbeat_bytes(const std::string& process) const {
+    static const std::vector<std::uint8_t> none;
+    auto it = last_heartbeat_.find(process);
+    return it == last_heartbeat_.end() ? none : it->second;
+  }
   const std::string& out() const { return out_; }
   double heartbeat_timeout_s() const { return heartbeat_timeout_s_; }
   FaultCounts& counts() { return counts_; }
@@ -146,6 +159,19 @@ class FaultRig {
   void Freeze(const std::string& process, bool frozen) {
     set_->Signal(labels_.at(process), frozen ? SIGSTOP : SIGCONT);
     Note(std::string(frozen ? "SIGSTOP " : "SIGCONT ") + process);
+  }
+
+  // Waits until `process` has caught up with rover time after a freeze (its heartbeat is
+  // within 2 s of the clock): until then its socket may still overflow with the backlog,
+  // and a sequence submitted meanwhile can be lost with it.
+  bool WaitCaughtUp(const std::string& process, double seconds) {
+    return PumpUntil(seconds, [&] {
+      auto it = last_heartbeat_.find(process);
+      if (it == last_heartbeat_.end()) return false;
+      rover_msgs::heartbeat_t hb;
+      if (hb.decode(it->second.data(), 0, static_cast<int>(it->second.size())) < 0) return false;
+      return now_utime_ > 0 && hb.utime >= now_utime_ - 2000000;
+    });
   }
 
   std::int64_t Submit(const std::string& text) {
@@ -298,7 +324,9 @@ class FaultRig {
     spec.program = process;
     spec.name = process + (starts_[process]++ ? "#" + std::to_string(starts_[process]) : "");
     labels_[process] = spec.name;
-    set_->Start(spec, {"ROVER_LCM_URL=" + url_});
+    std::vector<std::string> env = {"ROVER_LCM_URL=" + url_};
+    if (virtual_) env.push_back("ROVER_TIME=virtual");
+    set_->Start(spec, env);
     Note("started " + spec.name);
   }
 
@@ -339,6 +367,16 @@ class FaultRig {
   void OnRawCommand(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     const auto* p = static_cast<const std::uint8_t*>(rbuf->data);
     if (!injecting_) commands_.emplace_back(p, p + rbuf->data_size);
+  }
+  void OnRawClock(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    const auto* p = static_cast<const std::uint8_t*>(rbuf->data);
+    if (!injecting_) last_clock_.assign(p, p + rbuf->data_size);
+  }
+  void OnRawHeartbeat(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    rover_msgs::heartbeat_t hb;
+    if (injecting_ || hb.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) return;
+    const auto* p = static_cast<const std::uint8_t*>(rbuf->data);
+    last_heartbeat_[hb.process].assign(p, p + rbuf->data_size);
   }
 
   static bool From(std::int64_t pub_seq, const char* process) {
@@ -401,6 +439,9 @@ class FaultRig {
   std::optional<rover_msgs::mobility_status_t> status_;
   Clock::time_point last_advance_{};
   std::int64_t now_utime_ = 0;
+  bool virtual_ = false;
+  std::vector<std::uint8_t> last_clock_;
+  std::map<std::string, std::vector<std::uint8_t>> last_heartbeat_;
   std::int64_t submission_id_ = 0;
   std::deque<std::string> recent_;
   std::vector<fault::Bytes> commands_;  // MOBILITY_COMMAND packets before any injection

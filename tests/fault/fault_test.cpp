@@ -220,6 +220,123 @@ TEST(FaultFreeze, HazardMonitorHungStopsTheRoverWithinTwoSeconds) { RunFreeze("h
 TEST(FaultFreeze, VisualOdometryHungStopsTheRoverWithinTwoSeconds) { RunFreeze("visual_odometry"); }
 TEST(FaultFreeze, CameraCaptureHungStopsTheRoverWithinTwoSeconds) { RunFreeze("camera_capture"); }
 
+// Virtual time (README, "Simulated time"): a process frozen for 5 s holds the clock, so
+// the rover stands still from the freeze on (in rover time it does not move at all); after
+// sim.barrier_timeout_s of wall time the process is declared lost, the rover is halted and
+// the clock runs on, and after SIGCONT no clock is wedged: a new sequence completes. A
+// frozen rover_sim (the clock itself) pauses the whole simulation instead.
+void RunFreezeVirtual(const std::string& process, double rate) {
+  FaultRig rig(TestName());
+  rig.set_virtual(true);
+  ASSERT_TRUE(rig.StartAll(rate));
+  const auto drive = rig.Submit(DriveSequence("drive 2 m", 50));
+  ASSERT_TRUE(rig.WaitMoving(120)) << "the rover was never seen moving";
+  const auto frozen_at = Clock::now();
+  rig.Freeze(process, true);
+  const auto latency = rig.StopLatency(frozen_at, 5.0);
+  rig.Freeze(process, false);
+  const double bound = 3.0;  // sim.barrier_timeout_s: the liveness limit of the barrier
+  if (latency) {
+    rig.Note("the rover stopped " + std::to_string(*latency) + " s after SIGSTOP");
+    EXPECT_LE(*latency, bound) << "the rover stopped " << *latency << " s after SIGSTOP " << process;
+    if (*latency <= bound) ++rig.counts().safe_stops;
+  } else {
+    ADD_FAILURE() << "the rover still moved 5 s after SIGSTOP " << process << " (" << rig.mobility_detail() << ")";
+  }
+  // A frozen clock freezes the whole simulated world: nothing was lost, and the drive
+  // goes on where it stood. Any other process was declared lost and the drive aborted.
+  const bool clock = process == "rover_sim";
+  const auto final = rig.WaitFinal(drive, 60);
+  EXPECT_TRUE(final && final->state == (clock ? kCompleted : kAborted))
+      << "the drive after " << process << " hung: " << Describe(final);
+  EXPECT_TRUE(rig.deaths().empty()) << "a process died:" << Lines(rig.deaths());
+  EXPECT_TRUE(rig.WaitCaughtUp(process, 30)) << process << " did not catch up with rover time after SIGCONT";
+  ExpectNewSequenceCompletes(rig, "drive 1 m");
+  rig.Report();
+}
+
+TEST(FaultFreezeVirtual, SequenceExecutorAt50x) { RunFreezeVirtual("sequence_executor", 50); }
+TEST(FaultFreezeVirtual, StateEstimatorAt50x) { RunFreezeVirtual("state_estimator", 50); }
+TEST(FaultFreezeVirtual, HazardMonitorAt50x) { RunFreezeVirtual("hazard_monitor", 50); }
+TEST(FaultFreezeVirtual, VisualOdometryAt50x) { RunFreezeVirtual("visual_odometry", 50); }
+TEST(FaultFreezeVirtual, CameraCaptureAt50x) { RunFreezeVirtual("camera_capture", 50); }
+TEST(FaultFreezeVirtual, RoverSimAt50x) { RunFreezeVirtual("rover_sim", 50); }
+TEST(FaultFreezeVirtual, CameraCaptureAtRate2) { RunFreezeVirtual("camera_capture", 2); }
+TEST(FaultFreezeVirtual, SequenceExecutorAtRate2) { RunFreezeVirtual("sequence_executor", 2); }
+
+// A ROVER_CLOCK message, `utime` and count as given, from rover_sim's publisher id.
+fault::Packet ForgedClock(const std::string& label, std::int64_t utime, std::int64_t count) {
+  rover_msgs::rover_clock_t m{};
+  m.utime = utime;
+  m.pub_seq = static_cast<std::int64_t>((static_cast<std::uint64_t>(bus::PublisherId("rover_sim")) << 32) |
+                                        static_cast<std::uint64_t>(count));
+  m.mode = rover_msgs::rover_clock_t::MODE_VIRTUAL;
+  return {channels::kClock, label, bus::EncodeMessage(m), ""};
+}
+
+// Time cannot be forged: during a virtual-time drive, clock messages 600 s old, 600 s
+// ahead (from rover_sim's own publisher id, with counts that follow its own) and the last
+// real one replayed byte for byte leave every process's clock alone: the drive completes
+// and so does the next sequence. With keys, every one of them is refused outright
+// (unsigned, or a replayed counter).
+void RunForgedClock(bool keyed) {
+  FaultRig rig(TestName(), keyed);
+  rig.set_virtual(true);
+  ASSERT_TRUE(rig.StartAll());
+  const auto drive = rig.Submit(DriveSequence("drive 2 m", 25));
+  ASSERT_TRUE(rig.WaitSteps(drive, 2, 90)) << "the drive did not take two steps";
+  const auto executor_dropped = rig.dropped("sequence_executor");
+  const auto replay = rig.last_clock_bytes();
+  ASSERT_FALSE(replay.empty()) << "no ROVER_CLOCK seen to replay";
+  rover_msgs::rover_clock_t last;
+  ASSERT_GE(last.decode(replay.data(), 0, static_cast<int>(replay.size())), 0);
+  const auto count = static_cast<std::int64_t>(static_cast<std::uint64_t>(last.pub_seq) & 0xffffffffu);
+  std::vector<fault::Packet> forged;
+  for (int i = 0; i < 5; ++i) {
+    forged.push_back(ForgedClock("ROVER_CLOCK 600 s old", last.utime - 600000000, count + 1 + i));
+    forged.push_back(ForgedClock("ROVER_CLOCK 600 s ahead", last.utime + 600000000 + i * 100000, count + 100 + i));
+    forged.push_back({channels::kClock, "ROVER_CLOCK replayed", replay, ""});
+  }
+  rig.Inject(forged, 20);
+  const auto final = rig.WaitFinal(drive, 120);
+  EXPECT_TRUE(final && final->state == kCompleted) << "the drive under forged clocks did not complete: " << Describe(final);
+  rig.Pump(1.0);
+  // The 600 s ones were refused by every process (the replay of the current instant is
+  // harmless without keys: the same instant again).
+  EXPECT_GE(rig.dropped("sequence_executor") - executor_dropped, 10) << "the executor took a forged clock";
+  EXPECT_TRUE(rig.deaths().empty()) << "a process died:" << Lines(rig.deaths());
+  ExpectNewSequenceCompletes(rig, "drive 1 m");
+  rig.Report();
+}
+
+TEST(FaultForgedTime, OldFutureAndReplayedClocksLeaveTheDriveAlone) { RunForgedClock(false); }
+TEST(FaultForgedTime, WithKeysOldFutureAndReplayedClocksAreRefused) { RunForgedClock(true); }
+
+// With keys, a heartbeat is evidence of life: the executor frozen on a real clock while
+// its last heartbeat is replayed four times a second must still trip the dead-man within
+// 2 s (the replayed counter is refused), and the stack recovers after SIGCONT.
+TEST(FaultForgedTime, WithKeysAReplayedHeartbeatDoesNotKeepTheDeadManQuiet) {
+  FaultRig rig(TestName(), /*keyed=*/true);
+  ASSERT_TRUE(rig.StartAll(1));
+  rig.Submit(DriveSequence("drive 2 m", 50));
+  ASSERT_TRUE(rig.WaitMoving(120)) << "the rover was never seen moving";
+  const auto frozen_at = Clock::now();
+  rig.Freeze("sequence_executor", true);
+  rig.Pump(0.05);
+  const auto heartbeat = rig.last_heartbeat_bytes("sequence_executor");
+  ASSERT_FALSE(heartbeat.empty()) << "no heartbeat of the executor seen to replay";
+  std::vector<fault::Packet> replays(20, fault::Packet{channels::kHeartbeat, "HEARTBEAT replayed", heartbeat, ""});
+  rig.Inject(replays, 250);  // 5 s, four a second
+  const auto latency = rig.StopLatency(frozen_at, 5.5);
+  rig.Freeze("sequence_executor", false);
+  ASSERT_TRUE(latency.has_value()) << "the rover still moved while a replayed heartbeat stood in for a frozen executor";
+  rig.Note("the rover stopped " + std::to_string(*latency) + " s after SIGSTOP, heartbeats replayed");
+  EXPECT_LE(*latency, 2.0) << "the replayed heartbeat kept the dead-man quiet for " << *latency << " s";
+  EXPECT_TRUE(rig.deaths().empty()) << "a process died:" << Lines(rig.deaths());
+  ExpectNewSequenceCompletes(rig, "drive 1 m");
+  rig.Report();
+}
+
 TEST(FaultKill, SequenceExecutorMidDriveStopsTheRoverWithinTwoSeconds) { RunKill("sequence_executor"); }
 TEST(FaultKill, RoverSimMidDrive) { RunKill("rover_sim"); }
 TEST(FaultKill, StateEstimatorMidDrive) { RunKill("state_estimator"); }

@@ -153,3 +153,36 @@ TEST(Barrier, MessagesLostDuringAFreezeAreForgivenWhenTheMemberRejoins) {
 
 }  // namespace
 }  // namespace rover::simtime
+
+namespace rover::simtime {
+namespace {
+
+TEST(Barrier, MessagesThatNeverCameAreForgivenOnceTheLimitHasPassed) {
+  Barrier b({"estimator", "monitor"}, 3.0);
+  auto est = Report("estimator", 100);
+  est.published["POSE"] = 10;
+  auto mon = Report("monitor", 100, {"POSE"});
+  mon.received["POSE"][PublisherIdOf("estimator")] = 8;  // two lost in an overflowing socket
+  b.Report(est, 0.0);
+  b.Report(mon, 0.0);
+  std::vector<std::string> forgiven;
+  // Alive and reporting, so never lost; under the limit, still waited for.
+  b.Report(mon, 2.0);
+  EXPECT_TRUE(b.DeclareLost(100, 2.5, 0.0, &forgiven).empty());
+  EXPECT_TRUE(forgiven.empty());
+  EXPECT_FALSE(b.Finished(100));
+  b.Report(mon, 3.0);
+  EXPECT_TRUE(b.DeclareLost(100, 3.2, 0.0, &forgiven).empty());
+  ASSERT_EQ(forgiven.size(), 1u);
+  EXPECT_NE(forgiven[0].find("monitor has received 8 of 10 POSE from estimator"), std::string::npos);
+  EXPECT_TRUE(b.Finished(100));
+  // The next message is waited for as usual.
+  est.utime = mon.utime = 200;
+  est.published["POSE"] = 11;
+  b.Report(est, 4.0);
+  b.Report(mon, 4.0);
+  EXPECT_FALSE(b.Finished(200));
+}
+
+}  // namespace
+}  // namespace rover::simtime
