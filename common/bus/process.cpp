@@ -181,6 +181,8 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
       [this](const rover_msgs::rover_clock_t& msg) {
         const char* type = rover_msgs::rover_clock_t::getTypeName();
         const auto stamp = StampOf(msg);
+        // The time source keeps its own time: any clock it hears is its own or forged.
+        if (name_ == time_source_) return;
         if (stamp->first != PublisherId(time_source_)) {
           bus_.Drop(channels::kClock, type, "not from the time source '" + time_source_ + "' (bus.time_source)");
           return;

@@ -54,7 +54,7 @@ struct SimOptions {
   double status_hz = 4.0;    // periodic MOBILITY_STATUS (changes are sent at once)
   std::int64_t start_utime = 1000000;
   double tick_s = 0.1;             // virtual time: one instant of the barrier
-  double barrier_timeout_s = 3.0;  // virtual time: wall seconds before a silent process is lost
+  double barrier_timeout_s = 10.0;  // virtual time: wall seconds before a silent process is lost
 };
 
 SimOptions LoadSimOptions(const config::ConfigNode& section) {
