@@ -6,14 +6,7 @@
 
 namespace rover::bus {
 
-std::uint32_t PublisherId(const std::string& name) {
-  std::uint32_t h = 2166136261u;  // FNV-1a, 32 bits
-  for (unsigned char c : name) {
-    h ^= c;
-    h *= 16777619u;
-  }
-  return h;
-}
+std::uint32_t PublisherId(const std::string& name) { return simtime::PublisherIdOf(name); }
 
 Bus::Bus(const std::string& url) : url_(url), lcm_(url) {
   if (!lcm_.good()) {

@@ -421,7 +421,13 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
   while (heard.LastState(id2) != kAborted && Seconds(t3) < 60) set.Poll(100);
   ASSERT_EQ(heard.LastState(id2), kAborted);
   {
-    const YAML::Node s = state();
+    // rover_web hears the final status on its own subscription: give it a moment.
+    YAML::Node s = state();
+    for (const auto t4 = Clock::now();
+         s["status"]["abort_reason"].as<std::string>("") != "operator" && Seconds(t4) < 5;) {
+      set.Poll(100);
+      s = state();
+    }
     EXPECT_EQ(s["status"]["abort_reason"].as<std::string>(""), "operator");
     EXPECT_NE(s["status"]["detail"].as<std::string>("").find("web test abort"), std::string::npos)
         << s["status"]["detail"].as<std::string>("");
