@@ -61,9 +61,15 @@ void Bus::set_deferred(bool on, std::set<std::string> immediate) {
   immediate_ = std::move(immediate);
 }
 
-void Bus::SealBatch() {
+void Bus::SealBatch(std::int64_t next_instant) {
   for (auto& h : inbox_) sealed_.push_back(std::move(h));
   inbox_.clear();
+  instant_ = next_instant;
+  std::erase_if(later_, [&](auto& entry) {
+    if (entry.first > instant_) return false;
+    inbox_.push_back(std::move(entry.second));
+    return true;
+  });
 }
 
 int Bus::DispatchBatch() {

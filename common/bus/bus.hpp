@@ -106,8 +106,11 @@ class Bus {
   // Channels named in `immediate` (the clock) are always delivered at once.
   void set_deferred(bool on, std::set<std::string> immediate = {});
   bool deferred() const { return deferred_; }
-  // The messages held so far become the next batch (called when the clock moves on).
-  void SealBatch();
+  // The messages held so far become the next batch (called when the clock moves on to
+  // `next_instant`). A heartbeat stamped later than the instant it came in belongs to a
+  // later one: on a multi-core computer it can overtake the clock message that started
+  // its instant, so it is held by its stamp, not by when it came, until its instant.
+  void SealBatch(std::int64_t next_instant);
   // Hands the sealed batch to the callbacks; returns how many messages it held.
   int DispatchBatch();
   // Messages held, sealed or not.
@@ -173,6 +176,8 @@ class Bus {
   bool deferred_ = false;
   std::set<std::string> immediate_;
   std::vector<Held> inbox_, sealed_;
+  std::vector<std::pair<std::int64_t, Held>> later_;  // heartbeats stamped after the instant
+  std::int64_t instant_ = -1;
   std::uint64_t arrivals_ = 0;
 };
 
@@ -265,6 +270,12 @@ void Bus::TypedHandler<Msg>::OnMessage(const lcm::ReceiveBuffer* rbuf, const std
     Held h;
     h.key = {channel, stamp ? stamp->first : 0u, stamp ? stamp->second : 0, bus->arrivals_++};
     h.deliver = [this, msg, channel] { Deliver(*msg, channel); };
+    if constexpr (requires { msg->process; msg->seq; msg->utime; }) {
+      if (bus->instant_ >= 0 && msg->utime > bus->instant_) {
+        bus->later_.emplace_back(msg->utime, std::move(h));
+        return;
+      }
+    }
     bus->inbox_.push_back(std::move(h));
     return;
   }

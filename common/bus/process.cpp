@@ -207,7 +207,7 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
         }
         // A new instant: the messages received so far belong to the one before it.
         if (virtual_ && msg.utime > last_tick_utime_) {
-          bus_.SealBatch();
+          bus_.SealBatch(msg.utime);
           clock_moved_ = true;
         }
       },

@@ -360,7 +360,7 @@ int main(int argc, char** argv) {
           if (proc.stopping()) break;
         }
         // 3. The next instant: what came during this one acts first (commands, heartbeats).
-        proc.bus().SealBatch();
+        proc.bus().SealBatch(t + tick_us);
         proc.bus().DispatchBatch();
         const std::int64_t until = t + tick_us;
         while (sim->utime() < until) {

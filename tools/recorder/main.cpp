@@ -145,6 +145,15 @@ class Receiver {
         }
       }
     }
+    // A heartbeat stamped after this instant overtook the clock message of its own (it
+    // can on a multi-core computer): it waits for its instant (Bus::SealBatch says why).
+    if (channel == rover::channels::kHeartbeat && instant_ > 0) {
+      rover_msgs::heartbeat_t hb;
+      if (hb.decode(h.event.data.data(), 0, static_cast<int>(h.event.data.size())) >= 0 && hb.utime > instant_) {
+        later_.emplace_back(hb.utime, std::move(h));
+        return;
+      }
+    }
     held_.push_back(std::move(h));
   }
   // Virtual time, on the receive thread after each burst: the sync report when something
@@ -186,6 +195,11 @@ class Receiver {
     }
     held_.clear();
     instant_ = next;
+    std::erase_if(later_, [&](auto& entry) {
+      if (entry.first > instant_) return false;
+      held_.push_back(std::move(entry.second));
+      return true;
+    });
     if (instant_ >= next_heartbeat_) {  // once a rover second, from what it has received
       rover_msgs::heartbeat_t hb{};
       hb.utime = instant_;
@@ -205,6 +219,7 @@ class Receiver {
   std::atomic<std::int64_t> dropped_{0};
   std::unique_ptr<rover::bus::SyncSender> sync_;
   std::vector<Held> held_;
+  std::vector<std::pair<std::int64_t, Held>> later_;
   std::map<std::string, std::map<std::uint32_t, std::int64_t>> received_;
   std::int64_t instant_ = 0, next_heartbeat_ = 0, heartbeats_ = 0, received_total_ = 0;
   std::uint64_t arrivals_ = 0;
