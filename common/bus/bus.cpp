@@ -61,11 +61,23 @@ void Bus::set_deferred(bool on, std::set<std::string> immediate) {
   immediate_ = std::move(immediate);
 }
 
+std::string Bus::Hold(const std::string& channel, int queue_capacity) {
+  const int limit = std::max(8 * queue_capacity, 256);
+  int& held = held_count_[channel];
+  if (held >= limit) {
+    return "more than " + std::to_string(limit) + " messages on this channel in one instant of rover time (a flood?)";
+  }
+  ++held;
+  return "";
+}
+
 void Bus::SealBatch(std::int64_t next_instant) {
   for (auto& h : inbox_) sealed_.push_back(std::move(h));
   inbox_.clear();
+  held_count_.clear();
   instant_ = next_instant;
   std::erase_if(later_, [&](auto& entry) {
+    ++held_count_[std::get<0>(entry.second.key)];
     if (entry.first > instant_) return false;
     inbox_.push_back(std::move(entry.second));
     return true;

@@ -142,6 +142,7 @@ class Bus {
   struct TypedHandler : Handler {
     Bus* bus;
     std::function<void(const Msg&)> callback;
+    int queue_capacity = 30;
     void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
     void Deliver(const Msg& msg, const std::string& channel);
   };
@@ -151,6 +152,11 @@ class Bus {
   };
   void NoteReceived(const std::string& channel, std::uint32_t publisher, std::int64_t count);
   bool Defers(const std::string& channel) const { return deferred_ && !immediate_.count(channel); }
+  // Deferred delivery is bounded per channel as LCM's queue is in real time: one instant may
+  // hold at most this many messages of a channel subscribed with `queue_capacity` (far more
+  // than any process publishes in a tick), so a flood on one channel costs that channel's
+  // messages only and cannot grow a process's memory while the clock waits. "" admits.
+  std::string Hold(const std::string& channel, int queue_capacity);
 
   template <class Msg>
   std::string Admit(const std::string& channel, const lcm::ReceiveBuffer* rbuf, Msg* msg);
@@ -177,6 +183,7 @@ class Bus {
   std::set<std::string> immediate_;
   std::vector<Held> inbox_, sealed_;
   std::vector<std::pair<std::int64_t, Held>> later_;  // heartbeats stamped after the instant
+  std::map<std::string, int> held_count_;            // per channel, inbox_ and later_
   std::int64_t instant_ = -1;
   std::uint64_t arrivals_ = 0;
 };
@@ -266,6 +273,10 @@ void Bus::TypedHandler<Msg>::OnMessage(const lcm::ReceiveBuffer* rbuf, const std
     return;
   }
   if (bus->Defers(channel)) {
+    if (std::string why = bus->Hold(channel, queue_capacity); !why.empty()) {
+      bus->Drop(channel, Msg::getTypeName(), why);
+      return;
+    }
     const auto stamp = StampOf(*msg);
     Held h;
     h.key = {channel, stamp ? stamp->first : 0u, stamp ? stamp->second : 0, bus->arrivals_++};
@@ -299,6 +310,7 @@ void Bus::Subscribe(const std::string& channel, std::function<void(const Msg&)> 
   auto handler = std::make_unique<TypedHandler<Msg>>();
   handler->bus = this;
   handler->callback = std::move(callback);
+  handler->queue_capacity = queue_capacity;
   lcm::Subscription* sub =
       lcm_.subscribe(channel, &TypedHandler<Msg>::OnMessage, handler.get());
   if (sub == nullptr) throw std::runtime_error("LCM subscribe failed on channel " + channel);

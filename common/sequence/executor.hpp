@@ -50,6 +50,11 @@ struct ExecutorOptions {
   double mobility_wait_s = 300.0;     // mobility DONE; none = abort timeout
   double capture_wait_s = 2.0;        // science frame seen (OnStereoFrame); none = go on
   double site_wait_s = 5.0;           // pose in the new site; none = abort timeout
+  // Rover time one `goto ... avoid on` decision costs the rover's computer (the arc vote):
+  // the step is commanded this long after it was chosen. Not read from the `executor:`
+  // section: the process sets it from the compute profile in virtual time (README,
+  // "Simulated time"), and leaves it 0 on a real clock, where the work takes what it takes.
+  double plan_compute_s = 0.0;
 
   // Rover-time guard on one step: expected duration * factor + margin, then abort timeout.
   double mobility_timeout_factor = 3.0;
@@ -245,6 +250,8 @@ struct StepReport {  // step_report_t
   double pose_after[6] = {0, 0, 0, 0, 0, 0};
   int64_t utime_before = 0;
   int64_t utime_after = 0;
+  int64_t utime_plan_start = 0;  // the rover time charged for choosing the step (0, 0: none)
+  int64_t utime_plan_end = 0;
 };
 
 using ExecutorOutput = std::variant<MobilityCommand, CaptureRequest, HazardQuery, KeepOutZoneSet,
@@ -330,6 +337,7 @@ class SequenceExecutor {
     kWaitHazard,     // wait for a hazard status after that pose
     kImages,         // wait for a science frame
     kSite,           // wait for the pose in the new site
+    kPlanning,       // a `goto ... avoid on` step chosen: its compute time (plan_compute_s)
     kFinished,
   };
 
@@ -351,6 +359,7 @@ class SequenceExecutor {
   void PollWaitHazard();
   void PollImages();
   void PollSite();
+  void PollPlanning();
   void DispatchNext();
   double PhaseAge() const { return now_wall_ - phase_start_wall_; }
 
@@ -501,6 +510,10 @@ class SequenceExecutor {
 
   // The step in progress.
   PlannedStep step_;
+  // kPlanning: the step chosen, when its choice was charged from, and whether the choice
+  // in hand has been paid for (the next NextStepOfCommand commands it).
+  PlannedStep planned_;
+  int64_t plan_start_utime_ = 0, plan_end_utime_ = 0;
   int64_t query_id_ = -1;
   std::optional<HazardReply> hazard_reply_;
   int64_t mobility_id_ = -1;

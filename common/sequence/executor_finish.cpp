@@ -83,6 +83,8 @@ void SequenceExecutor::ReportStep(const StepEnd& end) {
   XyzRpy(end.after, r.pose_after);
   r.utime_before = pose_before_.utime;
   r.utime_after = end.after.utime;
+  r.utime_plan_start = plan_start_utime_;
+  r.utime_plan_end = plan_end_utime_;
   Emit(r);
 }
 

@@ -44,7 +44,15 @@ void SequenceExecutor::Poll() {
     case Phase::kWaitHazard: PollWaitHazard(); return;
     case Phase::kImages: PollImages(); return;
     case Phase::kSite: PollSite(); return;
+    case Phase::kPlanning: PollPlanning(); return;
   }
+}
+
+// The rover's computer is still choosing the step (ExecutorOptions::plan_compute_s).
+void SequenceExecutor::PollPlanning() {
+  if (PhaseAge() < options_.plan_compute_s) return;
+  plan_end_utime_ = now_utime_;
+  BeginStep(planned_);
 }
 
 void SequenceExecutor::PollWaitStart() {

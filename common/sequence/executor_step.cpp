@@ -58,6 +58,14 @@ bool SequenceExecutor::NextStepOfCommand() {
     return true;
   }
   if (!is_goto_) ++next_step_;
+  plan_start_utime_ = plan_end_utime_ = 0;
+  if (is_goto_ && goto_.avoid && options_.plan_compute_s > 0) {
+    // The choice costs the rover's computer rover time before the step can be commanded.
+    planned_ = step;
+    plan_start_utime_ = now_utime_;
+    EnterPhase(Phase::kPlanning);
+    return true;
+  }
   BeginStep(step);
   return true;
 }

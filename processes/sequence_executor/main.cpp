@@ -151,6 +151,8 @@ class OutputPublisher {
     }
     m.utime_before = r.utime_before;
     m.utime_after = r.utime_after;
+    m.utime_plan_start = r.utime_plan_start;
+    m.utime_plan_end = r.utime_plan_end;
     proc_.bus().Publish(channels::kStepReport, m);
   }
 
@@ -174,7 +176,9 @@ int main(int argc, char** argv) {
                       argc, argv,
                       {{"--state-file", "FILE",
                         "where the running sequence is kept across restarts (overrides executor.state_file)"}});
-    const auto options = seq::LoadExecutorOptions(proc.config());
+    auto options = seq::LoadExecutorOptions(proc.config());
+    // Choosing a `goto ... avoid on` step costs rover time in simulation (the compute profile).
+    options.plan_compute_s = proc.virtual_time() ? proc.compute().plan_s : 0.0;
     std::string state_file = options.state_file;
     if (auto f = proc.option("--state-file")) state_file = *f;
 

@@ -155,5 +155,72 @@ TEST(Recorder, RecordsARealRunWithoutLossAndLcmLogplayerReplaysIt) {
   EXPECT_GT(compared, 3000u);
 }
 
+// A flood on one channel (the hostile tester sent 1,236 copies a second of a 248 kB
+// STEREO_FRAME for 20 s, and lcm-logger's successor lost 24,391 real messages and grew by
+// 443 MB): the recorder's memory stays within its bound, and every message of the real
+// channels is in the log or named as lost, by publisher and count, in its own report.
+TEST(Recorder, AFloodOnOneChannelStaysWithinItsBoundAndTheLossesAreNamed) {
+  std::filesystem::current_path(SourceDir());
+  const std::string out = OutDir("recorder_flood");
+  const std::string url = PrivateUrl(35);
+  const std::string log_path = out + "/log.lcm";
+  Recording recording(url, out, log_path);
+  ASSERT_TRUE(recording.ready()) << ReadText(out + "/rover_recorder.log");
+  std::int64_t flood_sent = 0;
+  {
+    launch::ProcessSet set(Bin(""), out, false);
+    const std::vector<std::string> env = {"ROVER_LCM_URL=" + url};
+    set.Start({"rover_sim", "rover_sim",
+               {"--config", "configs/rover.yaml", "--world", "configs/worlds/flat_rock_course.yaml", "--rate", "50"}},
+              env);
+    set.Start({"state_estimator", "state_estimator", {"--config", "configs/rover.yaml"}}, env);
+    lcm::LCM flood(url);
+    ASSERT_TRUE(flood.good());
+    const std::vector<std::uint8_t> payload(248 * 1024, 0xa5);
+    const auto start = Clock::now();
+    const auto until = start + std::chrono::seconds(5);
+    while (Clock::now() < until) {
+      // At most 1,236 a second, as the tester sent them.
+      const auto due = start + std::chrono::microseconds(flood_sent * 1000000 / 1236);
+      if (Clock::now() < due) {
+        for (const auto& [name, how] : set.Poll(0)) ADD_FAILURE() << name << " " << how;
+        std::this_thread::sleep_until(due);
+        continue;
+      }
+      flood.publish(channels::kStereoFrame, payload.data(), static_cast<unsigned>(payload.size()));
+      ++flood_sent;
+    }
+    set.StopAll();
+  }
+  EXPECT_GT(flood_sent, 1000);
+  EXPECT_EQ(recording.Stop(), "exited with code 0");
+  const std::string says = ReadText(out + "/rover_recorder.log");
+
+  // 1. Memory: the deepest queue stays within the recorder's bound (256 MB).
+  const auto at = says.find("deepest queue ");
+  ASSERT_NE(at, std::string::npos) << says;
+  std::istringstream deepest(says.substr(says.find(", ", at) + 2));
+  double mb = -1;
+  deepest >> mb;
+  EXPECT_GE(mb, 0.0) << says;
+  EXPECT_LE(mb, 256.0) << says;
+
+  // 2. The real channels: what the log lacks, the recorder's closing report names as lost
+  //    (by channel, publisher and count), and their bulk is there.
+  const auto report = logcheck::CheckLog(log_path);
+  for (const char* channel : {channels::kImu, channels::kPose, channels::kWheelOdometry}) {
+    ASSERT_TRUE(report.channels.count(channel)) << channel << "\n" << logcheck::FormatReport(report);
+    const auto& c = report.channels.at(channel);
+    EXPECT_GT(c.count, 100) << channel;
+    for (const auto& gap : c.gaps) {
+      const std::string named = ": " + std::to_string(gap.lost) + " lost (count " + std::to_string(gap.count_before) +
+                                " then " + std::to_string(gap.count_after) + ")";
+      EXPECT_NE(says.find("gap: " + std::string(channel) + " from "), std::string::npos) << says;
+      EXPECT_NE(says.find(named), std::string::npos) << "the log lacks " << gap.lost << " on " << channel
+                                                     << " that the recorder did not name:\n" << says;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace rover::test

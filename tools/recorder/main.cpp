@@ -25,6 +25,7 @@
 #include "bus/channels.hpp"
 #include "bus/virtual_time.hpp"
 #include "logcheck/log_check.hpp"
+#include "recorder/event_queue.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/heartbeat_t.hpp>
@@ -51,64 +52,16 @@
 
 namespace {
 
+using rover::recorder::Event;
+using rover::recorder::EventQueue;
+using rover::recorder::kMaxChannelBytes;
+using rover::recorder::kMaxQueuedBytes;
+
 constexpr int kLcmQueueCapacity = 100000;          // messages LCM may hold for us
-constexpr std::size_t kMaxQueuedBytes = 1ull << 30;  // our own queue, in memory
 constexpr int kReportsPerSecond = 20;              // loss lines on stderr, then a count
 
 std::atomic<bool> g_stop{false};
 void OnSignal(int) { g_stop = true; }
-
-struct Event {
-  std::int64_t timestamp;  // receive time, us since the epoch (as lcm-logger records)
-  std::string channel;
-  std::vector<std::uint8_t> data;
-};
-
-// The hand-off between the receive thread and the writer: unbounded in count, bounded in
-// bytes (a message that would pass kMaxQueuedBytes is dropped and counted).
-class EventQueue {
- public:
-  bool Push(Event&& e) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (bytes_ + e.data.size() > kMaxQueuedBytes) return false;
-    bytes_ += e.data.size();
-    max_bytes_ = std::max(max_bytes_, bytes_);
-    events_.push_back(std::move(e));
-    max_events_ = std::max(max_events_, events_.size());
-    ready_.notify_one();
-    return true;
-  }
-  // The next event; nullopt once closed and empty.
-  std::optional<Event> Pop() {
-    std::unique_lock<std::mutex> lock(mutex_);
-    ready_.wait(lock, [this] { return closed_ || !events_.empty(); });
-    if (events_.empty()) return std::nullopt;
-    Event e = std::move(events_.front());
-    events_.pop_front();
-    bytes_ -= e.data.size();
-    return e;
-  }
-  void Close() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    closed_ = true;
-    ready_.notify_all();
-  }
-  std::size_t max_events() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return max_events_;
-  }
-  std::size_t max_bytes() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return max_bytes_;
-  }
-
- private:
-  mutable std::mutex mutex_;
-  std::condition_variable ready_;
-  std::deque<Event> events_;
-  std::size_t bytes_ = 0, max_bytes_ = 0, max_events_ = 0;
-  bool closed_ = false;
-};
 
 // LCM's dispatch thread: copies each message into the queue and nothing else (in virtual
 // time: into the instant's batch, written sorted when the clock moves on).
@@ -132,6 +85,14 @@ class Receiver {
     if (channel == "LCM_SELF_TEST") return;
     ++received_total_;
     changed_ = true;
+    // The instant's batch is bounded per channel as the queue is (a flood cannot make it
+    // grow without end while the clock waits); a message dropped here is counted.
+    std::size_t& held_bytes = held_bytes_[channel];
+    if (held_bytes + e.data.size() > kMaxChannelBytes) {
+      ++dropped_;
+      return;
+    }
+    held_bytes += e.data.size();
     Held h{{channel, 0u, 0, arrivals_++}, std::move(e)};
     if (const auto* type = rover::logcheck::FindChannel(channel)) {
       const auto read = rover::logcheck::ReadStamp(*type, h.event.data.data(), h.event.data.size());
@@ -194,9 +155,11 @@ class Receiver {
       if (!queue_.Push(std::move(h.event))) ++dropped_;
     }
     held_.clear();
+    held_bytes_.clear();
     instant_ = next;
     std::erase_if(later_, [&](auto& entry) {
       if (entry.first > instant_) return false;
+      held_bytes_[entry.second.event.channel] += entry.second.event.data.size();
       held_.push_back(std::move(entry.second));
       return true;
     });
@@ -219,6 +182,7 @@ class Receiver {
   std::atomic<std::int64_t> dropped_{0};
   std::unique_ptr<rover::bus::SyncSender> sync_;
   std::vector<Held> held_;
+  std::map<std::string, std::size_t> held_bytes_;
   std::vector<std::pair<std::int64_t, Held>> later_;
   std::map<std::string, std::map<std::uint32_t, std::int64_t>> received_;
   std::int64_t instant_ = 0, next_heartbeat_ = 0, heartbeats_ = 0, received_total_ = 0;
@@ -455,8 +419,13 @@ int main(int argc, char** argv) {
        << writer.bytes() / 1048576.0 << " MB) to " << args->output << " in " << wall_s
        << " s; lost upstream " << report.lost << ", dropped here " << receiver.dropped()
        << "; deepest queue " << queue.max_events() << " messages, "
-       << queue.max_bytes() / 1048576.0 << " MB\n"
-       << rover::logcheck::FormatReport(report);
+       << queue.max_bytes() / 1048576.0 << " MB (bound " << kMaxQueuedBytes / 1048576 << " MB, "
+       << kMaxChannelBytes / 1048576 << " MB a channel)\n";
+    for (const auto& [channel, n] : queue.dropped()) {
+      os << "rover_recorder: dropped " << n << " on " << channel
+         << " (its share of the queue was full: a flood, or a disk slower than the bus)\n";
+    }
+    os << rover::logcheck::FormatReport(report);
     std::cerr << os.str();
     return writer.write_failed() ? 1 : 0;
   } catch (const std::exception& e) {

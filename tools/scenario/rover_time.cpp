@@ -8,6 +8,7 @@
 #include <rover_msgs/mobility_status_t.hpp>
 #include <rover_msgs/rover_clock_t.hpp>
 #include <rover_msgs/sequence_status_t.hpp>
+#include <rover_msgs/step_report_t.hpp>
 #include <rover_msgs/stereo_frame_t.hpp>
 #include <rover_msgs/traversability_map_t.hpp>
 #include <rover_msgs/vo_update_t.hpp>
@@ -54,7 +55,7 @@ RoverTimeBreakdown BreakdownFromLog(const std::string& log_path) {
   if (!log.good()) return r;
   std::map<std::int64_t, std::int64_t> requests, frames;  // frame id -> instant
   std::map<std::int64_t, std::int64_t> commands;          // command id -> instant
-  std::vector<Interval> driving, imaging, vo, mapping;
+  std::vector<Interval> driving, imaging, vo, mapping, planning;
   std::vector<std::int64_t> frames_unmapped;
   std::int64_t first_status = -1, final_status = -1;
   for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
@@ -98,6 +99,10 @@ RoverTimeBreakdown BreakdownFromLog(const std::string& log_path) {
         driving.emplace_back(it->second, t);
         commands.erase(it);
       }
+    } else if (ch == channels::kStepReport) {
+      rover_msgs::step_report_t m;
+      if (m.decode(e->data, 0, e->datalen) >= 0 && m.utime_plan_end > m.utime_plan_start && m.utime_plan_start > 0)
+        planning.emplace_back(m.utime_plan_start, m.utime_plan_end);
     } else if (ch == channels::kSequenceStatus) {
       rover_msgs::sequence_status_t m;
       if (m.decode(e->data, 0, e->datalen) < 0) continue;
@@ -114,8 +119,9 @@ RoverTimeBreakdown BreakdownFromLog(const std::string& log_path) {
   r.imaging_s = Seconds(imaging);
   r.vo_s = Seconds(vo);
   r.mapping_s = Seconds(mapping);
+  r.planning_s = Seconds(planning);
   std::vector<Interval> all = driving;
-  for (const auto* v : {&imaging, &vo, &mapping}) all.insert(all.end(), v->begin(), v->end());
+  for (const auto* v : {&imaging, &vo, &mapping, &planning}) all.insert(all.end(), v->begin(), v->end());
   r.busy_s = UnionSeconds(all, first_status, final_status);
   r.waiting_s = std::max(0.0, r.span_s - r.busy_s);
   return r;

@@ -600,8 +600,7 @@ std::string SummaryJson(const ScenarioSummary& s) {
     j.BeginObject();
     j.Field("span_s", b.span_s).Field("driving_s", b.driving_s).Field("imaging_s", b.imaging_s);
     j.Field("vo_s", b.vo_s).Field("mapping_s", b.mapping_s).Field("busy_s", b.busy_s).Field("waiting_s", b.waiting_s);
-    j.Key("planning_s").Null();
-    j.Field("planning_s_reason", "planning time is not modelled yet");
+    j.Field("planning_s", b.planning_s);
     j.EndObject();
   } else {
     j.Null();
@@ -663,7 +662,7 @@ std::string SummaryText(const ScenarioSummary& s) {
     const auto& b = s.rover_time;
     os << std::setprecision(1) << "  rover time of the sequence: " << b.span_s << " s: driving " << b.driving_s
        << " s, imaging " << b.imaging_s << " s, VO " << b.vo_s << " s, mapping " << b.mapping_s
-       << " s (VO and mapping at once), waiting " << b.waiting_s << " s";
+       << " s (VO and mapping at once), planning " << b.planning_s << " s, waiting " << b.waiting_s << " s";
     if (b.span_s > 0) os << "; drive rate " << s.distance_travelled_m / (b.span_s / 3600.0) << " m/h of rover time";
     os << "\n" << std::setprecision(3);
   }
