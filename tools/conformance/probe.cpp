@@ -155,7 +155,14 @@ bool Probe::Moving(std::int64_t id) const {
   return false;
 }
 
+void Probe::WaitForClock() {
+  // A simulator's clock comes 50 times a second: a bus with none for a second has none,
+  // and rover time is the system clock.
+  Spin(1.0, [&] { return clock_.has_value(); });
+}
+
 void Probe::RunMobility(const MobilityLimits& limits, Report& report) {
+  WaitForClock();
   recording_mobility_ = true;
   commander_alive_ = true;
   Spin(2.0);  // at rest: the status stream and the driver's heartbeat
@@ -221,6 +228,7 @@ void Probe::RunMobility(const MobilityLimits& limits, Report& report) {
 }
 
 void Probe::RunImu(const ImuLimits& limits, Report& report) {
+  WaitForClock();
   recording_imu_ = true;
   Spin(options_.listen_s);
   recording_imu_ = false;
@@ -228,6 +236,7 @@ void Probe::RunImu(const ImuLimits& limits, Report& report) {
 }
 
 void Probe::RunWheelOdometry(const WheelOdometryLimits& limits, Report& report) {
+  WaitForClock();
   recording_odometry_ = true;
   Spin(options_.listen_s);
   recording_odometry_ = false;
@@ -235,6 +244,7 @@ void Probe::RunWheelOdometry(const WheelOdometryLimits& limits, Report& report) 
 }
 
 void Probe::RunCamera(const CameraLimits& limits, Report& report) {
+  WaitForClock();
   recording_camera_ = true;
   Spin(1.0);  // the capture process's heartbeat
   for (int i = 0; i < options_.requests; ++i) {

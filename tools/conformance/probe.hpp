@@ -53,6 +53,7 @@ class Probe {
   void Spin(double seconds, const std::function<bool()>& done = nullptr);
   std::int64_t Command(std::int8_t type, double distance_m, double curvature, double turn_rad, double speed,
                        double turn_rate);
+  void WaitForClock();
   bool Ended(std::int64_t id) const;
   bool Moving(std::int64_t id) const;
 
