@@ -1,0 +1,47 @@
+#!/bin/sh
+# The bench deployment (configs/deploy/bench_genicam.yaml) on Aravis's two simulated GigE
+# Vision cameras, for SECONDS of wall time, recorded with lcm-logger and checked with
+# logcheck (docs/HARDWARE.md, "A bench"). Everything runs in a user and network namespace
+# of its own whose loopback has 127.0.0.1 (camera GV01) and 127.0.0.2 (camera GV02) and the
+# multicast route: nothing leaves the machine. Exit 0 when every process lived to the end
+# and the log is complete.
+#   tools/launch/bench_fake_cameras.sh [SECONDS] [OUT_DIR] (default 600, out/bench)
+set -eu
+ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
+BIN="${ROVER_BUILD_DIR:-$ROOT/build}/bin"
+SECONDS_TO_RUN="${1:-600}"
+OUT="${2:-$ROOT/out/bench}"
+mkdir -p "$OUT"
+OUT="$(cd "$OUT" && pwd)"
+if [ -z "${ROVER_BENCH_NETNS:-}" ]; then
+  exec env ROVER_BENCH_NETNS=1 unshare -rn sh -c 'ip link set lo up && ip addr add 127.0.0.2/8 dev lo &&
+    ip route add 224.0.0.0/4 dev lo && exec sh "$0" "$@"' "$0" "$SECONDS_TO_RUN" "$OUT"
+fi
+cd "$ROOT"
+arv-fake-gv-camera-0.8 -i 127.0.0.1 -s GV01 > "$OUT/gv01.log" 2>&1 &
+CAM1=$!
+arv-fake-gv-camera-0.8 -i 127.0.0.2 -s GV02 > "$OUT/gv02.log" 2>&1 &
+CAM2=$!
+sleep 2
+lcm-logger -f "$OUT/log.lcm" > "$OUT/logger.log" 2>&1 &
+LOGGER=$!
+sleep 1
+"$BIN/launcher" configs/deploy/bench_genicam.yaml > "$OUT/launch.log" 2>&1 &
+LAUNCHER=$!
+sleep "$SECONDS_TO_RUN"
+alive=1
+if kill -0 "$LAUNCHER" 2>/dev/null; then
+  echo "bench: every process ran for $SECONDS_TO_RUN s"
+else
+  alive=0
+  echo "bench: the launcher stopped early (a process died): see $OUT/launch.log"
+fi
+kill -INT "$LAUNCHER" 2>/dev/null || true
+wait "$LAUNCHER" || true
+sleep 1
+kill -INT "$LOGGER"; wait "$LOGGER" || true
+kill "$CAM1" "$CAM2"
+complete=0
+"$BIN/logcheck" "$OUT/log.lcm" > "$OUT/logcheck.txt" 2>&1 && complete=1
+tail -1 "$OUT/logcheck.txt"
+[ "$alive" -eq 1 ] && [ "$complete" -eq 1 ]
