@@ -64,12 +64,14 @@ TEST(ConformanceKit, RoverSimPassesMobilityImuAndWheelOdometry) {
   EXPECT_EQ(mobility.exit_code, 0);
   EXPECT_TRUE(Has(mobility, "ok   mobility.deadman.stop"));
   EXPECT_TRUE(Has(mobility, "conformance mobility: PASS (25 held, 0 failed, 0 not checked)"));
-  const auto imu = Kit(rig.url(), "imu --config configs/rover.yaml --listen-s 3");
+  const auto imu = Kit(rig.url(), "imu --config configs/rover.yaml --listen-s 3 --drive");
   EXPECT_EQ(imu.exit_code, 0);
   EXPECT_TRUE(Has(imu, "ok   imu.frame.gravity"));
-  const auto odometry = Kit(rig.url(), "wheel_odometry --listen-s 3");
+  EXPECT_TRUE(Has(imu, "conformance imu: PASS (11 held, 0 failed, 0 not checked)"));
+  const auto odometry = Kit(rig.url(), "wheel_odometry --listen-s 3 --drive");
   EXPECT_EQ(odometry.exit_code, 0);
-  EXPECT_TRUE(Has(odometry, "ok   wheel_odometry.rate"));
+  EXPECT_TRUE(Has(odometry, "ok   wheel_odometry.frame.turn"));
+  EXPECT_TRUE(Has(odometry, "conformance wheel_odometry: PASS (9 held, 0 failed, 0 not checked)"));
   // With Earth's gravity the IMU is wrong by a factor of 2.6: the kit says so.
   const auto earth = Kit(rig.url(), "imu --gravity 9.81 --listen-s 2");
   EXPECT_EQ(earth.exit_code, 1);
@@ -84,8 +86,8 @@ TEST(ConformanceKit, SampleDriverPasses) {
   const auto mobility = Kit(url, "mobility");
   EXPECT_EQ(mobility.exit_code, 0);
   EXPECT_TRUE(Has(mobility, "conformance mobility: PASS (25 held, 0 failed, 0 not checked)"));
-  EXPECT_EQ(Kit(url, "imu --listen-s 2").exit_code, 0);
-  EXPECT_EQ(Kit(url, "wheel_odometry --listen-s 2").exit_code, 0);
+  EXPECT_EQ(Kit(url, "imu --listen-s 2 --drive").exit_code, 0);
+  EXPECT_EQ(Kit(url, "wheel_odometry --listen-s 2 --drive").exit_code, 0);
   set.StopAll();
 }
 

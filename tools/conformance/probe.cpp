@@ -227,20 +227,54 @@ void Probe::RunMobility(const MobilityLimits& limits, Report& report) {
   CheckRefusal(mobility_, unknown, "mobility.bad.type", true, limits, report);
 }
 
+DriveRecord Probe::Drive() {
+  // As the mobility check does: the kit is the commander while it drives.
+  recording_mobility_ = true;
+  commander_alive_ = true;
+  next_heartbeat_s_ = 0;
+  Spin(0.5);
+  DriveRecord d;
+  d.arc_m = 0.10;
+  d.arc_from_s = Wall();
+  const std::int64_t arc = Command(rover_msgs::mobility_command_t::TYPE_ARC, d.arc_m, 0, 0, 0.05, 0);
+  Spin(2.0 * d.arc_m / 0.05 + 2.0, [&] { return Ended(arc); });
+  Spin(0.3);
+  d.arc_to_s = Wall();
+  d.turn_rad = 0.10;
+  d.turn_from_s = Wall();
+  const std::int64_t turn = Command(rover_msgs::mobility_command_t::TYPE_TURN, 0, 0, d.turn_rad, 0, 0.1);
+  Spin(2.0 * d.turn_rad / 0.1 + 2.0, [&] { return Ended(turn); });
+  Spin(0.3);
+  d.turn_to_s = Wall();
+  commander_alive_ = false;
+  recording_mobility_ = false;
+  return d;
+}
+
 void Probe::RunImu(const ImuLimits& limits, Report& report) {
   WaitForClock();
   recording_imu_ = true;
   Spin(options_.listen_s);
+  const auto at_rest = imu_;
+  if (options_.drive) {
+    const DriveRecord d = Drive();
+    CheckImuDrive(imu_, d, report);
+  }
   recording_imu_ = false;
-  CheckImu(imu_, limits, report);
+  CheckImu(at_rest, limits, report);
 }
 
 void Probe::RunWheelOdometry(const WheelOdometryLimits& limits, Report& report) {
   WaitForClock();
   recording_odometry_ = true;
   Spin(options_.listen_s);
+  const auto at_rest = mobility_.odometry;
+  if (options_.drive) {
+    const DriveRecord d = Drive();
+    CheckWheelOdometryDrive(mobility_.odometry, d, report);
+  }
   recording_odometry_ = false;
-  CheckWheelOdometry(mobility_.odometry, limits, report);
+  CheckWheelOdometry(at_rest, limits, report);
 }
 
 void Probe::RunCamera(const CameraLimits& limits, Report& report) {

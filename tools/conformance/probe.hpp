@@ -26,6 +26,7 @@ struct ProbeOptions {
   std::string capture_process = "camera_capture";
   double listen_s = 5.0;                  // sensors: how long to listen
   int requests = 3;                       // camera: how many captures to ask for
+  bool drive = false;                     // imu, wheel_odometry: also drive an arc and a turn
 };
 
 class Probe {
@@ -54,6 +55,8 @@ class Probe {
   std::int64_t Command(std::int8_t type, double distance_m, double curvature, double turn_rad, double speed,
                        double turn_rate);
   void WaitForClock();
+  // Drives an ARC of 0.10 m and a TURN of 0.10 rad as the commander (--drive).
+  DriveRecord Drive();
   bool Ended(std::int64_t id) const;
   bool Moving(std::int64_t id) const;
 

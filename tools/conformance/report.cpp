@@ -47,7 +47,9 @@ const std::map<std::string, std::vector<Rule>>& Contracts() {
         {"imu.time.near_clock", "utimes are within the tolerance of rover time"},
         {"imu.units.accel", "accel is m/s^2 of specific force: at rest its norm is gravity (10 %)"},
         {"imu.frame.gravity", "at rest accel is R^T (0, 0, -g) of the orientation (rover frame, Z down; w x y z)"},
-        {"imu.units.rate", "angular_rate is rad/s: at rest below 0.05"}}},
+        {"imu.units.rate", "angular_rate is rad/s: at rest below 0.05"},
+        {"imu.frame.turn", "--drive: a clockwise turn reads a positive yaw rate and a growing yaw (Z down)"},
+        {"imu.units.turn", "--drive: the integrated yaw rate agrees with the orientation's yaw change (30 %), that with the turn (50 %)"}}},
       {"wheel_odometry",
        {{"wheel_odometry.present", "WHEEL_ODOMETRY is published"},
         {"wheel_odometry.fields", "finite distances, 1 to 16 wheels, as many distances as wheels"},
@@ -55,7 +57,9 @@ const std::map<std::string, std::vector<Rule>>& Contracts() {
         {"wheel_odometry.gap", "no gap longer than three periods of the minimum rate"},
         {"wheel_odometry.time.monotonic", "utimes strictly increase"},
         {"wheel_odometry.time.near_clock", "utimes are within the tolerance of rover time"},
-        {"wheel_odometry.at_rest", "at rest the cumulative distances stand still (1 mm)"}}},
+        {"wheel_odometry.at_rest", "at rest the cumulative distances stand still (1 mm)"},
+        {"wheel_odometry.units.distance", "--drive: distance_m grows by the arc's distance in metres (10 %)"},
+        {"wheel_odometry.frame.turn", "--drive: in a clockwise turn the left wheels roll forward, the right back, turning_in_place 1"}}},
       {"camera",
        {{"camera.answer", "every CAPTURE_REQUEST gets its STEREO_FRAME, or a heartbeat DEGRADED or FAULT naming the failure"},
         {"camera.frames", "at least one request gets a frame"},
@@ -83,6 +87,12 @@ const std::vector<Rule>& RulesOf(const std::string& contract) {
     throw std::invalid_argument("no contract '" + contract + "' (expected mobility, imu, wheel_odometry or camera)");
   }
   return it->second;
+}
+
+bool NeedsDrive(const std::string& contract, const std::string& rule) {
+  for (const auto& r : RulesOf(contract))
+    if (r.id == rule) return r.text.rfind("--drive:", 0) == 0;
+  return false;
 }
 
 std::string FailureLine(const Finding& f) { return "FAIL " + f.rule + ": expected " + f.expected + "; seen " + f.seen; }

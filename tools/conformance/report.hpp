@@ -22,6 +22,9 @@ const std::vector<std::string>& ContractNames();
 // naming the contract when there is no such one.
 const std::vector<Rule>& RulesOf(const std::string& contract);
 
+// Whether a rule of `contract` is checked only with --drive (its text starts so).
+bool NeedsDrive(const std::string& contract, const std::string& rule);
+
 struct Finding {
   std::string rule;
   std::string expected;

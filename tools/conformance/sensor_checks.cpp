@@ -141,4 +141,90 @@ void CheckWheelOdometry(const std::vector<Received<rover_msgs::wheel_odometry_t>
   }
 }
 
+namespace {
+
+// The last sample at or before `t` and the first at or after it (wall seconds).
+template <class Msg>
+const Received<Msg>* Before(const std::vector<Received<Msg>>& samples, double t) {
+  const Received<Msg>* out = nullptr;
+  for (const auto& s : samples)
+    if (s.at.wall_s <= t) out = &s;
+  return out;
+}
+template <class Msg>
+const Received<Msg>* After(const std::vector<Received<Msg>>& samples, double t) {
+  for (const auto& s : samples)
+    if (s.at.wall_s >= t) return &s;
+  return nullptr;
+}
+
+double Yaw(const rover_msgs::imu_t& m) {
+  const Eigen::Quaterniond q(m.orientation[0], m.orientation[1], m.orientation[2], m.orientation[3]);
+  const Eigen::Matrix3d R = q.normalized().toRotationMatrix();
+  return std::atan2(R(1, 0), R(0, 0));  // R = Rz(yaw) Ry(pitch) Rx(roll)
+}
+
+}  // namespace
+
+void CheckImuDrive(const std::vector<Received<rover_msgs::imu_t>>& samples, const DriveRecord& drive, Report& report) {
+  const auto* from = Before(samples, drive.turn_from_s);
+  const auto* to = After(samples, drive.turn_to_s);
+  if (from == nullptr || to == nullptr) {
+    report.Fail("imu.frame.turn", "IMU samples before and after the turn", "none");
+    return;
+  }
+  double integrated = 0;
+  for (std::size_t i = 1; i < samples.size(); ++i) {
+    if (samples[i].at.wall_s <= from->at.wall_s || samples[i].at.wall_s > to->at.wall_s) continue;
+    integrated += samples[i].msg.angular_rate[2] * static_cast<double>(samples[i].msg.utime - samples[i - 1].msg.utime) * 1e-6;
+  }
+  const double turned = std::remainder(Yaw(to->msg) - Yaw(from->msg), 2 * M_PI);
+  const double sign = drive.turn_rad >= 0 ? 1.0 : -1.0;
+  if (!report.Expect(sign * integrated > 0 && sign * turned > 0, "imu.frame.turn",
+                     "a clockwise turn of " + Num(drive.turn_rad, 3) +
+                         " rad reads a positive angular_rate[2] and a growing yaw (Z down)",
+                     "angular_rate[2] integrated to " + Num(integrated, 4) + " rad, yaw changed by " +
+                         Num(turned, 4) + " rad")) {
+    return;
+  }
+  report.Expect(std::abs(integrated - turned) <= 0.3 * std::abs(turned) &&
+                    std::abs(turned - drive.turn_rad) <= 0.5 * std::abs(drive.turn_rad),
+                "imu.units.turn",
+                "the yaw rate integrated (rad/s) agreeing with the orientation's yaw change (30 %), and that with the "
+                "commanded " + Num(drive.turn_rad, 3) + " rad (50 %)",
+                "integrated " + Num(integrated, 4) + " rad, yaw changed by " + Num(turned, 4) + " rad");
+}
+
+void CheckWheelOdometryDrive(const std::vector<Received<rover_msgs::wheel_odometry_t>>& samples,
+                             const DriveRecord& drive, Report& report) {
+  const auto* a0 = Before(samples, drive.arc_from_s);
+  const auto* a1 = After(samples, drive.arc_to_s);
+  if (report.Expect(a0 && a1, "wheel_odometry.units.distance", "odometry before and after the arc", "none")) {
+    const double d = a1->msg.distance_m - a0->msg.distance_m;
+    report.Expect(std::abs(d - drive.arc_m) <= 0.1 * std::abs(drive.arc_m), "wheel_odometry.units.distance",
+                  "distance_m grows by " + Num(drive.arc_m, 3) + " m over the arc (10 %)",
+                  "it grew by " + Num(d, 4));
+  }
+  const auto* t0 = Before(samples, drive.turn_from_s);
+  const auto* t1 = After(samples, drive.turn_to_s);
+  if (!report.Expect(t0 && t1 && t0->msg.num_wheels == t1->msg.num_wheels && t0->msg.num_wheels >= 2,
+                     "wheel_odometry.frame.turn", "odometry of the same wheels before and after the turn", "none")) {
+    return;
+  }
+  const int n = t0->msg.num_wheels;
+  double left = 0, right = 0;
+  for (int w = 0; w < n; ++w) {
+    const double d = t1->msg.wheel_distance_m[w] - t0->msg.wheel_distance_m[w];
+    (w < n / 2 ? left : right) += d / (n / 2);
+  }
+  bool flagged = false;
+  for (const auto& s : samples)
+    if (s.at.wall_s > drive.turn_from_s && s.at.wall_s < drive.turn_to_s && s.msg.turning_in_place) flagged = true;
+  const double sign = drive.turn_rad >= 0 ? 1.0 : -1.0;
+  report.Expect(sign * left > 0 && sign * right < 0 && flagged, "wheel_odometry.frame.turn",
+                "in a clockwise turn the left wheels (the first half) forward, the right back, turning_in_place 1",
+                "left wheels " + Num(left, 4) + " m, right " + Num(right, 4) + " m, turning_in_place " +
+                    (flagged ? "seen" : "never set"));
+}
+
 }  // namespace rover::conformance

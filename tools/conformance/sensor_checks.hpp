@@ -42,4 +42,21 @@ struct WheelOdometryLimits {
 void CheckWheelOdometry(const std::vector<Received<rover_msgs::wheel_odometry_t>>& samples,
                         const WheelOdometryLimits& limits, Report& report);
 
+// With --drive the probe, as commander, drove an ARC and then a TURN (clockwise, +); the
+// windows (wall seconds) span each motion from just before its command to just after its end.
+struct DriveRecord {
+  double arc_from_s = 0, arc_to_s = 0, arc_m = 0;
+  double turn_from_s = 0, turn_to_s = 0, turn_rad = 0;
+};
+
+// imu.frame.turn (a clockwise turn reads a positive yaw rate and a growing yaw: Z down) and
+// imu.units.turn (the integrated rate agrees with the orientation's yaw change, 30 %, and
+// that with the commanded angle, 50 %: slip loses some of a turn).
+void CheckImuDrive(const std::vector<Received<rover_msgs::imu_t>>& samples, const DriveRecord& drive, Report& report);
+// wheel_odometry.units.distance (distance_m grows by the ARC's distance, 10 %) and
+// wheel_odometry.frame.turn (in a clockwise turn the left wheels, the first half, roll
+// forward and the right ones back, with turning_in_place set).
+void CheckWheelOdometryDrive(const std::vector<Received<rover_msgs::wheel_odometry_t>>& samples,
+                             const DriveRecord& drive, Report& report);
+
 }  // namespace rover::conformance

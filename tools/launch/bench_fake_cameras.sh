@@ -4,7 +4,7 @@
 # logcheck (docs/HARDWARE.md, "A bench"). Everything runs in a user and network namespace
 # of its own whose loopback has 127.0.0.1 (camera GV01) and 127.0.0.2 (camera GV02) and the
 # multicast route: nothing leaves the machine. Exit 0 when every process lived to the end
-# and the log is complete.
+# and the log is complete, 77 when it cannot run here (no simulated camera, no namespaces).
 #   tools/launch/bench_fake_cameras.sh [SECONDS] [OUT_DIR] (default 600, out/bench)
 set -eu
 ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
@@ -13,7 +13,9 @@ SECONDS_TO_RUN="${1:-600}"
 OUT="${2:-$ROOT/out/bench}"
 mkdir -p "$OUT"
 OUT="$(cd "$OUT" && pwd)"
+command -v arv-fake-gv-camera-0.8 >/dev/null || { echo "bench: arv-fake-gv-camera-0.8 is not installed (aravis-tools): skipped"; exit 77; }
 if [ -z "${ROVER_BENCH_NETNS:-}" ]; then
+  unshare -rn true 2>/dev/null || { echo "bench: cannot make a network namespace (unshare -rn): skipped"; exit 77; }
   exec env ROVER_BENCH_NETNS=1 unshare -rn sh -c 'ip link set lo up && ip addr add 127.0.0.2/8 dev lo &&
     ip route add 224.0.0.0/4 dev lo && exec sh "$0" "$@"' "$0" "$SECONDS_TO_RUN" "$OUT"
 fi

@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace rover::conformance {
@@ -339,6 +340,65 @@ TEST(ConformanceCamera, FramesAnswersAndSwappedCameras) {
   Report sized;
   CheckCamera(trace, limits, sized);
   EXPECT_TRUE(sized.Failed("camera.size"));
+}
+
+// A turn of 0.1 rad at 0.1 rad/s from wall second 1 to 2: the IMU's yaw rate and yaw, the
+// wheels' signs, as a conforming driver reports them, and with one sign flipped.
+TEST(ConformanceDrive, TurnSignsInTheImuAndTheWheels) {
+  DriveRecord drive;
+  drive.arc_from_s = -1;
+  drive.arc_to_s = -0.5;
+  drive.arc_m = 0.1;
+  drive.turn_from_s = 0.9;
+  drive.turn_to_s = 2.1;
+  drive.turn_rad = 0.1;
+  auto imu = [](double rate_sign) {
+    std::vector<Received<rover_msgs::imu_t>> out;
+    for (const auto& s : Stream(20, 3)) {
+      rover_msgs::imu_t m{};
+      m.utime = s.utime;
+      const double yaw = 0.1 * std::clamp(s.wall_s - 1.0, 0.0, 1.0);
+      m.orientation[0] = std::cos(yaw / 2);
+      m.orientation[3] = std::sin(yaw / 2);
+      m.angular_rate[2] = rate_sign * (s.wall_s > 1.0 && s.wall_s <= 2.0 ? 0.1 : 0.0);
+      out.push_back({s, m});
+    }
+    return out;
+  };
+  Report good;
+  CheckImuDrive(imu(1.0), drive, good);
+  EXPECT_TRUE(good.Passed("imu.frame.turn"));
+  EXPECT_TRUE(good.Passed("imu.units.turn"));
+  Report flipped;
+  CheckImuDrive(imu(-1.0), drive, flipped);
+  EXPECT_TRUE(flipped.Failed("imu.frame.turn"));
+  Report degrees;
+  CheckImuDrive(imu(180.0 / M_PI), drive, degrees);
+  EXPECT_FALSE(degrees.Failed("imu.frame.turn"));
+  EXPECT_TRUE(degrees.Failed("imu.units.turn"));
+
+  auto wheels = [](double left_sign) {
+    std::vector<Received<rover_msgs::wheel_odometry_t>> out;
+    for (const auto& s : Stream(10, 3, 0)) {
+      rover_msgs::wheel_odometry_t m{};
+      m.utime = s.utime;
+      m.num_wheels = 6;
+      const double d = 0.05 * std::clamp(s.wall_s - 1.0, 0.0, 1.0);
+      for (int w = 0; w < 6; ++w) m.wheel_distance_m.push_back((w < 3 ? left_sign : -left_sign) * d);
+      m.turning_in_place = s.wall_s > 1.0 && s.wall_s < 2.0;
+      out.push_back({{s.wall_s, s.utime, s.clock_utime}, m});
+    }
+    return out;
+  };
+  Report turn;
+  CheckWheelOdometryDrive(wheels(1.0), drive, turn);
+  EXPECT_TRUE(turn.Passed("wheel_odometry.frame.turn"));
+  EXPECT_TRUE(turn.Failed("wheel_odometry.units.distance"));  // no arc in this record
+  Report swapped;
+  CheckWheelOdometryDrive(wheels(-1.0), drive, swapped);
+  EXPECT_NE(LineOf(swapped, "wheel_odometry.frame.turn").find("seen left wheels -0.0500 m, right 0.0500 m"),
+            std::string::npos)
+      << LineOf(swapped, "wheel_odometry.frame.turn");
 }
 
 TEST(ConformanceRules, EveryContractHasRulesAndUnknownIsNamed) {
