@@ -246,6 +246,7 @@ DriveRecord Probe::Drive() {
   Spin(2.0 * d.turn_rad / 0.1 + 2.0, [&] { return Ended(turn); });
   Spin(0.3);
   d.turn_to_s = Wall();
+  Spin(0.3);  // samples after the turn, to judge it by
   commander_alive_ = false;
   recording_mobility_ = false;
   return d;
