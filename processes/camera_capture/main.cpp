@@ -17,6 +17,7 @@
 #include "terrain/world.hpp"
 
 #include <rover_msgs/capture_request_t.hpp>
+#include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/pose_t.hpp>
 #include <rover_msgs/sim_truth_t.hpp>
 #include <rover_msgs/stereo_frame_t.hpp>
@@ -331,9 +332,13 @@ int main(int argc, char** argv) {
       if (job.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return true;
       try {
         proc.bus().Publish(channels::kStereoFrame, job.get());  // rethrows a capture error
+        proc.SetHealth(rover_msgs::heartbeat_t::STATE_OK, "");
       } catch (const std::exception& e) {
-        // No frame for this request: the executor counts a VO failure; the process goes on.
+        // No frame for this request: the executor counts a VO failure; the process goes on,
+        // and its heartbeat says DEGRADED with the failure until a capture succeeds again
+        // (the camera contract, docs/HARDWARE.md).
         std::cerr << "camera_capture: capture failed, no frame sent: " << e.what() << "\n";
+        proc.SetHealth(rover_msgs::heartbeat_t::STATE_DEGRADED, std::string("capture failed: ") + e.what());
       }
       return false;
     };

@@ -11,6 +11,7 @@
 #include "launch/process_set.hpp"
 
 #include <rover_msgs/capture_request_t.hpp>
+#include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/stereo_frame_t.hpp>
 
 #include <opencv2/imgcodecs.hpp>
@@ -116,9 +117,26 @@ TEST(CameraCaptureGenicam, FakeGigECamerasOnTheBusSurviveAKill) {
   }
   EXPECT_EQ(frame->left_model.width, 256);
 
+  // The capture process's heartbeat says whether its last capture failed (the camera
+  // contract, docs/HARDWARE.md): OK now, DEGRADED with the failure after the kill.
+  std::optional<rover_msgs::heartbeat_t> health;
+  bus.Subscribe<rover_msgs::heartbeat_t>(channels::kHeartbeat, [&](const rover_msgs::heartbeat_t& h) {
+    if (h.process == "camera_capture") health = h;
+  });
+  auto listen = [&bus](double seconds) {  // heartbeats come 4 a second
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < until) bus.Handle(50);
+  };
+  listen(0.6);
+  ASSERT_TRUE(health.has_value());
+  EXPECT_EQ(health->state, +rover_msgs::heartbeat_t::STATE_OK) << health->detail;
+
   right.Kill();
   EXPECT_FALSE(requests.Take(2, 8, false).has_value()) << "a frame with the right camera dead";
   EXPECT_TRUE(set.Running("camera_capture"));
+  listen(0.6);
+  EXPECT_EQ(health->state, +rover_msgs::heartbeat_t::STATE_DEGRADED);
+  EXPECT_EQ(health->detail.rfind("capture failed: genicam: right camera (serial GV02): ", 0), 0u) << health->detail;
 
   ASSERT_TRUE(right.Start());
   // The first request after the kill may still be failing while the right camera is
@@ -127,6 +145,8 @@ TEST(CameraCaptureGenicam, FakeGigECamerasOnTheBusSurviveAKill) {
   for (std::int64_t id = 3; id < 10 && !back; ++id) back = requests.Take(id, 6, false);
   ASSERT_TRUE(back.has_value()) << "no frame after the right camera came back";
   EXPECT_EQ(RampMismatches(back->right), 0);
+  listen(0.6);
+  EXPECT_EQ(health->state, +rover_msgs::heartbeat_t::STATE_OK) << health->detail;
   set.StopAll();
 
   std::ifstream log(dir + "/camera_capture.log");

@@ -1,0 +1,263 @@
+// The conformance kit (tools/conformance) against real processes on a real bus: it passes
+// rover_sim (mobility, imu, wheel_odometry), the sample mobility driver, and camera_capture
+// on the simulator source; it fails, naming the broken rule, against drivers made here
+// with one fault each: a wheel distance in millimetres, no dead-man, no answer to STOP, an
+// IMU with Z up, a camera that fails in silence.
+#include "bus/bus.hpp"
+#include "bus/channels.hpp"
+#include "integration/run_support.hpp"
+#include "launch/process_set.hpp"
+#include "mobility/deadman.hpp"
+#include "sample_driver/sample_mobility.hpp"
+
+#include <rover_msgs/capture_request_t.hpp>
+#include <rover_msgs/heartbeat_t.hpp>
+#include <rover_msgs/imu_t.hpp>
+#include <rover_msgs/mobility_command_t.hpp>
+#include <rover_msgs/mobility_status_t.hpp>
+#include <rover_msgs/wheel_odometry_t.hpp>
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+namespace rover::test {
+namespace {
+
+CommandResult Kit(const std::string& url, const std::string& args) {
+  const auto r = RunCommand("ROVER_LCM_URL='" + url + "' ROVER_TIME=real " + Bin("rover_conformance") + " " + args);
+  std::cout << r.output;
+  return r;
+}
+
+bool Has(const CommandResult& r, const std::string& text) { return r.output.find(text) != std::string::npos; }
+
+// rover_sim on a real clock at rate 1, as a rover's mobility runs.
+class SimRig {
+ public:
+  explicit SimRig(const std::string& name, int offset, bool cameras = false)
+      : url_(PrivateUrl(offset)), set_(std::string(ROVER_BINARY_DIR) + "/bin", OutDir(name), false) {
+    const std::string world = SourceDir() + "/configs/worlds/featureless_sand.yaml";
+    const std::vector<std::string> env = {"ROVER_LCM_URL=" + url_, "ROVER_TIME=real"};
+    set_.Start({"rover_sim", "rover_sim",
+                {"--config", SourceDir() + "/configs/rover.yaml", "--world", world, "--start", "0,0,0", "--rate", "1"}},
+               env);
+    if (cameras) {
+      set_.Start({"camera_capture", "camera_capture", {"--config", SourceDir() + "/configs/rover.yaml", "--world", world}},
+                 env);
+    }
+  }
+  ~SimRig() { set_.StopAll(); }
+  const std::string& url() const { return url_; }
+  bool Running(const std::string& name) const { return set_.Running(name); }
+
+ private:
+  std::string url_;
+  launch::ProcessSet set_;
+};
+
+TEST(ConformanceKit, RoverSimPassesMobilityImuAndWheelOdometry) {
+  SimRig rig("conformance_sim", 41);
+  const auto mobility = Kit(rig.url(), "mobility --config configs/rover.yaml");
+  EXPECT_EQ(mobility.exit_code, 0);
+  EXPECT_TRUE(Has(mobility, "ok   mobility.deadman.stop"));
+  EXPECT_TRUE(Has(mobility, "conformance mobility: PASS (25 held, 0 failed, 0 not checked)"));
+  const auto imu = Kit(rig.url(), "imu --config configs/rover.yaml --listen-s 3 --drive");
+  EXPECT_EQ(imu.exit_code, 0);
+  EXPECT_TRUE(Has(imu, "ok   imu.frame.gravity"));
+  EXPECT_TRUE(Has(imu, "conformance imu: PASS (11 held, 0 failed, 0 not checked)"));
+  const auto odometry = Kit(rig.url(), "wheel_odometry --listen-s 3 --drive");
+  EXPECT_EQ(odometry.exit_code, 0);
+  EXPECT_TRUE(Has(odometry, "ok   wheel_odometry.frame.turn"));
+  EXPECT_TRUE(Has(odometry, "conformance wheel_odometry: PASS (9 held, 0 failed, 0 not checked)"));
+  // With Earth's gravity the IMU is wrong by a factor of 2.6: the kit says so.
+  const auto earth = Kit(rig.url(), "imu --gravity 9.81 --listen-s 2");
+  EXPECT_EQ(earth.exit_code, 1);
+  EXPECT_TRUE(Has(earth, "FAIL imu.units.accel: expected |accel| 9.81 m/s^2 at rest (10 %); seen |accel| 3.7"));
+  EXPECT_TRUE(rig.Running("rover_sim"));
+}
+
+TEST(ConformanceKit, SampleDriverPasses) {
+  const std::string url = PrivateUrl(42);
+  launch::ProcessSet set(std::string(ROVER_BINARY_DIR) + "/bin", OutDir("conformance_sample"), false);
+  set.Start({"mobility_driver", "sample_mobility_driver", {}}, {"ROVER_LCM_URL=" + url, "ROVER_TIME=real"});
+  const auto mobility = Kit(url, "mobility");
+  EXPECT_EQ(mobility.exit_code, 0);
+  EXPECT_TRUE(Has(mobility, "conformance mobility: PASS (25 held, 0 failed, 0 not checked)"));
+  EXPECT_EQ(Kit(url, "imu --listen-s 2 --drive").exit_code, 0);
+  EXPECT_EQ(Kit(url, "wheel_odometry --listen-s 2 --drive").exit_code, 0);
+  set.StopAll();
+}
+
+// A mobility driver on this test's thread: the sample driver's logic, wired to the bus
+// with one fault.
+enum class Fault { kMillimetres, kNoDeadman, kIgnoresStop, kImuZUp };
+
+class BrokenDriver {
+ public:
+  BrokenDriver(const std::string& url, Fault fault) : url_(url), fault_(fault), thread_([this] { Loop(); }) {}
+  ~BrokenDriver() {
+    stop_ = true;
+    thread_.join();
+  }
+
+ private:
+  static std::int64_t Now() {
+    return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  }
+  static double Wall() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  }
+  void Publish(bus::Bus& bus, const sample_driver::Status& s) {
+    rover_msgs::mobility_status_t m{};
+    m.utime = Now();
+    m.command_id = s.command_id;
+    m.state = static_cast<std::int8_t>(s.state);
+    m.wheel_distance_m = s.wheel_distance_m * (fault_ == Fault::kMillimetres ? 1000.0 : 1.0);
+    m.wheel_turn_rad = s.wheel_turn_rad;
+    m.detail = s.detail;
+    bus.Publish(channels::kMobilityStatus, m);
+  }
+  void Loop() {
+    bus::Bus bus(url_);
+    bus.set_publisher("mobility_driver");
+    sample_driver::SampleMobility drive;
+    mobility::Deadman deadman;
+    bus.Subscribe<rover_msgs::mobility_command_t>(channels::kMobilityCommand, [&](const rover_msgs::mobility_command_t& m) {
+      deadman.OnCommanderMessage(Wall());
+      if (fault_ == Fault::kIgnoresStop && m.type == rover_msgs::mobility_command_t::TYPE_STOP) return;
+      sample_driver::Command c;
+      c.id = m.command_id;
+      c.type = m.type;
+      c.distance_m = m.distance_m;
+      c.curvature_per_m = m.curvature_per_m;
+      c.turn_rad = m.turn_rad;
+      c.speed_mps = m.speed_mps;
+      c.turn_rate_rps = m.turn_rate_rps;
+      for (const auto& s : drive.Execute(c)) Publish(bus, s);
+    });
+    bus.Subscribe<rover_msgs::heartbeat_t>(channels::kHeartbeat, [&](const rover_msgs::heartbeat_t& hb) {
+      deadman.OnHeartbeat(hb.process, Wall());
+    }, 1000);
+    double last = Wall(), next_status = 0, next_heartbeat = 0, next_imu = 0;
+    std::int64_t seq = 0;
+    while (!stop_) {
+      bus.Handle(10);
+      const double now = Wall();
+      if (fault_ != Fault::kNoDeadman) {
+        if (const auto why = deadman.Check(drive.moving(), now)) {
+          if (const auto s = drive.Halt(*why)) Publish(bus, *s);
+        }
+      }
+      if (const auto s = drive.Advance(now - last)) Publish(bus, *s);
+      last = now;
+      if (now >= next_status) {
+        Publish(bus, drive.status());
+        next_status = now + 0.25;
+      }
+      if (now >= next_imu) {
+        rover_msgs::imu_t m{};
+        m.utime = Now();
+        m.orientation[0] = 1;
+        m.accel[2] = fault_ == Fault::kImuZUp ? 9.80665 : -9.80665;
+        bus.Publish(channels::kImu, m);
+        next_imu = now + 0.05;
+      }
+      if (now >= next_heartbeat) {
+        rover_msgs::heartbeat_t hb{};
+        hb.utime = Now();
+        hb.process = "mobility_driver";
+        hb.seq = seq++;
+        hb.dropped = bus.dropped();
+        bus.Publish(channels::kHeartbeat, hb);
+        next_heartbeat = now + 0.25;
+      }
+    }
+  }
+
+  std::string url_;
+  Fault fault_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+TEST(ConformanceKit, WheelDistanceInMillimetresFailsTheDistanceUnit) {
+  const std::string url = PrivateUrl(43);
+  BrokenDriver driver(url, Fault::kMillimetres);
+  const auto r = Kit(url, "mobility");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(Has(r, "FAIL mobility.units.distance: expected wheel_distance_m 0.100 (10 %) at DONE; seen 100."));
+  EXPECT_TRUE(Has(r, "ok   mobility.deadman.stop"));
+  EXPECT_TRUE(Has(r, "ok   mobility.units.turn"));
+}
+
+TEST(ConformanceKit, NoDeadmanFailsTheDeadmanStop) {
+  const std::string url = PrivateUrl(44);
+  BrokenDriver driver(url, Fault::kNoDeadman);
+  const auto r = Kit(url, "mobility");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(Has(r, "FAIL mobility.deadman.stop: expected STOPPED for command "));
+  EXPECT_TRUE(Has(r, "s after the commander fell silent; seen MOVING for command "));
+  EXPECT_TRUE(Has(r, "ok   mobility.units.distance"));
+  EXPECT_TRUE(Has(r, "ok   mobility.stop.answer"));
+}
+
+TEST(ConformanceKit, NoAnswerToStopFailsTheStopRules) {
+  const std::string url = PrivateUrl(45);
+  BrokenDriver driver(url, Fault::kIgnoresStop);
+  const auto r = Kit(url, "mobility");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(Has(r, "FAIL mobility.stop.answer: expected STOPPED for command "));
+  EXPECT_TRUE(Has(r, "FAIL mobility.stop.idle_answer: expected STOPPED for command "));
+  EXPECT_TRUE(Has(r, "ok   mobility.deadman.stop"));
+}
+
+TEST(ConformanceKit, ImuWithZUpFailsTheGravityFrame) {
+  const std::string url = PrivateUrl(46);
+  BrokenDriver driver(url, Fault::kImuZUp);
+  const auto r = Kit(url, "imu --listen-s 2");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(Has(r, "FAIL imu.frame.gravity: expected accel along R^T (0, 0, -1) of the orientation within 5.0 deg; "
+                     "seen 180.0 deg apart"));
+  EXPECT_TRUE(Has(r, "ok   imu.units.accel"));
+}
+
+TEST(ConformanceKit, CameraCapturePassesAndASilentFailureDoesNot) {
+  {
+    SimRig rig("conformance_camera", 47, true);
+    const auto r = Kit(rig.url(), "camera --requests 2 --timeout-s 60");
+    EXPECT_EQ(r.exit_code, 0);
+    EXPECT_TRUE(Has(r, "ok   camera.pairing"));
+    EXPECT_TRUE(Has(r, "ok   camera.time.capture"));
+    EXPECT_TRUE(rig.Running("camera_capture"));
+  }
+  // A capture process that heartbeats OK and never answers.
+  const std::string url = PrivateUrl(48);
+  bus::Bus bus(url);
+  bus.set_publisher("camera_capture");
+  std::atomic<bool> stop{false};
+  std::thread silent([&] {
+    std::int64_t seq = 0;
+    while (!stop) {
+      rover_msgs::heartbeat_t hb{};
+      hb.utime = std::chrono::duration_cast<std::chrono::microseconds>(
+                     std::chrono::system_clock::now().time_since_epoch()).count();
+      hb.process = "camera_capture";
+      hb.seq = seq++;
+      bus.Publish(channels::kHeartbeat, hb);
+      std::this_thread::sleep_for(std::chrono::milliseconds(250));
+    }
+  });
+  const auto r = Kit(url, "camera --requests 1 --timeout-s 2");
+  stop = true;
+  silent.join();
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(Has(r, "FAIL camera.answer: expected STEREO_FRAME "));
+  EXPECT_TRUE(Has(r, "FAIL camera.frames: expected at least one STEREO_FRAME; seen none for 1 requests"));
+}
+
+}  // namespace
+}  // namespace rover::test
