@@ -5,6 +5,8 @@
 #include "bus/process.hpp"
 #include "conformance/probe.hpp"
 
+#include <algorithm>
+#include <cstdio>
 #include <iostream>
 
 using namespace rover;

@@ -7,6 +7,7 @@
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/mobility_command_t.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
