@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 
@@ -18,22 +19,26 @@ std::string Fixed(double v, int digits = 2) {
   return buf;
 }
 
-// How much closer to the goal the path brings the rover, by the distance to go where it
-// ends: round the hazards when there is a field and the rover stands where it is defined,
-// else in a straight line. The end, not the nearest point: a path that only leads away is
-// a loss, not a draw (measured from the nearest point, a straight arc away from a goal
-// behind the rover made no loss, and on ground already seen, rated better than the unseen
-// ground a turn faces, it won step after step).
+// How much closer to the goal the path brings the rover: round the hazards when there is a
+// field and the rover stands where it is defined, else in a straight line. By the nearest
+// point of the path; but a path that gets no nearer than where it starts is a loss, by
+// where it ends, not a draw (as a draw, a straight arc away from a goal behind the rover,
+// on ground already seen and rated better than the unseen ground a turn faces, won step
+// after step and drove the rover away).
 double Progress(const GoalDistance* field, const Pose2& pose, const std::vector<Pose2>& path, double gx, double gy) {
-  if (field) {
-    const double d0 = field->DistanceAt(pose.x, pose.y);
-    if (std::isfinite(d0)) {
-      for (auto p = path.rbegin(); p != path.rend(); ++p)
-        if (const double d = field->DistanceAt(p->x, p->y); std::isfinite(d)) return d0 - d;
-      return 0.0;
-    }
+  std::function<double(double, double)> to_go = [&](double x, double y) { return std::hypot(gx - x, gy - y); };
+  if (field && std::isfinite(field->DistanceAt(pose.x, pose.y)))
+    to_go = [&](double x, double y) { return field->DistanceAt(x, y); };
+  const double d0 = to_go(pose.x, pose.y);
+  double best = GoalField::kUnreachable, last = GoalField::kUnreachable;
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const double d = to_go(path[i].x, path[i].y);
+    if (!std::isfinite(d)) continue;
+    best = std::min(best, d);
+    last = d;
   }
-  return std::hypot(gx - pose.x, gy - pose.y) - std::hypot(gx - path.back().x, gy - path.back().y);
+  if (!std::isfinite(best)) return 0.0;
+  return best < d0 ? d0 - best : d0 - last;
 }
 
 // Judges one candidate: `step` is the motion driven, `look` the motion judged (step first).

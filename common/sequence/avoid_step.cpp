@@ -69,7 +69,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   const double remaining = (goto_.target - Eigen::Vector2d(p.x, p.y)).norm();
   const ArrivalDisc disc = GotoArrival();
   if (remaining <= disc.radius_m) {
-    detail_ = "goto reached the disc: " + Fixed(remaining) + " m from the target by the estimate, " + disc.Describe();
+    detail_ = arrival_note_ =
+        "goto reached the disc: " + Fixed(remaining) + " m from the target by the estimate, " + disc.Describe();
     return AvoidOutcome::kDone;
   }
   // 1. A pair where the rover stands. With VO on, NextStepOfCommand takes VO's baseline

@@ -59,6 +59,7 @@ void SequenceExecutor::Submit(Sequence sequence, int64_t submission_id, const st
   started_ = false;
   pause_requested_ = false;
   command_active_ = false;
+  arrival_note_.clear();
   ResetSettings();
   for (const Command& c : sequence_.commands) {
     if (const auto* v = std::get_if<VoSetting>(&c.action); v && v->enabled) sequence_uses_vo_ = true;

@@ -564,6 +564,7 @@ class SequenceExecutor {
   int map_site_ = -1;
   std::optional<planner::PriorCostMap> prior_;
   int unreachable_plans_ = 0;     // consecutive plans that found no way
+  std::string arrival_note_;      // how the last goto of the sequence ended (its disc and margin)
 };
 
 }  // namespace rover::sequence

@@ -34,8 +34,8 @@ bool SequenceExecutor::NextStepOfCommand() {
     const GotoDecision d = SteerToward(CurrentPlanePose(), goto_.target, disc.radius_m, StepLength(), MaxTurn(),
                                        options_.goto_turn_threshold_deg * kDeg);
     if (d.arrived) {
-      detail_ = "goto reached the disc: " + Fixed(d.remaining_m) + " m from the target by the estimate, " +
-                disc.Describe();
+      detail_ = arrival_note_ = "goto reached the disc: " + Fixed(d.remaining_m) +
+                                " m from the target by the estimate, " + disc.Describe();
       return false;
     }
     step = d.step;
