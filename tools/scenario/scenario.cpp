@@ -208,6 +208,7 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
   std::optional<rover_msgs::pose_t> last_pose;
   std::optional<rover_msgs::sequence_status_t> final_status;
   std::map<int, std::pair<int, std::string>> command_text;  // index -> line, text
+  std::int64_t latest_submission = -1;  // the summary judges the last sequence submitted
   int num_commands = 0;
   // Zones in force over time, for the truth clearance.
   std::vector<std::pair<std::int64_t, std::vector<hazards::KeepOutZone>>> zone_sets;
@@ -241,6 +242,7 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
       const auto parsed = sequence::ParseSequence(m.text, m.name);
       command_text.clear();  // a later submission on the same stack: the summary is its
       num_commands = 0;
+      latest_submission = std::max(latest_submission, m.submission_id);
       if (parsed.ok()) {
         for (std::size_t i = 0; i < parsed.sequence.commands.size(); ++i) {
           command_text[static_cast<int>(i)] = {parsed.sequence.commands[i].line,
@@ -258,6 +260,8 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
       }
     }
   }
+  // A later sequence that never ended leaves the run incomplete, whatever the first did.
+  if (final_status && final_status->submission_id < latest_submission) final_status.reset();
   std::sort(truth.begin(), truth.end(),
             [](const auto& a, const auto& b) { return a.utime < b.utime; });
 
