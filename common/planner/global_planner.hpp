@@ -9,8 +9,8 @@
 // interpolated, any-angle costs. Here neither pays: the hazard monitor's map changes
 // everywhere in view at every step (each new pair re-rates every cell it sees), so every
 // step's plan is a new plan anyway, and the map is small (a 20 m goto with 10 m margins is
-// about 200 x 200 cells of 0.2 m: one Dijkstra over it, 8-connected, takes a few ms; see
-// the README for a measured figure). Hybrid A* plans kinematically feasible paths for
+// about 200 x 200 cells of 0.2 m: one Dijkstra over it, 8-connected, takes milliseconds;
+// the README has a measured figure). Hybrid A* plans kinematically feasible paths for
 // car-like vehicles; a rover that turns in place does not need that, and arc voting already
 // makes each step drivable. So: Dijkstra from the goal over a configuration-space grid,
 // recomputed at every step, the plan being the whole field.

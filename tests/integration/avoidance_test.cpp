@@ -71,9 +71,11 @@ TEST(Avoidance, RockWallGapIsFound) {
 TEST(Avoidance, KeepOutZoneAcrossTheWayIsSteeredRound) {
   const YAML::Node s = RunScenario("keepout_avoid");
   ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
-  ASSERT_FALSE(s["min_clearance_m"].IsNull());
-  EXPECT_GT(s["min_clearance_m"].as<double>(), 0.0);
+  ASSERT_FALSE(s["min_keepout_clearance_m"].IsNull());
+  EXPECT_GT(s["min_keepout_clearance_m"].as<double>(), 0.0);
   EXPECT_LT(Dist(s["final_truth"], 7.0, 0.5), 0.5);
+  // It says the margin it used for the estimate's uncertainty.
+  EXPECT_NE(Detail(s).find("less 3 sigma"), std::string::npos) << Detail(s);
   // The straight line crosses the zone (radius 1 m at 4.2, 0.4): the path left it.
   int turned = 0;
   for (const auto& st : s["steps"]) turned += std::abs(st["commanded"]["turn_rad"].as<double>()) > 0.01;
