@@ -164,7 +164,9 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     return AvoidOutcome::kAborted;
   }
   if (!choice.found) {
-    AbortWith(abort_reason::kHazardMap, "hazard_map: " + choice.detail);
+    AbortWith(abort_reason::kHazardMap,
+              "hazard_map: " + choice.detail +
+                  (zones_.empty() ? "" : " (keep-out zones, grown by " + Fixed(zone_grow) + " m, count as unsafe cells)"));
     return AvoidOutcome::kAborted;
   }
   const avoidance::Candidate& b = choice.best;
