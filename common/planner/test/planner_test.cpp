@@ -188,6 +188,17 @@ TEST(GlobalPlanner, ImpassablePriorIsAnObstacle) {
   EXPECT_FALSE(PlanOnGrid(g, r, PlannerOptions{}).reachable());
 }
 
+// The sample in configs/planner/ (shown in the README) reads as drawn: north at the top.
+TEST(GlobalPlanner, SamplePriorFileReadsAsDrawn) {
+  const PriorCostMap m = PriorCostMap::LoadFile(std::string(ROVER_SOURCE_DIR) + "/configs/planner/prior_example.yaml");
+  EXPECT_EQ(m.rows, 13);
+  EXPECT_EQ(m.cols, 12);
+  EXPECT_DOUBLE_EQ(m.CostAt(8.5, 3.5), 2.5);   // the sand patch
+  EXPECT_TRUE(std::isinf(m.CostAt(3.5, -2.5)));  // the boulders
+  EXPECT_DOUBLE_EQ(m.CostAt(0.0, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(m.CostAt(30.0, 0.0), 1.0);   // off the map
+}
+
 TEST(GlobalPlanner, PriorFileErrorsNameTheRowAndCharacter) {
   try {
     PriorCostMap::FromYaml("prior_cost_map:\n  south_west: [0, 0]\n  cell_m: 1\n  legend: {'.': 1}\n  rows: ['..', '.x']\n", "p.yaml");
