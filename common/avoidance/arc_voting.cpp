@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 
@@ -18,25 +19,30 @@ std::string Fixed(double v, int digits = 2) {
   return buf;
 }
 
-// How much closer to the goal the path brings the rover: by the distance round the known
-// hazards when there is a field and the rover stands where it is defined, else in a
-// straight line. A path whose every pose is cut off from the goal makes no progress.
-double Progress(const GoalField* field, const Pose2& pose, const std::vector<Pose2>& path, double gx, double gy) {
-  if (field) {
-    const double d0 = field->DistanceAt(pose.x, pose.y);
-    if (std::isfinite(d0)) {
-      double best = GoalField::kUnreachable;
-      for (const Pose2& p : path) best = std::min(best, field->DistanceAt(p.x, p.y));
-      return std::isfinite(best) ? d0 - best : 0.0;
-    }
+// How much closer to the goal the path brings the rover: round the hazards when there is a
+// field and the rover stands where it is defined, else in a straight line. By the nearest
+// point of the path; but a path that gets no nearer than where it starts is a loss, by
+// where it ends, not a draw (as a draw, a straight arc away from a goal behind the rover,
+// on ground already seen and rated better than the unseen ground a turn faces, won step
+// after step and drove the rover away).
+double Progress(const GoalDistance* field, const Pose2& pose, const std::vector<Pose2>& path, double gx, double gy) {
+  std::function<double(double, double)> to_go = [&](double x, double y) { return std::hypot(gx - x, gy - y); };
+  if (field && std::isfinite(field->DistanceAt(pose.x, pose.y)))
+    to_go = [&](double x, double y) { return field->DistanceAt(x, y); };
+  const double d0 = to_go(pose.x, pose.y);
+  double best = GoalField::kUnreachable, last = GoalField::kUnreachable;
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const double d = to_go(path[i].x, path[i].y);
+    if (!std::isfinite(d)) continue;
+    best = std::min(best, d);
+    last = d;
   }
-  double best = 1e300;
-  for (const Pose2& p : path) best = std::min(best, std::hypot(gx - p.x, gy - p.y));
-  return std::hypot(gx - pose.x, gy - pose.y) - best;
+  if (!std::isfinite(best)) return 0.0;
+  return best < d0 ? d0 - best : d0 - last;
 }
 
 // Judges one candidate: `step` is the motion driven, `look` the motion judged (step first).
-void Judge(const Grid& grid, const GoalField* field, const Pose2& pose, double gx, double gy, const VoteOptions& o,
+void Judge(const Grid& grid, const GoalDistance* field, const Pose2& pose, double gx, double gy, const VoteOptions& o,
            const std::vector<Pose2>& step, const std::vector<Pose2>& look, Candidate* c) {
   c->step_sweep = SweepFootprint(grid, o.footprint, step, pose, o.blind_margin_m, o.unknown.hidden_patch_m);
   const UnknownVerdict unknown = JudgeUnknown(c->step_sweep, o.unknown);
@@ -115,8 +121,12 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   if (const std::string p = grid.Problem(); !p.empty()) throw std::invalid_argument("avoidance: grid: " + p);
   Choice choice;
   const double remaining = std::hypot(gx - pose.x, gy - pose.y);
-  std::unique_ptr<GoalField> field;
-  if (o.goal_around_hazards) field = std::make_unique<GoalField>(grid, gx, gy, 0.5 * o.footprint.width_m);
+  std::unique_ptr<GoalField> local_field;
+  if (!o.goal_distance && o.goal_around_hazards) local_field = std::make_unique<GoalField>(grid, gx, gy, 0.5 * o.footprint.width_m);
+  const GoalDistance* field = o.goal_distance ? o.goal_distance : local_field.get();
+  // The global plan's way: how far round it lies, and whether it lies behind.
+  const double way = std::isfinite(o.way_heading_rad) ? std::remainder(o.way_heading_rad - pose.yaw, 2.0 * M_PI) : 0.0;
+  const bool way_behind = std::abs(way) > 0.5 * M_PI;
   // Arcs.
   for (int a = 0; a < o.num_arcs; ++a) {
     Candidate c;
@@ -128,7 +138,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.distance_m = s;
     const auto step = SamplePath(pose, 0.0, s, c.curvature_per_m);
     const auto look = SamplePath(pose, 0.0, std::max(s, o.lookahead_m), c.curvature_per_m);
-    Judge(grid, field.get(), pose, gx, gy, o, step, look, &c);
+    Judge(grid, field, pose, gx, gy, o, step, look, &c);
     choice.candidates.push_back(c);
   }
   // Turns in place to headings up to max_point_turn_rad round, then straight ahead in the
@@ -140,6 +150,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   if (turns.empty() || std::abs(turns.back()) < o.max_point_turn_rad - 1e-9)
     turns.insert(turns.end(), {-o.max_point_turn_rad, o.max_point_turn_rad});
   if (std::abs(bearing) > 1e-3 && std::abs(bearing) <= o.max_point_turn_rad) turns.push_back(bearing);
+  if (std::abs(way) > 1e-3) turns.push_back(way);
   for (double t : turns) {
     Candidate c;
     c.kind = Candidate::Kind::kTurn;
@@ -147,7 +158,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.turn_rad = std::clamp(t, -o.max_turn_rad, o.max_turn_rad);
     const auto step = SamplePath(pose, t, 0.0, 0.0);
     const auto look = SamplePath(pose, t, o.lookahead_m, 0.0);
-    Judge(grid, field.get(), pose, gx, gy, o, step, look, &c);
+    Judge(grid, field, pose, gx, gy, o, step, look, &c);
     choice.candidates.push_back(c);
   }
   // A turn after which not even one step is clear leads nowhere (see the header).
@@ -156,21 +167,25 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   auto pick = [&](bool dead_ends) {
     const Candidate* best = nullptr;
     for (const Candidate& c : choice.candidates) {
-      if (c.vetoed || c.kind == Candidate::Kind::kBackup || leads_nowhere(c) != dead_ends) continue;
+      if (c.vetoed || (c.kind == Candidate::Kind::kBackup && !way_behind) || leads_nowhere(c) != dead_ends) continue;
       if (!best || c.vote > best->vote + 1e-9 ||
           (std::abs(c.vote - best->vote) <= 1e-9 && std::abs(c.curvature_per_m) < std::abs(best->curvature_per_m)))
         best = &c;
     }
     return best;
   };
-  const Candidate* best = pick(false);
-  if (!best && o.backup_m > 0.0) {
+  auto backup = [&] {
     Candidate c;
     c.kind = Candidate::Kind::kBackup;
     c.distance_m = -o.backup_m;
     const auto step = SamplePath(pose, 0.0, -o.backup_m, 0.0);
-    Judge(grid, field.get(), pose, gx, gy, o, step, step, &c);
+    Judge(grid, field, pose, gx, gy, o, step, step, &c);
     choice.candidates.push_back(c);
+  };
+  if (way_behind && o.backup_m > 0.0) backup();
+  const Candidate* best = pick(false);
+  if (!best && o.backup_m > 0.0 && !way_behind) {
+    backup();
     if (!choice.candidates.back().vetoed) best = &choice.candidates.back();
   }
   if (!best) best = pick(true);

@@ -24,7 +24,10 @@
 // previous_turn_rad).
 #pragma once
 
+#include "avoidance/goal_field.hpp"
 #include "avoidance/grid.hpp"
+
+#include <limits>
 
 #include <string>
 #include <vector>
@@ -53,6 +56,15 @@ struct VoteOptions {
   // (goal_field.hpp), not in a straight line; the rover's centre keeps half the footprint's
   // width from an unsafe cell's centre there. false: straight-line progress only.
   bool goal_around_hazards = true;
+  // The goal vote's distance to go, when given (not owned): the global planner's cost-to-go
+  // over the accumulated site map (common/planner), so that each candidate scores its
+  // progress along the best way to the goal. nullptr: the local field above, or the line.
+  const GoalDistance* goal_distance = nullptr;
+  // The site heading of the way the global plan leaves the rover on (NaN: none). A turn in
+  // place toward it is a candidate however far round it lies; when it lies more than 90 deg
+  // off the rover's heading, backing up is a candidate like the others (not only the last
+  // resort), so that a rover in a cul-de-sac turns or backs out of it.
+  double way_heading_rad = std::numeric_limits<double>::quiet_NaN();
   // The turn in place the previous step made (0: it was no turn). A turn the other way
   // would only undo it: it is vetoed, so that two turns cannot take turns for ever in
   // front of an obstacle that blocks both headings.
@@ -72,7 +84,7 @@ struct Candidate {
   bool vetoed = false;
   std::string why;               // veto reason
   double goodness = 0.0;         // 0..1: worst cell before an unsafe one x clear fraction
-  double goal = 0.0;             // 0..1: (1 + progress over the clear part / look-ahead) / 2
+  double goal = 0.0;             // 0..1: (1 + progress to the clear part's end / look-ahead) / 2
   double vote = 0.0;
   double clear_m = 0.0;          // how far the look-ahead runs before an unsafe cell
   Sweep step_sweep;              // the step alone

@@ -27,12 +27,22 @@
 
 namespace rover::avoidance {
 
-class GoalField {
+// What the goal vote measures progress with: the distance (or cost) still to go from a
+// point. GoalField is the local one; the global planner's cost-to-go field
+// (common/planner) is the other.
+class GoalDistance {
+ public:
+  virtual ~GoalDistance() = default;
+  // +infinity where the goal cannot be reached from (x, y).
+  virtual double DistanceAt(double x, double y) const = 0;
+};
+
+class GoalField final : public GoalDistance {
  public:
   GoalField(const Grid& grid, double goal_x, double goal_y, double clearance_m);
   // Path distance from (x, y) to the goal: through the grid where the point is on it,
   // the straight line where it is not.
-  double DistanceAt(double x, double y) const;
+  double DistanceAt(double x, double y) const override;
   static constexpr double kUnreachable = std::numeric_limits<double>::infinity();
   // A cell near a hazard costs this many times its length (a way round of up to that
   // many times the length through is preferred).

@@ -1,7 +1,11 @@
 // `goto ... avoid on`: the executor's use of arc voting (common/avoidance) on the hazard
-// monitor's traversability map, and the pair taken before a step the map cannot judge.
-// MER drove this way under autonomous navigation: image, map, then drive one step.
+// monitor's traversability map, following the global planner's cost-to-go over the site
+// map the executor accumulates from every map (common/planner), and the pair taken before a
+// step the map cannot judge. MER drove this way under autonomous navigation: image, map,
+// then drive one step, GESTALT's vote guided by Field D*'s global costs.
 #include "avoidance/arc_voting.hpp"
+#include "hazards/hazard_assessor.hpp"
+#include "planner/global_planner.hpp"
 #include "sequence/executor.hpp"
 #include "sequence/executor_internal.hpp"
 
@@ -12,16 +16,61 @@ namespace rover::sequence {
 
 using internal::Fixed;
 
+namespace {
+
+// Keep-out zones as the executor holds them, for the planner.
+std::vector<hazards::KeepOutZone> HazardZones(const std::vector<KeepOutZone>& zones) {
+  std::vector<hazards::KeepOutZone> out;
+  for (const KeepOutZone& z : zones) {
+    hazards::KeepOutZone h;
+    h.name = z.name;
+    h.shape = z.shape == KeepOutZone::Shape::kCircle ? hazards::KeepOutZone::Shape::kCircle
+                                                     : hazards::KeepOutZone::Shape::kPolygon;
+    h.center = z.center;
+    h.radius_m = z.radius_m;
+    h.vertices = z.vertices;
+    out.push_back(std::move(h));
+  }
+  return out;
+}
+
+}  // namespace
+
 void SequenceExecutor::OnTraversabilityMap(const TraversabilityMap& map) {
   map_ = map;
+  // The monitor starts its map again in a new site frame; so does the site map.
+  const int site = pose_ ? pose_->site_index : 0;
+  if (site != map_site_) {
+    site_map_.Clear();
+    map_site_ = site;
+  }
+  try {
+    site_map_.Merge(map.grid);
+  } catch (const std::invalid_argument& e) {
+    step_note_ += std::string("map not merged (") + e.what() + "); ";
+  }
   Advance();
+}
+
+// Where the rover has been: the ground under its body carried it (site_map.hpp).
+void SequenceExecutor::MarkDriven() {
+  if (!pose_ || !map_ || !PoseFinite() || pose_->site_index != map_site_) return;
+  const PlanePose p = CurrentPlanePose();
+  site_map_.MarkDriven({p.x, p.y, p.yaw}, map_->footprint);
+}
+
+ArrivalDisc SequenceExecutor::GotoArrival() const {
+  const double sigma = pose_ ? hazards::HorizontalSigma(pose_->covariance) : 0.0;
+  return ArrivalRadius(goto_.tolerance_m, sigma, options_.goto_arrival_sigmas, options_.goto_min_arrival_fraction);
 }
 
 SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   const PlanePose p = CurrentPlanePose();
   const double remaining = (goto_.target - Eigen::Vector2d(p.x, p.y)).norm();
-  if (remaining <= goto_.tolerance_m) {
-    detail_ = "goto reached the disc: " + Fixed(remaining) + " m from the target";
+  const ArrivalDisc disc = GotoArrival();
+  if (remaining <= disc.radius_m) {
+    detail_ = arrival_note_ =
+        "goto reached the disc: " + Fixed(remaining) + " m from the target by the estimate, " + disc.Describe();
     return AvoidOutcome::kDone;
   }
   // 1. A pair where the rover stands. With VO on, NextStepOfCommand takes VO's baseline
@@ -62,11 +111,33 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.unknown = map_->unknown;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
   o.previous_turn_rad = last_turn_rad_;
+  // Keep-out zones are obstacles: their cells, grown by the position uncertainty as the
+  // hazard monitor grows them (and a cell, since a cell counts when its centre is under the
+  // footprint grown by half a cell), are unsafe to the vote.
+  const double zone_grow = options_.avoid_zone_sigma_multiplier * hazards::HorizontalSigma(pose_->covariance);
+  avoidance::Grid grid = map_->grid;
+  if (!zones_.empty()) {
+    const auto cells = planner::ZoneCells(grid, HazardZones(zones_), zone_grow + grid.cell_m);
+    for (std::size_t k = 0; k < cells.size(); ++k)
+      if (cells[k]) grid.state[k] = avoidance::CellClass::kUnsafe, grid.goodness[k] = 0.0f;
+  }
+  // The global plan from here, over everything seen so far.
+  std::optional<planner::GlobalPlan> plan;
+  if (options_.planner_enabled) {
+    switch (PlanAhead(p, disc, o.footprint, zone_grow, &plan)) {
+      case PlanVerdict::kFollow: break;
+      case PlanVerdict::kAborted: return AvoidOutcome::kAborted;
+    }
+    if (plan) {
+      o.goal_distance = &*plan;
+      o.way_heading_rad = plan->WayHeading(o.lookahead_m);
+    }
+  }
   // Near the goal (inside the look-ahead) with a clear line to it: steer straight at it as
   // a plain goto does, so that the vote's look-ahead, longer than the way left, cannot
   // carry the rover past the disc.
   if (remaining < o.lookahead_m) {
-    const GotoDecision direct = SteerToward(p, goto_.target, goto_.tolerance_m, StepLength(), MaxTurn(),
+    const GotoDecision direct = SteerToward(p, goto_.target, disc.radius_m, StepLength(), MaxTurn(),
                                             options_.goto_turn_threshold_deg * M_PI / 180.0);
     const avoidance::Pose2 here{p.x, p.y, p.yaw};
     const bool turn = direct.step.kind == PlannedStep::Kind::kTurn;
@@ -75,8 +146,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     const double bearing = std::atan2(goto_.target.y() - p.y, goto_.target.x() - p.x);
     const auto line = avoidance::SamplePath(here, geometry::WrapAngle(bearing - p.yaw), remaining, 0.0);
     const auto s =
-        avoidance::SweepFootprint(map_->grid, o.footprint, step_path, here, o.blind_margin_m, o.unknown.hidden_patch_m);
-    const auto l = avoidance::SweepFootprint(map_->grid, o.footprint, line, here, o.blind_margin_m);
+        avoidance::SweepFootprint(grid, o.footprint, step_path, here, o.blind_margin_m, o.unknown.hidden_patch_m);
+    const auto l = avoidance::SweepFootprint(grid, o.footprint, line, here, o.blind_margin_m);
     if (s.unsafe == 0 && avoidance::JudgeUnknown(s, o.unknown) == avoidance::UnknownVerdict::kAcceptable &&
         l.unsafe == 0) {
       *step = direct.step;
@@ -87,13 +158,15 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   }
   avoidance::Choice choice;
   try {
-    choice = avoidance::VoteArcs(map_->grid, {p.x, p.y, p.yaw}, goto_.target.x(), goto_.target.y(), o);
+    choice = avoidance::VoteArcs(grid, {p.x, p.y, p.yaw}, goto_.target.x(), goto_.target.y(), o);
   } catch (const std::invalid_argument& e) {
     AbortWith(abort_reason::kHazardUnknown, std::string("arc voting cannot decide: ") + e.what());
     return AvoidOutcome::kAborted;
   }
   if (!choice.found) {
-    AbortWith(abort_reason::kHazardMap, "hazard_map: " + choice.detail);
+    AbortWith(abort_reason::kHazardMap,
+              "hazard_map: " + choice.detail +
+                  (zones_.empty() ? "" : " (keep-out zones, grown by " + Fixed(zone_grow) + " m, count as unsafe cells)"));
     return AvoidOutcome::kAborted;
   }
   const avoidance::Candidate& b = choice.best;
@@ -123,9 +196,48 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   d += Fixed(b.goal);
   d += ", ";
   d += Fixed(remaining);
-  d += " m to go)";
+  d += " m to go";
+  if (plan) d += ", plan " + Fixed(plan->path_length_m()) + " m";
+  d += ")";
   detail_ = std::move(d);
   return AvoidOutcome::kStep;
+}
+
+// The plan over the site map. A goal unreachable for planner_unreachable_plans plans in a
+// row aborts the goto; until then the vote follows the plan's field, which is defined
+// round obstacles even when the way is shut (global_planner.hpp).
+SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, const ArrivalDisc& disc,
+                                                          const avoidance::Footprint& footprint, double zone_grow,
+                                                          std::optional<planner::GlobalPlan>* plan) {
+  planner::PlannerOptions po;
+  po.SetRadiiFrom(footprint, 0.0);
+  po.unknown_cost = options_.planner_unknown_cost;
+  po.caution_cost = options_.planner_caution_cost;
+  po.margin_m = options_.planner_margin_m;
+  planner::PlanRequest r;
+  r.start_x = p.x, r.start_y = p.y;
+  r.goal_x = goto_.target.x(), r.goal_y = goto_.target.y();
+  r.goal_radius_m = disc.radius_m;
+  r.zones = HazardZones(zones_);
+  r.zone_grow_m = zone_grow;
+  r.prior = prior_ ? &*prior_ : nullptr;
+  try {
+    *plan = planner::PlanOnSiteMap(site_map_, r, po);
+  } catch (const std::invalid_argument& e) {
+    AbortWith(abort_reason::kGoalUnreachable, std::string("the planner cannot plan: ") + e.what());
+    return PlanVerdict::kAborted;
+  }
+  if ((*plan)->reachable()) {
+    unreachable_plans_ = 0;
+    return PlanVerdict::kFollow;
+  }
+  if (++unreachable_plans_ >= options_.planner_unreachable_plans) {
+    AbortWith(abort_reason::kGoalUnreachable, "goal unreachable on " + std::to_string(unreachable_plans_) +
+                                                  " plans in a row: " + (*plan)->why_unreachable());
+    return PlanVerdict::kAborted;
+  }
+  step_note_ += "plan " + std::to_string(unreachable_plans_) + " finds no way (" + (*plan)->why_unreachable() + "); ";
+  return PlanVerdict::kFollow;
 }
 
 bool SequenceExecutor::AvoidRefused(const HazardReply& reply) {

@@ -21,6 +21,7 @@ SequenceExecutor::SequenceExecutor(ExecutorOptions options, int64_t first_id)
   vo_wait_s_ = options_.vo_wait_s;
   blind_slope_rad_ = options_.blind_slope_deg * kDeg;
   blind_slip_pct_ = options_.blind_slip_pct;
+  if (!options_.planner_prior_map.empty()) prior_ = planner::PriorCostMap::LoadFile(options_.planner_prior_map);
 }
 
 bool SequenceExecutor::Active() const {
@@ -58,6 +59,7 @@ void SequenceExecutor::Submit(Sequence sequence, int64_t submission_id, const st
   started_ = false;
   pause_requested_ = false;
   command_active_ = false;
+  arrival_note_.clear();
   ResetSettings();
   for (const Command& c : sequence_.commands) {
     if (const auto* v = std::get_if<VoSetting>(&c.action); v && v->enabled) sequence_uses_vo_ = true;
@@ -150,6 +152,7 @@ void SequenceExecutor::OnPose(const PoseEstimate& pose) {
   pose_ = pose;
   ++pose_count_;
   now_utime_ = std::max(now_utime_, pose.utime);
+  MarkDriven();
   Advance();
 }
 

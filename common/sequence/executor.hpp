@@ -10,6 +10,9 @@
 
 #include "avoidance/grid.hpp"
 #include "config/yaml_config.hpp"
+#include "planner/global_planner.hpp"
+#include "planner/prior_map.hpp"
+#include "planner/site_map.hpp"
 #include "geometry/pose.hpp"
 #include "sequence/parser.hpp"
 #include "sequence/sequence.hpp"
@@ -105,6 +108,28 @@ struct ExecutorOptions {
   // the drift the monitor's check allows for (the step's path shifted by the drift VO
   // measured) does not make it refuse the step the vote chose.
   double avoid_margin_m = 0.1;
+  // Keep-out zones are obstacles for arc voting and the planner, grown by this many sigma
+  // of the pose's horizontal position (as the hazard monitor's hazards.sigma_multiplier).
+  double avoid_zone_sigma_multiplier = 3.0;
+  // The global planner (common/planner): a cost-to-go over the site map the executor
+  // accumulates from the monitor's maps; arc voting's goal vote scores progress along it.
+  // false: the vote's local field over the monitor's latest map only.
+  bool planner_enabled = true;
+  double planner_unknown_cost = 1.25;   // per metre of ground never seen (safe ground: 1)
+  double planner_caution_cost = 3.0;    // per metre of caution
+  double planner_margin_m = 10.0;       // the plan's window: map, rover and goal, plus this
+  // A goal the plan finds unreachable this many steps running aborts the goto (the map
+  // changes as the rover looks again; one unlucky map is not the end).
+  int planner_unreachable_plans = 3;
+  // Optional prior cost map (planner/prior_map.hpp), relative to the config file. "" = none.
+  std::string planner_prior_map;
+
+  // A goto ends when its estimate is inside the disc less goto_arrival_sigmas times the
+  // pose's horizontal position sigma, so that the truth is in the disc; when that leaves
+  // less than goto_min_arrival_fraction of the radius, it ends inside that fraction and
+  // says the disc is smaller than the estimate can promise.
+  double goto_arrival_sigmas = 3.0;
+  double goto_min_arrival_fraction = 0.25;
 
   // The running sequence's submission id, name and state, kept on disk (run_state.hpp)
   // so that a restarted executor reports it interrupted. Empty = off. Used by the shell.
@@ -271,6 +296,7 @@ inline constexpr const char* kGotoDistanceLimit = "goto_distance_limit";
 inline constexpr const char* kProcessLost = "process_lost";
 inline constexpr const char* kHazardUnknown = "hazard_unknown";
 inline constexpr const char* kHazardMap = "hazard_map";  // an unsafe cell on the traversability map
+inline constexpr const char* kGoalUnreachable = "goal_unreachable";  // the global planner found no way
 inline constexpr const char* kOperator = "operator";
 inline constexpr const char* kMobilityFault = "mobility_fault";
 inline constexpr const char* kTimeout = "timeout";
@@ -418,6 +444,13 @@ class SequenceExecutor {
   // map (a phase may have been entered); kDone: inside the disc; kAborted: nothing is allowed.
   enum class AvoidOutcome { kStep, kWait, kDone, kAborted };
   AvoidOutcome AvoidStep(PlannedStep* step);
+  // The disc a goto ends in, judged with the estimate's uncertainty (stepping.hpp).
+  ArrivalDisc GotoArrival() const;
+  // The global plan for the avoid goto's next step (kAborted: no way, plans running).
+  enum class PlanVerdict { kFollow, kAborted };
+  PlanVerdict PlanAhead(const PlanePose& pose, const ArrivalDisc& disc, const avoidance::Footprint& footprint,
+                        double zone_grow_m, std::optional<planner::GlobalPlan>* plan);
+  void MarkDriven();  // the ground under the rover now carried it (site map)
   // An UNKNOWN map verdict on a step with no pair taken where the rover stands: take one
   // (MER: image, map, then drive) and ask again. False: the reply stands.
   bool ImagesForMap(const HazardReply& reply);
@@ -537,7 +570,14 @@ class SequenceExecutor {
   int64_t pair_here_id_ = -1;    // the last pair taken since the rover last moved, or -1
   bool map_images_taken_ = false;  // ImagesForMap took its pair for the step in hand
   bool avoid_refused_ = false;
-  double last_turn_rad_ = 0.0;    // the last commanded step's turn in place (0: not a turn)     // the monitor refused this stop's first voted step
+  double last_turn_rad_ = 0.0;    // the last commanded step's turn in place (0: not a turn)
+  // The site map merged from every map the monitor sends, and where the rover has been
+  // (common/planner), in the site frame of map_site_; it starts again with a new site.
+  planner::SiteMap site_map_;
+  int map_site_ = -1;
+  std::optional<planner::PriorCostMap> prior_;
+  int unreachable_plans_ = 0;     // consecutive plans that found no way
+  std::string arrival_note_;      // how the last goto of the sequence ended (its disc and margin)
 };
 
 }  // namespace rover::sequence

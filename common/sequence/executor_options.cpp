@@ -43,6 +43,13 @@ void ValidateExecutorOptions(const ExecutorOptions& o) {
   if (o.avoid_num_arcs < 1 || !(o.avoid_backup_m >= 0.0) || !(o.avoid_margin_m >= 0.0)) {
     throw std::invalid_argument("executor options avoid_num_arcs must be >= 1, avoid_backup_m and avoid_margin_m >= 0");
   }
+  if (!(o.avoid_zone_sigma_multiplier >= 0.0) || !(o.planner_unknown_cost >= 1.0) || !(o.planner_caution_cost >= 1.0) ||
+      !(o.planner_margin_m >= 0.0) || o.planner_unreachable_plans < 1 || !(o.goto_arrival_sigmas >= 0.0) ||
+      !(o.goto_min_arrival_fraction > 0.0) || !(o.goto_min_arrival_fraction <= 1.0)) {
+    throw std::invalid_argument(
+        "executor options: avoid_zone_sigma_multiplier, planner_margin_m and goto_arrival_sigmas must be >= 0, "
+        "planner_*_cost >= 1, planner_unreachable_plans >= 1, goto_min_arrival_fraction in (0, 1]");
+  }
   if (o.recent_steps < 1) {
     throw std::invalid_argument("executor option recent_steps must be >= 1, got " +
                                 std::to_string(o.recent_steps));
@@ -75,7 +82,10 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "path_sample_turn_deg", "slip_min_step_m", "status_period_s", "blind_slope_deg",
                "blind_slip_pct", "recent_steps", "lost_min_step_m", "step_sigma_growth_pct",
                "margin_sigma_multiplier", "state_file", "map_wait_s", "avoid_lookahead_m",
-               "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m"});
+               "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m",
+               "avoid_zone_sigma_multiplier", "planner_enabled", "planner_unknown_cost", "planner_caution_cost",
+               "planner_margin_m", "planner_unreachable_plans", "planner_prior_map", "goto_arrival_sigmas",
+               "goto_min_arrival_fraction"});
   auto names = [&](const char* key, std::vector<std::string>& out) {
     if (!n.Has(key)) return;
     const config::ConfigNode list = n[key];
@@ -127,6 +137,21 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("avoid_num_arcs", o.avoid_num_arcs, 1, 101);
   n.Get("avoid_backup_m", o.avoid_backup_m, 0.0, 0.75);
   n.Get("avoid_margin_m", o.avoid_margin_m, 0.0, 1.0);
+  n.Get("avoid_zone_sigma_multiplier", o.avoid_zone_sigma_multiplier, 0.0, 10.0);
+  n.Get("planner_enabled", o.planner_enabled);
+  n.Get("planner_unknown_cost", o.planner_unknown_cost, 1.0, 100.0);
+  n.Get("planner_caution_cost", o.planner_caution_cost, 1.0, 100.0);
+  n.Get("planner_margin_m", o.planner_margin_m, 0.0, 100.0);
+  n.Get("planner_unreachable_plans", o.planner_unreachable_plans, 1, 1000);
+  n.Get("planner_prior_map", o.planner_prior_map);
+  if (!o.planner_prior_map.empty() && o.planner_prior_map.front() != '/') {
+    // Relative to the config file, as the camera rig is.
+    const std::string& src = n.source();
+    const auto slash = src.find_last_of('/');
+    if (slash != std::string::npos) o.planner_prior_map = src.substr(0, slash + 1) + o.planner_prior_map;
+  }
+  n.Get("goto_arrival_sigmas", o.goto_arrival_sigmas, 0.0, 10.0);
+  n.Get("goto_min_arrival_fraction", o.goto_min_arrival_fraction, 0.01, 1.0);
   return o;
 }
 

@@ -205,8 +205,10 @@ void SequenceExecutor::DispatchNext() {
   step_index_ = 0;
   if (command_index_ >= static_cast<int>(sequence_.commands.size())) {
     command_index_ = static_cast<int>(sequence_.commands.size()) - 1;
-    Finish(SequenceState::kCompleted, "", "all " + std::to_string(sequence_.commands.size()) +
-                                              " commands done");
+    // The last goto's arrival, with the margin it used for the estimate's uncertainty.
+    Finish(SequenceState::kCompleted, "",
+           "all " + std::to_string(sequence_.commands.size()) + " commands done" +
+               (arrival_note_.empty() ? "" : "; " + arrival_note_));
     return;
   }
   StartCommand();

@@ -30,10 +30,12 @@ bool SequenceExecutor::NextStepOfCommand() {
       case AvoidOutcome::kAborted: return true;
     }
   } else if (is_goto_) {
-    const GotoDecision d = SteerToward(CurrentPlanePose(), goto_.target, goto_.tolerance_m, StepLength(),
-                                       MaxTurn(), options_.goto_turn_threshold_deg * kDeg);
+    const ArrivalDisc disc = GotoArrival();
+    const GotoDecision d = SteerToward(CurrentPlanePose(), goto_.target, disc.radius_m, StepLength(), MaxTurn(),
+                                       options_.goto_turn_threshold_deg * kDeg);
     if (d.arrived) {
-      detail_ = "goto reached the disc: " + Fixed(d.remaining_m) + " m from the target";
+      detail_ = arrival_note_ = "goto reached the disc: " + Fixed(d.remaining_m) +
+                                " m from the target by the estimate, " + disc.Describe();
       return false;
     }
     step = d.step;

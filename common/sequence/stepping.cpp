@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -87,6 +89,32 @@ GotoDecision SteerToward(const PlanePose& pose, const Eigen::Vector2d& target, d
     d.step.distance_m = std::min(step_m, d.remaining_m);
   }
   return d;
+}
+
+ArrivalDisc ArrivalRadius(double tolerance_m, double sigma_m, double sigmas, double min_fraction) {
+  ArrivalDisc d;
+  d.tolerance_m = tolerance_m;
+  d.sigmas = sigmas;
+  d.margin_m = std::isfinite(sigma_m) ? sigmas * std::max(0.0, sigma_m) : std::numeric_limits<double>::infinity();
+  d.radius_m = tolerance_m - d.margin_m;
+  if (!(d.radius_m >= min_fraction * tolerance_m)) {
+    d.radius_m = min_fraction * tolerance_m;
+    d.fits = false;
+  }
+  return d;
+}
+
+std::string ArrivalDisc::Describe() const {
+  char buf[256];
+  if (fits) {
+    std::snprintf(buf, sizeof buf, "inside the %.2f m disc less %g sigma (%.2f m)", tolerance_m, sigmas, margin_m);
+  } else {
+    std::snprintf(buf, sizeof buf,
+                  "the estimate's %g sigma (%.2f m) does not fit in the %.2f m disc: stopped within %.2f m of the "
+                  "target by the estimate; the truth may lie outside the disc",
+                  sigmas, margin_m, tolerance_m, radius_m);
+  }
+  return buf;
 }
 
 StepMotion MeasureStep(const geometry::Pose& T_site_before, const geometry::Pose& T_site_after,

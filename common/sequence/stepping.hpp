@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include <string>
 #include <vector>
 
 namespace rover::sequence {
@@ -48,6 +49,22 @@ struct GotoDecision {
 // at most `max_turn_rad`), otherwise drives straight min(step_m, remaining).
 GotoDecision SteerToward(const PlanePose& pose, const Eigen::Vector2d& target, double tolerance_m,
                          double step_m, double max_turn_rad, double turn_threshold_rad);
+
+// The goal disc judged with the estimate's uncertainty: a goto ends when its estimate lies
+// within radius_m of the target, the tolerance less sigmas x the horizontal position sigma,
+// so that the truth lies in the tolerance disc with that confidence. When the margin leaves
+// less than min_fraction of the tolerance, radius_m is min_fraction x tolerance and `fits`
+// is false: the disc is smaller than the estimate can promise.
+struct ArrivalDisc {
+  double tolerance_m = 0.0;
+  double radius_m = 0.0;
+  double margin_m = 0.0;  // sigmas x sigma
+  double sigmas = 0.0;
+  bool fits = true;
+  // "inside 0.30 m less 3 sigma 0.12 m" or the warning that the margin does not fit.
+  std::string Describe() const;
+};
+ArrivalDisc ArrivalRadius(double tolerance_m, double sigma_m, double sigmas, double min_fraction);
 
 // What a step achieved, from the (VO-corrected) poses before and after it.
 struct StepMotion {

@@ -65,5 +65,32 @@ TEST(Avoidance, RockWallGapIsFound) {
   EXPECT_LT(s["distance_travelled_m"].as<double>(), 12.5);
 }
 
+// (d) A keep-out zone across the way of a goto with avoidance: arc voting and the planner
+// take it as an obstacle (grown by 3 sigma of the position), so the rover steers round it
+// and completes, the hazard monitor never refusing a step and the truth never in the zone.
+TEST(Avoidance, KeepOutZoneAcrossTheWayIsSteeredRound) {
+  const YAML::Node s = RunScenario("keepout_avoid");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  ASSERT_FALSE(s["min_keepout_clearance_m"].IsNull());
+  EXPECT_GT(s["min_keepout_clearance_m"].as<double>(), 0.0);
+  EXPECT_LT(Dist(s["final_truth"], 7.0, 0.5), 0.5);
+  // It says the margin it used for the estimate's uncertainty.
+  EXPECT_NE(Detail(s).find("less 3 sigma"), std::string::npos) << Detail(s);
+  // The straight line crosses the zone (radius 1 m at 4.2, 0.4): the path left it.
+  int turned = 0;
+  for (const auto& st : s["steps"]) turned += std::abs(st["commanded"]["turn_rad"].as<double>()) > 0.01;
+  EXPECT_GT(turned, 0);
+}
+
+// (e) Issue 20: the demo, then a goto back to its start (behind the rover) with avoidance,
+// on the same running stack. The second sequence completes, in truth inside its disc.
+TEST(Avoidance, GoalBehindTheRoverOnAStackThatHasDrivenIsReached) {
+  const YAML::Node s = RunScenario("demo_then_home");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  EXPECT_NE(Detail(s).find("goto reached the disc"), std::string::npos) << Detail(s);
+  EXPECT_NE(Detail(s).find("sigma"), std::string::npos) << Detail(s);  // the margin it used
+  EXPECT_LT(Dist(s["final_truth"], 0.0, 0.0), 0.5);
+}
+
 }  // namespace
 }  // namespace rover::test

@@ -30,7 +30,7 @@ namespace rover::tools {
 
 ScenarioSpec LoadScenario(const std::string& path) {
   const auto root = config::ConfigNode::LoadFile(path);
-  root.CheckKeys({"name", "description", "world", "sequence", "deployment", "rover_config",
+  root.CheckKeys({"name", "description", "world", "sequence", "then_sequences", "deployment", "rover_config",
                   "start", "sim_rate", "timeout_s", "inject", "expect", "seeds", "dragged_wheel",
                   "overrides", "world_overrides", "campaign"});
   ScenarioSpec s;
@@ -40,6 +40,11 @@ ScenarioSpec LoadScenario(const std::string& path) {
   root.Get("description", s.description);
   s.world = root.RequireString("world");
   s.sequence = root.RequireString("sequence");
+  if (root.Has("then_sequences")) {
+    const auto list = root["then_sequences"];
+    if (!list.IsSequence()) list.Fail("expected a list of sequence files");
+    for (std::size_t i = 0; i < list.size(); ++i) s.then_sequences.push_back(list.at(i).AsString());
+  }
   s.deployment = root.RequireString("deployment");
   root.Get("rover_config", s.rover_config);
   if (root.Has("start")) {
@@ -203,6 +208,7 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
   std::optional<rover_msgs::pose_t> last_pose;
   std::optional<rover_msgs::sequence_status_t> final_status;
   std::map<int, std::pair<int, std::string>> command_text;  // index -> line, text
+  std::int64_t latest_submission = -1;  // the summary judges the last sequence submitted
   int num_commands = 0;
   // Zones in force over time, for the truth clearance.
   std::vector<std::pair<std::int64_t, std::vector<hazards::KeepOutZone>>> zone_sets;
@@ -234,6 +240,9 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
       rover_msgs::sequence_submit_t m;
       if (m.decode(ev->data, 0, ev->datalen) < 0) continue;
       const auto parsed = sequence::ParseSequence(m.text, m.name);
+      command_text.clear();  // a later submission on the same stack: the summary is its
+      num_commands = 0;
+      latest_submission = std::max(latest_submission, m.submission_id);
       if (parsed.ok()) {
         for (std::size_t i = 0; i < parsed.sequence.commands.size(); ++i) {
           command_text[static_cast<int>(i)] = {parsed.sequence.commands[i].line,
@@ -247,10 +256,12 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
       if (m.state == rover_msgs::sequence_status_t::STATE_COMPLETED ||
           m.state == rover_msgs::sequence_status_t::STATE_ABORTED ||
           m.state == rover_msgs::sequence_status_t::STATE_REJECTED) {
-        if (!final_status) final_status = m;
+        if (!final_status || m.submission_id > final_status->submission_id) final_status = m;
       }
     }
   }
+  // A later sequence that never ended leaves the run incomplete, whatever the first did.
+  if (final_status && final_status->submission_id < latest_submission) final_status.reset();
   std::sort(truth.begin(), truth.end(),
             [](const auto& a, const auto& b) { return a.utime < b.utime; });
 

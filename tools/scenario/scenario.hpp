@@ -22,6 +22,9 @@ struct ScenarioSpec {
   std::string description;
   std::string world;          // configs/worlds/*.yaml
   std::string sequence;       // configs/sequences/*.seq
+  // Submitted one after another on the same running stack, each when the one before has
+  // completed (summary.json reports the last).
+  std::vector<std::string> then_sequences;
   std::string deployment;     // configs/deploy/*.yaml
   std::string rover_config = "configs/rover.yaml";
   double start_x = 0, start_y = 0, start_yaw_deg = 0;

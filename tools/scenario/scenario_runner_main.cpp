@@ -39,6 +39,7 @@
 #include <fstream>
 #include <iostream>
 #include <set>
+#include <vector>
 #include <sstream>
 #include <thread>
 
@@ -166,6 +167,8 @@ int main(int argc, char** argv) {
     const auto spec = rover::tools::LoadScenario(scenario_path);
     const auto deployment = rover::launch::LoadDeployment(spec.deployment);
     const std::string sequence_text = ReadSequenceFile(spec.sequence);
+    std::vector<std::string> then_texts;
+    for (const auto& f : spec.then_sequences) then_texts.push_back(ReadSequenceFile(f));
     fs::create_directories(out_dir);
     // The scenario's seeds and overrides go into copies in DIR; the processes read those.
     const auto configs = rover::tools::PrepareRunConfigs(spec.rover_config, spec.overrides, spec.world,
@@ -200,6 +203,7 @@ int main(int argc, char** argv) {
     if (const auto key = ExecutorKey(deployment)) bus.set_auth(rover::bus::MakeBusAuth(*key, "scenario_runner"));
     std::set<std::string> alive;
     std::optional<rover_msgs::sequence_status_t> final_status;
+    std::int64_t submission_id = 1;
     int steps_seen = 0;
     std::string last_line;
     bus.Subscribe<rover_msgs::heartbeat_t>(rover::channels::kHeartbeat,
@@ -212,7 +216,7 @@ int main(int argc, char** argv) {
                                              });
     bus.Subscribe<rover_msgs::sequence_status_t>(
         rover::channels::kSequenceStatus, [&](const rover_msgs::sequence_status_t& st) {
-          if (st.submission_id != 1) return;
+          if (st.submission_id != submission_id) return;
           if (!quiet && st.detail != last_line) {
             std::cout << "[t=" << std::fixed << std::setprecision(1) << st.elapsed_s << " s] "
                       << st.detail << "\n" << std::flush;
@@ -222,6 +226,16 @@ int main(int argc, char** argv) {
               st.state == rover_msgs::sequence_status_t::STATE_ABORTED ||
               st.state == rover_msgs::sequence_status_t::STATE_REJECTED) {
             if (!final_status) final_status = st;
+            // The next sequence on the same running stack, when this one completed.
+            if (st.state == rover_msgs::sequence_status_t::STATE_COMPLETED &&
+                submission_id <= static_cast<std::int64_t>(spec.then_sequences.size())) {
+              rover_msgs::sequence_submit_t next{};
+              next.submission_id = ++submission_id;
+              next.name = spec.then_sequences[static_cast<std::size_t>(submission_id - 2)];
+              next.text = then_texts[static_cast<std::size_t>(submission_id - 2)];
+              bus.Publish(rover::channels::kSequenceSubmit, next);
+              final_status.reset();
+            }
           }
         });
 

@@ -88,5 +88,79 @@ TEST(ArcVoting, ALongWallIsGoneRoundAtTheEndThatLeadsToTheGoal) {
   EXPECT_GT(heading_change, 0.0) << ToString(c.best.kind) << " k " << c.best.curvature_per_m;
 }
 
+// Issue 20: after a drive, a goto back to the start. The ground ahead is known and good;
+// behind the rover it was never seen. A straight arc away from the goal makes no progress
+// at any point, so it is a loss, not a draw: the rover turns toward the goal.
+TEST(ArcVoting, GoalBehindTheRoverOnSeenGroundTurnsRatherThanDrivesAway) {
+  Grid g = Grid::Filled(-6.0, -6.0, 0.2, 60, 60, CellClass::kUnknown, 0.0f);
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j)
+      if (g.CellCentreX(i) > -0.8) {
+        g.state[static_cast<std::size_t>(i) * g.cols + j] = CellClass::kSafe;
+        g.goodness[static_cast<std::size_t>(i) * g.cols + j] = 1.0f;
+      }
+  // 150 deg off the heading, as (0, 0) from the demo's end at (5, 3) facing 60 deg.
+  const double gx = -5.0 * std::cos(30 * M_PI / 180), gy = -5.0 * std::sin(30 * M_PI / 180);
+  const Choice c = VoteArcs(g, {0, 0, 0}, gx, gy, VoteOptions{});
+  ASSERT_TRUE(c.found);
+  // The short way round, to the left (west): a turn in place or a hard left arc.
+  const double heading_change = c.best.kind == Candidate::Kind::kTurn ? c.best.turn_rad
+                                                                      : c.best.curvature_per_m * c.best.distance_m;
+  EXPECT_LT(heading_change, -5 * M_PI / 180) << ToString(c.best.kind) << " " << c.best.distance_m << " m k "
+                                             << c.best.curvature_per_m;
+}
+
+// A plan's cost-to-go (common/planner) that says the way lies behind, south, though the goal
+// itself lies north beyond the end of a pocket the rover stands in.
+struct SouthIsTheWay final : GoalDistance {
+  double DistanceAt(double x, double) const override { return 30.0 + x; }
+};
+
+// The pocket: open ground ahead for a while, its end at x = 3.5, sides at +-half_width.
+Grid Pocket(double half_width) {
+  Grid g = Open();
+  Wall(&g, 3.5, -half_width, half_width);
+  for (double x = -4.0; x <= 3.5; x += 0.1) {
+    g.Paint(x, -half_width, 0.25, CellClass::kUnsafe, 0.0f, 0.4f);
+    g.Paint(x, half_width, 0.25, CellClass::kUnsafe, 0.0f, 0.4f);
+  }
+  return g;
+}
+
+TEST(ArcVoting, FollowingAPlanOutOfAPocketTurnsRoundWhereItCan) {
+  const Grid g = Pocket(1.4);  // room to turn in place
+  VoteOptions o;
+  o.footprint.width_m = 1.2;
+  // Without the plan, the goal ahead draws the rover deeper in.
+  const Choice local = VoteArcs(g, {0, 0, 0}, 8.0, 0.0, o);
+  ASSERT_TRUE(local.found);
+  EXPECT_EQ(local.best.kind, Candidate::Kind::kArc);
+  EXPECT_GT(local.best.distance_m, 0.0);
+  const SouthIsTheWay plan;
+  o.goal_distance = &plan;
+  o.way_heading_rad = M_PI;
+  const Choice c = VoteArcs(g, {0, 0, 0}, 8.0, 0.0, o);
+  ASSERT_TRUE(c.found);
+  ASSERT_EQ(c.best.kind, Candidate::Kind::kTurn) << ToString(c.best.kind) << " " << c.best.distance_m;
+  EXPECT_GT(std::abs(c.best.planned_turn_rad), 0.5 * M_PI);  // round toward the way out
+}
+
+TEST(ArcVoting, FollowingAPlanOutOfAPocketTooNarrowToTurnInBacksUp) {
+  const Grid g = Pocket(1.15);
+  VoteOptions o;
+  o.footprint.width_m = 1.2;
+  const Choice local = VoteArcs(g, {0, 0, 0}, 8.0, 0.0, o);
+  ASSERT_TRUE(local.found);
+  EXPECT_EQ(local.best.kind, Candidate::Kind::kArc);
+  const SouthIsTheWay plan;
+  o.goal_distance = &plan;
+  o.way_heading_rad = M_PI;
+  const Choice c = VoteArcs(g, {0, 0, 0}, 8.0, 0.0, o);
+  ASSERT_TRUE(c.found);
+  EXPECT_EQ(c.best.kind, Candidate::Kind::kBackup) << ToString(c.best.kind) << " " << c.best.distance_m << " "
+                                                   << c.best.planned_turn_rad;
+  EXPECT_LT(c.best.distance_m, 0.0);
+}
+
 }  // namespace
 }  // namespace rover::avoidance

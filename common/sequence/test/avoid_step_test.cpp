@@ -3,6 +3,7 @@
 // hazard monitor's map), and a monitor that judges each query's swept footprint on that
 // grid (common/avoidance). No bus.
 #include "avoidance/grid.hpp"
+#include "hazards/keepout.hpp"
 #include "sequence/executor.hpp"
 
 #include <gtest/gtest.h>
@@ -24,6 +25,7 @@ class MapWorld {
   bool camera = true;
   PlanePose pose;
   std::vector<MobilityCommand> motions;
+  std::vector<PlanePose> trail;  // the pose after each motion
   std::vector<CaptureRequest> captures;
   std::vector<SequenceStatus> statuses;
   int64_t utime = 1'000'000;
@@ -76,6 +78,7 @@ class MapWorld {
       s.curvature_per_m = c.curvature_per_m;
     }
     pose = EndOfStep(pose, s);
+    trail.push_back(pose);
     utime += 10'000'000;
     pending_.push_back([this, c] { ex_.OnMobilityStatus({utime, c.command_id, MobilityState::kDone, 0, 0, ""}); });
   }
@@ -201,6 +204,45 @@ TEST(AvoidStep, BoxedInAbortsWithTheHazard) {
   EXPECT_EQ(w.Final().abort_reason, "hazard_map") << w.Final().detail;
   EXPECT_NE(w.Final().detail.find("no safe step"), std::string::npos) << w.Final().detail;
   EXPECT_TRUE(w.motions.empty());
+}
+
+// A keep-out zone on the line to the goal is an obstacle to the vote and the plan: the rover
+// goes round it (the fake monitor here checks only the map, so nothing else would stop it).
+TEST(AvoidStep, KeepOutZoneOnTheWayIsGoneRound) {
+  SequenceExecutor ex(Fast());
+  MapWorld w(ex);
+  ex.SubmitText("keepout z circle 2.5 m 0 m radius 0.5 m\ngoto 5 m 0 m within 0.4 m distance 12 m avoid on\n", 1, "t.seq");
+  w.Run();
+  ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().abort_reason << ": " << w.Final().detail;
+  const auto zone = rover::hazards::KeepOutZone::Circle("z", 2.5, 0.0, 0.5);
+  rover::hazards::Footprint body;
+  body.width_m = 1.4;
+  double closest = 1e9;
+  for (const PlanePose& p : w.trail) closest = std::min(closest, rover::hazards::Clearance(zone, body, p.x, p.y, p.yaw));
+  EXPECT_GT(closest, 0.0);
+  ASSERT_FALSE(w.trail.empty());
+}
+
+// The goal inside a closed ring of rocks: the plan finds no way on 3 steps running and the
+// goto aborts goal_unreachable, saying why, rather than wandering.
+TEST(AvoidStep, GoalInsideARingOfRocksIsReportedUnreachable) {
+  SequenceExecutor ex(Fast());
+  MapWorld w(ex);
+  for (int i = 0; i < w.grid.rows; ++i)
+    for (int j = 0; j < w.grid.cols; ++j) {
+      const double r = std::hypot(w.grid.CellCentreX(i) - 4.0, w.grid.CellCentreY(j));
+      if (r < 1.2 || r > 1.8) continue;
+      const std::size_t k = static_cast<std::size_t>(i) * w.grid.cols + j;
+      w.grid.state[k] = CellClass::kUnsafe;
+      w.grid.goodness[k] = 0.0f;
+      w.grid.step_m[k] = 0.5f;
+    }
+  ex.SubmitText("goto 4 m 0 m within 0.3 m distance 12 m avoid on\n", 1, "t.seq");
+  w.Run();
+  EXPECT_EQ(w.Final().abort_reason, "goal_unreachable") << w.Final().detail;
+  EXPECT_NE(w.Final().detail.find("goal unreachable on 3 plans in a row: no way from"), std::string::npos)
+      << w.Final().detail;
+  EXPECT_LE(w.motions.size(), 2u);
 }
 
 }  // namespace

@@ -40,6 +40,7 @@ class FakeWorld {
   bool hazard_unknown = false;
   bool hazard_monitor_knows_zones = true;  // status uses the zones it was sent
   bool nan_pose = false;                   // a broken estimator
+  double position_sigma_m = 0.0;           // the estimate's horizontal 1-sigma (x and y)
   std::set<std::string> alive = {"rover_sim", "state_estimator", "hazard_monitor", "camera_capture",
                                  "visual_odometry"};
 
@@ -75,6 +76,7 @@ class FakeWorld {
     p.orientation = Eigen::Quaterniond(rover::geometry::RotationFromRpy(roll_rad, pitch_rad, estimate.yaw));
     p.site_index = site_index;
     p.last_vo_to_frame = last_vo_frame;
+    p.covariance(0, 0) = p.covariance(1, 1) = position_sigma_m * position_sigma_m;
     if (nan_pose) p.position.x() = std::nan("");
     return p;
   }
@@ -571,6 +573,33 @@ TEST(SequenceExecutor, GotoReachesItsDiscDespiteHeadingDrift) {
   ASSERT_EQ(w2.Final().state, SequenceState::kCompleted);
   EXPECT_LT(std::hypot(w2.estimate.x - 5.0, w2.estimate.y + 4.0), 0.2);
   EXPECT_GT(std::hypot(w2.truth.x - 5.0, w2.truth.y + 4.0), 0.2);
+}
+
+// Goal reached by truth, not hope: with a 5 cm position sigma the goto ends inside the
+// disc less 3 sigma (0.3 - 0.15 m), and says so; with 0.2 m the margin does not fit in the
+// 0.3 m disc, and it ends within a quarter of the radius and says the truth may lie outside.
+TEST(SequenceExecutor, GotoEndsInsideTheDiscLessThreeSigma) {
+  for (const double sigma : {0.0, 0.05, 0.2}) {
+    SequenceExecutor ex(FastOptions());
+    FakeWorld w(ex);
+    w.position_sigma_m = sigma;
+    SubmitText(ex, "goto 2.3 m 0.1 m within 0.3 m\n");
+    w.Run();
+    ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+    const double off = std::hypot(w.estimate.x - 2.3, w.estimate.y - 0.1);
+    const std::string& d = w.Final().detail;
+    if (sigma == 0.0) {
+      EXPECT_LE(off, 0.3);
+      EXPECT_NE(d.find("inside the 0.30 m disc less 3 sigma (0.00 m)"), std::string::npos) << d;
+    } else if (sigma == 0.05) {
+      EXPECT_LE(off, 0.15 + 1e-9);
+      EXPECT_NE(d.find("inside the 0.30 m disc less 3 sigma (0.15 m)"), std::string::npos) << d;
+    } else {
+      EXPECT_LE(off, 0.075 + 1e-9);
+      EXPECT_NE(d.find("the estimate's 3 sigma (0.60 m) does not fit in the 0.30 m disc"), std::string::npos) << d;
+      EXPECT_NE(d.find("the truth may lie outside the disc"), std::string::npos) << d;
+    }
+  }
 }
 
 TEST(SequenceExecutor, GotoLimitsAbort) {

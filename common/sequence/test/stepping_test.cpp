@@ -140,3 +140,19 @@ TEST(Stepping, StepSigmaGrowthAndTilt) {
   EXPECT_NEAR(TiltAngle(rover::geometry::RotationFromRpy(-20 * kDeg, 0, -2.0)), 20 * kDeg, 1e-12);
   EXPECT_NEAR(TiltAngle(rover::geometry::RotationFromRpy(0.3, 0.4, 0)), std::acos(std::cos(0.3) * std::cos(0.4)), 1e-12);
 }
+
+TEST(ArrivalRadius, TheDiscLessTheMarginOrAFractionOfIt) {
+  using rover::sequence::ArrivalRadius;
+  const auto fits = ArrivalRadius(0.5, 0.05, 3.0, 0.25);
+  EXPECT_TRUE(fits.fits);
+  EXPECT_NEAR(fits.radius_m, 0.35, 1e-12);
+  EXPECT_NEAR(fits.margin_m, 0.15, 1e-12);
+  EXPECT_EQ(fits.Describe(), "inside the 0.50 m disc less 3 sigma (0.15 m)");
+  const auto tight = ArrivalRadius(0.3, 0.1, 3.0, 0.25);
+  EXPECT_FALSE(tight.fits);
+  EXPECT_NEAR(tight.radius_m, 0.075, 1e-12);
+  EXPECT_NE(tight.Describe().find("does not fit in the 0.30 m disc: stopped within 0.07"), std::string::npos)
+      << tight.Describe();
+  EXPECT_FALSE(ArrivalRadius(0.3, std::nan(""), 3.0, 0.25).fits);  // an unknown sigma never fits
+  EXPECT_NEAR(ArrivalRadius(0.3, 0.0, 3.0, 0.25).radius_m, 0.3, 1e-12);
+}

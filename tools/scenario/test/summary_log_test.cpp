@@ -8,6 +8,7 @@
 #include <rover_msgs/keepout_zones_t.hpp>
 #include <rover_msgs/pose_t.hpp>
 #include <rover_msgs/sequence_status_t.hpp>
+#include <rover_msgs/sequence_submit_t.hpp>
 #include <rover_msgs/sim_truth_t.hpp>
 #include <yaml-cpp/yaml.h>
 
@@ -157,4 +158,39 @@ TEST(SummaryLog, ALossShowsPerChannelAndInTheReasons) {
   EXPECT_EQ(j["min_keepout_clearance_m_reason"].as<std::string>(), "no keep-out zone was defined");
   EXPECT_NE(tools::SummaryText(s).find("log: 7 messages, 3 lost; complete: no"), std::string::npos)
       << tools::SummaryText(s);
+}
+
+// Two sequences on one running stack (scenario then_sequences): the summary judges the
+// last one submitted; while it has not ended, the run is incomplete, whatever the first did.
+TEST(SummaryLog, TheLastSequenceSubmittedIsJudged) {
+  auto submit = [](std::int64_t id, const std::string& text) {
+    rover_msgs::sequence_submit_t m{};
+    m.submission_id = id;
+    m.name = "s" + std::to_string(id) + ".seq";
+    m.text = text;
+    return m;
+  };
+  rover_msgs::sequence_status_t second = Completed();
+  second.submission_id = 2;
+  second.state = rover_msgs::sequence_status_t::STATE_ABORTED;
+  second.abort_reason = "goal_unreachable";
+  second.pub_seq = PubSeq("sequence_executor", 1);
+  {
+    TestLog log("two_unfinished");
+    log.Add(channels::kSequenceSubmit, submit(1, "drive 1 m\n"));
+    log.Add(channels::kSequenceStatus, Completed());
+    log.Add(channels::kSequenceSubmit, submit(2, "goto 0 m 0 m within 0.5 m avoid on\n"));
+    const auto s = tools::SummarizeLog(log.Close(), SmallFootprint());
+    EXPECT_EQ(s.outcome, "incomplete");
+  }
+  {
+    TestLog log("two_ended");
+    log.Add(channels::kSequenceSubmit, submit(1, "drive 1 m\n"));
+    log.Add(channels::kSequenceStatus, Completed());
+    log.Add(channels::kSequenceSubmit, submit(2, "goto 0 m 0 m within 0.5 m avoid on\n"));
+    log.Add(channels::kSequenceStatus, second);
+    const auto s = tools::SummarizeLog(log.Close(), SmallFootprint());
+    EXPECT_EQ(s.outcome, "aborted");
+    EXPECT_EQ(s.abort_reason, "goal_unreachable");
+  }
 }

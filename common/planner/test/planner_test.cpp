@@ -1,0 +1,318 @@
+// Known answers for the global planner on synthetic grids: open ground, a wall with a gap,
+// a gap narrower than the rover, a cul-de-sac, an unreachable goal, a prior cost map that
+// steers the path, keep-out zones as obstacles; and the site map that accumulates maps.
+#include "planner/global_planner.hpp"
+#include "planner/prior_map.hpp"
+#include "planner/site_map.hpp"
+
+#include "config/yaml_config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace rover::planner;
+using rover::avoidance::CellClass;
+using rover::avoidance::Grid;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// 30 m x 30 m of 0.2 m cells from (-10, -15), all `state`.
+Grid Field(CellClass state = CellClass::kSafe) { return Grid::Filled(-10, -15, 0.2, 150, 150, state, 0.9f); }
+
+// Unsafe cells in the box [x0, x1] x [y0, y1].
+void Rocks(Grid* g, double x0, double x1, double y0, double y1) {
+  for (int i = 0; i < g->rows; ++i)
+    for (int j = 0; j < g->cols; ++j)
+      if (g->CellCentreX(i) >= x0 && g->CellCentreX(i) <= x1 && g->CellCentreY(j) >= y0 && g->CellCentreY(j) <= y1)
+        g->state[static_cast<std::size_t>(i) * g->cols + j] = CellClass::kUnsafe;
+}
+
+PlanRequest Request(double sx, double sy, double gx, double gy, double radius = 0.3) {
+  PlanRequest r;
+  r.start_x = sx, r.start_y = sy, r.goal_x = gx, r.goal_y = gy, r.goal_radius_m = radius;
+  return r;
+}
+
+// The smallest distance from the path's points to any obstacle cell centre of the plan.
+double PathClearance(const GlobalPlan& plan, const Grid& g) {
+  double best = 1e9;
+  for (const auto& p : plan.path())
+    for (int i = 0; i < g.rows; ++i)
+      for (int j = 0; j < g.cols; ++j)
+        if (plan.ObstacleAt(g.CellCentreX(i), g.CellCentreY(j)))
+          best = std::min(best, std::hypot(p.x() - g.CellCentreX(i), p.y() - g.CellCentreY(j)));
+  return best;
+}
+
+TEST(GlobalPlanner, OpenGroundIsTheStraightLine) {
+  const Grid g = Field();
+  const GlobalPlan plan = PlanOnGrid(g, Request(0, 0, 10, 0), PlannerOptions{});
+  ASSERT_TRUE(plan.reachable()) << plan.why_unreachable();
+  EXPECT_NEAR(plan.path_length_m(), 10.0, 0.25);
+  EXPECT_NEAR(plan.cost_at_start(), 10.0, 0.25);  // safe ground costs its length
+  EXPECT_NEAR(plan.WayHeading(2.0), 0.0, 0.05);
+  EXPECT_NEAR(plan.path().back().x(), 10.0, 1e-9);
+}
+
+TEST(GlobalPlanner, UnknownGroundIsAWayAtItsCost) {
+  const Grid g = Field(CellClass::kUnknown);
+  PlannerOptions o;
+  const GlobalPlan plan = PlanOnGrid(g, Request(0, 0, 0, 10), o);
+  ASSERT_TRUE(plan.reachable());
+  EXPECT_NEAR(plan.cost_at_start(), o.unknown_cost * 10.0, 0.3);
+}
+
+// A wall of rocks across the way at x = 5 with one 2.4 m gap east of the line (y 2 to 4.4).
+TEST(GlobalPlanner, WallWithAGapIsCrossedAtTheGap) {
+  Grid g = Field();
+  Rocks(&g, 4.8, 5.2, -15, 2.0);
+  Rocks(&g, 4.8, 5.2, 4.4, 15);
+  PlannerOptions o;
+  const GlobalPlan plan = PlanOnGrid(g, Request(0, 0, 10, 0), o);
+  ASSERT_TRUE(plan.reachable()) << plan.why_unreachable();
+  bool crossed = false;
+  for (const auto& p : plan.path())
+    if (std::abs(p.x() - 5.0) < 0.15) {
+      crossed = true;
+      EXPECT_GT(p.y(), 2.0 + o.inscribed_radius_m - 0.2) << "at x 5 the path is at y " << p.y();
+      EXPECT_LT(p.y(), 4.4 - o.inscribed_radius_m + 0.2);
+    }
+  EXPECT_TRUE(crossed);
+  EXPECT_GE(PathClearance(plan, g), o.inscribed_radius_m);
+  // It bends toward the gap from the start: east of north.
+  EXPECT_GT(plan.WayHeading(2.0), 0.1);
+}
+
+// The same wall with a gap of 1.0 m, narrower than the rover (1.4 m): no way.
+TEST(GlobalPlanner, GapNarrowerThanTheRoverIsNoWay) {
+  Grid g = Field();
+  Rocks(&g, 4.8, 5.2, -15, 2.0);
+  Rocks(&g, 4.8, 5.2, 3.0, 15);
+  const GlobalPlan plan = PlanOnGrid(g, Request(0, 0, 10, 0), PlannerOptions{});
+  EXPECT_FALSE(plan.reachable());
+  EXPECT_NE(plan.why_unreachable().find("no way from 0.00,0.00 to within 0.30 m of 10.00,0.00"), std::string::npos)
+      << plan.why_unreachable();
+  EXPECT_TRUE(plan.path().empty());
+}
+
+// The goal inside a closed ring of rocks.
+TEST(GlobalPlanner, GoalInsideARingOfRocksIsReportedUnreachable) {
+  Grid g = Field();
+  Rocks(&g, 6, 14, 4, 12);
+  // Hollow it out: a 4 m x 4 m pocket at the centre (10, 8) with 2 m walls.
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j)
+      if (std::abs(g.CellCentreX(i) - 10) < 2 && std::abs(g.CellCentreY(j) - 8) < 2)
+        g.state[static_cast<std::size_t>(i) * g.cols + j] = CellClass::kSafe;
+  const GlobalPlan plan = PlanOnGrid(g, Request(0, 0, 10, 8), PlannerOptions{});
+  EXPECT_FALSE(plan.reachable());
+  EXPECT_FALSE(plan.why_unreachable().empty());
+  // Opening one side (the south wall, 2 m wide) makes it reachable.
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j)
+      if (g.CellCentreX(i) < 8.1 && g.CellCentreX(i) > 5.9 && std::abs(g.CellCentreY(j) - 8) < 1.2)
+        g.state[static_cast<std::size_t>(i) * g.cols + j] = CellClass::kSafe;
+  EXPECT_TRUE(PlanOnGrid(g, Request(0, 0, 10, 8), PlannerOptions{}).reachable());
+}
+
+// A cul-de-sac: a U of rocks open to the south (toward -x) round the rover, the goal north
+// beyond its closed end. The way is back out of the mouth and round the U.
+TEST(GlobalPlanner, CulDeSacIsLeftByItsMouth) {
+  Grid g = Field();
+  Rocks(&g, 4.0, 4.6, -3.0, 3.0);   // the closed end, north
+  Rocks(&g, -2.0, 4.6, -3.0, -2.4); // west wall
+  Rocks(&g, -2.0, 4.6, 2.4, 3.0);   // east wall
+  PlannerOptions o;
+  const GlobalPlan plan = PlanOnGrid(g, Request(2.0, 0, 9, 0), o);
+  ASSERT_TRUE(plan.reachable()) << plan.why_unreachable();
+  // The path leaves by the mouth: it goes south of x = -2 before it goes north of x = 4.6.
+  double min_x = 1e9;
+  for (const auto& p : plan.path()) min_x = std::min(min_x, p.x());
+  EXPECT_LT(min_x, -2.0);
+  EXPECT_GE(PathClearance(plan, g), o.inscribed_radius_m);
+  // The way from where the rover stands lies behind it (south) though the goal is north.
+  EXPECT_GT(std::abs(plan.WayHeading(1.0)), kPi / 2);
+  // The field agrees: a metre south is nearer the goal, by the way, than a metre north.
+  EXPECT_LT(plan.DistanceAt(1.0, 0.0), plan.DistanceAt(3.0, 0.0));
+  // The path is far longer than the straight line (7 m): round the U.
+  EXPECT_GT(plan.path_length_m(), 14.0);
+}
+
+TEST(GlobalPlanner, PriorCostMapSteersThePathOverUnknownGround) {
+  const Grid g = Field(CellClass::kUnknown);
+  // A dune field (cost 4) across the way from y = -6 to y = 1, open ground east of it.
+  const PriorCostMap prior = PriorCostMap::FromYaml(R"(
+prior_cost_map:
+  south_west: [3.0, -6.0]
+  cell_m: 1.0
+  legend: {".": 1, "d": 4}
+  rows:
+    - "ddddddd....."
+    - "ddddddd....."
+    - "ddddddd....."
+)",
+                                                    "test");
+  EXPECT_DOUBLE_EQ(prior.CostAt(4.5, 0.5), 4.0);
+  EXPECT_DOUBLE_EQ(prior.CostAt(4.5, 1.5), 1.0);
+  EXPECT_DOUBLE_EQ(prior.CostAt(-20, 0), 1.0);
+  PlanRequest r = Request(0, 0, 10, 0);
+  const GlobalPlan straight = PlanOnGrid(g, r, PlannerOptions{});
+  r.prior = &prior;
+  const GlobalPlan steered = PlanOnGrid(g, r, PlannerOptions{});
+  ASSERT_TRUE(steered.reachable());
+  // Without the prior the path crosses x = 4.5 on the line; with it, east of the dunes.
+  auto y_at = [](const GlobalPlan& p, double x) {
+    for (const auto& q : p.path())
+      if (std::abs(q.x() - x) < 0.11) return q.y();
+    return 1e9;
+  };
+  EXPECT_NEAR(y_at(straight, 4.5), 0.0, 0.3);
+  EXPECT_GT(y_at(steered, 4.5), 1.0);
+  EXPECT_GT(steered.path_length_m(), straight.path_length_m());
+  // Seen ground overrides the prior: the same dunes rated safe by the rover's map.
+  Grid seen = Field(CellClass::kSafe);
+  EXPECT_NEAR(y_at(PlanOnGrid(seen, r, PlannerOptions{}), 4.5), 0.0, 0.3);
+}
+
+TEST(GlobalPlanner, ImpassablePriorIsAnObstacle) {
+  const Grid g = Field(CellClass::kUnknown);
+  const PriorCostMap prior = PriorCostMap::FromYaml(
+      "prior_cost_map:\n  south_west: [4.0, -15.0]\n  cell_m: 1.0\n  legend: {'.': 1, '#': impassable}\n"
+      "  rows: ['##############################']\n",
+      "test");
+  PlanRequest r = Request(0, 0, 10, 0);
+  r.prior = &prior;
+  EXPECT_FALSE(PlanOnGrid(g, r, PlannerOptions{}).reachable());
+}
+
+// The sample in configs/planner/ (shown in the README) reads as drawn: north at the top.
+TEST(GlobalPlanner, SamplePriorFileReadsAsDrawn) {
+  const PriorCostMap m = PriorCostMap::LoadFile(std::string(ROVER_SOURCE_DIR) + "/configs/planner/prior_example.yaml");
+  EXPECT_EQ(m.rows, 13);
+  EXPECT_EQ(m.cols, 12);
+  EXPECT_DOUBLE_EQ(m.CostAt(8.5, 3.5), 2.5);   // the sand patch
+  EXPECT_TRUE(std::isinf(m.CostAt(3.5, -2.5)));  // the boulders
+  EXPECT_DOUBLE_EQ(m.CostAt(0.0, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(m.CostAt(30.0, 0.0), 1.0);   // off the map
+}
+
+TEST(GlobalPlanner, PriorFileErrorsNameTheRowAndCharacter) {
+  try {
+    PriorCostMap::FromYaml("prior_cost_map:\n  south_west: [0, 0]\n  cell_m: 1\n  legend: {'.': 1}\n  rows: ['..', '.x']\n", "p.yaml");
+    FAIL() << "no error";
+  } catch (const rover::config::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("p.yaml"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'x' is not in the legend"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(PriorCostMap::FromYaml("prior_cost_map:\n  south_west: [0, 0]\n  cell_m: 1\n  legend: {'.': 0.5}\n  rows: ['..']\n", "p"),
+               rover::config::ConfigError);
+  EXPECT_THROW(PriorCostMap::FromYaml("prior_cost_map:\n  south_west: [0, 0]\n  cell_m: 1\n  legend: {'.': 1}\n  rows: ['..', '...']\n", "p"),
+               rover::config::ConfigError);
+}
+
+// A keep-out zone on the line is an obstacle, grown by the position uncertainty: the path
+// keeps the rover's centre the inscribed radius plus the growth off the zone's edge.
+TEST(GlobalPlanner, KeepOutZonesAreObstaclesGrownByTheUncertainty) {
+  const Grid g = Field();
+  PlanRequest r = Request(0, 0, 10, 0);
+  r.zones.push_back(rover::hazards::KeepOutZone::Circle("adirondack", 5.0, 0.2, 1.0));
+  r.zone_grow_m = 0.3;
+  PlannerOptions o;
+  const GlobalPlan plan = PlanOnGrid(g, r, o);
+  ASSERT_TRUE(plan.reachable());
+  EXPECT_GT(plan.obstacle_cells(), 0);
+  double closest = 1e9;
+  for (const auto& p : plan.path()) closest = std::min(closest, std::hypot(p.x() - 5.0, p.y() - 0.2));
+  EXPECT_GE(closest, 1.0 + r.zone_grow_m + o.inscribed_radius_m - 0.2);
+  // A polygon zone across the whole window blocks the way.
+  r.zones = {rover::hazards::KeepOutZone::Polygon("scarp", {{4, -20}, {6, -20}, {6, 20}, {4, 20}})};
+  EXPECT_FALSE(PlanOnGrid(g, r, o).reachable());
+}
+
+TEST(GlobalPlanner, LoneUnsafeCellIsNoObstacle) {
+  Grid g = Field();
+  Rocks(&g, 5.0, 5.15, 0.0, 0.15);  // one cell
+  const GlobalPlan plan = PlanOnGrid(g, Request(0, 0, 10, 0), PlannerOptions{});
+  EXPECT_EQ(plan.obstacle_cells(), 0);
+  EXPECT_TRUE(plan.reachable());
+}
+
+// A rover already inside the inscribed band of a rock (the map grew the rock's edge) still
+// has a way out and a finite field.
+TEST(GlobalPlanner, RoverBesideARockStillHasAWay) {
+  Grid g = Field();
+  Rocks(&g, 2.0, 2.6, -0.2, 0.4);
+  const GlobalPlan plan = PlanOnGrid(g, Request(1.6, 0.7, 10, 0), PlannerOptions{});
+  EXPECT_TRUE(plan.reachable()) << plan.why_unreachable();
+  EXPECT_TRUE(std::isfinite(plan.cost_at_start()));
+}
+
+TEST(GlobalPlanner, RejectsBadInput) {
+  PlannerOptions o;
+  o.unknown_cost = 0.5;
+  EXPECT_THROW(PlanOnGrid(Field(), Request(0, 0, 10, 0), o), std::invalid_argument);
+  EXPECT_THROW(PlanOnGrid(Field(), Request(0, 0, 100, 0), PlannerOptions{}), std::invalid_argument);
+  EXPECT_THROW(PlanOnGrid(Field(), Request(0, NAN, 10, 0), PlannerOptions{}), std::invalid_argument);
+}
+
+// ---- The site map ----
+
+Grid Local(double cx, double cy, CellClass state) { return Grid::Filled(cx - 7, cy - 7, 0.2, 70, 70, state, 0.8f); }
+
+TEST(SiteMap, RemembersWhatLeftTheMonitorsWindow) {
+  SiteMap map;
+  Grid first = Local(0, 0, CellClass::kUnknown);
+  Rocks(&first, 3.0, 3.6, -1.0, 1.0);  // a rock 3 m ahead
+  map.Merge(first);
+  // The rover drove 10 m on: the monitor's window no longer holds the rock.
+  Grid later = Local(12, 0, CellClass::kSafe);
+  map.Merge(later);
+  const Grid w = map.Window(-5, -5, 15, 5);
+  EXPECT_EQ(w.state[static_cast<std::size_t>(w.IndexAt(3.3, 0.1))], CellClass::kUnsafe);
+  EXPECT_EQ(w.state[static_cast<std::size_t>(w.IndexAt(12.1, 0.1))], CellClass::kSafe);
+  EXPECT_EQ(w.state[static_cast<std::size_t>(w.IndexAt(-4.9, 4.9))], CellClass::kUnknown);
+  // A later rating of the same ground replaces the earlier one; unknown leaves it.
+  Grid again = Local(0, 0, CellClass::kUnknown);
+  Rocks(&again, 3.0, 3.2, -1.0, -0.8);
+  for (auto& s : again.state) s = s == CellClass::kUnsafe ? CellClass::kSafe : s;
+  map.Merge(again);
+  const Grid w2 = map.Window(-5, -5, 15, 5);
+  EXPECT_EQ(w2.state[static_cast<std::size_t>(w2.IndexAt(3.1, -0.9))], CellClass::kSafe);
+  EXPECT_EQ(w2.state[static_cast<std::size_t>(w2.IndexAt(3.5, 0.5))], CellClass::kUnsafe);
+}
+
+TEST(SiteMap, RemembersWhereTheRoverHasBeen) {
+  SiteMap map;
+  map.Merge(Local(0, 0, CellClass::kUnknown));
+  rover::avoidance::Footprint fp;
+  map.MarkDriven({2.0, 1.0, 0.0}, fp);
+  EXPECT_TRUE(map.Driven(2.0, 1.0));
+  EXPECT_FALSE(map.Driven(5.0, 1.0));
+  EXPECT_NEAR(map.DrivenCells(), (1.6 / 0.2) * (1.4 / 0.2), 16);
+  // Driven ground reads safe though the cameras never rated it.
+  const Grid w = map.Window(-1, -1, 4, 3);
+  EXPECT_EQ(w.state[static_cast<std::size_t>(w.IndexAt(2.0, 1.0))], CellClass::kSafe);
+  // Far beyond the first map: it grows to hold it.
+  map.MarkDriven({30.0, -20.0, 1.0}, fp);
+  EXPECT_TRUE(map.Driven(30.0, -20.0));
+  EXPECT_TRUE(map.Driven(2.0, 1.0));
+}
+
+TEST(SiteMap, PlanningOverTheSiteMapSeesRocksOutOfTheMonitorsWindow) {
+  SiteMap map;
+  Grid seen = Local(0, 0, CellClass::kSafe);
+  Rocks(&seen, 4.8, 5.2, -7, 2.0);  // a wall with its end at y = 2
+  map.Merge(seen);
+  map.Merge(Local(-8, 0, CellClass::kSafe));  // the rover went back south; the wall left the window
+  const GlobalPlan plan = PlanOnSiteMap(map, Request(-8, 0, 9, 0), PlannerOptions{});
+  ASSERT_TRUE(plan.reachable());
+  bool crossed_east = false;
+  for (const auto& p : plan.path())
+    if (std::abs(p.x() - 5.0) < 0.15) crossed_east = p.y() > 2.0;
+  EXPECT_TRUE(crossed_east);
+}
+
+}  // namespace
