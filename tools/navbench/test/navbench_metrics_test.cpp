@@ -80,7 +80,12 @@ TEST(NavbenchJudge, TheGridFindsWhatEveryPairFinds) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> pos(-10, 10), rad(0.05, 0.75), step(-0.3, 0.3), turn(-0.3, 0.3);
   std::vector<KeepOutZone> rocks;
-  for (int i = 0; i < 300; ++i) rocks.push_back(KeepOutZone::Circle("r" + std::to_string(i), pos(rng), pos(rng), rad(rng)));
+  for (int i = 0; i < 300; ++i) {
+    std::string name = std::to_string(i);
+    name.insert(0, 1, 'r');
+    const double x = pos(rng), y = pos(rng);
+    rocks.push_back(KeepOutZone::Circle(name, x, y, rad(rng)));
+  }
   std::vector<Pose2> track = {{0, 0, 0}};
   for (int i = 0; i < 400; ++i) {
     const Pose2& p = track.back();
