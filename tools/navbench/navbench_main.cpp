@@ -179,6 +179,7 @@ int main(int argc, char** argv) {
         nb::WriteRun(p);
         out << p.scenario_path() << "\n";
       }
+      out.close();
       if (!out) throw std::runtime_error(list + ": cannot write");
       std::cout << "navbench: " << plans.size() << " runs (" << options.runs << " per world kind, seed " << options.seed
                 << ") written to " << options.out_dir << "/runs/\n";

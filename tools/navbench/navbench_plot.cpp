@@ -77,14 +77,14 @@ std::string PlotRun(const RunPlan& plan, const RunFigures& figures, const RunTra
   title << plan.id << ": " << result << "; straight " << Num(std::round(figures.straight_m * 10) / 10)
         << " m, driven " << Num(std::round(figures.driven_m * 10) / 10) << " m";
   std::ostringstream gp;
-  gp << "set terminal " << terminal << " size 900,900\nset output '../" << plan.id << ".png'\n"
+  gp << "set terminal " << terminal << " size 900,900 noenhanced\nset output '../" << plan.id << ".png'\n"
      << "set title " << Quoted(title.str()) << "\n"
      << "set xlabel 'east (site y), m'\nset ylabel 'north (site x), m'\nset size ratio -1\n"
      << "set xrange [" << Num(e0) << ":" << Num(e1) << "]\nset yrange [" << Num(n0) << ":" << Num(n1) << "]\n"
      << "set grid back lc rgb '#dddddd'\nset key below center box\nset style fill solid 0.8 noborder\n"
      << "set object 1 rect from " << Num(track.map.min_y) << "," << Num(track.map.min_x) << " to "
      << Num(track.map.max_y) << "," << Num(track.map.max_x) << " fs empty border lc rgb '#000000' lw 2 back\n"
-     << "plot 'rocks_small.dat' using 1:2:3 with circles fs empty border lc rgb '#999999' title 'rocks under the step limit (>= 0.2 m)', \\\n"
+     << "plot 'rocks_small.dat' using 1:2:3 with circles lc rgb '#999999' fs empty title 'rocks under the step limit (>= 0.2 m)', \\\n"
      << "     'rocks_over_limit.dat' using 1:2:3 with circles lc rgb '#cc2222' title 'rocks over the step limit', \\\n"
      << "     'zone_circles.dat' using 1:2:3 with circles fs transparent solid 0.3 lc rgb '#e69f00' title 'keep-out zones', \\\n"
      << "     'zone_polygons.dat' using 1:2 with lines lw 2 lc rgb '#e69f00' notitle, \\\n"

@@ -200,7 +200,7 @@ void WriteRun(const RunPlan& p) {
   // limits end a wandering one).
   y << YAML::Key << "timeout_s" << YAML::Value << 7200;
   y << YAML::Key << "seeds" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  if (!p.world_file.empty()) y << YAML::Key << "world" << YAML::Value << p.world_seed;
+  y << YAML::Key << "world" << YAML::Value << p.world_seed;
   y << YAML::Key << "mobility" << YAML::Value << p.mobility_seed << YAML::Key << "render" << YAML::Value
     << p.render_seed << YAML::EndMap;
   y << YAML::Key << "overrides" << YAML::Value << YAML::BeginMap << YAML::Key << "hazards.map.enabled"
