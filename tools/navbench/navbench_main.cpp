@@ -77,138 +77,161 @@ int RunCampaign(const std::string& list, const std::string& out_dir, int jobs) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+// The command line, after --quick has filled in what was not given.
+struct Args {
+  nb::BenchOptions options;
+  int jobs = 1;
+  bool plot = true, prepare_only = false, report_only = false, help = false;
+  std::string command = "navbench";
+};
+
+Args ParseArgs(int argc, char** argv) {
+  Args a;
+  nb::BenchOptions& options = a.options;
+  bool quick = false, runs_set = false, densities_set = false, worlds_set = false, goals_set = false;
+  for (int i = 1; i < argc; ++i) a.command += std::string(" ") + argv[i];
+  auto value = [&](int& i, const std::string& flag) -> std::string {
+    if (i + 1 >= argc) throw ConfigError("navbench: " + flag + ": missing value");
+    return argv[++i];
+  };
+  auto number = [&](int& i, const std::string& flag, double lo, double hi, bool whole) -> double {
+    const std::string v = value(i, flag);
+    char* end = nullptr;
+    const double d = std::strtod(v.c_str(), &end);
+    if (v.empty() || *end != '\0' || !std::isfinite(d) || d < lo || d > hi || (whole && d != std::floor(d))) {
+      std::ostringstream os;
+      os << "navbench: " << flag << " \"" << v << "\": expected " << (whole ? "a whole number" : "a number")
+         << " in [" << lo << ", " << hi << "]";
+      throw ConfigError(os.str());
+    }
+    return d;
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      a.help = true;
+    } else if (arg == "--runs") {
+      options.runs = static_cast<int>(number(i, arg, 1, 1000, true));
+      runs_set = true;
+    } else if (arg == "--jobs") {
+      a.jobs = static_cast<int>(number(i, arg, 1, 64, true));
+    } else if (arg == "--seed") {
+      options.seed = static_cast<std::uint64_t>(number(i, arg, 0, 1e15, true));
+    } else if (arg == "--out") {
+      options.out_dir = value(i, arg);
+    } else if (arg == "--densities") {
+      options.densities.clear();
+      const std::string text = value(i, arg);
+      for (const auto& part : SplitCommas(text)) {
+        char* end = nullptr;
+        const double k = std::strtod(part.c_str(), &end);
+        if (*end != '\0' || !(k > 0 && k <= 0.5)) {
+          throw ConfigError("navbench: --densities \"" + text + "\": expected Golombek k values in (0, 0.5] separated by commas");
+        }
+        options.densities.push_back(k);
+      }
+      densities_set = true;
+    } else if (arg == "--worlds") {
+      const std::string text = value(i, arg);
+      options.worlds.clear();
+      if (text != "none") {
+        for (const auto& name : SplitCommas(text)) {
+          bool known = false;
+          for (const auto& w : nb::FixedWorlds()) known = known || w.name == name;
+          if (!known) throw ConfigError("navbench: --worlds: unknown world '" + name + "' (expected gap_wall, cul_de_sac or none)");
+          options.worlds.push_back(name);
+        }
+      }
+      worlds_set = true;
+    } else if (arg == "--min-goal") {
+      options.min_goal_m = number(i, arg, 1, 500, false);
+      goals_set = true;
+    } else if (arg == "--max-goal") {
+      options.max_goal_m = number(i, arg, 1, 500, false);
+      goals_set = true;
+    } else if (arg == "--quick") {
+      quick = true;
+    } else if (arg == "--no-plot") {
+      a.plot = false;
+    } else if (arg == "--prepare") {
+      a.prepare_only = true;
+    } else if (arg == "--report") {
+      a.report_only = true;
+    } else {
+      throw ConfigError("navbench: argument " + arg + ": unexpected (see navbench --help)");
+    }
+  }
+  // --quick fills in what was not given: one short run on one field.
+  if (quick) {
+    if (!runs_set) options.runs = 1;
+    if (!densities_set) options.densities = {0.10};
+    if (!worlds_set) options.worlds.clear();
+    if (!goals_set) options.min_goal_m = 8, options.max_goal_m = 10;
+  }
+  if (options.min_goal_m > options.max_goal_m) throw ConfigError("navbench: --min-goal is over --max-goal");
+  if (a.prepare_only && a.report_only) throw ConfigError("navbench: --prepare and --report exclude each other");
+  if (options.densities.empty() && options.worlds.empty()) throw ConfigError("navbench: no density and no world to run");
+  return a;
+}
+
+// Writes every run and the list the campaign reads (DIR/runs.txt); returns the list.
+std::string PrepareRuns(const std::vector<nb::RunPlan>& plans, const nb::BenchOptions& options) {
+  const std::string list = options.out_dir + "/runs.txt";
+  std::ofstream out(list);
+  for (const auto& p : plans) {
+    nb::WriteRun(p);
+    out << p.scenario_path() << "\n";
+  }
+  out.close();
+  if (!out) throw std::runtime_error(list + ": cannot write");
+  std::cout << "navbench: " << plans.size() << " runs (" << options.runs << " per world kind, seed " << options.seed
+            << ") written to " << options.out_dir << "/runs/\n";
+  return list;
+}
+
+// Judges every run, draws it, and prints and writes the table.
+void Report(const std::vector<nb::RunPlan>& plans, const Args& args) {
+  const std::string& out_dir = args.options.out_dir;
+  std::vector<nb::RunFigures> figures;
+  for (const auto& p : plans) {
+    nb::RunTrack track;
+    figures.push_back(nb::ReadRun(p, &track));
+    if (args.plot && figures.back().ran) {
+      const std::string why = nb::PlotRun(p, figures.back(), track, out_dir + "/plots");
+      if (!why.empty()) std::cerr << "navbench: " << p.id << ": no picture: " << why << "\n";
+    }
+  }
+  std::vector<std::string> groups;  // in plan order
+  for (const auto& p : plans) {
+    if (groups.empty() || groups.back() != p.group) groups.push_back(p.group);
+  }
+  std::vector<nb::GroupFigures> rows;
+  for (const auto& g : groups) rows.push_back(nb::Aggregate(g, figures));
+  const std::string table = nb::TableText(rows);
+  std::cout << "\n" << table;
+  std::ofstream(out_dir + "/results.txt") << "# " << args.command << "\n" << table;
+  std::ofstream(out_dir + "/results.json") << nb::ResultsJson(rows, figures, args.command);
+  std::cout << "wrote " << out_dir << "/results.txt, results.json" << (args.plot ? " and plots/ID.png" : "") << "\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   return rover::bus::RunMain("navbench", [&]() -> int {
-    nb::BenchOptions options;
-    int jobs = 1;
-    bool quick = false, plot = true, prepare_only = false, report_only = false;
-    bool runs_set = false, densities_set = false, worlds_set = false, goals_set = false;
-    std::string command = "navbench";
-    for (int i = 1; i < argc; ++i) command += std::string(" ") + argv[i];
-    auto value = [&](int& i, const std::string& flag) -> std::string {
-      if (i + 1 >= argc) throw ConfigError("navbench: " + flag + ": missing value");
-      return argv[++i];
-    };
-    auto number = [&](int& i, const std::string& flag, double lo, double hi, bool whole) -> double {
-      const std::string v = value(i, flag);
-      char* end = nullptr;
-      const double d = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end != '\0' || !std::isfinite(d) || d < lo || d > hi || (whole && d != std::floor(d))) {
-        std::ostringstream os;
-        os << "navbench: " << flag << " \"" << v << "\": expected " << (whole ? "a whole number" : "a number")
-           << " in [" << lo << ", " << hi << "]";
-        throw ConfigError(os.str());
-      }
-      return d;
-    };
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      if (arg == "--help" || arg == "-h") {
-        std::cout << kUsage;
-        return 0;
-      } else if (arg == "--runs") {
-        options.runs = static_cast<int>(number(i, arg, 1, 1000, true));
-        runs_set = true;
-      } else if (arg == "--jobs") {
-        jobs = static_cast<int>(number(i, arg, 1, 64, true));
-      } else if (arg == "--seed") {
-        options.seed = static_cast<std::uint64_t>(number(i, arg, 0, 1e15, true));
-      } else if (arg == "--out") {
-        options.out_dir = value(i, arg);
-      } else if (arg == "--densities") {
-        options.densities.clear();
-        const std::string text = value(i, arg);
-        for (const auto& part : SplitCommas(text)) {
-          char* end = nullptr;
-          const double k = std::strtod(part.c_str(), &end);
-          if (*end != '\0' || !(k > 0 && k <= 0.5)) {
-            throw ConfigError("navbench: --densities \"" + text + "\": expected Golombek k values in (0, 0.5] separated by commas");
-          }
-          options.densities.push_back(k);
-        }
-        densities_set = true;
-      } else if (arg == "--worlds") {
-        const std::string text = value(i, arg);
-        options.worlds.clear();
-        if (text != "none") {
-          for (const auto& name : SplitCommas(text)) {
-            bool known = false;
-            for (const auto& w : nb::FixedWorlds()) known = known || w.name == name;
-            if (!known) throw ConfigError("navbench: --worlds: unknown world '" + name + "' (expected gap_wall, cul_de_sac or none)");
-            options.worlds.push_back(name);
-          }
-        }
-        worlds_set = true;
-      } else if (arg == "--min-goal") {
-        options.min_goal_m = number(i, arg, 1, 500, false);
-        goals_set = true;
-      } else if (arg == "--max-goal") {
-        options.max_goal_m = number(i, arg, 1, 500, false);
-        goals_set = true;
-      } else if (arg == "--quick") {
-        quick = true;
-      } else if (arg == "--no-plot") {
-        plot = false;
-      } else if (arg == "--prepare") {
-        prepare_only = true;
-      } else if (arg == "--report") {
-        report_only = true;
-      } else {
-        throw ConfigError("navbench: argument " + arg + ": unexpected (see navbench --help)");
-      }
+    const Args args = ParseArgs(argc, argv);
+    if (args.help) {
+      std::cout << kUsage;
+      return 0;
     }
-    // --quick fills in what was not given: one short run on one field.
-    if (quick) {
-      if (!runs_set) options.runs = 1;
-      if (!densities_set) options.densities = {0.10};
-      if (!worlds_set) options.worlds.clear();
-      if (!goals_set) options.min_goal_m = 8, options.max_goal_m = 10;
-    }
-    if (options.min_goal_m > options.max_goal_m) throw ConfigError("navbench: --min-goal is over --max-goal");
-    if (prepare_only && report_only) throw ConfigError("navbench: --prepare and --report exclude each other");
-    if (options.densities.empty() && options.worlds.empty()) throw ConfigError("navbench: no density and no world to run");
-
-    const std::vector<nb::RunPlan> plans = nb::PlanRuns(options);
-    fs::create_directories(options.out_dir);
-    const std::string list = options.out_dir + "/runs.txt";
-    if (!report_only) {
-      std::ofstream out(list);
-      for (const auto& p : plans) {
-        nb::WriteRun(p);
-        out << p.scenario_path() << "\n";
-      }
-      out.close();
-      if (!out) throw std::runtime_error(list + ": cannot write");
-      std::cout << "navbench: " << plans.size() << " runs (" << options.runs << " per world kind, seed " << options.seed
-                << ") written to " << options.out_dir << "/runs/\n";
-      if (prepare_only) return 0;
-      const int code = RunCampaign(list, options.out_dir, jobs);
+    const std::vector<nb::RunPlan> plans = nb::PlanRuns(args.options);
+    fs::create_directories(args.options.out_dir);
+    if (!args.report_only) {
+      const std::string list = PrepareRuns(plans, args.options);
+      if (args.prepare_only) return 0;
+      const int code = RunCampaign(list, args.options.out_dir, args.jobs);
       if (code == 2 || code >= 127) throw std::runtime_error("scenario_campaign failed (exit " + std::to_string(code) + ")");
     }
-
-    std::vector<nb::RunFigures> figures;
-    for (const auto& p : plans) {
-      nb::RunTrack track;
-      figures.push_back(nb::ReadRun(p, &track));
-      if (plot && figures.back().ran) {
-        const std::string why = nb::PlotRun(p, figures.back(), track, options.out_dir + "/plots");
-        if (!why.empty()) std::cerr << "navbench: " << p.id << ": no picture: " << why << "\n";
-      }
-    }
-    std::vector<std::string> groups;
-    for (const auto& p : plans) {
-      if (groups.empty() || groups.back() != p.group) groups.push_back(p.group);
-    }
-    std::vector<nb::GroupFigures> rows;
-    for (const auto& g : groups) rows.push_back(nb::Aggregate(g, figures));
-    const std::string table = nb::TableText(rows);
-    std::cout << "\n" << table;
-    std::ofstream(options.out_dir + "/results.txt") << "# " << command << "\n" << table;
-    std::ofstream(options.out_dir + "/results.json") << nb::ResultsJson(rows, figures, command);
-    std::cout << "wrote " << options.out_dir << "/results.txt, results.json"
-              << (plot ? " and plots/ID.png" : "") << "\n";
+    Report(plans, args);
     return 0;
   });
 }
