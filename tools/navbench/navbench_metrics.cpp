@@ -69,7 +69,8 @@ CollisionReport JudgeCollisions(const std::vector<hazards::Pose2>& track, const 
   const ObstacleGrid grid(obstacles, reach);
   std::vector<char> inside(obstacles.size(), 0), seen(obstacles.size(), 0);
   std::vector<std::size_t> was_inside;
-  for (const auto& pose : track) {
+  for (std::size_t k = 0; k < track.size(); ++k) {
+    const auto& pose = track[k];
     std::vector<std::size_t> now_inside;
     for (const std::size_t i : grid.Near(pose.x, pose.y)) {
       const double c = hazards::Clearance(obstacles[i], footprint, pose);
@@ -80,6 +81,7 @@ CollisionReport JudgeCollisions(const std::vector<hazards::Pose2>& track, const 
       if (c < 0) {
         if (!inside[i]) {
           ++report.contacts;
+          report.contact_samples.push_back(k);
           if (!seen[i]) report.touched.push_back(obstacles[i].name);
           seen[i] = 1;
         }

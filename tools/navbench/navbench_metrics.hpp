@@ -24,6 +24,7 @@ struct CollisionReport {
   std::optional<double> min_clearance_m;  // empty: no obstacle came within a footprint of the track
   std::string closest;                    // the obstacle at min_clearance_m
   std::vector<std::string> touched;       // each obstacle with a contact, once, in order of first contact
+  std::vector<std::size_t> contact_samples;  // the track index at which each contact began
 };
 
 // The footprint at every pose of `track` against every obstacle (rocks over the step limit as

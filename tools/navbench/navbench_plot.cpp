@@ -57,6 +57,20 @@ std::string PlotRun(const RunPlan& plan, const RunFigures& figures, const RunTra
     out << "# east_m north_m (truth)\n";
     for (const auto& p : track.truth) out << Num(p.y) << " " << Num(p.x) << "\n";
   }
+  {
+    // The footprint where the run ended (block 0) and where each collision began (1, ...).
+    std::ofstream out(dir + "/footprints.dat");
+    out << "# east_m north_m; one block per footprint\n";
+    std::vector<hazards::Pose2> poses = track.contact_poses;
+    if (!track.truth.empty()) poses.insert(poses.begin(), track.truth.back());
+    for (const auto& pose : poses) {
+      const auto corners = track.footprint.Corners(pose);
+      for (std::size_t i = 0; i <= corners.size(); ++i) {
+        out << Num(corners[i % corners.size()].y()) << " " << Num(corners[i % corners.size()].x()) << "\n";
+      }
+      out << "\n\n";
+    }
+  }
   std::ofstream(dir + "/goal.dat") << Num(plan.goal_y) << " " << Num(plan.goal_x) << " " << Num(plan.goal_radius_m)
                                    << "\n";
   std::ofstream(dir + "/start.dat") << "0 0\n";
@@ -90,7 +104,15 @@ std::string PlotRun(const RunPlan& plan, const RunFigures& figures, const RunTra
      << "     'zone_polygons.dat' using 1:2 with lines lw 2 lc rgb '#e69f00' notitle, \\\n"
      << "     'goal.dat' using 1:2:3 with circles fs transparent solid 0.25 border lc rgb '#009e73' title 'goal disc', \\\n"
      << "     'path.dat' using 1:2 with lines lw 2.5 lc rgb '#0072b2' title 'path (truth)', \\\n"
-     << "     'start.dat' using 1:2 with points pt 5 ps 1.5 lc rgb '#009e73' title 'start'\n";
+     << "     'start.dat' using 1:2 with points pt 5 ps 1.5 lc rgb '#009e73' title 'start'";
+  if (!track.truth.empty()) {
+    gp << ", \\\n     'footprints.dat' index 0 using 1:2 with lines lw 1.5 lc rgb '#000000' title 'footprint at the end'";
+  }
+  if (!track.contact_poses.empty()) {
+    gp << ", \\\n     'footprints.dat' index 1:" << track.contact_poses.size()
+       << " using 1:2 with lines lw 2 lc rgb '#ff00ff' title 'footprint at a collision'";
+  }
+  gp << "\n";
   std::ofstream(dir + "/navbench.gp") << gp.str();
   return plot::RunGnuplot(dir, "navbench.gp");
 }

@@ -295,8 +295,14 @@ RunFigures ReadRun(const RunPlan& p, RunTrack* track) {
   }
   ReadLog(p.dir + "/log.lcm", &t.truth, &t.zones);
 
-  r.rock_contacts = JudgeCollisions(t.truth, footprint, t.rocks_over_limit).contacts;
-  r.zone_contacts = JudgeCollisions(t.truth, footprint, t.zones).contacts;
+  t.footprint = footprint;
+  const CollisionReport rocks = JudgeCollisions(t.truth, footprint, t.rocks_over_limit);
+  const CollisionReport zones = JudgeCollisions(t.truth, footprint, t.zones);
+  r.rock_contacts = rocks.contacts;
+  r.zone_contacts = zones.contacts;
+  for (const auto* c : {&rocks, &zones}) {
+    for (const std::size_t k : c->contact_samples) t.contact_poses.push_back(t.truth[k]);
+  }
   r.off_map_samples = WheelsOffMap(t.truth, SixWheels(wheelbase_m, track_m), t.map).samples;
   r.driven_m = PathLength(t.truth);
   r.path_ratio = PathRatio(r.driven_m, Eigen::Vector2d(spec.start_x, spec.start_y), Eigen::Vector2d(p.goal_x, p.goal_y));

@@ -62,6 +62,8 @@ struct RunTrack {
   std::vector<hazards::KeepOutZone> rocks_over_limit, zones;
   std::vector<hazards::KeepOutZone> small_rocks;  // under the limit (drawn, not judged)
   MapBounds map;
+  hazards::Footprint footprint;
+  std::vector<hazards::Pose2> contact_poses;  // where each collision began
 };
 
 // Reads a finished run: its summary.json, the truth track and keep-out zones in its log,

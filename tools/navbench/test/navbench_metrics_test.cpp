@@ -36,6 +36,9 @@ TEST(NavbenchJudge, DrivingThroughARockIsOneContact) {
   // The footprint's front edge is 0.8 m ahead of the origin; the rock's edge at 1.5 m.
   const auto report = nb::JudgeCollisions(StraightNorth(0, 3, 0), MerFootprint(), {KeepOutZone::Circle("boulder", 2, 0, 0.5)});
   EXPECT_EQ(report.contacts, 1);
+  // The first pose whose front edge passes 1.5 m: x = 0.8 m (0.7 m just touches).
+  ASSERT_EQ(report.contact_samples.size(), 1u);
+  EXPECT_NEAR(0.1 * static_cast<double>(report.contact_samples[0]), 0.75, 0.051);
   ASSERT_EQ(report.touched.size(), 1u);
   EXPECT_EQ(report.touched[0], "boulder");
   ASSERT_TRUE(report.min_clearance_m);
