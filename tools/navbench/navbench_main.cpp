@@ -1,6 +1,6 @@
 // ./rover navbench [--runs N] [--jobs J] [--densities K,...] [--worlds NAME,...|none]
 //                  [--seed S] [--out DIR] [--quick] [--min-goal M] [--max-goal M] [--no-plot]
-//                  [--prepare | --report]
+//                  [--prepare | --report] [--resume]
 //
 // The Monte Carlo navigation benchmark (README, "Navigation benchmark"): seeded Golombek
 // rock fields and fixed worlds (a wall with a gap, a cul-de-sac), one goto with avoidance
@@ -33,7 +33,8 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: navbench [--runs N] [--jobs J] [--densities K,...] [--worlds NAME,...|none] [--seed S]\n"
-    "                [--out DIR] [--quick] [--min-goal M] [--max-goal M] [--no-plot] [--prepare | --report]\n\n"
+    "                [--out DIR] [--quick] [--min-goal M] [--max-goal M] [--no-plot] [--prepare | --report]\n"
+    "                [--resume]\n\n"
     "The navigation benchmark: N runs (default 20) per Golombek rock field k (default\n"
     "0.05,0.10,0.15,0.20; rocks 0.1 to 1.5 m) and per fixed world (default gap_wall,cul_de_sac),\n"
     "each one `goto ... avoid on` with VO and the map on: 20 to 50 m (--min-goal, --max-goal) in\n"
@@ -45,7 +46,8 @@ constexpr const char* kUsage =
     "time), VO false updates and the rover-time breakdown; writes DIR/results.txt,\n"
     "DIR/results.json and DIR/plots/ID.png. --seed S (default 1) draws every run.\n"
     "--quick: 1 run at k = 0.10, 8 to 10 m, no fixed world (a smoke run). --prepare writes the\n"
-    "runs and runs none; --report tables runs already in DIR.\n";
+    "runs and runs none; --report tables runs already in DIR; --resume runs only those without\n"
+    "a summary.json (an interrupted benchmark, or more --runs on the same seed).\n";
 
 std::vector<std::string> SplitCommas(const std::string& text) {
   std::vector<std::string> parts;
@@ -81,7 +83,7 @@ int RunCampaign(const std::string& list, const std::string& out_dir, int jobs) {
 struct Args {
   nb::BenchOptions options;
   int jobs = 1;
-  bool plot = true, prepare_only = false, report_only = false, help = false;
+  bool plot = true, prepare_only = false, report_only = false, resume = false, help = false;
   std::string command = "navbench";
 };
 
@@ -157,6 +159,8 @@ Args ParseArgs(int argc, char** argv) {
       a.prepare_only = true;
     } else if (arg == "--report") {
       a.report_only = true;
+    } else if (arg == "--resume") {
+      a.resume = true;
     } else {
       throw ConfigError("navbench: argument " + arg + ": unexpected (see navbench --help)");
     }
@@ -174,19 +178,25 @@ Args ParseArgs(int argc, char** argv) {
   return a;
 }
 
-// Writes every run and the list the campaign reads (DIR/runs.txt); returns the list.
-std::string PrepareRuns(const std::vector<nb::RunPlan>& plans, const nb::BenchOptions& options) {
+// Writes every run and the list the campaign reads (DIR/runs.txt); returns the list, or ""
+// when there is nothing to run. With `resume`, a run that already has its summary.json is
+// left as it is and not run again (a run depends only on the seed, its kind and index).
+std::string PrepareRuns(const std::vector<nb::RunPlan>& plans, const nb::BenchOptions& options, bool resume) {
   const std::string list = options.out_dir + "/runs.txt";
   std::ofstream out(list);
+  int written = 0;
   for (const auto& p : plans) {
+    if (resume && fs::exists(p.dir + "/summary.json")) continue;
     nb::WriteRun(p);
     out << p.scenario_path() << "\n";
+    ++written;
   }
   out.close();
   if (!out) throw std::runtime_error(list + ": cannot write");
-  std::cout << "navbench: " << plans.size() << " runs (" << options.runs << " per world kind, seed " << options.seed
+  std::cout << "navbench: " << written << " runs (" << options.runs << " per world kind, seed " << options.seed
+            << (resume ? ", " + std::to_string(plans.size() - static_cast<std::size_t>(written)) + " done before" : "")
             << ") written to " << options.out_dir << "/runs/\n";
-  return list;
+  return written > 0 ? list : "";
 }
 
 // Judges every run, draws it, and prints and writes the table.
@@ -226,10 +236,12 @@ int main(int argc, char** argv) {
     const std::vector<nb::RunPlan> plans = nb::PlanRuns(args.options);
     fs::create_directories(args.options.out_dir);
     if (!args.report_only) {
-      const std::string list = PrepareRuns(plans, args.options);
+      const std::string list = PrepareRuns(plans, args.options, args.resume);
       if (args.prepare_only) return 0;
-      const int code = RunCampaign(list, args.options.out_dir, args.jobs);
-      if (code == 2 || code >= 127) throw std::runtime_error("scenario_campaign failed (exit " + std::to_string(code) + ")");
+      if (!list.empty()) {
+        const int code = RunCampaign(list, args.options.out_dir, args.jobs);
+        if (code == 2 || code >= 127) throw std::runtime_error("scenario_campaign failed (exit " + std::to_string(code) + ")");
+      }
     }
     Report(plans, args);
     return 0;
