@@ -168,6 +168,7 @@ GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& 
     g.imaging_s += r.imaging_s;
     g.vo_s += r.vo_s;
     g.mapping_s += r.mapping_s;
+    g.planning_s += r.planning_s;
     g.waiting_s += r.waiting_s;
     g.vo_accepted += r.vo_accepted;
     g.vo_false += r.vo_false;
@@ -198,12 +199,14 @@ std::string TableText(const std::vector<GroupFigures>& groups) {
   }
   os << "\nrover time (share of the sequences' span; VO and mapping overlap):\n";
   os << std::left << std::setw(11) << "world" << std::setw(10) << "hours" << std::setw(10) << "driving"
-     << std::setw(10) << "imaging" << std::setw(10) << "VO" << std::setw(10) << "mapping" << "waiting\n";
+     << std::setw(10) << "imaging" << std::setw(10) << "VO" << std::setw(10) << "mapping" << std::setw(10)
+     << "planning" << "waiting\n";
   for (const auto& g : groups) {
     auto share = [&](double s) { return g.rover_time_s > 0 ? Fixed(100.0 * s / g.rover_time_s, 1) + " %" : "-"; };
     os << std::left << std::setw(11) << g.group << std::setw(10) << Fixed(g.rover_time_s / 3600.0, 2)
        << std::setw(10) << share(g.driving_s) << std::setw(10) << share(g.imaging_s) << std::setw(10)
-       << share(g.vo_s) << std::setw(10) << share(g.mapping_s) << share(g.waiting_s) << "\n";
+       << share(g.vo_s) << std::setw(10) << share(g.mapping_s) << std::setw(10) << share(g.planning_s)
+       << share(g.waiting_s) << "\n";
   }
   return os.str();
 }
@@ -235,7 +238,7 @@ std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vect
     optional("drive_rate_m_per_h", g.drive_rate_m_per_h);
     j.Key("rover_time_breakdown").BeginObject();
     j.Field("driving_s", g.driving_s).Field("imaging_s", g.imaging_s).Field("vo_s", g.vo_s);
-    j.Field("mapping_s", g.mapping_s).Field("waiting_s", g.waiting_s);
+    j.Field("mapping_s", g.mapping_s).Field("planning_s", g.planning_s).Field("waiting_s", g.waiting_s);
     j.EndObject();
     j.Field("vo_updates_accepted", g.vo_accepted).Field("false_updates", g.vo_false);
     j.EndObject();

@@ -266,6 +266,7 @@ RunFigures ReadRun(const RunPlan& p, RunTrack* track) {
     r.imaging_s = Number(b["imaging_s"]);
     r.vo_s = Number(b["vo_s"]);
     r.mapping_s = Number(b["mapping_s"]);
+    r.planning_s = Number(b["planning_s"]);
     r.waiting_s = Number(b["waiting_s"]);
   }
   r.vo_accepted = static_cast<int>(Number(s["vo_updates_accepted"]));

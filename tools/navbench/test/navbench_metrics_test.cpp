@@ -152,6 +152,7 @@ TEST(NavbenchTable, RowsCountWhatTheRunsSay) {
     r.path_ratio = ratio;
     r.rover_time_s = time_s;
     r.driving_s = 0.5 * time_s;
+    r.planning_s = 0.125 * time_s;
     r.vo_accepted = 10;
     r.vo_false = 1;
     return r;
@@ -186,6 +187,7 @@ TEST(NavbenchTable, RowsCountWhatTheRunsSay) {
   EXPECT_NEAR(g.rover_time_s, 7800.0, 1e-9);
   EXPECT_NEAR(*g.drive_rate_m_per_h, 168.0 / 7800.0 * 3600.0, 1e-9);
   EXPECT_NEAR(g.driving_s, 3900.0, 1e-9);
+  EXPECT_NEAR(g.planning_s, 975.0, 1e-9);
   EXPECT_EQ(g.vo_accepted, 70);
   EXPECT_EQ(g.vo_false, 7);
   const std::string text = nb::TableText({g});
@@ -193,4 +195,5 @@ TEST(NavbenchTable, RowsCountWhatTheRunsSay) {
   EXPECT_NE(text.find("hazard_map 1"), std::string::npos) << text;
   EXPECT_NE(text.find("77.5"), std::string::npos) << text;  // 168 m in 7800 s: 77.5 m/h
   EXPECT_NE(text.find("50.0 %"), std::string::npos) << text;  // driving share
+  EXPECT_NE(text.find("12.5 %"), std::string::npos) << text;  // planning share
 }
