@@ -7,6 +7,10 @@
 // variant passes when scenario_runner says it ended as expected), and writes
 // DIR/campaign.json. Exit status 1 when the pass rate is below --min-pass or any variant
 // slid blind (see BlindSlide), 2 on a bad argument.
+//
+// ./rover campaign --each LIST [--jobs J] [--out DIR] runs scenarios already written (one
+// path a line in LIST, as `--prepare` or ./rover navbench writes them) once each, as they
+// are, into the folder that holds each file; the same table, pass rate and campaign.json.
 #include "bus/process.hpp"
 #include "config/yaml_config.hpp"
 #include "launch/process_set.hpp"
@@ -73,6 +77,45 @@ Variant MakeVariant(const rover::tools::ScenarioSpec& spec, std::optional<double
   v.yaw_deg = spec.start_yaw_deg + spec.campaign_yaw_jitter_deg * unit(rng);
   if (slope) v.slope_deg = *slope + spec.campaign_slope_jitter_deg * unit(rng);
   return v;
+}
+
+// A scenario run as written (--each): its seeds and start from the file, its folder the
+// run's output folder.
+Variant PreparedVariant(const std::string& path, int k) {
+  const rover::tools::ScenarioSpec spec = rover::tools::LoadScenario(path);
+  const YAML::Node root = YAML::LoadFile(path);
+  Variant v;
+  v.index = k;
+  if (const YAML::Node seeds = root["seeds"]) {
+    v.world_seed = seeds["world"].as<std::uint64_t>(0);
+    v.mobility_seed = seeds["mobility"].as<std::uint64_t>(0);
+    v.render_seed = seeds["render"].as<std::uint64_t>(0);
+  }
+  v.x = spec.start_x;
+  v.y = spec.start_y;
+  v.yaw_deg = spec.start_yaw_deg;
+  v.dir = fs::path(path).parent_path().string();
+  if (v.dir.empty()) v.dir = ".";
+  return v;
+}
+
+// The scenario paths of an --each list: one a line; blank lines and # comments skipped.
+std::vector<std::string> ReadScenarioList(const std::string& list_path) {
+  std::ifstream in(list_path);
+  if (!in) throw ConfigError("scenario_campaign: --each " + list_path + ": cannot read the list");
+  std::vector<std::string> paths;
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    const auto first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    line = line.substr(first, line.find_last_not_of(" \t\r") + 1 - first);
+    if (!fs::exists(line)) {
+      throw ConfigError(list_path + ":" + std::to_string(n) + ": " + line + ": no such scenario file");
+    }
+    paths.push_back(line);
+  }
+  if (paths.empty()) throw ConfigError("scenario_campaign: --each " + list_path + ": no scenario listed");
+  return paths;
 }
 
 // The scenario file of a variant: the original with its seeds, start and slope replaced.
@@ -194,7 +237,7 @@ std::string Fixed(double v, int digits) {
 
 int main(int argc, char** argv) {
   return rover::bus::RunMain("scenario_campaign", [&]() -> int {
-    std::string scenario_path, out_dir;
+    std::string scenario_path, out_dir, each_list;
     int variants = 0, window = 2, jobs = 1;
     std::uint64_t seed = 1;
     double min_pass_pct = 95.0, slide_pct = 10.0;
@@ -213,6 +256,7 @@ int main(int argc, char** argv) {
       const std::string arg = argv[i];
       if (arg == "--help" || arg == "-h") {
         std::cout << "usage: scenario_campaign SCENARIO.yaml --variants N [--out DIR] [--seed S] [--jobs N]\n"
+                     "       scenario_campaign --each LIST [--out DIR] [--jobs N]\n"
                      "                         [--min-pass PCT] [--slide-window N] [--slide-progress PCT] [--no-plot]\n\n"
                      "Runs N seeded variants of a scenario (seeds, start pose, slope; the scenario's\n"
                      "`campaign:` section sets the jitter), prints a table and the pass rate, and\n"
@@ -223,7 +267,10 @@ int main(int argc, char** argv) {
                      "--jobs N runs N variants at once, each on its own private bus; in virtual time\n"
                      "each variant's result and log digest are the same as with --jobs 1.\n"
                      "--prepare writes DIR/vK/scenario.yaml for every variant and runs none (to spread\n"
-                     "a campaign over several machines: README, \"Campaigns scale out\").\n";
+                     "a campaign over several machines: README, \"Campaigns scale out\").\n"
+                     "--each LIST runs the scenario files listed in LIST (one path a line) once each,\n"
+                     "as written, into the folder that holds each (./rover navbench uses it); DIR\n"
+                     "(default: LIST's folder) gets campaign.json.\n";
         return 0;
       } else if (arg == "--variants") {
         const double n = number(i, arg);
@@ -244,6 +291,8 @@ int main(int argc, char** argv) {
         const double n = number(i, arg);
         if (n < 1 || n > 100 || n != std::floor(n)) throw ConfigError("scenario_campaign: --slide-window: expected 1 to 100");
         window = static_cast<int>(n);
+      } else if (arg == "--each" && i + 1 < argc) {
+        each_list = argv[++i];
       } else if (arg == "--no-plot") {
         plot = false;
       } else if (arg == "--prepare") {
@@ -261,20 +310,36 @@ int main(int argc, char** argv) {
                           ": unexpected (expected SCENARIO.yaml --variants N [--out DIR])");
       }
     }
-    if (scenario_path.empty()) throw ConfigError("scenario_campaign: missing SCENARIO.yaml");
-    if (variants == 0) throw ConfigError("scenario_campaign: missing --variants N");
+    const bool each = !each_list.empty();
+    if (each && (!scenario_path.empty() || variants != 0 || prepare_only)) {
+      throw ConfigError("scenario_campaign: --each LIST takes no SCENARIO.yaml, --variants or --prepare");
+    }
+    if (!each && scenario_path.empty()) throw ConfigError("scenario_campaign: missing SCENARIO.yaml");
+    if (!each && variants == 0) throw ConfigError("scenario_campaign: missing --variants N");
+    const std::vector<std::string> listed = each ? ReadScenarioList(each_list) : std::vector<std::string>{};
+    if (each) {
+      variants = static_cast<int>(listed.size());
+      scenario_path = listed.front();
+    }
     const auto spec = rover::tools::LoadScenario(scenario_path);
-    if (out_dir.empty()) out_dir = "out/campaign/" + spec.name;
+    if (out_dir.empty()) {
+      out_dir = each ? fs::path(each_list).parent_path().string() : "out/campaign/" + spec.name;
+      if (out_dir.empty()) out_dir = ".";
+    }
     fs::create_directories(out_dir);
-    const std::optional<double> slope = FirstSlope(spec);
+    const std::optional<double> slope = each ? std::nullopt : FirstSlope(spec);
     const std::string runner = rover::launch::BinDir() + "/scenario_runner";
 
-    std::cout << "campaign " << spec.name << ": " << variants << " variants (seed " << seed << "), start +/- "
-              << spec.campaign_start_jitter_m << " m, +/- " << spec.campaign_yaw_jitter_deg << " deg"
-              << (slope ? ", slope " + Fixed(*slope, 1) + " +/- " + Fixed(spec.campaign_slope_jitter_deg, 1) + " deg"
-                        : std::string(", no slope"))
-              << "; expected " << spec.expect_outcome
-              << (spec.expect_abort_reason.empty() ? "" : " (" + spec.expect_abort_reason + ")") << "\n";
+    if (each) {
+      std::cout << "campaign " << each_list << ": " << variants << " scenarios as written\n";
+    } else {
+      std::cout << "campaign " << spec.name << ": " << variants << " variants (seed " << seed << "), start +/- "
+                << spec.campaign_start_jitter_m << " m, +/- " << spec.campaign_yaw_jitter_deg << " deg"
+                << (slope ? ", slope " + Fixed(*slope, 1) + " +/- " + Fixed(spec.campaign_slope_jitter_deg, 1) + " deg"
+                          : std::string(", no slope"))
+                << "; expected " << spec.expect_outcome
+                << (spec.expect_abort_reason.empty() ? "" : " (" + spec.expect_abort_reason + ")") << "\n";
+    }
     std::cout << std::left << std::setw(4) << "var" << std::setw(22) << " seeds w/m/r" << std::setw(24)
               << " start x, y, yaw" << std::setw(7) << " slope" << std::setw(11) << " outcome" << std::setw(20)
               << " reason" << std::setw(10) << " clear m" << std::setw(8) << " err %" << std::setw(10)
@@ -315,11 +380,18 @@ int main(int argc, char** argv) {
     while (printed < variants) {
       while (next < variants && static_cast<int>(running.size()) < jobs) {
         const int k = next + 1;
-        Variant v = MakeVariant(spec, slope, seed, k);
-        v.dir = out_dir + "/v" + std::to_string(k);
-        fs::create_directories(v.dir);
-        const std::string variant_yaml = v.dir + "/scenario.yaml";
-        WriteVariantScenario(spec, v, variant_yaml);
+        Variant v;
+        std::string variant_yaml;
+        if (each) {
+          variant_yaml = listed[static_cast<std::size_t>(next)];
+          v = PreparedVariant(variant_yaml, k);
+        } else {
+          v = MakeVariant(spec, slope, seed, k);
+          v.dir = out_dir + "/v" + std::to_string(k);
+          fs::create_directories(v.dir);
+          variant_yaml = v.dir + "/scenario.yaml";
+          WriteVariantScenario(spec, v, variant_yaml);
+        }
         std::vector<std::string> runner_args = {runner, variant_yaml, "--out", v.dir, "--quiet"};
         if (!plot) runner_args.push_back("--no-plot");
         results[static_cast<std::size_t>(next)] = v;
@@ -355,7 +427,7 @@ int main(int argc, char** argv) {
 
     rover::tools::JsonWriter j;
     j.BeginObject();
-    j.Field("scenario", spec.source).Field("seed", static_cast<long long>(seed)).Field("variants", variants);
+    j.Field("scenario", each ? each_list : spec.source).Field("seed", static_cast<long long>(seed)).Field("variants", variants);
     j.Field("passed", passed).Field("pass_rate_pct", pass_pct).Field("min_pass_pct", min_pass_pct);
     j.Field("blind_slides", slides).Field("vo_updates_accepted", accepted).Field("false_updates", false_updates);
     j.Key("runs").BeginArray();

@@ -1,0 +1,249 @@
+// ./rover navbench [--runs N] [--jobs J] [--densities K,...] [--worlds NAME,...|none]
+//                  [--seed S] [--out DIR] [--quick] [--min-goal M] [--max-goal M] [--no-plot]
+//                  [--prepare | --report] [--resume]
+//
+// The Monte Carlo navigation benchmark (README, "Navigation benchmark"): seeded Golombek
+// rock fields and fixed worlds (a wall with a gap, a cul-de-sac), one goto with avoidance
+// per run. It writes every run's world, sequence and scenario into DIR/runs/ID/, runs them
+// all through the scenario campaign (scenario_campaign --each, J at once), judges each run
+// against truth (navbench_metrics.hpp), and prints and writes the table (DIR/results.txt,
+// DIR/results.json) and a picture per run (DIR/plots/ID.png).
+#include "bus/process.hpp"
+#include "config/yaml_config.hpp"
+#include "launch/process_set.hpp"
+#include "navbench/navbench_metrics.hpp"
+#include "navbench/navbench_plot.hpp"
+#include "navbench/navbench_run.hpp"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using rover::config::ConfigError;
+namespace nb = rover::navbench;
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: navbench [--runs N] [--jobs J] [--densities K,...] [--worlds NAME,...|none] [--seed S]\n"
+    "                [--out DIR] [--quick] [--min-goal M] [--max-goal M] [--no-plot] [--prepare | --report]\n"
+    "                [--resume]\n\n"
+    "The navigation benchmark: N runs (default 20) per Golombek rock field k (default\n"
+    "0.05,0.10,0.15,0.20; rocks 0.1 to 1.5 m) and per fixed world (default gap_wall,cul_de_sac),\n"
+    "each one `goto ... avoid on` with VO and the map on: 20 to 50 m (--min-goal, --max-goal) in\n"
+    "a seeded direction on the rock fields. Runs go through the scenario campaign, J at once\n"
+    "(--jobs, default 1), into DIR/runs/ID/ (default DIR out/navbench). Prints per world kind:\n"
+    "success (completed, truly inside the goal disc, no collision, no wheel off the map),\n"
+    "collisions of the true footprint with rocks over the step limit and keep-out zones, wheels\n"
+    "off the map, safe aborts by reason, the median path ratio, the drive rate (m/h of rover\n"
+    "time), VO false updates and the rover-time breakdown; writes DIR/results.txt,\n"
+    "DIR/results.json and DIR/plots/ID.png. --seed S (default 1) draws every run.\n"
+    "--quick: 1 run at k = 0.10, 8 to 10 m, no fixed world (a smoke run). --prepare writes the\n"
+    "runs and runs none; --report tables runs already in DIR; --resume runs only those without\n"
+    "a summary.json (an interrupted benchmark, or more --runs on the same seed).\n";
+
+std::vector<std::string> SplitCommas(const std::string& text) {
+  std::vector<std::string> parts;
+  std::stringstream ss(text);
+  for (std::string part; std::getline(ss, part, ',');) {
+    if (!part.empty()) parts.push_back(part);
+  }
+  return parts;
+}
+
+// Runs the scenario campaign over the listed scenarios, its table on this stdout.
+int RunCampaign(const std::string& list, const std::string& out_dir, int jobs) {
+  const std::vector<std::string> argv = {rover::launch::BinDir() + "/scenario_campaign", "--each", list, "--out",
+                                         out_dir, "--jobs", std::to_string(jobs), "--no-plot", "--min-pass", "0"};
+  std::cout << std::flush;
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid == 0) {
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    execv(args[0], args.data());
+    std::perror(argv[0].c_str());
+    _exit(127);
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// The command line, after --quick has filled in what was not given.
+struct Args {
+  nb::BenchOptions options;
+  int jobs = 1;
+  bool plot = true, prepare_only = false, report_only = false, resume = false, help = false;
+  std::string command = "navbench";
+};
+
+Args ParseArgs(int argc, char** argv) {
+  Args a;
+  nb::BenchOptions& options = a.options;
+  bool quick = false, runs_set = false, densities_set = false, worlds_set = false, goals_set = false;
+  for (int i = 1; i < argc; ++i) a.command += std::string(" ") + argv[i];
+  auto value = [&](int& i, const std::string& flag) -> std::string {
+    if (i + 1 >= argc) throw ConfigError("navbench: " + flag + ": missing value");
+    return argv[++i];
+  };
+  auto number = [&](int& i, const std::string& flag, double lo, double hi, bool whole) -> double {
+    const std::string v = value(i, flag);
+    char* end = nullptr;
+    const double d = std::strtod(v.c_str(), &end);
+    if (v.empty() || *end != '\0' || !std::isfinite(d) || d < lo || d > hi || (whole && d != std::floor(d))) {
+      std::ostringstream os;
+      os << "navbench: " << flag << " \"" << v << "\": expected " << (whole ? "a whole number" : "a number")
+         << " in [" << lo << ", " << hi << "]";
+      throw ConfigError(os.str());
+    }
+    return d;
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      a.help = true;
+    } else if (arg == "--runs") {
+      options.runs = static_cast<int>(number(i, arg, 1, 1000, true));
+      runs_set = true;
+    } else if (arg == "--jobs") {
+      a.jobs = static_cast<int>(number(i, arg, 1, 64, true));
+    } else if (arg == "--seed") {
+      options.seed = static_cast<std::uint64_t>(number(i, arg, 0, 1e15, true));
+    } else if (arg == "--out") {
+      options.out_dir = value(i, arg);
+    } else if (arg == "--densities") {
+      options.densities.clear();
+      const std::string text = value(i, arg);
+      for (const auto& part : SplitCommas(text)) {
+        char* end = nullptr;
+        const double k = std::strtod(part.c_str(), &end);
+        if (*end != '\0' || !(k > 0 && k <= 0.5)) {
+          throw ConfigError("navbench: --densities \"" + text + "\": expected Golombek k values in (0, 0.5] separated by commas");
+        }
+        options.densities.push_back(k);
+      }
+      densities_set = true;
+    } else if (arg == "--worlds") {
+      const std::string text = value(i, arg);
+      options.worlds.clear();
+      if (text != "none") {
+        for (const auto& name : SplitCommas(text)) {
+          bool known = false;
+          for (const auto& w : nb::FixedWorlds()) known = known || w.name == name;
+          if (!known) throw ConfigError("navbench: --worlds: unknown world '" + name + "' (expected gap_wall, cul_de_sac or none)");
+          options.worlds.push_back(name);
+        }
+      }
+      worlds_set = true;
+    } else if (arg == "--min-goal") {
+      options.min_goal_m = number(i, arg, 1, 500, false);
+      goals_set = true;
+    } else if (arg == "--max-goal") {
+      options.max_goal_m = number(i, arg, 1, 500, false);
+      goals_set = true;
+    } else if (arg == "--quick") {
+      quick = true;
+    } else if (arg == "--no-plot") {
+      a.plot = false;
+    } else if (arg == "--prepare") {
+      a.prepare_only = true;
+    } else if (arg == "--report") {
+      a.report_only = true;
+    } else if (arg == "--resume") {
+      a.resume = true;
+    } else {
+      throw ConfigError("navbench: argument " + arg + ": unexpected (see navbench --help)");
+    }
+  }
+  // --quick fills in what was not given: one short run on one field.
+  if (quick) {
+    if (!runs_set) options.runs = 1;
+    if (!densities_set) options.densities = {0.10};
+    if (!worlds_set) options.worlds.clear();
+    if (!goals_set) options.min_goal_m = 8, options.max_goal_m = 10;
+  }
+  if (options.min_goal_m > options.max_goal_m) throw ConfigError("navbench: --min-goal is over --max-goal");
+  if (a.prepare_only && a.report_only) throw ConfigError("navbench: --prepare and --report exclude each other");
+  if (options.densities.empty() && options.worlds.empty()) throw ConfigError("navbench: no density and no world to run");
+  return a;
+}
+
+// Writes every run and the list the campaign reads (DIR/runs.txt); returns the list, or ""
+// when there is nothing to run. With `resume`, a run that already has its summary.json is
+// left as it is and not run again (a run depends only on the seed, its kind and index).
+std::string PrepareRuns(const std::vector<nb::RunPlan>& plans, const nb::BenchOptions& options, bool resume) {
+  const std::string list = options.out_dir + "/runs.txt";
+  std::ofstream out(list);
+  int written = 0;
+  for (const auto& p : plans) {
+    if (resume && fs::exists(p.dir + "/summary.json")) continue;
+    nb::WriteRun(p);
+    out << p.scenario_path() << "\n";
+    ++written;
+  }
+  out.close();
+  if (!out) throw std::runtime_error(list + ": cannot write");
+  std::cout << "navbench: " << written << " runs (" << options.runs << " per world kind, seed " << options.seed
+            << (resume ? ", " + std::to_string(plans.size() - static_cast<std::size_t>(written)) + " done before" : "")
+            << ") written to " << options.out_dir << "/runs/\n";
+  return written > 0 ? list : "";
+}
+
+// Judges every run, draws it, and prints and writes the table.
+void Report(const std::vector<nb::RunPlan>& plans, const Args& args) {
+  const std::string& out_dir = args.options.out_dir;
+  std::vector<nb::RunFigures> figures;
+  for (const auto& p : plans) {
+    nb::RunTrack track;
+    figures.push_back(nb::ReadRun(p, &track));
+    if (args.plot && figures.back().ran) {
+      const std::string why = nb::PlotRun(p, figures.back(), track, out_dir + "/plots");
+      if (!why.empty()) std::cerr << "navbench: " << p.id << ": no picture: " << why << "\n";
+    }
+  }
+  std::vector<std::string> groups;  // in plan order
+  for (const auto& p : plans) {
+    if (groups.empty() || groups.back() != p.group) groups.push_back(p.group);
+  }
+  std::vector<nb::GroupFigures> rows;
+  for (const auto& g : groups) rows.push_back(nb::Aggregate(g, figures));
+  const std::string table = nb::TableText(rows);
+  std::cout << "\n" << table;
+  std::ofstream(out_dir + "/results.txt") << "# " << args.command << "\n" << table;
+  std::ofstream(out_dir + "/results.json") << nb::ResultsJson(rows, figures, args.command);
+  std::cout << "wrote " << out_dir << "/results.txt, results.json" << (args.plot ? " and plots/ID.png" : "") << "\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return rover::bus::RunMain("navbench", [&]() -> int {
+    const Args args = ParseArgs(argc, argv);
+    if (args.help) {
+      std::cout << kUsage;
+      return 0;
+    }
+    const std::vector<nb::RunPlan> plans = nb::PlanRuns(args.options);
+    fs::create_directories(args.options.out_dir);
+    if (!args.report_only) {
+      const std::string list = PrepareRuns(plans, args.options, args.resume);
+      if (args.prepare_only) return 0;
+      if (!list.empty()) {
+        const int code = RunCampaign(list, args.options.out_dir, args.jobs);
+        if (code == 2 || code >= 127) throw std::runtime_error("scenario_campaign failed (exit " + std::to_string(code) + ")");
+      }
+    }
+    Report(plans, args);
+    return 0;
+  });
+}

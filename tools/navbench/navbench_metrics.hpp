@@ -1,0 +1,113 @@
+// The figures of a navigation benchmark run (./rover navbench, README "Navigation
+// benchmark"), judged against truth: collisions of the true footprint with every rock over
+// the step limit and every keep-out zone, wheels off the world's map, the path ratio, and
+// the per-world rows of the results table. Nothing here reads a log or knows LCM; the
+// tracks and figures come in as plain values (navbench_run.hpp reads them from a run).
+#pragma once
+
+#include "hazards/keepout.hpp"
+
+#include <Eigen/Core>
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rover::navbench {
+
+// Every contact of the true footprint with an obstacle along a track.
+struct CollisionReport {
+  // Times the footprint went from clear of an obstacle to overlapping it (an obstacle
+  // overlapped at the first sample counts once), summed over the obstacles.
+  int contacts = 0;
+  std::optional<double> min_clearance_m;  // empty: no obstacle came within a footprint of the track
+  std::string closest;                    // the obstacle at min_clearance_m
+  std::vector<std::string> touched;       // each obstacle with a contact, once, in order of first contact
+  std::vector<std::size_t> contact_samples;  // the track index at which each contact began
+};
+
+// The footprint at every pose of `track` against every obstacle (rocks over the step limit as
+// circles, keep-out zones as they are), by hazards::Clearance (negative: overlap). Only the
+// obstacles within reach of a pose are measured (a grid of their bounding circles), so a
+// field of thousands of rocks is judged in one pass.
+CollisionReport JudgeCollisions(const std::vector<hazards::Pose2>& track, const hazards::Footprint& footprint,
+                                const std::vector<hazards::KeepOutZone>& obstacles);
+
+// The world's map as an axis-aligned rectangle in the site plane.
+struct MapBounds {
+  double min_x = 0, max_x = 0, min_y = 0, max_y = 0;
+  bool Contains(const Eigen::Vector2d& p) const {
+    return p.x() >= min_x && p.x() <= max_x && p.y() >= min_y && p.y() <= max_y;
+  }
+};
+
+// The six wheel contact points of a rocker-bogie (front, middle, rear on each side) in the
+// rover frame (x forward, y right): axles at +wheelbase/2, 0 and -wheelbase/2, sides at
+// +-track/2.
+std::vector<Eigen::Vector2d> SixWheels(double wheelbase_m, double track_m);
+
+struct OffMapReport {
+  int samples = 0;                        // poses with a wheel outside the map
+  std::optional<Eigen::Vector2d> first;   // the first wheel found outside
+};
+OffMapReport WheelsOffMap(const std::vector<hazards::Pose2>& track, const std::vector<Eigen::Vector2d>& wheels,
+                          const MapBounds& map);
+
+// Length of the polyline through the track's positions.
+double PathLength(const std::vector<hazards::Pose2>& track);
+// Driven distance over the straight line from start to goal; empty when the line is 0.
+std::optional<double> PathRatio(double driven_m, const Eigen::Vector2d& start, const Eigen::Vector2d& goal);
+// The median (mean of the middle two for an even count); empty for none.
+std::optional<double> Median(std::vector<double> values);
+
+// One run as the table counts it.
+struct RunFigures {
+  std::string group;                 // the table row: "k=0.10", "gap_wall", ...
+  std::string id;                    // "k0.10_r03"
+  bool ran = false;                  // a summary.json was written
+  std::string outcome = "incomplete";  // completed, aborted, rejected, incomplete
+  std::string abort_reason;          // empty unless aborted
+  bool in_goal_disc = false;         // the TRUE final position lies inside the goal disc
+  int rock_contacts = 0;             // JudgeCollisions against rocks over the limit
+  int zone_contacts = 0;             // and against keep-out zones
+  int off_map_samples = 0;
+  double goal_x = 0, goal_y = 0, goal_radius_m = 0.5;
+  std::optional<Eigen::Vector2d> final_truth;  // the last true position
+  double straight_m = 0;             // start to goal
+  double driven_m = 0;               // the true path's length
+  std::optional<double> path_ratio;  // driven / straight
+  double rover_time_s = 0;           // span of the sequence (rover_time_breakdown.span_s)
+  // Planning counts only where the stack charges it (summary.json's planning_s; 0 when null).
+  double driving_s = 0, imaging_s = 0, vo_s = 0, mapping_s = 0, planning_s = 0, waiting_s = 0;
+  int vo_accepted = 0, vo_false = 0;
+  bool collided() const { return rock_contacts + zone_contacts > 0; }
+  // Completed, truly inside the goal disc, no contact, no wheel off the map.
+  bool success() const { return outcome == "completed" && in_goal_disc && !collided() && off_map_samples == 0; }
+};
+
+// One row of the table: the runs of one world kind.
+struct GroupFigures {
+  std::string group;
+  int runs = 0, successes = 0, completed = 0;
+  int runs_with_collision = 0, contacts = 0, runs_off_map = 0;
+  // Aborts without a contact or a wheel off the map, by abort reason; runs that did not end
+  // (no summary, or the wall-clock limit) under "incomplete".
+  std::map<std::string, int> safe_aborts;
+  std::optional<double> median_path_ratio;  // over the successful runs
+  double driven_m = 0, rover_time_s = 0;    // sums over every run that ran
+  std::optional<double> drive_rate_m_per_h; // driven_m / rover_time_s
+  double driving_s = 0, imaging_s = 0, vo_s = 0, mapping_s = 0, planning_s = 0, waiting_s = 0;
+  int vo_accepted = 0, vo_false = 0;
+  double success_pct() const { return runs > 0 ? 100.0 * successes / runs : 0.0; }
+};
+
+GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& runs);
+
+// The results table as text (one line per group, then the rover-time breakdown) and as
+// JSON (groups, then every run).
+std::string TableText(const std::vector<GroupFigures>& groups);
+std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vector<RunFigures>& runs,
+                        const std::string& command);
+
+}  // namespace rover::navbench

@@ -1,0 +1,199 @@
+// Known answers for navbench's judge against truth and for its table (navbench_metrics.hpp).
+#include "navbench/navbench_metrics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace nb = rover::navbench;
+using rover::hazards::Footprint;
+using rover::hazards::KeepOutZone;
+using rover::hazards::Pose2;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+Footprint MerFootprint() {
+  Footprint f;
+  f.length_m = 1.6;
+  f.width_m = 1.4;
+  return f;
+}
+
+// x from x0 to x1 in steps of 0.1 m at y, heading north.
+std::vector<Pose2> StraightNorth(double x0, double x1, double y) {
+  std::vector<Pose2> track;
+  for (int i = 0; x0 + 0.1 * i <= x1 + 1e-9; ++i) track.push_back({x0 + 0.1 * i, y, 0.0});
+  return track;
+}
+
+}  // namespace
+
+TEST(NavbenchJudge, DrivingThroughARockIsOneContact) {
+  // The footprint's front edge is 0.8 m ahead of the origin; the rock's edge at 1.5 m.
+  const auto report = nb::JudgeCollisions(StraightNorth(0, 3, 0), MerFootprint(), {KeepOutZone::Circle("boulder", 2, 0, 0.5)});
+  EXPECT_EQ(report.contacts, 1);
+  // The first pose whose front edge passes 1.5 m: x = 0.8 m (0.7 m just touches).
+  ASSERT_EQ(report.contact_samples.size(), 1u);
+  EXPECT_NEAR(0.1 * static_cast<double>(report.contact_samples[0]), 0.75, 0.051);
+  ASSERT_EQ(report.touched.size(), 1u);
+  EXPECT_EQ(report.touched[0], "boulder");
+  ASSERT_TRUE(report.min_clearance_m);
+  EXPECT_LT(*report.min_clearance_m, 0.0);
+}
+
+TEST(NavbenchJudge, PassingBesideARockKeepsItsExactGap) {
+  // Abeam at y = 1.5: the gap is 1.5 - 0.7 (half the width) - 0.5 (the radius) = 0.3 m.
+  const auto report = nb::JudgeCollisions(StraightNorth(0, 4, 1.5), MerFootprint(), {KeepOutZone::Circle("boulder", 2, 0, 0.5)});
+  EXPECT_EQ(report.contacts, 0);
+  EXPECT_TRUE(report.touched.empty());
+  ASSERT_TRUE(report.min_clearance_m);
+  EXPECT_NEAR(*report.min_clearance_m, 0.3, 1e-9);
+  EXPECT_EQ(report.closest, "boulder");
+}
+
+TEST(NavbenchJudge, EachEntryIsAContactAndZonesCount) {
+  // North through the rock, back south out of it, north into it again: two contacts. A
+  // square zone beside the start, overlapped at the first pose (one contact), is left at
+  // x = 1.8 m and entered again on the way back, where the rover stays in it: two.
+  std::vector<Pose2> track = StraightNorth(0, 3, 0);
+  const auto back = StraightNorth(0, 3, 0);
+  track.insert(track.end(), back.rbegin(), back.rend());
+  track.insert(track.end(), back.begin(), back.end());
+  const KeepOutZone zone = KeepOutZone::Polygon("square", {{-1, -1.2}, {1, -1.2}, {1, -0.5}, {-1, -0.5}});
+  const auto report = nb::JudgeCollisions(track, MerFootprint(), {KeepOutZone::Circle("boulder", 2, 0, 0.5), zone});
+  EXPECT_EQ(report.contacts, 2 + 2);
+  ASSERT_EQ(report.touched.size(), 2u);
+  EXPECT_EQ(report.touched[0], "square");
+  EXPECT_EQ(report.touched[1], "boulder");
+}
+
+TEST(NavbenchJudge, FarObstaclesAreNotMeasured) {
+  const auto report = nb::JudgeCollisions(StraightNorth(0, 3, 0), MerFootprint(), {KeepOutZone::Circle("far", 100, 100, 1)});
+  EXPECT_EQ(report.contacts, 0);
+  EXPECT_FALSE(report.min_clearance_m);
+}
+
+TEST(NavbenchJudge, TheGridFindsWhatEveryPairFinds) {
+  // Random rocks and a wandering track: the judge's smallest clearance equals the one over
+  // every pose and rock, wherever that is within the footprint's reach.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> pos(-10, 10), rad(0.05, 0.75), step(-0.3, 0.3), turn(-0.3, 0.3);
+  std::vector<KeepOutZone> rocks;
+  for (int i = 0; i < 300; ++i) {
+    std::string name = std::to_string(i);
+    name.insert(0, 1, 'r');
+    const double x = pos(rng), y = pos(rng);
+    rocks.push_back(KeepOutZone::Circle(name, x, y, rad(rng)));
+  }
+  std::vector<Pose2> track = {{0, 0, 0}};
+  for (int i = 0; i < 400; ++i) {
+    const Pose2& p = track.back();
+    const double yaw = p.yaw + turn(rng), d = std::abs(step(rng));
+    track.push_back({p.x + d * std::cos(yaw), p.y + d * std::sin(yaw), yaw});
+  }
+  const Footprint f = MerFootprint();
+  double brute = std::numeric_limits<double>::infinity();
+  int overlapping_pairs = 0;
+  for (const auto& p : track) {
+    for (const auto& r : rocks) {
+      const double c = rover::hazards::Clearance(r, f, p);
+      brute = std::min(brute, c);
+      overlapping_pairs += c < 0;
+    }
+  }
+  const auto report = nb::JudgeCollisions(track, f, rocks);
+  ASSERT_TRUE(report.min_clearance_m);
+  EXPECT_DOUBLE_EQ(*report.min_clearance_m, brute);
+  EXPECT_EQ(report.contacts > 0, overlapping_pairs > 0);
+}
+
+TEST(NavbenchWheels, AWheelOverTheEdgeIsOffTheMap) {
+  const nb::MapBounds map{-5, 5, -5, 5};
+  const auto wheels = nb::SixWheels(1.1, 1.0);
+  ASSERT_EQ(wheels.size(), 6u);
+  // Front wheels at x + 0.55: inside at 4.4, outside at 4.5.
+  EXPECT_EQ(nb::WheelsOffMap({{4.4, 0, 0}}, wheels, map).samples, 0);
+  const auto off = nb::WheelsOffMap({{4.4, 0, 0}, {4.5, 0, 0}, {4.6, 0, 0}}, wheels, map);
+  EXPECT_EQ(off.samples, 2);
+  ASSERT_TRUE(off.first);
+  EXPECT_NEAR(off.first->x(), 5.05, 1e-9);
+  // Heading east (yaw 90 deg): the side wheels stick out 0.5 m north and south; the front
+  // ones 0.55 m east.
+  EXPECT_EQ(nb::WheelsOffMap({{4.45, 4.4, kPi / 2}}, wheels, map).samples, 0);
+  EXPECT_EQ(nb::WheelsOffMap({{4.55, 4.4, kPi / 2}}, wheels, map).samples, 1);
+  EXPECT_EQ(nb::WheelsOffMap({{0, 4.5, kPi / 2}}, wheels, map).samples, 1);
+}
+
+TEST(NavbenchPath, LengthRatioAndMedian) {
+  EXPECT_NEAR(nb::PathLength({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 0}}), 4.0, 1e-12);
+  EXPECT_NEAR(*nb::PathRatio(12.0, {0, 0}, {6, 8}), 1.2, 1e-12);
+  EXPECT_FALSE(nb::PathRatio(3.0, {1, 1}, {1, 1}));
+  EXPECT_EQ(*nb::Median({3, 1, 2}), 2.0);
+  EXPECT_EQ(*nb::Median({4, 1, 3, 2}), 2.5);
+  EXPECT_FALSE(nb::Median({}));
+}
+
+TEST(NavbenchTable, RowsCountWhatTheRunsSay) {
+  auto run = [](const std::string& outcome, const std::string& reason, bool in_disc, int rocks, int off_map,
+                double driven, double ratio, double time_s) {
+    nb::RunFigures r;
+    r.group = "k=0.15";
+    r.ran = outcome != "incomplete";
+    r.outcome = outcome;
+    r.abort_reason = reason;
+    r.in_goal_disc = in_disc;
+    r.rock_contacts = rocks;
+    r.off_map_samples = off_map;
+    r.driven_m = driven;
+    r.path_ratio = ratio;
+    r.rover_time_s = time_s;
+    r.driving_s = 0.5 * time_s;
+    r.planning_s = 0.125 * time_s;
+    r.vo_accepted = 10;
+    r.vo_false = 1;
+    return r;
+  };
+  std::vector<nb::RunFigures> runs = {
+      run("completed", "", true, 0, 0, 22, 1.1, 1000),         // success
+      run("completed", "", true, 0, 0, 26, 1.3, 1000),         // success
+      run("completed", "", true, 1, 0, 30, 1.5, 1000),         // touched a rock: no success, no safe abort
+      run("completed", "", false, 0, 0, 20, 1.0, 1000),        // ended outside the disc by truth
+      run("aborted", "goto_distance_limit", false, 0, 0, 60, 3.0, 3000),
+      run("aborted", "hazard_map", false, 0, 0, 5, 0.25, 400),
+      run("aborted", "hazard_map", false, 0, 2, 5, 0.25, 400),  // a wheel off the map: not safe
+      run("incomplete", "", false, 0, 0, 0, 0, 0),
+  };
+  nb::RunFigures other = runs[0];
+  other.group = "k=0.05";
+  runs.push_back(other);
+  const nb::GroupFigures g = nb::Aggregate("k=0.15", runs);
+  EXPECT_EQ(g.runs, 8);
+  EXPECT_EQ(g.successes, 2);
+  EXPECT_EQ(g.completed, 4);
+  EXPECT_EQ(g.runs_with_collision, 1);
+  EXPECT_EQ(g.runs_off_map, 1);
+  EXPECT_EQ(g.safe_aborts.size(), 3u);
+  EXPECT_EQ(g.safe_aborts.at("goto_distance_limit"), 1);
+  EXPECT_EQ(g.safe_aborts.at("hazard_map"), 1);
+  EXPECT_EQ(g.safe_aborts.at("incomplete"), 1);
+  ASSERT_TRUE(g.median_path_ratio);
+  EXPECT_NEAR(*g.median_path_ratio, 1.2, 1e-12);  // the two successes: 1.1 and 1.3
+  ASSERT_TRUE(g.drive_rate_m_per_h);
+  EXPECT_NEAR(g.driven_m, 168.0, 1e-9);
+  EXPECT_NEAR(g.rover_time_s, 7800.0, 1e-9);
+  EXPECT_NEAR(*g.drive_rate_m_per_h, 168.0 / 7800.0 * 3600.0, 1e-9);
+  EXPECT_NEAR(g.driving_s, 3900.0, 1e-9);
+  EXPECT_NEAR(g.planning_s, 975.0, 1e-9);
+  EXPECT_EQ(g.vo_accepted, 70);
+  EXPECT_EQ(g.vo_false, 7);
+  const std::string text = nb::TableText({g});
+  EXPECT_NE(text.find("2 (25.0 %)"), std::string::npos) << text;
+  EXPECT_NE(text.find("hazard_map 1"), std::string::npos) << text;
+  EXPECT_NE(text.find("77.5"), std::string::npos) << text;  // 168 m in 7800 s: 77.5 m/h
+  EXPECT_NE(text.find("50.0 %"), std::string::npos) << text;  // driving share
+  EXPECT_NE(text.find("12.5 %"), std::string::npos) << text;  // planning share
+}
