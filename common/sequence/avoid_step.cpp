@@ -4,6 +4,7 @@
 // step the map cannot judge. MER drove this way under autonomous navigation: image, map,
 // then drive one step, GESTALT's vote guided by Field D*'s global costs.
 #include "avoidance/arc_voting.hpp"
+#include "avoidance/loop_breaker.hpp"
 #include "hazards/hazard_assessor.hpp"
 #include "planner/global_planner.hpp"
 #include "sequence/executor.hpp"
@@ -169,7 +170,23 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
                   (zones_.empty() ? "" : " (keep-out zones, grown by " + Fixed(zone_grow) + " m, count as unsafe cells)"));
     return AvoidOutcome::kAborted;
   }
-  const avoidance::Candidate& b = choice.best;
+  // Round in a loop (avoidance/loop_breaker.hpp): a choice made at this pose before in this
+  // goto gives way to the next best one.
+  const avoidance::Pose2 here{p.x, p.y, p.yaw};
+  const auto before = avoidance::ChosenHereBefore(avoid_history_, here);
+  const avoidance::Candidate* chosen = &choice.best;
+  bool loop_broken = false;
+  for (const auto& c : before) {
+    if (!avoidance::SameMove(c, choice.best)) continue;
+    const double one_step = std::min(o.step_m, std::max(remaining, 0.05)) - 1e-6;
+    if (const auto* other = avoidance::BestNotRepeating(choice, before, one_step)) {
+      chosen = other;
+      loop_broken = true;
+    }
+    break;
+  }
+  avoid_history_.push_back({here, *chosen});
+  const avoidance::Candidate& b = *chosen;
   if (b.kind == avoidance::Candidate::Kind::kTurn) {
     step->kind = PlannedStep::Kind::kTurn;
     step->turn_rad = b.turn_rad;
@@ -198,6 +215,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   d += Fixed(remaining);
   d += " m to go";
   if (plan) d += ", plan " + Fixed(plan->path_length_m()) + " m";
+  if (loop_broken) d += "; the vote's first choice was made here before: the next best instead";
   d += ")";
   detail_ = std::move(d);
   return AvoidOutcome::kStep;

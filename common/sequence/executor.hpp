@@ -9,6 +9,7 @@
 #pragma once
 
 #include "avoidance/grid.hpp"
+#include "avoidance/loop_breaker.hpp"
 #include "config/yaml_config.hpp"
 #include "planner/global_planner.hpp"
 #include "planner/prior_map.hpp"
@@ -574,6 +575,7 @@ class SequenceExecutor {
   // The site map merged from every map the monitor sends, and where the rover has been
   // (common/planner), in the site frame of map_site_; it starts again with a new site.
   planner::SiteMap site_map_;
+  std::vector<avoidance::Visit> avoid_history_;  // this goto's votes, where (loop_breaker.hpp)
   int map_site_ = -1;
   std::optional<planner::PriorCostMap> prior_;
   int unreachable_plans_ = 0;     // consecutive plans that found no way

@@ -39,6 +39,7 @@ void SequenceExecutor::PlanMotion(const Command& c) {
   } else if (const auto* g = std::get_if<Goto>(&c.action)) {
     is_goto_ = true;
     goto_ = *g;
+    avoid_history_.clear();
     last_turn_rad_ = 0.0;
     goto_start_utime_ = now_utime_;
     goto_start_distance_ = distance_m_;

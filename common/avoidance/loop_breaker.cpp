@@ -1,0 +1,42 @@
+#include "avoidance/loop_breaker.hpp"
+
+#include <cmath>
+
+namespace rover::avoidance {
+
+bool SameMove(const Candidate& a, const Candidate& b) {
+  if (a.kind != b.kind) return false;
+  if (a.kind == Candidate::Kind::kTurn) return std::abs(a.turn_rad - b.turn_rad) < 1e-3;
+  return std::abs(a.curvature_per_m - b.curvature_per_m) < 1e-6 && (a.distance_m > 0) == (b.distance_m > 0);
+}
+
+std::vector<Candidate> ChosenHereBefore(const std::vector<Visit>& history, const Pose2& here,
+                                        const LoopOptions& options) {
+  std::vector<Candidate> out;
+  for (const Visit& v : history) {
+    const double d = std::hypot(v.pose.x - here.x, v.pose.y - here.y);
+    const double dyaw = std::abs(std::remainder(v.pose.yaw - here.yaw, 2.0 * M_PI));
+    if (d <= options.radius_m && dyaw <= options.heading_rad) out.push_back(v.chosen);
+  }
+  return out;
+}
+
+const Candidate* BestNotRepeating(const Choice& choice, const std::vector<Candidate>& before, double one_step_m) {
+  auto repeats = [&](const Candidate& c) {
+    for (const Candidate& b : before)
+      if (SameMove(c, b)) return true;
+    return false;
+  };
+  auto leads_nowhere = [&](const Candidate& c) { return c.kind == Candidate::Kind::kTurn && c.clear_m < one_step_m; };
+  for (const bool dead_ends : {false, true}) {
+    const Candidate* best = nullptr;
+    for (const Candidate& c : choice.candidates) {
+      if (c.vetoed || repeats(c) || leads_nowhere(c) != dead_ends) continue;
+      if (!best || c.vote > best->vote + 1e-9) best = &c;
+    }
+    if (best) return best;
+  }
+  return nullptr;
+}
+
+}  // namespace rover::avoidance

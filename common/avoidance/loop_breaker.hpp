@@ -1,0 +1,39 @@
+// Going round in a loop: arc voting is local, and with a plan whose cost-to-go at a pose
+// depends on what the cameras saw from there (a rock rated caution from afar and unsafe up
+// close), two poses can each vote for the step that leads to the other: forward 0.6 m,
+// back 0.3 m twice, forward again, until a limit stops the goto. A tabu rule (Glover's
+// tabu search) breaks it: a choice already made at this pose (within the radius and
+// heading below) in this goto is not made again while another allowed candidate exists, so
+// the second visit tries the next best way, and every visit after that the next one.
+// Knows nothing of LCM.
+#pragma once
+
+#include "avoidance/arc_voting.hpp"
+
+#include <vector>
+
+namespace rover::avoidance {
+
+struct Visit {
+  Pose2 pose;
+  Candidate chosen;  // kind, distance, curvature and turn are compared
+};
+
+struct LoopOptions {
+  double radius_m = 0.15;                                      // the same pose: this close ...
+  double heading_rad = 10.0 * 3.14159265358979323846 / 180.0;  // ... and this well aligned
+};
+
+// Whether `a` and `b` are the same move (kind, curvature and signed distance, or turn).
+bool SameMove(const Candidate& a, const Candidate& b);
+
+// The choices made before at poses like `here`.
+std::vector<Candidate> ChosenHereBefore(const std::vector<Visit>& history, const Pose2& here,
+                                        const LoopOptions& options = {});
+
+// The best allowed candidate of `choice` that repeats none of `before` (highest vote; a
+// turn after which not even `one_step_m` is clear only when nothing else is left), or
+// nullptr when every allowed candidate repeats one (then the loop cannot be broken here).
+const Candidate* BestNotRepeating(const Choice& choice, const std::vector<Candidate>& before, double one_step_m);
+
+}  // namespace rover::avoidance
