@@ -35,15 +35,74 @@ double Progress(const GoalField* field, const Pose2& pose, const std::vector<Pos
   return std::hypot(gx - pose.x, gy - pose.y) - best;
 }
 
+std::vector<clearance::Pose> ToClearance(const std::vector<Pose2>& path) {
+  std::vector<clearance::Pose> out;
+  out.reserve(path.size());
+  for (const Pose2& p : path) out.push_back({p.x, p.y, p.yaw});
+  return out;
+}
+
+// How far a pose breaks the suspension's limits (Candidate::severity).
+double Severity(const clearance::Suspension& s, const clearance::Bounds& b) {
+  if (!b.decided) return 1.0;
+  const double deg = M_PI / 180.0;
+  return std::max({s.min_belly_clearance_m - b.min_clearance_m, b.max_rocker_rad - s.max_rocker_deg * deg,
+                   b.max_bogie_rad - s.max_bogie_deg * deg,
+                   std::max(b.max_roll_rad, b.max_pitch_rad) - s.max_tilt_deg * deg});
+}
+
+// Where a path stops being safe and what is met before that: by ACE's clearance bounds
+// with a suspension, else by the cells' ratings.
+struct Safety {
+  std::size_t clear_end = 0;  // poses [0, clear_end) are safe
+  double good = 1.0;          // the goodness of what they cross
+  std::string hazard;         // what stops the path ("" when nothing does)
+  double severity = 0.0;
+};
+
+Safety JudgeSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, const std::vector<Pose2>& path) {
+  Safety out;
+  if (o.suspension) {
+    const clearance::Excused standing{{pose.x, pose.y, pose.yaw}, o.footprint.length_m, o.footprint.width_m,
+                                      o.footprint.center_forward_m, o.blind_margin_m};
+    // The pose the rover stands at is where it is (as the sweep leaves out the cells under
+    // it): the poses after it are judged.
+    std::vector<clearance::Pose> ahead = ToClearance(path);
+    if (ahead.size() > 1) ahead.erase(ahead.begin());
+    const clearance::PathBounds p = clearance::EvaluatePath(*o.suspension, grid.Heights(), ahead, &standing);
+    const std::size_t skipped = path.size() - ahead.size();
+    out.clear_end = p.first_unsafe_pose < 0 ? path.size() : skipped + static_cast<std::size_t>(p.first_unsafe_pose);
+    out.good = p.min_margin;
+    if (p.first_unsafe_pose >= 0) {
+      const Pose2& at = path[out.clear_end];
+      out.hazard = "clearance at " + Fixed(at.x) + "," + Fixed(at.y) + ": " + p.first_unsafe.violation;
+      out.severity = Severity(*o.suspension, p.first_unsafe);
+    }
+    return out;
+  }
+  const Sweep s = SweepFootprint(grid, o.footprint, path, pose, o.blind_margin_m);
+  out.clear_end = s.first_unsafe_pose < 0 ? path.size() : static_cast<std::size_t>(s.first_unsafe_pose);
+  out.good = s.clear_min_goodness;
+  if (s.clear_unknown > 0) out.good = std::min(out.good, o.unknown_goodness);
+  if (s.unsafe > 0) {
+    out.hazard = "step " + Fixed(s.worst_step_m) + " m at " + Fixed(s.worst_x) + "," + Fixed(s.worst_y);
+    out.severity = s.worst_step_m;
+  }
+  return out;
+}
+
 // Judges one candidate: `step` is the motion driven, `look` the motion judged (step first).
 void Judge(const Grid& grid, const GoalField* field, const Pose2& pose, double gx, double gy, const VoteOptions& o,
            const std::vector<Pose2>& step, const std::vector<Pose2>& look, Candidate* c) {
   c->step_sweep = SweepFootprint(grid, o.footprint, step, pose, o.blind_margin_m, o.unknown.hidden_patch_m);
   const UnknownVerdict unknown = JudgeUnknown(c->step_sweep, o.unknown);
   const Sweep& s = c->step_sweep;
-  if (s.unsafe > 0) {
+  const Safety step_safety = JudgeSafety(grid, o, pose, step);
+  if (!step_safety.hazard.empty()) {
     c->vetoed = true;
-    c->why = "step " + Fixed(s.worst_step_m) + " m at " + Fixed(s.worst_x) + "," + Fixed(s.worst_y);
+    c->hazard = true;
+    c->severity = step_safety.severity;
+    c->why = step_safety.hazard;
   } else if (unknown == UnknownVerdict::kHidden) {
     c->vetoed = true;
     c->why = "unknown ground " + Fixed(o.unknown.hidden_patch_m) + " m across at " + Fixed(s.hidden_x) + "," +
@@ -55,19 +114,17 @@ void Judge(const Grid& grid, const GoalField* field, const Pose2& pose, double g
     c->vetoed = true;
     c->why = "it would undo the last turn";
   }
-  // The look-ahead: how far it runs clear of unsafe cells (a fraction of its length), and
-  // the worst cell met before that.
-  const Sweep la = SweepFootprint(grid, o.footprint, look, pose, o.blind_margin_m);
-  const std::size_t clear_end = la.first_unsafe_pose < 0 ? look.size() : static_cast<std::size_t>(la.first_unsafe_pose);
+  // The look-ahead: how far it runs safe (a fraction of its length), and the worst met
+  // before that.
+  const Safety la = JudgeSafety(grid, o, pose, look);
+  const std::size_t clear_end = la.clear_end;
   double total = 0.0, clear = 0.0;
   for (std::size_t i = 1; i < look.size(); ++i) {
     const double d = std::hypot(look[i].x - look[i - 1].x, look[i].y - look[i - 1].y);
     total += d;
     if (i < clear_end) clear += d;
   }
-  double good = la.clear_min_goodness;
-  if (la.clear_unknown > 0) good = std::min(good, o.unknown_goodness);
-  c->goodness = total > 0.0 ? good * clear / total : (la.unsafe > 0 ? 0.0 : good);
+  c->goodness = total > 0.0 ? la.good * clear / total : (la.hazard.empty() ? la.good : 0.0);
   c->clear_m = clear;
   const std::vector<Pose2> reached(look.begin(), look.begin() + std::max<std::size_t>(1, clear_end));
   const double progress = std::clamp(Progress(field, pose, reached, gx, gy) / o.lookahead_m, -1.0, 1.0);
@@ -90,6 +147,9 @@ void VoteOptions::Validate() const {
   positive(step_m, "step_m");
   positive(max_turn_rad, "max_turn_rad");
   positive(max_point_turn_rad, "max_point_turn_rad");
+  if (suspension) {
+    if (const std::string p = suspension->Problem(); !p.empty()) throw std::invalid_argument("avoidance: suspension: " + p);
+  }
   if (max_point_turn_rad > M_PI) throw std::invalid_argument("avoidance: max_point_turn_rad must be <= pi");
   if (!std::isfinite(previous_turn_rad)) throw std::invalid_argument("avoidance: previous_turn_rad must be finite");
   if (num_arcs < 1 || num_arcs > 101) throw std::invalid_argument("avoidance: num_arcs must be 1 to 101");
@@ -113,6 +173,8 @@ const char* ToString(Candidate::Kind kind) {
 Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const VoteOptions& o) {
   o.Validate();
   if (const std::string p = grid.Problem(); !p.empty()) throw std::invalid_argument("avoidance: grid: " + p);
+  if (o.suspension && !grid.HasHeights())
+    throw std::invalid_argument("avoidance: the grid holds no heights for the clearance model");
   Choice choice;
   const double remaining = std::hypot(gx - pose.x, gy - pose.y);
   std::unique_ptr<GoalField> field;
@@ -182,7 +244,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   // Nothing allowed: name the worst hazard met by any step.
   const Candidate* worst = nullptr;
   for (const Candidate& c : choice.candidates)
-    if (c.step_sweep.unsafe > 0 && (!worst || c.step_sweep.worst_step_m > worst->step_sweep.worst_step_m)) worst = &c;
+    if (c.hazard && (!worst || c.severity > worst->severity)) worst = &c;
   choice.detail = "no safe step among " + std::to_string(choice.candidates.size()) + " candidates" +
                   (worst ? ": " + worst->why : ": " + choice.candidates.front().why);
   return choice;

@@ -175,6 +175,10 @@ int main(int argc, char** argv) {
                       {{"--state-file", "FILE",
                         "where the running sequence is kept across restarts (overrides executor.state_file)"}});
     const auto options = seq::LoadExecutorOptions(proc.config());
+    // The suspension `goto ... avoid on` judges paths with (ACE clearance); without the
+    // section, the map's cell ratings.
+    std::optional<clearance::Suspension> suspension;
+    if (proc.config().Has("clearance")) suspension = clearance::LoadSuspension(proc.config()["clearance"]);
     std::string state_file = options.state_file;
     if (auto f = proc.option("--state-file")) state_file = *f;
 
@@ -339,6 +343,7 @@ int main(int argc, char** argv) {
           t.footprint = rules.footprint;
           t.blind_margin_m = rules.blind_margin_m;
           t.unknown = rules.unknown;
+          t.suspension = suspension;
           executor.OnTraversabilityMap(t);
           flush();
         }, 4);
