@@ -219,13 +219,16 @@ cv::Mat MatchDisparity(const cv::Mat& rectL, const cv::Mat& rectR, const MapOpti
       0, num_disp, bs, 8 * bs * bs, 32 * bs * bs, 1, 31, o.uniqueness_ratio, o.speckle_window,
       o.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
   // SGBM leaves the left num_disp columns unmatched: pad both images on the left so that
-  // the whole left image is matched, then crop.
+  // the whole left image is matched, then crop. The right view's match leaves its right
+  // num_disp columns unmatched the same way: with the check, pad on the right as well.
+  const bool check = o.lr_max_diff_px > 0;
+  const int right_pad = check ? num_disp : 0;
   cv::Mat padL, padR, padded;
-  cv::copyMakeBorder(rectL, padL, 0, 0, num_disp, 0, cv::BORDER_CONSTANT, 0);
-  cv::copyMakeBorder(rectR, padR, 0, 0, num_disp, 0, cv::BORDER_CONSTANT, 0);
+  cv::copyMakeBorder(rectL, padL, 0, 0, num_disp, right_pad, cv::BORDER_CONSTANT, 0);
+  cv::copyMakeBorder(rectR, padR, 0, 0, num_disp, right_pad, cv::BORDER_CONSTANT, 0);
   sgbm->compute(padL, padR, padded);
-  if (o.lr_max_diff_px > 0) CheckLeftRight(sgbm, padL, padR, o.lr_max_diff_px, &padded);
-  return padded.colRange(num_disp, padded.cols).clone();
+  if (check) CheckLeftRight(sgbm, padL, padR, o.lr_max_diff_px, &padded);
+  return padded.colRange(num_disp, num_disp + rectL.cols).clone();
 }
 
 StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
