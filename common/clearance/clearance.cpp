@@ -137,7 +137,7 @@ std::string Suspension::Problem() const {
     return "rocker_pivot_x_m: expected between bogie_pivot_x_m and front_wheel_x_m";
   if (!finite(belly_min_x_m) || !finite(belly_max_x_m) || !(belly_max_x_m > belly_min_x_m))
     return "belly_max_x_m: expected a finite value over belly_min_x_m";
-  if (!(belly_width_m < track_m)) return "belly_width_m: expected less than track_m (the belly lies between the wheels)";
+  if (!(belly_width_m <= 2.0 * track_m)) return "belly_width_m: expected at most twice track_m";
   if (!finite(min_belly_clearance_m) || min_belly_clearance_m < 0 || !(min_belly_clearance_m < belly_height_m))
     return "min_belly_clearance_m: expected in [0, belly_height_m)";
   if (max_rocker_deg >= 90 || max_bogie_deg >= 90 || max_tilt_deg >= 90)
@@ -179,10 +179,10 @@ Suspension LoadSuspension(const config::ConfigNode& node) {
   return s;
 }
 
-bool Excused::Contains(double x, double y) const {
+bool Excused::Contains(double x, double y, double grow_m) const {
   const double c = std::cos(standing.yaw), s = std::sin(standing.yaw);
   const double dx = x - (standing.x + center_forward_m * c), dy = y - (standing.y + center_forward_m * s);
-  return std::abs(c * dx + s * dy) <= 0.5 * length_m + margin_m && std::abs(-s * dx + c * dy) <= 0.5 * width_m + margin_m;
+  return std::abs(c * dx + s * dy) <= 0.5 * length_m + grow_m && std::abs(-s * dx + c * dy) <= 0.5 * width_m + grow_m;
 }
 
 PoseTerrain SampleTerrain(const Suspension& s, const HeightMap& map, const Pose& pose, const Excused* excused) {
@@ -237,6 +237,7 @@ PoseTerrain SampleTerrain(const Suspension& s, const HeightMap& map, const Pose&
     const double dx = cx - pose.x, dy = cy - pose.y;
     const double fx = c * dx + sn * dy, ry = -sn * dx + c * dy;
     if (fx < s.belly_min_x_m - grow || fx > s.belly_max_x_m + grow || std::abs(ry) > half_w + grow) return;
+    if (excused && excused->Contains(cx, cy, 0.0)) return;  // under the rover where it stands
     const PoseTerrain::BellyPoint p{std::clamp(fx, s.belly_min_x_m, s.belly_max_x_m), std::clamp(ry, -half_w, half_w), 0.0};
     float h, sigma;
     if (HeightAt(map, i, j, &h, &sigma)) {

@@ -26,7 +26,9 @@
 // the rover stands on and the ring round it that the mast cameras cannot see from where
 // it stands (an `Excused` region, the same rule as the footprint sweep's blind ring in
 // common/avoidance/grid.hpp): an unknown cell there adds no rock, and a wheel whose patch
-// holds nothing else rests within the heights the other wheels rest on.
+// holds nothing else rests within the heights the other wheels rest on. And the ground
+// under the rover where it stands is not held against the belly: the rover is on it (as
+// the sweep leaves those cells out), so a false height there cannot pin it in place.
 //
 // Knows nothing of LCM or of how the map was made.
 #pragma once
@@ -95,7 +97,9 @@ struct Pose {
 struct Excused {
   Pose standing;
   double length_m = 0.0, width_m = 0.0, center_forward_m = 0.0, margin_m = 0.0;
-  bool Contains(double x, double y) const;
+  // Whether (x, y) lies in the rectangle grown by `grow_m`.
+  bool Contains(double x, double y, double grow_m) const;
+  bool Contains(double x, double y) const { return Contains(x, y, margin_m); }
 };
 
 // Wheels: left front, middle, rear, then right front, middle, rear.

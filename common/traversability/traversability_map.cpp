@@ -204,8 +204,8 @@ void TraversabilityMap::Rate() const {
     my[k] = a.sy / a.sw;
     s[k] = std::sqrt(a.n / a.sw);
     const double spread2 = std::max(0.0, static_cast<double>(a.shh) / a.sw - static_cast<double>(h[k]) * h[k]);
-    cells_[k].elevation_m = h[k];
-    cells_[k].height_sigma_m = static_cast<float>(std::sqrt(static_cast<double>(s[k]) * s[k] + spread2));
+    cells_[k].elevation_m = static_cast<float>(h[k] + std::sqrt(spread2));
+    cells_[k].height_sigma_m = s[k];
   }
   // The patch: cell offsets within the footprint radius.
   const double cell = o.cell_size_m;

@@ -45,9 +45,10 @@ struct Cell {
   float roughness_m = 0;  // residual of the plane fit
   float goodness = 0;     // 0 (unsafe) .. 1 (ideal); meaningful when state != kUnknown
   float sigma_m = 0;      // height uncertainty (grows with range and pose uncertainty)
-  // The cell's own height, for the clearance model: the weighted mean elevation of its
-  // points (m, up), and its uncertainty: the points' sigma and their spread in the cell (a
-  // rock's top standing in a cell of ground) together. < 0: the cell has too few points.
+  // The cell's own height, for the clearance model: its top, the weighted mean elevation
+  // of its points plus one standard deviation of them (m, up: a rock's top standing in a
+  // cell of ground, where the mean would lie halfway down), and the points' height sigma.
+  // height_sigma_m < 0: the cell has too few points.
   float elevation_m = 0;
   float height_sigma_m = -1;
 };
