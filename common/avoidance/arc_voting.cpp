@@ -60,9 +60,9 @@ struct Safety {
   double severity = 0.0;
 };
 
-Safety JudgeSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, const std::vector<Pose2>& path) {
+Safety ClearanceSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, const std::vector<Pose2>& path) {
   Safety out;
-  if (o.suspension) {
+  {
     const clearance::Excused standing{{pose.x, pose.y, pose.yaw}, o.footprint.length_m, o.footprint.width_m,
                                       o.footprint.center_forward_m, o.blind_margin_m};
     // The pose the rover stands at is where it is (as the sweep leaves out the cells under
@@ -78,8 +78,12 @@ Safety JudgeSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, co
       out.hazard = "clearance at " + Fixed(at.x) + "," + Fixed(at.y) + ": " + p.first_unsafe.violation;
       out.severity = Severity(*o.suspension, p.first_unsafe);
     }
-    return out;
   }
+  return out;
+}
+
+Safety CellSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, const std::vector<Pose2>& path) {
+  Safety out;
   const Sweep s = SweepFootprint(grid, o.footprint, path, pose, o.blind_margin_m);
   out.clear_end = s.first_unsafe_pose < 0 ? path.size() : static_cast<std::size_t>(s.first_unsafe_pose);
   out.good = s.clear_min_goodness;
@@ -88,6 +92,22 @@ Safety JudgeSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, co
     out.hazard = "step " + Fixed(s.worst_step_m) + " m at " + Fixed(s.worst_x) + "," + Fixed(s.worst_y);
     out.severity = s.worst_step_m;
   }
+  return out;
+}
+
+Safety JudgeSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, const std::vector<Pose2>& path) {
+  if (!o.suspension) return CellSafety(grid, o, pose, path);
+  Safety out = ClearanceSafety(grid, o, pose, path);
+  if (!o.cells_too) return out;
+  // The hazard monitor's check, which still judges every step by the cells: what it would
+  // refuse is not safe either. The path stops at whichever test stops it first.
+  const Safety cells = CellSafety(grid, o, pose, path);
+  if (!cells.hazard.empty() && (out.hazard.empty() || cells.clear_end < out.clear_end)) {
+    out.clear_end = cells.clear_end;
+    out.hazard = cells.hazard;
+    out.severity = cells.severity;
+  }
+  out.good = std::min(out.good, cells.good);
   return out;
 }
 

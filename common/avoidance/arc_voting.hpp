@@ -64,6 +64,12 @@ struct VoteOptions {
   // within the suspension's limits at every pose, in place of the cells' step and tilt
   // ratings; the grid must then hold heights. Unset: the cells' ratings (unsafe cells).
   std::optional<clearance::Suspension> suspension;
+  // With a suspension: whether a path must also cross no unsafe cell. The hazard monitor
+  // still judges every step by the cells' ratings (hazards/map_check.hpp), which are
+  // dilated by the wheel patch and refuse ground the clearance bounds allow (a low rock
+  // between the wheels); a step it refuses twice aborts the goto. true keeps the vote
+  // within what the monitor allows; false: the clearance bounds alone.
+  bool cells_too = true;
 
   // Throws std::invalid_argument naming the field.
   void Validate() const;

@@ -289,7 +289,10 @@ TEST(ArcVotingClearance, ALowRockBetweenTheWheelsIsDrivenOver) {
   const Choice cells = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, VoteOptions{});
   ASSERT_NE(Straight(cells), nullptr);
   EXPECT_LT(Straight(cells)->clear_m, 3.0);  // the cells stop the look-ahead at the rock
-  const Choice ace = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, WithSuspension());
+  VoteOptions o = WithSuspension();
+  EXPECT_LT(Straight(VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o))->clear_m, 3.0);  // the cells still stop it
+  o.cells_too = false;
+  const Choice ace = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o);
   ASSERT_NE(Straight(ace), nullptr);
   EXPECT_FALSE(Straight(ace)->vetoed) << Straight(ace)->why;
   EXPECT_NEAR(Straight(ace)->clear_m, 3.0, 1e-6);
@@ -297,7 +300,7 @@ TEST(ArcVotingClearance, ALowRockBetweenTheWheelsIsDrivenOver) {
   // clearance (less the heights' uncertainty). Open ground leaves more.
   EXPECT_GT(Straight(ace)->goodness, 0.0);
   EXPECT_LT(Straight(ace)->goodness, (0.30 - 0.12 - 0.10) / 0.20);
-  const Choice open = VoteArcs(OpenWithHeights(), {0, 0, 0}, 5.0, 0.0, WithSuspension());
+  const Choice open = VoteArcs(OpenWithHeights(), {0, 0, 0}, 5.0, 0.0, o);
   EXPECT_GT(Straight(open)->goodness, Straight(ace)->goodness + 0.3);
 }
 
@@ -317,6 +320,7 @@ TEST(ArcVotingClearance, UnknownGroundAheadShortensWhatIsClear) {
   Grid g = OpenWithHeights();
   g.Paint(1.7, 0.0, 0.4, CellClass::kUnknown, 0.0f, 0.0f);
   VoteOptions o = WithSuspension();
+  o.cells_too = false;
   o.unknown.max_fraction = 0.5;
   const Choice c = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o);
   ASSERT_NE(Straight(c), nullptr);
@@ -330,17 +334,20 @@ TEST(ArcVotingClearance, UnknownGroundAheadShortensWhatIsClear) {
 }
 
 TEST(ArcVotingClearance, NothingAllowedNamesTheClearanceItBreaks) {
-  // Boxed in by rock taller than the belly, with a rock under the belly as well: every arc
-  // and every turn in place keeps rock under it (a turn alone would clear the box: only
-  // the wheels and the belly meet the ground).
+  // Boxed in by rock taller than the underside, here the whole 1.6 x 1.4 m footprint: every
+  // arc and every turn in place brings rock under it.
   Grid g = OpenWithHeights();
   for (int i = 0; i < g.rows; ++i)
     for (int j = 0; j < g.cols; ++j) {
       const double x = g.CellCentreX(i), y = g.CellCentreY(j);
-      if (std::abs(x) < 0.9 && std::abs(y) < 0.8 && std::hypot(x, y) > 0.25) continue;
+      if (std::abs(x) < 0.9 && std::abs(y) < 0.8) continue;
       g.elevation_m[static_cast<std::size_t>(i) * g.cols + j] = 0.5f;
     }
   VoteOptions o = WithSuspension();
+  o.cells_too = false;
+  o.suspension->belly_min_x_m = -0.8;
+  o.suspension->belly_max_x_m = 0.8;
+  o.suspension->belly_width_m = 1.4;
   o.backup_m = 0.0;
   const Choice c = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o);
   EXPECT_FALSE(c.found);
