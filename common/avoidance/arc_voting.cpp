@@ -60,7 +60,8 @@ struct Safety {
   double severity = 0.0;
 };
 
-Safety ClearanceSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, const std::vector<Pose2>& path) {
+Safety ClearanceSafety(const clearance::HeightMap& heights, const VoteOptions& o, const Pose2& pose,
+                       const std::vector<Pose2>& path) {
   Safety out;
   {
     const clearance::Excused standing{{pose.x, pose.y, pose.yaw}, o.footprint.length_m, o.footprint.width_m,
@@ -69,7 +70,7 @@ Safety ClearanceSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose
     // it): the poses after it are judged.
     std::vector<clearance::Pose> ahead = ToClearance(path);
     if (ahead.size() > 1) ahead.erase(ahead.begin());
-    const clearance::PathBounds p = clearance::EvaluatePath(*o.suspension, grid.Heights(), ahead, &standing);
+    const clearance::PathBounds p = clearance::EvaluatePath(*o.suspension, heights, ahead, &standing);
     const std::size_t skipped = path.size() - ahead.size();
     out.clear_end = p.first_unsafe_pose < 0 ? path.size() : skipped + static_cast<std::size_t>(p.first_unsafe_pose);
     out.good = p.min_margin;
@@ -95,9 +96,10 @@ Safety CellSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, con
   return out;
 }
 
-Safety JudgeSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, const std::vector<Pose2>& path) {
+Safety JudgeSafety(const Grid& grid, const clearance::HeightMap& heights, const VoteOptions& o, const Pose2& pose,
+                   const std::vector<Pose2>& path) {
   if (!o.suspension) return CellSafety(grid, o, pose, path);
-  Safety out = ClearanceSafety(grid, o, pose, path);
+  Safety out = ClearanceSafety(heights, o, pose, path);
   if (!o.cells_too) return out;
   // The hazard monitor's check, which still judges every step by the cells: what it would
   // refuse is not safe either. The path stops at whichever test stops it first.
@@ -112,12 +114,12 @@ Safety JudgeSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, co
 }
 
 // Judges one candidate: `step` is the motion driven, `look` the motion judged (step first).
-void Judge(const Grid& grid, const GoalField* field, const Pose2& pose, double gx, double gy, const VoteOptions& o,
+void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalField* field, const Pose2& pose, double gx, double gy, const VoteOptions& o,
            const std::vector<Pose2>& step, const std::vector<Pose2>& look, Candidate* c) {
   c->step_sweep = SweepFootprint(grid, o.footprint, step, pose, o.blind_margin_m, o.unknown.hidden_patch_m);
   const UnknownVerdict unknown = JudgeUnknown(c->step_sweep, o.unknown);
   const Sweep& s = c->step_sweep;
-  const Safety step_safety = JudgeSafety(grid, o, pose, step);
+  const Safety step_safety = JudgeSafety(grid, heights, o, pose, step);
   if (!step_safety.hazard.empty()) {
     c->vetoed = true;
     c->hazard = true;
@@ -136,7 +138,7 @@ void Judge(const Grid& grid, const GoalField* field, const Pose2& pose, double g
   }
   // The look-ahead: how far it runs safe (a fraction of its length), and the worst met
   // before that.
-  const Safety la = JudgeSafety(grid, o, pose, look);
+  const Safety la = JudgeSafety(grid, heights, o, pose, look);
   const std::size_t clear_end = la.clear_end;
   double total = 0.0, clear = 0.0;
   for (std::size_t i = 1; i < look.size(); ++i) {
@@ -195,6 +197,13 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   if (const std::string p = grid.Problem(); !p.empty()) throw std::invalid_argument("avoidance: grid: " + p);
   if (o.suspension && !grid.HasHeights())
     throw std::invalid_argument("avoidance: the grid holds no heights for the clearance model");
+  // The rock each unknown cell could hide, once for every candidate.
+  clearance::HeightMap heights = grid.Heights();
+  std::vector<float> hidden_rock;
+  if (o.suspension) {
+    hidden_rock = clearance::HiddenRockHeights(*o.suspension, heights);
+    heights.hidden_rock_m = hidden_rock.data();
+  }
   Choice choice;
   const double remaining = std::hypot(gx - pose.x, gy - pose.y);
   std::unique_ptr<GoalField> field;
@@ -210,7 +219,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.distance_m = s;
     const auto step = SamplePath(pose, 0.0, s, c.curvature_per_m);
     const auto look = SamplePath(pose, 0.0, std::max(s, o.lookahead_m), c.curvature_per_m);
-    Judge(grid, field.get(), pose, gx, gy, o, step, look, &c);
+    Judge(grid, heights, field.get(), pose, gx, gy, o, step, look, &c);
     choice.candidates.push_back(c);
   }
   // Turns in place to headings up to max_point_turn_rad round, then straight ahead in the
@@ -229,7 +238,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.turn_rad = std::clamp(t, -o.max_turn_rad, o.max_turn_rad);
     const auto step = SamplePath(pose, t, 0.0, 0.0);
     const auto look = SamplePath(pose, t, o.lookahead_m, 0.0);
-    Judge(grid, field.get(), pose, gx, gy, o, step, look, &c);
+    Judge(grid, heights, field.get(), pose, gx, gy, o, step, look, &c);
     choice.candidates.push_back(c);
   }
   // A turn after which not even one step is clear leads nowhere (see the header).
@@ -251,7 +260,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.kind = Candidate::Kind::kBackup;
     c.distance_m = -o.backup_m;
     const auto step = SamplePath(pose, 0.0, -o.backup_m, 0.0);
-    Judge(grid, field.get(), pose, gx, gy, o, step, step, &c);
+    Judge(grid, heights, field.get(), pose, gx, gy, o, step, step, &c);
     choice.candidates.push_back(c);
     if (!choice.candidates.back().vetoed) best = &choice.candidates.back();
   }

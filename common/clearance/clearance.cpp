@@ -107,6 +107,12 @@ bool HeightAt(const HeightMap& map, long i, long j, float* h, float* sigma) {
   return true;
 }
 
+// The rock unknown cell (i, j) may hide.
+double HiddenRock(const Suspension& s, const HeightMap& map, long i, long j) {
+  if (!map.hidden_rock_m || i < 0 || j < 0 || i >= map.rows || j >= map.cols) return s.unknown_rise_m;
+  return map.hidden_rock_m[static_cast<std::size_t>(i) * map.cols + j];
+}
+
 const char* WheelName(int k) {
   static const char* names[] = {"left front", "left middle", "left rear", "right front", "right middle", "right rear"};
   return names[k];
@@ -144,6 +150,8 @@ std::string Suspension::Problem() const {
     return "max_tilt_deg: expected the angle limits under 90 deg";
   if (!finite(sigma_multiplier) || sigma_multiplier < 0) return "sigma_multiplier: expected a finite value >= 0";
   if (!finite(unknown_rise_m) || unknown_rise_m < 0) return "unknown_rise_m: expected a finite value >= 0";
+  if (!finite(rock_width_per_height) || rock_width_per_height < 0)
+    return "rock_width_per_height: expected a finite value >= 0";
   return "";
 }
 
@@ -155,7 +163,7 @@ Suspension LoadSuspension(const config::ConfigNode& node) {
                   "rear_wheel_x_m", "bogie_pivot_x_m", "rocker_pivot_x_m",
                   "rocker_pivot_height_m", "belly_height_m", "belly_min_x_m", "belly_max_x_m", "belly_width_m",
                   "min_belly_clearance_m", "max_rocker_deg", "max_bogie_deg", "max_tilt_deg", "sigma_multiplier",
-                  "unknown_rise_m"});
+                  "unknown_rise_m", "rock_width_per_height"});
   node.Get("wheel_radius_m", s.wheel_radius_m, 0.01, 2.0);
   node.Get("wheel_patch_m", s.wheel_patch_m, 0.01, 2.0);
   node.Get("track_m", s.track_m, 0.1, 10.0);
@@ -175,8 +183,51 @@ Suspension LoadSuspension(const config::ConfigNode& node) {
   node.Get("max_tilt_deg", s.max_tilt_deg, 0.1, 89.0);
   node.Get("sigma_multiplier", s.sigma_multiplier, 0.0, 10.0);
   node.Get("unknown_rise_m", s.unknown_rise_m, 0.0, 5.0);
+  node.Get("rock_width_per_height", s.rock_width_per_height, 0.0, 100.0);
   if (const std::string p = s.Problem(); !p.empty()) node.Fail(p);
   return s;
+}
+
+std::vector<float> HiddenRockHeights(const Suspension& s, const HeightMap& map) {
+  const std::size_t n = static_cast<std::size_t>(map.rows) * static_cast<std::size_t>(map.cols);
+  std::vector<float> out(n, 0.0f);
+  std::vector<char> done(n, 0);
+  std::vector<std::size_t> patch, stack;
+  for (std::size_t start = 0; start < n; ++start) {
+    if (done[start] || map.sigma_m[start] >= 0.0f) continue;
+    // The 8-connected patch of unknown cells, its bounding box, and whether it runs off the map.
+    patch.clear();
+    stack.assign(1, start);
+    done[start] = 1;
+    int i0 = map.rows, i1 = -1, j0 = map.cols, j1 = -1;
+    bool open = false;
+    while (!stack.empty()) {
+      const std::size_t k = stack.back();
+      stack.pop_back();
+      patch.push_back(k);
+      const int i = static_cast<int>(k / map.cols), j = static_cast<int>(k % map.cols);
+      i0 = std::min(i0, i), i1 = std::max(i1, i), j0 = std::min(j0, j), j1 = std::max(j1, j);
+      for (int di = -1; di <= 1; ++di)
+        for (int dj = -1; dj <= 1; ++dj) {
+          const int a = i + di, b = j + dj;
+          if (a < 0 || b < 0 || a >= map.rows || b >= map.cols) {
+            open = true;
+            continue;
+          }
+          const std::size_t q = static_cast<std::size_t>(a) * map.cols + b;
+          if (!done[q] && map.sigma_m[q] < 0.0f) {
+            done[q] = 1;
+            stack.push_back(q);
+          }
+        }
+    }
+    // A rock inside the patch is no wider than its narrower side.
+    const double narrow_m = std::min(i1 - i0 + 1, j1 - j0 + 1) * map.cell_m;
+    double rise = s.unknown_rise_m;
+    if (!open && s.rock_width_per_height > 0) rise = std::min(rise, narrow_m / s.rock_width_per_height);
+    for (std::size_t k : patch) out[k] = static_cast<float>(rise);
+  }
+  return out;
 }
 
 bool Excused::Contains(double x, double y, double grow_m) const {
@@ -203,6 +254,7 @@ PoseTerrain SampleTerrain(const Suspension& s, const HeightMap& map, const Pose&
     to_site(wheel_x[w % 3], (w < 3 ? -0.5 : 0.5) * s.track_m, &x, &y);
     double max_lo = -std::numeric_limits<double>::infinity(), max_hi = max_lo;
     int known = 0, unknown = 0;
+    double rise = 0.0;
     ForCellsInDisc(map, x, y, 0.5 * s.wheel_patch_m, [&](long i, long j, double cx, double cy) {
       float h, sigma;
       if (HeightAt(map, i, j, &h, &sigma)) {
@@ -211,11 +263,12 @@ PoseTerrain SampleTerrain(const Suspension& s, const HeightMap& map, const Pose&
         max_hi = std::max(max_hi, static_cast<double>(h) + k * sigma);
       } else if (!is_excused(cx, cy)) {
         ++unknown;
+        rise = std::max(rise, HiddenRock(s, map, i, j));
       }
     });
     if (known > 0) {
       // A rock in an unknown cell would lift the wheel; a hole would not lower it.
-      t.wheel_ground[w] = {max_lo, max_hi + (unknown > 0 ? s.unknown_rise_m : 0.0)};
+      t.wheel_ground[w] = {max_lo, max_hi + rise};
       known_wheels.push_back(t.wheel_ground[w]);
     } else if (unknown > 0) {
       t.decided = false;
@@ -245,7 +298,7 @@ PoseTerrain SampleTerrain(const Suspension& s, const HeightMap& map, const Pose&
       belly_known_hi = std::max(belly_known_hi, t.belly.back().ground_hi);
       belly_known.push_back({h - k * sigma, h + k * sigma});
     } else if (!is_excused(cx, cy)) {
-      unknown_points.push_back(p);
+      unknown_points.push_back({p.x, p.y, HiddenRock(s, map, i, j)});
     }
   });
   // Wheels on excused ground alone rest within the heights the others rest on (or, with
@@ -262,7 +315,7 @@ PoseTerrain SampleTerrain(const Suspension& s, const HeightMap& map, const Pose&
     double base = belly_known_hi;
     for (int w = 0; w < kNumWheels; ++w) base = std::max(base, t.wheel_ground[w].hi);
     for (PoseTerrain::BellyPoint p : unknown_points) {
-      p.ground_hi = base + s.unknown_rise_m;
+      p.ground_hi = base + p.ground_hi;  // it holds the rock the cell may hide
       t.belly.push_back(p);
     }
   }

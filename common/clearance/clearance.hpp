@@ -66,8 +66,13 @@ struct Suspension {
   double max_tilt_deg = 30.0;        // roll and pitch against the vertical
   // Uncertainty: heights are taken as the map's height +- this many of its sigmas.
   double sigma_multiplier = 2.0;
-  // The rock an unknown cell may hide: this tall above the highest known ground round it.
+  // The rock an unknown cell may hide: this tall above the highest known ground round it,
+  // at most; and no taller than the unknown ground it lies in is narrow over
+  // rock_width_per_height (rocks are about this many times as wide as tall: 2.5 for
+  // MER-like rocks, so a speck of unknown between known cells hides no rock over the step
+  // limit). 0: every unknown cell may hide unknown_rise_m.
   double unknown_rise_m = 0.25;
+  double rock_width_per_height = 0.0;
 
   // "" when consistent; otherwise "<key>: expected ..." for the first key that is not.
   std::string Problem() const;
@@ -85,7 +90,16 @@ struct HeightMap {
   int rows = 0, cols = 0;
   const float* elevation_m = nullptr;
   const float* sigma_m = nullptr;
+  // Optional: the rock each unknown cell may hide (HiddenRockHeights); nullptr: the
+  // suspension's unknown_rise_m everywhere.
+  const float* hidden_rock_m = nullptr;
 };
+
+// The tallest rock each unknown cell of `map` could hide: unknown_rise_m, or less where the
+// unknown ground holding it (its 8-connected patch of unknown cells; off the map counts as
+// unknown) is narrower than unknown_rise_m x rock_width_per_height: that patch's narrower
+// side over rock_width_per_height. 0 for known cells.
+std::vector<float> HiddenRockHeights(const Suspension& s, const HeightMap& map);
 
 struct Pose {
   double x = 0.0, y = 0.0, yaw = 0.0;
