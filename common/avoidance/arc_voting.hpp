@@ -68,7 +68,9 @@ struct VoteOptions {
   // still judges every step by the cells' ratings (hazards/map_check.hpp), which are
   // dilated by the wheel patch and refuse ground the clearance bounds allow (a low rock
   // between the wheels); a step it refuses twice aborts the goto. true keeps the vote
-  // within what the monitor allows; false: the clearance bounds alone.
+  // within what the monitor allows, and rates the clear part of a path by the cells'
+  // goodness; false: the clearance bounds alone, the clear part rated by the smallest
+  // margin they leave to a limit.
   bool cells_too = true;
 
   // Throws std::invalid_argument naming the field.

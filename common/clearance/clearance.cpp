@@ -248,6 +248,8 @@ PoseTerrain SampleTerrain(const Suspension& s, const HeightMap& map, const Pose&
   // The wheels: each rests on the highest ground in its patch.
   const double wheel_x[3] = {s.front_wheel_x_m, s.middle_wheel_x_m, s.rear_wheel_x_m};
   std::array<bool, kNumWheels> rests_on_others{};
+  std::array<double, kNumWheels> unknown_rise{};  // > 0: the wheel's patch is all unknown ground
+  std::array<std::string, kNumWheels> where;
   std::vector<Interval> known_wheels;
   for (int w = 0; w < kNumWheels; ++w) {
     double x, y;
@@ -271,10 +273,8 @@ PoseTerrain SampleTerrain(const Suspension& s, const HeightMap& map, const Pose&
       t.wheel_ground[w] = {max_lo, max_hi + rise};
       known_wheels.push_back(t.wheel_ground[w]);
     } else if (unknown > 0) {
-      t.decided = false;
-      if (t.undecided_why.empty())
-        t.undecided_why = std::string("the ground under the ") + WheelName(w) + " wheel at " + Fixed(x) + "," +
-                          Fixed(y) + " is unknown";
+      unknown_rise[w] = std::max(rise, 1e-9);
+      where[w] = Fixed(x) + "," + Fixed(y);
     } else {
       rests_on_others[w] = true;
     }
@@ -309,6 +309,19 @@ PoseTerrain SampleTerrain(const Suspension& s, const HeightMap& map, const Pose&
   else if (!belly_known.empty()) others = Hull(belly_known);
   for (int w = 0; w < kNumWheels; ++w)
     if (rests_on_others[w]) t.wheel_ground[w] = others;
+  // A wheel on unknown ground alone may stand on the rock the ground could hide, or in a
+  // hole as deep, about the heights the rest of the rover stands on; with nothing known
+  // at all the pose cannot be decided.
+  for (int w = 0; w < kNumWheels; ++w) {
+    if (unknown_rise[w] <= 0.0) continue;
+    if (known_wheels.empty() && belly_known.empty()) {
+      t.decided = false;
+      if (t.undecided_why.empty())
+        t.undecided_why = std::string("the ground under the ") + WheelName(w) + " wheel at " + where[w] + " is unknown";
+      continue;
+    }
+    t.wheel_ground[w] = {others.lo - unknown_rise[w], others.hi + unknown_rise[w]};
+  }
   // Unknown belly cells may hold a rock unknown_rise_m above the highest known ground there
   // (or the highest the wheels may rest on).
   if (!unknown_points.empty()) {

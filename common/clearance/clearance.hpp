@@ -22,7 +22,8 @@
 //
 // Optimistic never: a cell the map does not know under a wheel, or under the belly, may
 // hold a rock `unknown_rise_m` tall above the highest known ground there; a wheel patch
-// with no known cell at all leaves the pose undecided. The one exception is the ground
+// with no known cell at all stands that high above, or that deep below, the heights the
+// rest of the rover stands on; with nothing known under the rover, the pose is undecided. The one exception is the ground
 // the rover stands on and the ring round it that the mast cameras cannot see from where
 // it stands (an `Excused` region, the same rule as the footprint sweep's blind ring in
 // common/avoidance/grid.hpp): an unknown cell there adds no rock, and a wheel whose patch
@@ -125,7 +126,7 @@ struct Interval {
 
 // The map's heights at one pose: what ACE needs of the terrain.
 struct PoseTerrain {
-  bool decided = true;          // false: a wheel's patch holds no known cell (and is not excused)
+  bool decided = true;          // false: a wheel's patch holds no known cell, nor does the rest
   std::string undecided_why;    // which wheel
   // The ground each wheel rests on (the highest in its patch): [lowest it can be, highest].
   std::array<Interval, kNumWheels> wheel_ground;

@@ -201,15 +201,25 @@ TEST(Clearance, AnUnknownCellUnderAWheelMakesItsBoundWorse) {
   EXPECT_FALSE(b.Safe()) << "a 0.25 m rock under a middle wheel exceeds the bogie limit";
 }
 
-TEST(Clearance, AWheelOnUnknownGroundCannotBeDecided) {
+TEST(Clearance, AWheelOnUnknownGroundStandsOnTheWorstItCouldHide) {
   const Suspension s;
   TestMap map;
   for (double dx = -0.15; dx <= 0.15 + 1e-9; dx += kCell)
-    for (double dy = -0.15; dy <= 0.15 + 1e-9; dy += kCell) map.Unknown(s.front_wheel_x_m + dx, -0.5 * s.track_m + dy);
+    for (double dy = -0.15; dy <= 0.15 + 1e-9; dy += kCell) map.Unknown(s.middle_wheel_x_m + dx, -0.5 * s.track_m + dy);
   const Bounds b = At(s, map);
-  EXPECT_FALSE(b.decided);
+  EXPECT_TRUE(b.decided);
+  // As bad as a rock unknown_rise_m tall under the left middle wheel, or worse.
+  TestMap rock;
+  rock.Set(s.middle_wheel_x_m, -0.5 * s.track_m, static_cast<float>(s.unknown_rise_m));
+  EXPECT_GE(b.max_bogie_rad, At(s, rock).max_bogie_rad - 1e-9);
   EXPECT_FALSE(b.Safe());
-  EXPECT_NE(b.undecided_why.find("left front"), std::string::npos) << b.undecided_why;
+  // With nothing known under the rover at all, it cannot be decided.
+  TestMap blank;
+  std::fill(blank.sigma.begin(), blank.sigma.end(), -1.0f);
+  const Bounds u = At(s, blank);
+  EXPECT_FALSE(u.decided);
+  EXPECT_FALSE(u.Safe());
+  EXPECT_NE(u.undecided_why.find("wheel at"), std::string::npos) << u.undecided_why;
   // The same ground where the rover stands (excused: the mast cannot see it) rests the wheel
   // within the heights the other wheels rest on.
   Excused here;
