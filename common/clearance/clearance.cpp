@@ -159,11 +159,12 @@ Suspension LoadSuspension(const config::ConfigNode& node) {
   Suspension s;
   if (node.IsNull()) return s;
   if (!node.IsMap()) node.Fail("expected a map of the suspension's geometry and limits");
-  node.CheckKeys({"wheel_radius_m", "wheel_patch_m", "track_m", "front_wheel_x_m", "middle_wheel_x_m",
+  node.CheckKeys({"enabled", "wheel_radius_m", "wheel_patch_m", "track_m", "front_wheel_x_m", "middle_wheel_x_m",
                   "rear_wheel_x_m", "bogie_pivot_x_m", "rocker_pivot_x_m",
                   "rocker_pivot_height_m", "belly_height_m", "belly_min_x_m", "belly_max_x_m", "belly_width_m",
                   "min_belly_clearance_m", "max_rocker_deg", "max_bogie_deg", "max_tilt_deg", "sigma_multiplier",
                   "unknown_rise_m", "rock_width_per_height"});
+  node.Get("enabled", s.enabled);
   node.Get("wheel_radius_m", s.wheel_radius_m, 0.01, 2.0);
   node.Get("wheel_patch_m", s.wheel_patch_m, 0.01, 2.0);
   node.Get("track_m", s.track_m, 0.1, 10.0);

@@ -45,6 +45,7 @@ namespace rover::clearance {
 // The suspension's geometry on flat ground (rover frame: x forward from the rover origin,
 // heights up from the ground the wheels stand on) and the limits it must stay within.
 struct Suspension {
+  bool enabled = true;               // false: the section is read and checked but not used
   double wheel_radius_m = 0.125;
   double wheel_patch_m = 0.2;        // side of the square under a wheel whose highest point carries it
   double track_m = 1.0;              // left wheel centres to right

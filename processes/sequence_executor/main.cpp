@@ -178,7 +178,10 @@ int main(int argc, char** argv) {
     // The suspension `goto ... avoid on` judges paths with (ACE clearance); without the
     // section, the map's cell ratings.
     std::optional<clearance::Suspension> suspension;
-    if (proc.config().Has("clearance")) suspension = clearance::LoadSuspension(proc.config()["clearance"]);
+    if (proc.config().Has("clearance")) {
+      suspension = clearance::LoadSuspension(proc.config()["clearance"]);
+      if (!suspension->enabled) suspension.reset();
+    }
     std::string state_file = options.state_file;
     if (auto f = proc.option("--state-file")) state_file = *f;
 
