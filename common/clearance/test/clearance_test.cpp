@@ -42,7 +42,7 @@ Bounds At(const Suspension& s, const TestMap& map, const Excused* excused = null
 
 double Deg(double rad) { return rad * 180.0 / M_PI; }
 
-TEST(Clearance, FlatGroundGivesTheNominalClearanceAndNoAngles) {
+TEST(AceClearance, FlatGroundGivesTheNominalClearanceAndNoAngles) {
   const Suspension s;
   const Bounds b = At(s, TestMap{});
   ASSERT_TRUE(b.Safe()) << b.violation;
@@ -61,7 +61,7 @@ struct WheelRockCase {
   double rocker_deg;   // |rocker - body|
 };
 
-TEST(Clearance, ARockUnderEachWheelTurnsItsBogieAndRocker) {
+TEST(AceClearance, ARockUnderEachWheelTurnsItsBogieAndRocker) {
   const Suspension s;
   const double h = 0.15;
   const double bogie_len = s.middle_wheel_x_m - s.rear_wheel_x_m;            // middle to rear
@@ -97,7 +97,7 @@ TEST(Clearance, ARockUnderEachWheelTurnsItsBogieAndRocker) {
   }
 }
 
-TEST(Clearance, ATallRockUnderTheMiddleWheelExceedsTheBogieLimit) {
+TEST(AceClearance, ATallRockUnderTheMiddleWheelExceedsTheBogieLimit) {
   Suspension s;
   TestMap map;
   // The bogie angle a rock h under the middle wheel causes grows with h; find it over the limit.
@@ -108,7 +108,7 @@ TEST(Clearance, ATallRockUnderTheMiddleWheelExceedsTheBogieLimit) {
   EXPECT_NE(b.violation.find("bogie"), std::string::npos) << b.violation;
 }
 
-TEST(Clearance, ARockUnderTheBellyReducesTheClearanceByItsHeight) {
+TEST(AceClearance, ARockUnderTheBellyReducesTheClearanceByItsHeight) {
   const Suspension s;
   for (const double h : {0.05, 0.12}) {
     TestMap map;
@@ -119,7 +119,7 @@ TEST(Clearance, ARockUnderTheBellyReducesTheClearanceByItsHeight) {
   }
 }
 
-TEST(Clearance, ARockBetweenTheWheelsIsSafeUnderTheBellyAndUnsafeOverIt) {
+TEST(AceClearance, ARockBetweenTheWheelsIsSafeUnderTheBellyAndUnsafeOverIt) {
   const Suspension s;
   const double lower = s.belly_height_m - s.min_belly_clearance_m - 0.05;  // leaves more than the minimum
   const double higher = s.belly_height_m + 0.05;                           // taller than the belly is high
@@ -139,7 +139,7 @@ TEST(Clearance, ARockBetweenTheWheelsIsSafeUnderTheBellyAndUnsafeOverIt) {
   EXPECT_TRUE(At(s, beside).Safe());
 }
 
-TEST(Clearance, AUniformSlopePitchesTheBodyAndLeavesTheSuspensionStraight) {
+TEST(AceClearance, AUniformSlopePitchesTheBodyAndLeavesTheSuspensionStraight) {
   const Suspension s;
   const double grade = std::tan(12.0 * M_PI / 180.0);
   TestMap map;
@@ -155,7 +155,7 @@ TEST(Clearance, AUniformSlopePitchesTheBodyAndLeavesTheSuspensionStraight) {
   EXPECT_NEAR(b.max_bogie_rad, 0.0, 1e-9);
 }
 
-TEST(Clearance, UncertaintyOnlyWidensTheBounds) {
+TEST(AceClearance, UncertaintyOnlyWidensTheBounds) {
   Suspension s;
   TestMap map;
   map.Set(s.middle_wheel_x_m, -0.5 * s.track_m, 0.1f);
@@ -172,7 +172,7 @@ TEST(Clearance, UncertaintyOnlyWidensTheBounds) {
   }
 }
 
-TEST(Clearance, AnUnknownCellUnderTheBellyCanHideARock) {
+TEST(AceClearance, AnUnknownCellUnderTheBellyCanHideARock) {
   Suspension s;
   TestMap map;
   const Bounds known = At(s, map);
@@ -186,7 +186,7 @@ TEST(Clearance, AnUnknownCellUnderTheBellyCanHideARock) {
   EXPECT_TRUE(At(s, map).Safe());
 }
 
-TEST(Clearance, AnUnknownCellUnderAWheelMakesItsBoundWorse) {
+TEST(AceClearance, AnUnknownCellUnderAWheelMakesItsBoundWorse) {
   const Suspension s;
   TestMap map;
   map.Unknown(s.middle_wheel_x_m + kCell, 0.5 * s.track_m);  // one cell of the right middle wheel's patch
@@ -201,7 +201,7 @@ TEST(Clearance, AnUnknownCellUnderAWheelMakesItsBoundWorse) {
   EXPECT_FALSE(b.Safe()) << "a 0.25 m rock under a middle wheel exceeds the bogie limit";
 }
 
-TEST(Clearance, AWheelOnUnknownGroundStandsOnTheWorstItCouldHide) {
+TEST(AceClearance, AWheelOnUnknownGroundStandsOnTheWorstItCouldHide) {
   const Suspension s;
   TestMap map;
   for (double dx = -0.15; dx <= 0.15 + 1e-9; dx += kCell)
@@ -230,7 +230,7 @@ TEST(Clearance, AWheelOnUnknownGroundStandsOnTheWorstItCouldHide) {
   EXPECT_TRUE(e.Safe()) << e.violation;
 }
 
-TEST(Clearance, APathStopsAtItsFirstUnsafePose) {
+TEST(AceClearance, APathStopsAtItsFirstUnsafePose) {
   const Suspension s;
   TestMap map;
   map.Set(1.0, 0.0, static_cast<float>(s.belly_height_m));  // under the belly once the rover is 0.5 m on
@@ -244,7 +244,7 @@ TEST(Clearance, APathStopsAtItsFirstUnsafePose) {
   EXPECT_NEAR(p.min_margin, 1.0, 1e-9);
 }
 
-TEST(Clearance, ConfigErrorsNameTheKey) {
+TEST(AceClearance, ConfigErrorsNameTheKey) {
   auto load = [](const std::string& yaml) {
     return LoadSuspension(config::ConfigNode::FromString(yaml, "rover.yaml")["clearance"]);
   };
