@@ -230,6 +230,45 @@ TEST(AceClearance, AWheelOnUnknownGroundStandsOnTheWorstItCouldHide) {
   EXPECT_TRUE(e.Safe()) << e.violation;
 }
 
+TEST(AceClearance, ASpeckOfUnknownGroundHidesOnlyASmallRock) {
+  Suspension s;
+  s.rock_width_per_height = 2.5;
+  TestMap map;
+  map.Unknown(0.1, 0.0);  // one cell, 5 cm across: a rock 2 cm tall at most
+  for (double x = -1.0; x <= 1.0 + 1e-9; x += kCell) map.Unknown(x, 0.9);  // a band 5 cm wide, 2 m long
+  HeightMap v = map.View();
+  const std::vector<float> hidden = HiddenRockHeights(s, v);
+  EXPECT_NEAR(hidden[map.At(0.1, 0.0)], kCell / 2.5, 1e-6);
+  EXPECT_NEAR(hidden[map.At(0.0, 0.9)], kCell / 2.5, 1e-6);
+  EXPECT_EQ(hidden[map.At(0.0, 0.0)], 0.0f);  // known
+  v.hidden_rock_m = hidden.data();
+  const Bounds b = Evaluate(s, SampleTerrain(s, v, Pose{}, nullptr));
+  EXPECT_NEAR(b.min_clearance_m, s.belly_height_m - kCell / 2.5, 1e-6);
+  EXPECT_TRUE(b.Safe()) << b.violation;
+  // Unknown ground wide enough for a rock over the limit keeps the full rise.
+  TestMap wide;
+  for (double x = -0.2; x <= 0.4 + 1e-9; x += kCell)
+    for (double y = -0.3; y <= 0.3 + 1e-9; y += kCell) wide.Unknown(x, y);
+  const std::vector<float> h2 = HiddenRockHeights(s, wide.View());
+  EXPECT_NEAR(h2[wide.At(0.1, 0.0)], s.unknown_rise_m, 1e-6);
+}
+
+TEST(AceClearance, TheGroundTheRoverStandsOnIsNotHeldAgainstTheBelly) {
+  const Suspension s;
+  TestMap map;
+  map.Set(0.0, 0.0, static_cast<float>(s.belly_height_m));  // a false height under the rover
+  Excused here;
+  here.length_m = 1.6;
+  here.width_m = 1.4;
+  here.margin_m = 0.5;
+  EXPECT_FALSE(At(s, map).Safe());
+  EXPECT_TRUE(At(s, map, &here).Safe());
+  // Elsewhere it is: 0.6 m ahead, the rover's belly would reach a rock there.
+  TestMap ahead;
+  ahead.Set(1.0, 0.0, static_cast<float>(s.belly_height_m));
+  EXPECT_FALSE(Evaluate(s, SampleTerrain(s, ahead.View(), Pose{0.6, 0.0, 0.0}, &here)).Safe());
+}
+
 TEST(AceClearance, APathStopsAtItsFirstUnsafePose) {
   const Suspension s;
   TestMap map;
