@@ -41,15 +41,100 @@ double Progress(const GoalDistance* field, const Pose2& pose, const std::vector<
   return best < d0 ? d0 - best : d0 - last;
 }
 
+std::vector<clearance::Pose> ToClearance(const std::vector<Pose2>& path) {
+  std::vector<clearance::Pose> out;
+  out.reserve(path.size());
+  for (const Pose2& p : path) out.push_back({p.x, p.y, p.yaw});
+  return out;
+}
+
+// How far a pose breaks the suspension's limits (Candidate::severity).
+double Severity(const clearance::Suspension& s, const clearance::Bounds& b) {
+  if (!b.decided) return 1.0;
+  const double deg = M_PI / 180.0;
+  return std::max({s.min_belly_clearance_m - b.min_clearance_m, b.max_rocker_rad - s.max_rocker_deg * deg,
+                   b.max_bogie_rad - s.max_bogie_deg * deg,
+                   std::max(b.max_roll_rad, b.max_pitch_rad) - s.max_tilt_deg * deg});
+}
+
+// Where a path stops being safe and what is met before that: by ACE's clearance bounds
+// with a suspension, else by the cells' ratings.
+struct Safety {
+  std::size_t clear_end = 0;  // poses [0, clear_end) are safe
+  double good = 1.0;          // the goodness of what they cross
+  std::string hazard;         // what stops the path ("" when nothing does)
+  double severity = 0.0;
+};
+
+Safety ClearanceSafety(const clearance::HeightMap& heights, const VoteOptions& o, const Pose2& pose,
+                       const std::vector<Pose2>& path) {
+  Safety out;
+  {
+    const clearance::Excused standing{{pose.x, pose.y, pose.yaw}, o.footprint.length_m, o.footprint.width_m,
+                                      o.footprint.center_forward_m, o.blind_margin_m};
+    // The pose the rover stands at is where it is (as the sweep leaves out the cells under
+    // it): the poses after it are judged.
+    std::vector<clearance::Pose> ahead = ToClearance(path);
+    if (ahead.size() > 1) ahead.erase(ahead.begin());
+    const clearance::PathBounds p = clearance::EvaluatePath(*o.suspension, heights, ahead, &standing);
+    const std::size_t skipped = path.size() - ahead.size();
+    out.clear_end = p.first_unsafe_pose < 0 ? path.size() : skipped + static_cast<std::size_t>(p.first_unsafe_pose);
+    out.good = p.min_margin;
+    if (p.first_unsafe_pose >= 0) {
+      const Pose2& at = path[out.clear_end];
+      out.hazard = "clearance at " + Fixed(at.x) + "," + Fixed(at.y) + ": " + p.first_unsafe.violation;
+      out.severity = Severity(*o.suspension, p.first_unsafe);
+    }
+  }
+  return out;
+}
+
+Safety CellSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, const std::vector<Pose2>& path) {
+  Safety out;
+  const Sweep s = SweepFootprint(grid, o.footprint, path, pose, o.blind_margin_m);
+  out.clear_end = s.first_unsafe_pose < 0 ? path.size() : static_cast<std::size_t>(s.first_unsafe_pose);
+  out.good = s.clear_min_goodness;
+  if (s.clear_unknown > 0) out.good = std::min(out.good, o.unknown_goodness);
+  if (s.unsafe > 0) {
+    out.hazard = "step " + Fixed(s.worst_step_m) + " m at " + Fixed(s.worst_x) + "," + Fixed(s.worst_y);
+    out.severity = s.worst_step_m;
+  }
+  return out;
+}
+
+Safety JudgeSafety(const Grid& grid, const clearance::HeightMap& heights, const VoteOptions& o, const Pose2& pose,
+                   const std::vector<Pose2>& path) {
+  if (!o.suspension) return CellSafety(grid, o, pose, path);
+  Safety out = ClearanceSafety(heights, o, pose, path);
+  if (!o.cells_too) return out;
+  // The hazard monitor's check, which still judges every step by the cells: what it would
+  // refuse is not safe either. The path stops at whichever test stops it first.
+  const Safety cells = CellSafety(grid, o, pose, path);
+  if (!cells.hazard.empty() && (out.hazard.empty() || cells.clear_end < out.clear_end)) {
+    out.clear_end = cells.clear_end;
+    out.hazard = cells.hazard;
+    out.severity = cells.severity;
+  }
+  // What the clear part is worth stays the cells' goodness, as without a suspension: the
+  // clearance margin is small on any ground the map is unsure of (2 sigma at every wheel
+  // and under the whole underside), and as the vote's goodness it let the goal vote
+  // outweigh steering round a rock early, so the rover drove at it and backed off in turn.
+  out.good = cells.good;
+  return out;
+}
+
 // Judges one candidate: `step` is the motion driven, `look` the motion judged (step first).
-void Judge(const Grid& grid, const GoalDistance* field, const Pose2& pose, double gx, double gy, const VoteOptions& o,
+void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalDistance* field, const Pose2& pose, double gx, double gy, const VoteOptions& o,
            const std::vector<Pose2>& step, const std::vector<Pose2>& look, Candidate* c) {
   c->step_sweep = SweepFootprint(grid, o.footprint, step, pose, o.blind_margin_m, o.unknown.hidden_patch_m);
   const UnknownVerdict unknown = JudgeUnknown(c->step_sweep, o.unknown);
   const Sweep& s = c->step_sweep;
-  if (s.unsafe > 0) {
+  const Safety step_safety = JudgeSafety(grid, heights, o, pose, step);
+  if (!step_safety.hazard.empty()) {
     c->vetoed = true;
-    c->why = "step " + Fixed(s.worst_step_m) + " m at " + Fixed(s.worst_x) + "," + Fixed(s.worst_y);
+    c->hazard = true;
+    c->severity = step_safety.severity;
+    c->why = step_safety.hazard;
   } else if (unknown == UnknownVerdict::kHidden) {
     c->vetoed = true;
     c->why = "unknown ground " + Fixed(o.unknown.hidden_patch_m) + " m across at " + Fixed(s.hidden_x) + "," +
@@ -61,19 +146,17 @@ void Judge(const Grid& grid, const GoalDistance* field, const Pose2& pose, doubl
     c->vetoed = true;
     c->why = "it would undo the last turn";
   }
-  // The look-ahead: how far it runs clear of unsafe cells (a fraction of its length), and
-  // the worst cell met before that.
-  const Sweep la = SweepFootprint(grid, o.footprint, look, pose, o.blind_margin_m);
-  const std::size_t clear_end = la.first_unsafe_pose < 0 ? look.size() : static_cast<std::size_t>(la.first_unsafe_pose);
+  // The look-ahead: how far it runs safe (a fraction of its length), and the worst met
+  // before that.
+  const Safety la = JudgeSafety(grid, heights, o, pose, look);
+  const std::size_t clear_end = la.clear_end;
   double total = 0.0, clear = 0.0;
   for (std::size_t i = 1; i < look.size(); ++i) {
     const double d = std::hypot(look[i].x - look[i - 1].x, look[i].y - look[i - 1].y);
     total += d;
     if (i < clear_end) clear += d;
   }
-  double good = la.clear_min_goodness;
-  if (la.clear_unknown > 0) good = std::min(good, o.unknown_goodness);
-  c->goodness = total > 0.0 ? good * clear / total : (la.unsafe > 0 ? 0.0 : good);
+  c->goodness = total > 0.0 ? la.good * clear / total : (la.hazard.empty() ? la.good : 0.0);
   c->clear_m = clear;
   const std::vector<Pose2> reached(look.begin(), look.begin() + std::max<std::size_t>(1, clear_end));
   const double progress = std::clamp(Progress(field, pose, reached, gx, gy) / o.lookahead_m, -1.0, 1.0);
@@ -96,6 +179,9 @@ void VoteOptions::Validate() const {
   positive(step_m, "step_m");
   positive(max_turn_rad, "max_turn_rad");
   positive(max_point_turn_rad, "max_point_turn_rad");
+  if (suspension) {
+    if (const std::string p = suspension->Problem(); !p.empty()) throw std::invalid_argument("avoidance: suspension: " + p);
+  }
   if (max_point_turn_rad > M_PI) throw std::invalid_argument("avoidance: max_point_turn_rad must be <= pi");
   if (!std::isfinite(previous_turn_rad)) throw std::invalid_argument("avoidance: previous_turn_rad must be finite");
   if (num_arcs < 1 || num_arcs > 101) throw std::invalid_argument("avoidance: num_arcs must be 1 to 101");
@@ -119,6 +205,15 @@ const char* ToString(Candidate::Kind kind) {
 Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const VoteOptions& o) {
   o.Validate();
   if (const std::string p = grid.Problem(); !p.empty()) throw std::invalid_argument("avoidance: grid: " + p);
+  if (o.suspension && !grid.HasHeights())
+    throw std::invalid_argument("avoidance: the grid holds no heights for the clearance model");
+  // The rock each unknown cell could hide, once for every candidate.
+  clearance::HeightMap heights = grid.Heights();
+  std::vector<float> hidden_rock;
+  if (o.suspension) {
+    hidden_rock = clearance::HiddenRockHeights(*o.suspension, heights);
+    heights.hidden_rock_m = hidden_rock.data();
+  }
   Choice choice;
   const double remaining = std::hypot(gx - pose.x, gy - pose.y);
   std::unique_ptr<GoalField> local_field;
@@ -138,7 +233,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.distance_m = s;
     const auto step = SamplePath(pose, 0.0, s, c.curvature_per_m);
     const auto look = SamplePath(pose, 0.0, std::max(s, o.lookahead_m), c.curvature_per_m);
-    Judge(grid, field, pose, gx, gy, o, step, look, &c);
+    Judge(grid, heights, field, pose, gx, gy, o, step, look, &c);
     choice.candidates.push_back(c);
   }
   // Turns in place to headings up to max_point_turn_rad round, then straight ahead in the
@@ -158,7 +253,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.turn_rad = std::clamp(t, -o.max_turn_rad, o.max_turn_rad);
     const auto step = SamplePath(pose, t, 0.0, 0.0);
     const auto look = SamplePath(pose, t, o.lookahead_m, 0.0);
-    Judge(grid, field, pose, gx, gy, o, step, look, &c);
+    Judge(grid, heights, field, pose, gx, gy, o, step, look, &c);
     choice.candidates.push_back(c);
   }
   // A turn after which not even one step is clear leads nowhere (see the header).
@@ -179,7 +274,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.kind = Candidate::Kind::kBackup;
     c.distance_m = -o.backup_m;
     const auto step = SamplePath(pose, 0.0, -o.backup_m, 0.0);
-    Judge(grid, field, pose, gx, gy, o, step, step, &c);
+    Judge(grid, heights, field, pose, gx, gy, o, step, step, &c);
     choice.candidates.push_back(c);
   };
   if (way_behind && o.backup_m > 0.0) backup();
@@ -197,7 +292,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   // Nothing allowed: name the worst hazard met by any step.
   const Candidate* worst = nullptr;
   for (const Candidate& c : choice.candidates)
-    if (c.step_sweep.unsafe > 0 && (!worst || c.step_sweep.worst_step_m > worst->step_sweep.worst_step_m)) worst = &c;
+    if (c.hazard && (!worst || c.severity > worst->severity)) worst = &c;
   choice.detail = "no safe step among " + std::to_string(choice.candidates.size()) + " candidates" +
                   (worst ? ": " + worst->why : ": " + choice.candidates.front().why);
   return choice;

@@ -8,10 +8,11 @@
 // (then straight ahead), driven max_turn_rad a step; and,
 // when nothing else is allowed, backing up.
 //
-// A candidate is vetoed when the step itself (not the look-ahead) crosses an unsafe cell,
+// A candidate is vetoed when the step itself (not the look-ahead) crosses an unsafe cell
+// (with a suspension: reaches a pose whose clearance bounds break its limits),
 // or when the unknown cells it crosses (outside the blind ring round the rover) are too
 // many by `unknown` (JudgeUnknown in grid.hpp: their share, and whether they could hide a
-// rock). A look-ahead that meets an unsafe cell
+// rock). A look-ahead that meets an unsafe cell (or pose)
 // leaves the candidate allowed, but its goodness is the worst cell met before that times
 // the fraction of the look-ahead that is clear, and its goal vote counts only the clear
 // part: arcs that run further through open ground win before the rover is close to an
@@ -28,7 +29,7 @@
 #include "avoidance/grid.hpp"
 
 #include <limits>
-
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,19 @@ struct VoteOptions {
   // would only undo it: it is vetoed, so that two turns cannot take turns for ever in
   // front of an obstacle that blocks both headings.
   double previous_turn_rad = 0.0;
+  // The rover's suspension (common/clearance): when set, a path is safe when ACE's bounds
+  // on its belly clearance, rocker and bogie angles and tilt, from the grid's heights, stay
+  // within the suspension's limits at every pose, in place of the cells' step and tilt
+  // ratings; the grid must then hold heights. Unset: the cells' ratings (unsafe cells).
+  std::optional<clearance::Suspension> suspension;
+  // With a suspension: whether a path must also cross no unsafe cell. The hazard monitor
+  // still judges every step by the cells' ratings (hazards/map_check.hpp), which are
+  // dilated by the wheel patch and refuse ground the clearance bounds allow (a low rock
+  // between the wheels); a step it refuses twice aborts the goto. true keeps the vote
+  // within what the monitor allows, and rates the clear part of a path by the cells'
+  // goodness; false: the clearance bounds alone, the clear part rated by the smallest
+  // margin they leave to a limit.
+  bool cells_too = true;
 
   // Throws std::invalid_argument naming the field.
   void Validate() const;
@@ -86,8 +100,13 @@ struct Candidate {
   double goodness = 0.0;         // 0..1: worst cell before an unsafe one x clear fraction
   double goal = 0.0;             // 0..1: (1 + progress to the clear part's end / look-ahead) / 2
   double vote = 0.0;
-  double clear_m = 0.0;          // how far the look-ahead runs before an unsafe cell
+  double clear_m = 0.0;          // how far the look-ahead runs before an unsafe cell (or pose)
   Sweep step_sweep;              // the step alone
+  // Vetoed by the terrain itself (an unsafe cell, or a pose outside the suspension's
+  // limits), and how badly: the worst step (m), or the worst excess over a clearance limit
+  // (m of belly clearance, or rad of angle; 1 when undecided).
+  bool hazard = false;
+  double severity = 0.0;
 };
 
 struct Choice {

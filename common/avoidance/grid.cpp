@@ -19,6 +19,12 @@ std::string Grid::Problem() const {
            std::to_string(step_m.size()) + " values (expected " + std::to_string(n) + ")";
   if (!tilt_deg.empty() && tilt_deg.size() != n)
     return "tilt array holds " + std::to_string(tilt_deg.size()) + " values (expected 0 or " + std::to_string(n) + ")";
+  if (elevation_m.size() != sigma_m.size() || (!sigma_m.empty() && sigma_m.size() != n))
+    return "height arrays hold " + std::to_string(elevation_m.size()) + "/" + std::to_string(sigma_m.size()) +
+           " values (expected 0 or " + std::to_string(n) + " each)";
+  for (std::size_t k = 0; k < sigma_m.size(); ++k)
+    if (!std::isfinite(elevation_m[k]) || !std::isfinite(sigma_m[k]))
+      return "cell " + std::to_string(k) + " has a non-finite height or sigma";
   for (std::size_t k = 0; k < tilt_deg.size(); ++k)
     if (!std::isfinite(tilt_deg[k])) return "cell " + std::to_string(k) + " has a non-finite tilt";
   for (std::size_t k = 0; k < n; ++k) {
@@ -26,6 +32,24 @@ std::string Grid::Problem() const {
     if (!std::isfinite(goodness[k]) || !std::isfinite(step_m[k])) return "cell " + std::to_string(k) + " is not finite";
   }
   return "";
+}
+
+clearance::HeightMap Grid::Heights() const {
+  clearance::HeightMap h;
+  h.origin_x = origin_x;
+  h.origin_y = origin_y;
+  h.cell_m = cell_m;
+  h.rows = rows;
+  h.cols = cols;
+  h.elevation_m = elevation_m.data();
+  h.sigma_m = sigma_m.data();
+  return h;
+}
+
+void Grid::SetHeights(float elevation, float sigma) {
+  const std::size_t n = static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols);
+  elevation_m.assign(n, elevation);
+  sigma_m.assign(n, sigma);
 }
 
 int Grid::IndexAt(double x, double y) const {
@@ -75,6 +99,10 @@ void Grid::Paint(double x, double y, double radius_m, CellClass s, float g, floa
         state[k] = s;
         goodness[k] = g;
         step_m[k] = step;
+        if (HasHeights()) {
+          elevation_m[k] = step;
+          sigma_m[k] = s == CellClass::kUnknown ? -1.0f : 0.0f;
+        }
       }
 }
 

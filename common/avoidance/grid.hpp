@@ -4,6 +4,8 @@
 // (-sin yaw, cos yaw). Knows nothing of LCM or of how the grid was made (stereo, a test).
 #pragma once
 
+#include "clearance/clearance.hpp"
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -28,7 +30,15 @@ struct Grid {
   // Optional (empty: not known, as in a TRAVERSABILITY_MAP message): the tilt of each
   // cell's plane, so that a refusal can say a slope, not only a step, was the hazard.
   std::vector<float> tilt_deg;
+  // Optional (empty: not known): each cell's elevation (m, up) and its 1-sigma uncertainty,
+  // from the cell's own points; sigma_m < 0: no height for the cell. What the clearance
+  // model (common/clearance) reads under the wheels and the belly.
+  std::vector<float> elevation_m;
+  std::vector<float> sigma_m;
 
+  bool HasHeights() const { return !sigma_m.empty(); }
+  // The heights as the clearance model reads them (a view of this grid's arrays).
+  clearance::HeightMap Heights() const;
   // "" when the sizes agree and the numbers are finite; otherwise what is wrong.
   std::string Problem() const;
   // Index of the cell holding (x, y), or -1 outside the grid.
@@ -44,7 +54,10 @@ struct Grid {
   // field of view) rate falsely high there; a real rock spans several cells, so its inner
   // cells stay unsafe. Returns how many cells changed.
   int DistrustEdges();
-  // Sets the cells whose centre lies within radius_m of (x, y).
+  // Gives every cell a known elevation and sigma (for tests; Paint then keeps them).
+  void SetHeights(float elevation_m, float sigma_m);
+  // Sets the cells whose centre lies within radius_m of (x, y). With heights, a cell painted
+  // unknown loses its height and any other stands step_m above the level (a rock that tall).
   void Paint(double x, double y, double radius_m, CellClass state, float goodness, float step_m);
 };
 

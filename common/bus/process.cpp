@@ -126,7 +126,8 @@ simtime::ComputeProfile LoadComputeProfile(const config::ConfigNode& section) {
 const std::vector<std::string>& KnownConfigSections() {
   static const std::vector<std::string> sections = {
       "mobility", "sensors",  "sim",    "estimator",       "hazards", "executor", "vo",
-      "camera",   "visual_odometry",    "capture",         "bus",     "auth",     "compute"};
+      "camera",   "visual_odometry",    "capture",         "bus",     "auth",     "compute",
+      "clearance"};
   return sections;
 }
 

@@ -31,6 +31,13 @@ inline rover_msgs::traversability_map_t MapToMsg(const avoidance::Grid& g, const
   for (int k = 0; k < m.num_cells; ++k) m.state[k] = static_cast<int8_t>(g.state[k]);
   m.goodness = g.goodness;
   m.step_m = g.step_m;
+  if (g.HasHeights()) {
+    m.elevation_m = g.elevation_m;
+    m.sigma_m = g.sigma_m;
+  } else {
+    m.elevation_m.assign(m.num_cells, 0.0f);
+    m.sigma_m.assign(m.num_cells, -1.0f);
+  }
   m.footprint_length_m = rules.footprint.length_m;
   m.footprint_width_m = rules.footprint.width_m;
   m.footprint_center_forward_m = rules.footprint.center_forward_m;
@@ -53,6 +60,8 @@ inline avoidance::Grid GridFromMsg(const rover_msgs::traversability_map_t& m, Ma
   for (std::size_t k = 0; k < m.state.size(); ++k) g.state[k] = static_cast<avoidance::CellClass>(m.state[k]);
   g.goodness = m.goodness;
   g.step_m = m.step_m;
+  g.elevation_m = m.elevation_m;
+  g.sigma_m = m.sigma_m;
   if (rules) {
     rules->footprint.length_m = m.footprint_length_m;
     rules->footprint.width_m = m.footprint_width_m;

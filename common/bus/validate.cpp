@@ -92,7 +92,9 @@ std::string Problem(const rover_msgs::traversability_map_t& m) {
   if (!(m.cell_m > 0) || !std::isfinite(m.cell_m)) return "cell_m is not a finite value > 0";
   for (int k = 0; k < m.num_cells; ++k) {
     if (auto p = Enum("state", m.state[k], 0, 3); !p.empty()) return "cell " + std::to_string(k) + ": " + p;
-    if (!std::isfinite(m.goodness[k]) || !std::isfinite(m.step_m[k])) return "cell " + std::to_string(k) + " is not finite";
+    if (!std::isfinite(m.goodness[k]) || !std::isfinite(m.step_m[k]) || !std::isfinite(m.elevation_m[k]) ||
+        !std::isfinite(m.sigma_m[k]))
+      return "cell " + std::to_string(k) + " is not finite";
   }
   return First({Finite("origin_x", m.origin_x), Finite("origin_y", m.origin_y),
                 Finite("footprint_length_m", m.footprint_length_m), Finite("footprint_width_m", m.footprint_width_m),

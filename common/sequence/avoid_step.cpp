@@ -110,6 +110,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.max_turn_rad = MaxTurn();
   o.blind_margin_m = map_->blind_margin_m;
   o.unknown = map_->unknown;
+  o.suspension = map_->suspension;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
   o.previous_turn_rad = last_turn_rad_;
   // Keep-out zones are obstacles: their cells, grown by the position uncertainty as the

@@ -195,6 +195,9 @@ struct TraversabilityMap {  // traversability_map_t (hazard_monitor)
   avoidance::Footprint footprint;  // what the monitor sweeps along a step
   double blind_margin_m = 0.5;
   avoidance::UnknownLimits unknown;  // how much unknown ground a step may cross
+  // The rover's suspension (configs/rover.yaml `clearance:`): arc voting judges paths by
+  // its clearance bounds from the map's heights; unset: by the cells' ratings.
+  std::optional<clearance::Suspension> suspension;
 };
 
 struct HazardReply {  // hazard_reply_t

@@ -2,6 +2,7 @@
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/ximgproc/disparity_filter.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -125,6 +126,32 @@ double ImageNoiseSigma(const cv::Mat& f, const cv::Mat& grey) {
   return std::max(quantisation, median / (0.6745 * 6.0));
 }
 
+// The left-right consistency check: the right image matched against the left by the same
+// matcher (cv::ximgproc::createRightMatcher, whose disparities are the negated right-view
+// ones), and every left pixel u with disparity d whose match u - d in the right view
+// carries a disparity more than max_diff_px from d is unmatched (set to -16). The check
+// itself is a loop over the pixels: OpenCV's only one (ximgproc's DisparityWLSFilter)
+// comes with its edge-aware smoothing of the disparities, which would move the depths the
+// map rates.
+void CheckLeftRight(const cv::Ptr<cv::StereoSGBM>& left_matcher, const cv::Mat& padL, const cv::Mat& padR,
+                    double max_diff_px, cv::Mat* disp16) {
+  cv::Ptr<cv::StereoMatcher> right_matcher = cv::ximgproc::createRightMatcher(left_matcher);
+  cv::Mat right16;
+  right_matcher->compute(padR, padL, right16);
+  const int unmatched_right = (right_matcher->getMinDisparity() - 1) * 16;
+  const double max_diff16 = 16.0 * max_diff_px;
+  for (int v = 0; v < disp16->rows; ++v) {
+    std::int16_t* dl = disp16->ptr<std::int16_t>(v);
+    const std::int16_t* dr = right16.ptr<std::int16_t>(v);
+    for (int u = 0; u < disp16->cols; ++u) {
+      if (dl[u] <= 0) continue;
+      const int ur = static_cast<int>(std::lround(u - dl[u] / 16.0));
+      const bool consistent = ur >= 0 && dr[ur] != unmatched_right && std::abs(dl[u] + dr[ur]) <= max_diff16;
+      if (!consistent) dl[u] = -16;
+    }
+  }
+}
+
 }  // namespace
 
 RectifiedRig Rectify(const geometry::StereoRig& rig, double scale) {
@@ -183,6 +210,27 @@ RectifiedRig Rectify(const geometry::StereoRig& rig, double scale) {
   return r;
 }
 
+cv::Mat MatchDisparity(const cv::Mat& rectL, const cv::Mat& rectR, const MapOptions& o) {
+  if (rectL.empty() || rectL.type() != CV_8UC1 || rectR.type() != CV_8UC1 || rectL.size() != rectR.size())
+    Bad("MatchDisparity: expected two 8-bit grey images of the same size");
+  const int num_disp = ((o.num_disparities + 15) / 16) * 16;
+  const int bs = o.block_size;
+  cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
+      0, num_disp, bs, 8 * bs * bs, 32 * bs * bs, 1, 31, o.uniqueness_ratio, o.speckle_window,
+      o.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
+  // SGBM leaves the left num_disp columns unmatched: pad both images on the left so that
+  // the whole left image is matched, then crop. The right view's match leaves its right
+  // num_disp columns unmatched the same way: with the check, pad on the right as well.
+  const bool check = o.lr_max_diff_px > 0;
+  const int right_pad = check ? num_disp : 0;
+  cv::Mat padL, padR, padded;
+  cv::copyMakeBorder(rectL, padL, 0, 0, num_disp, right_pad, cv::BORDER_CONSTANT, 0);
+  cv::copyMakeBorder(rectR, padR, 0, 0, num_disp, right_pad, cv::BORDER_CONSTANT, 0);
+  sgbm->compute(padL, padR, padded);
+  if (check) CheckLeftRight(sgbm, padL, padR, o.lr_max_diff_px, &padded);
+  return padded.colRange(num_disp, num_disp + rectL.cols).clone();
+}
+
 StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
                          const geometry::StereoRig& rig, const MapOptions& o,
                          UpdateStats* stats) {
@@ -227,16 +275,7 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
   t0 = std::chrono::steady_clock::now();
   const int num_disp = ((o.num_disparities + 15) / 16) * 16;
   const int bs = o.block_size;
-  cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
-      0, num_disp, bs, 8 * bs * bs, 32 * bs * bs, 1, 31, o.uniqueness_ratio, o.speckle_window,
-      o.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
-  // SGBM leaves the left num_disp columns unmatched: pad both images on the left so that
-  // the whole left image is matched, then crop.
-  cv::Mat padL, padR, padded;
-  cv::copyMakeBorder(rectL, padL, 0, 0, num_disp, 0, cv::BORDER_CONSTANT, 0);
-  cv::copyMakeBorder(rectR, padR, 0, 0, num_disp, 0, cv::BORDER_CONSTANT, 0);
-  sgbm->compute(padL, padR, padded);
-  const cv::Mat disp16 = padded.colRange(num_disp, padded.cols);
+  const cv::Mat disp16 = MatchDisparity(rectL, rectR, o);
   // Depth edges: the range of matched disparities over each pixel's 5x5 neighbourhood.
   cv::Mat edge;
   if (o.max_disparity_jump > 0) {

@@ -44,6 +44,13 @@ struct RectifiedRig {
 // std::invalid_argument on a degenerate rig (zero baseline, axes far from parallel).
 RectifiedRig Rectify(const geometry::StereoRig& rig, double scale);
 
+// Matches a rectified pair (8-bit grey, the same size): the left image's disparities in
+// 1/16 px (CV_16S), <= 0 where unmatched. Uses StereoSGBM (MODE_SGBM_3WAY) on the pair
+// padded on the left so that the whole left image is matched; with options.lr_max_diff_px
+// > 0, also the right image against the left (cv::ximgproc's right matcher), and a left
+// pixel whose match's right-view disparity differs by more than that is unmatched.
+cv::Mat MatchDisparity(const cv::Mat& rectL, const cv::Mat& rectR, const MapOptions& options);
+
 // Rectifies, matches and triangulates one pair. Throws std::invalid_argument with a
 // one-line message when an image is empty, not 8-bit grey, or not the models' size.
 // `stats` (optional) gets the rectify and match times. Caches the rectification of the

@@ -69,6 +69,8 @@ TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(optio
   if (!std::isfinite(o.min_texture_snr) || o.min_texture_snr < 0 || o.min_texture_snr > 100)
     Bad("min_texture_snr must be in [0, 100]");
   if (o.subsample < 1 || o.subsample > 16) Bad("subsample must be in [1, 16]");
+  if (!std::isfinite(o.lr_max_diff_px) || o.lr_max_diff_px < 0 || o.lr_max_diff_px > 64)
+    Bad("lr_max_diff_px must be in [0, 64]");
   if (!std::isfinite(o.max_disparity_jump) || o.max_disparity_jump < 0)
     Bad("max_disparity_jump must be >= 0");
   if (!std::isfinite(o.min_range_m) || o.min_range_m < 0 || o.min_range_m >= o.max_range_m)
@@ -201,6 +203,9 @@ void TraversabilityMap::Rate() const {
     mx[k] = a.sx / a.sw;  // the centroid of the cell's points, from the cell centre
     my[k] = a.sy / a.sw;
     s[k] = std::sqrt(a.n / a.sw);
+    const double spread2 = std::max(0.0, static_cast<double>(a.shh) / a.sw - static_cast<double>(h[k]) * h[k]);
+    cells_[k].elevation_m = static_cast<float>(h[k] + std::sqrt(spread2));
+    cells_[k].height_sigma_m = s[k];
   }
   // The patch: cell offsets within the footprint radius.
   const double cell = o.cell_size_m;
@@ -380,7 +385,7 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
                   "min_patch_fraction", "stereo_width_px", "num_disparities", "block_size",
                   "uniqueness_ratio", "speckle_window", "speckle_range", "disparity_sigma_px",
                   "subsample", "min_range_m", "max_disparity_jump", "min_texture", "min_texture_snr",
-                  "tilt_margin_sigmas", "drop_unseen_border"});
+                  "tilt_margin_sigmas", "drop_unseen_border", "lr_max_diff_px"});
   node.Get("cell_size_m", o.cell_size_m, 0.01, 10.0);
   node.Get("extent_m", o.extent_m, 0.1, 200.0);
   node.Get("footprint_radius_m", o.footprint_radius_m, 0.0, 10.0);
@@ -410,6 +415,7 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
   node.Get("min_texture_snr", o.min_texture_snr, 0.0, 100.0);
   node.Get("tilt_margin_sigmas", o.tilt_margin_sigmas, 0.0, 10.0);
   node.Get("drop_unseen_border", o.drop_unseen_border);
+  node.Get("lr_max_diff_px", o.lr_max_diff_px, 0.0, 64.0);
   if (o.min_range_m >= o.max_range_m)
     node.Fail("min_range_m: expected less than max_range_m");
   if (o.footprint_radius_m > o.extent_m / 2)

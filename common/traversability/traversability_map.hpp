@@ -45,6 +45,12 @@ struct Cell {
   float roughness_m = 0;  // residual of the plane fit
   float goodness = 0;     // 0 (unsafe) .. 1 (ideal); meaningful when state != kUnknown
   float sigma_m = 0;      // height uncertainty (grows with range and pose uncertainty)
+  // The cell's own height, for the clearance model: its top, the weighted mean elevation
+  // of its points plus one standard deviation of them (m, up: a rock's top standing in a
+  // cell of ground, where the mean would lie halfway down), and the points' height sigma.
+  // height_sigma_m < 0: the cell has too few points.
+  float elevation_m = 0;
+  float height_sigma_m = -1;
 };
 
 struct MapOptions {           // read from YAML by LoadMapOptions (key names = field names)
@@ -113,6 +119,12 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // interior of the nearby rows; so is every pixel within half a block (plus one) of the
   // image's edges, whose matching block runs off the image.
   bool drop_unseen_border = false;
+  // Left-right consistency: the right image is matched against the left as well, and a
+  // left pixel whose disparity disagrees with the right view's at its match by more than
+  // this many pixels (at the matching width) is dropped: it is occluded in the right image
+  // (the ground beside a rock's left flank) or mismatched. StereoSGBM's own disp12MaxDiff
+  // does nothing in MODE_SGBM_3WAY. 0 (the default) keeps every pixel.
+  double lr_max_diff_px = 0.0;
 };
 
 // Per update, for the log and the benchmark.

@@ -179,6 +179,13 @@ int main(int argc, char** argv) {
     auto options = seq::LoadExecutorOptions(proc.config());
     // Choosing a `goto ... avoid on` step costs rover time in simulation (the compute profile).
     options.plan_compute_s = proc.virtual_time() ? proc.compute().plan_s : 0.0;
+    // The suspension `goto ... avoid on` judges paths with (ACE clearance); without the
+    // section, the map's cell ratings.
+    std::optional<clearance::Suspension> suspension;
+    if (proc.config().Has("clearance")) {
+      suspension = clearance::LoadSuspension(proc.config()["clearance"]);
+      if (!suspension->enabled) suspension.reset();
+    }
     std::string state_file = options.state_file;
     if (auto f = proc.option("--state-file")) state_file = *f;
 
@@ -343,6 +350,7 @@ int main(int argc, char** argv) {
           t.footprint = rules.footprint;
           t.blind_margin_m = rules.blind_margin_m;
           t.unknown = rules.unknown;
+          t.suspension = suspension;
           executor.OnTraversabilityMap(t);
           flush();
         }, 4);

@@ -367,6 +367,9 @@ Bytes Sample(const std::string& channel, std::int64_t now) {
     m.goodness[4] = 0.0f;
     m.step_m.assign(9, 0.01f);
     m.step_m[4] = 0.5f;
+    m.elevation_m.assign(9, 0.0f);
+    m.elevation_m[4] = 0.5f;
+    m.sigma_m.assign(9, 0.02f);
     m.footprint_length_m = 1.6;
     m.footprint_width_m = 1.2;
     m.max_unknown_fraction = 0.2;

@@ -261,6 +261,103 @@ TEST(ArcVoting, ARoverWhoseEveryWayOnIsBlockedBacksAwayRatherThanTurning) {
   EXPECT_EQ(c.best.kind, Candidate::Kind::kBackup) << ToString(c.best.kind) << " " << c.best.turn_rad;
 }
 
+// With the rover's suspension, ACE's clearance bounds from the grid's heights, not the
+// cells' ratings, decide what is safe (common/clearance).
+Grid OpenWithHeights() {
+  Grid g = Open();
+  g.SetHeights(0.0f, 0.01f);
+  return g;
+}
+
+VoteOptions WithSuspension() {
+  VoteOptions o;
+  o.suspension = clearance::Suspension{};
+  return o;
+}
+
+const Candidate* Straight(const Choice& c) {
+  for (const auto& k : c.candidates)
+    if (k.kind == Candidate::Kind::kArc && k.curvature_per_m == 0.0) return &k;
+  return nullptr;
+}
+
+TEST(ArcVotingClearance, ALowRockBetweenTheWheelsIsDrivenOver) {
+  // A rock 0.12 m tall and 0.3 m across on the line, between the wheel tracks: the belly
+  // (0.30 m up) clears it by more than the 0.10 m asked. The cells rate it unsafe.
+  Grid g = OpenWithHeights();
+  g.Paint(1.5, 0.0, 0.15, CellClass::kUnsafe, 0.0f, 0.12f);
+  const Choice cells = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, VoteOptions{});
+  ASSERT_NE(Straight(cells), nullptr);
+  EXPECT_LT(Straight(cells)->clear_m, 3.0);  // the cells stop the look-ahead at the rock
+  VoteOptions o = WithSuspension();
+  EXPECT_LT(Straight(VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o))->clear_m, 3.0);  // the cells still stop it
+  o.cells_too = false;
+  const Choice ace = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o);
+  ASSERT_NE(Straight(ace), nullptr);
+  EXPECT_FALSE(Straight(ace)->vetoed) << Straight(ace)->why;
+  EXPECT_NEAR(Straight(ace)->clear_m, 3.0, 1e-6);
+  // Its goodness is the margin left, at most (0.30 - 0.12 - 0.10) / (0.30 - 0.10) of the
+  // clearance (less the heights' uncertainty). Open ground leaves more.
+  EXPECT_GT(Straight(ace)->goodness, 0.0);
+  EXPECT_LT(Straight(ace)->goodness, (0.30 - 0.12 - 0.10) / 0.20);
+  const Choice open = VoteArcs(OpenWithHeights(), {0, 0, 0}, 5.0, 0.0, o);
+  EXPECT_GT(Straight(open)->goodness, Straight(ace)->goodness + 0.3);
+}
+
+TEST(ArcVotingClearance, ATallRockBetweenTheWheelsIsSteeredRound) {
+  Grid g = OpenWithHeights();
+  g.Paint(1.2, 0.0, 0.15, CellClass::kSafe, 0.9f, 0.35f);  // taller than the belly is high
+  const Choice c = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, WithSuspension());
+  ASSERT_NE(Straight(c), nullptr);
+  EXPECT_TRUE(Straight(c)->vetoed);
+  EXPECT_NE(Straight(c)->why.find("belly clearance"), std::string::npos) << Straight(c)->why;
+  ASSERT_TRUE(c.found);
+  EXPECT_FALSE(c.best.kind == Candidate::Kind::kArc && c.best.curvature_per_m == 0.0);
+}
+
+TEST(ArcVotingClearance, UnknownGroundAheadShortensWhatIsClear) {
+  // Ground beyond the blind ring the map has no height for, 0.8 m across, on the line.
+  Grid g = OpenWithHeights();
+  g.Paint(1.7, 0.0, 0.4, CellClass::kUnknown, 0.0f, 0.0f);
+  VoteOptions o = WithSuspension();
+  o.cells_too = false;
+  o.unknown.max_fraction = 0.5;
+  const Choice c = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o);
+  ASSERT_NE(Straight(c), nullptr);
+  // A rock unknown_rise_m tall could stand there: the look-ahead is clear only until the
+  // belly reaches it.
+  EXPECT_LT(Straight(c)->clear_m, 1.0);
+  // A rover that assumed unknown ground level would see the whole look-ahead clear.
+  o.suspension->unknown_rise_m = 0.0;
+  const Choice level = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o);
+  EXPECT_NEAR(Straight(level)->clear_m, 3.0, 1e-6);
+}
+
+TEST(ArcVotingClearance, NothingAllowedNamesTheClearanceItBreaks) {
+  // Boxed in by rock taller than the underside, here the whole 1.6 x 1.4 m footprint: every
+  // arc and every turn in place brings rock under it.
+  Grid g = OpenWithHeights();
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j) {
+      const double x = g.CellCentreX(i), y = g.CellCentreY(j);
+      if (std::abs(x) < 0.9 && std::abs(y) < 0.8) continue;
+      g.elevation_m[static_cast<std::size_t>(i) * g.cols + j] = 0.5f;
+    }
+  VoteOptions o = WithSuspension();
+  o.cells_too = false;
+  o.suspension->belly_min_x_m = -0.8;
+  o.suspension->belly_max_x_m = 0.8;
+  o.suspension->belly_width_m = 1.4;
+  o.backup_m = 0.0;
+  const Choice c = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o);
+  EXPECT_FALSE(c.found);
+  EXPECT_NE(c.detail.find("clearance at "), std::string::npos) << c.detail;
+}
+
+TEST(ArcVotingClearance, AGridWithoutHeightsCannotBeJudged) {
+  EXPECT_THROW(VoteArcs(Open(), {0, 0, 0}, 5.0, 0.0, WithSuspension()), std::invalid_argument);
+}
+
 TEST(ArcVoting, BadInputThrowsOneLine) {
   Grid g = Open();
   g.goodness.pop_back();

@@ -81,6 +81,8 @@ TEST(WebState, JsonCarriesEveryPanel) {
   map.state = {0, 1, 2, 3, 1, 1};
   map.goodness.assign(6, 0.5f);
   map.step_m.assign(6, 0.0f);
+  map.elevation_m.assign(6, 0.0f);
+  map.sigma_m = {-1, 0.02f, 0.02f, 0.02f, 0.02f, 0.02f};
   state.On(map, t);
 
   rover_msgs::keepout_zones_t zones{};
