@@ -148,6 +148,29 @@ void HazardLines(const ConsoleState& s, double now, std::vector<std::string>& ou
   if (!h.detail.empty()) out.push_back(Line("", h.detail));
 }
 
+// The set the executor last sent the hazard monitor (it replaces the previous one).
+void ZoneLines(const ConsoleState& s, std::vector<std::string>& out) {
+  if (!s.zones) {
+    out.push_back(Line("ZONES", "no KEEPOUT_ZONES heard yet (none sent since the console started)"));
+    return;
+  }
+  const auto& zones = s.zones->msg.zones;
+  if (zones.empty()) {
+    out.push_back(Line("ZONES", "none in force (a sequence's zones are cleared when the next one starts)"));
+    return;
+  }
+  std::string text = std::to_string(zones.size()) + " in force:";
+  for (const auto& z : zones) {
+    text += " " + z.name;
+    if (z.shape == rover_msgs::keepout_zone_t::SHAPE_CIRCLE) {
+      text += " (circle " + Fixed(z.center[0], 2) + " " + Fixed(z.center[1], 2) + " m r " + Fixed(z.radius_m, 2) + " m)";
+    } else {
+      text += " (polygon, " + std::to_string(z.num_vertices) + " vertices)";
+    }
+  }
+  out.push_back(Line("ZONES", text));
+}
+
 void PoseLines(const ConsoleState& s, double now, std::vector<std::string>& out) {
   if (!s.pose) {
     out.push_back(Line("POSE", "no POSE heard yet"));
@@ -228,6 +251,12 @@ void ConsoleState::On(const rover_msgs::pose_t& m, double wall_s) {
   ++messages;
 }
 
+void ConsoleState::On(const rover_msgs::keepout_zones_t& m, double wall_s) {
+  zones = Heard<rover_msgs::keepout_zones_t>{m, wall_s};
+  rover_utime = std::max(rover_utime, m.utime);
+  ++messages;
+}
+
 void ConsoleState::On(const rover_msgs::heartbeat_t& m, double wall_s) {
   processes[m.process] = {m, wall_s};
   ++messages;
@@ -245,6 +274,7 @@ std::vector<std::string> RenderFrame(const ConsoleState& s, double now, const Fr
   out.push_back("");
   VoLines(s, now, out);
   HazardLines(s, now, out);
+  ZoneLines(s, out);
   PoseLines(s, now, out);
   out.push_back("");
   ProcessLines(s, now, o, out);
