@@ -19,9 +19,7 @@ namespace {
 // The URL itself when it is one LCM can open, else a one-line error before LCM sees it.
 const std::string& CheckedUrl(const std::string& url) {
   if (const std::string problem = LcmUrlProblem(url); !problem.empty()) {
-    throw std::runtime_error("LCM URL " + url + ": " + problem +
-                             " (expected udpm://GROUP:PORT?ttl=N, GROUP an IPv4 multicast address in "
-                             "224.0.0.0/4, PORT 1-65535, ttl 0-255)");
+    throw std::runtime_error("LCM URL " + url + ": " + problem + " (expected " + kLcmUrlExpected + ")");
   }
   return url;
 }

@@ -11,4 +11,8 @@ namespace rover::bus {
 // LCM's to judge.
 std::string LcmUrlProblem(const std::string& url);
 
+// What a good one looks like, for the error line.
+inline constexpr const char* kLcmUrlExpected =
+    "udpm://GROUP:PORT?ttl=N, GROUP in 224.0.0.0/4, PORT 1-65535, ttl 0-255";
+
 }  // namespace rover::bus

@@ -65,7 +65,7 @@ std::string ChooseUrl(const std::string& name, int argc, char** argv) {
   }
   if (const std::string problem = LcmUrlProblem(url); !problem.empty()) {
     throw config::ConfigError(name + ": " + (from.empty() ? "LCM URL" : from) + ": " + url + ": " + problem +
-                              " (expected udpm://GROUP:PORT?ttl=N, GROUP in 224.0.0.0/4, PORT 1-65535)");
+                              " (expected " + kLcmUrlExpected + ")");
   }
   return url;
 }
@@ -149,7 +149,7 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
                  std::vector<OptionSpec> options, std::vector<std::string> config_sections)
     : name_(std::move(name)),
       options_(ParseArgs(name_, summary, argc, argv, options)),
-      bus_(ChooseUrl(name, argc, argv)) {
+      bus_(ChooseUrl(name_, argc, argv)) {
   if (auto it = options_.find("--config"); it != options_.end()) {
     config_path_ = it->second;
     config_ = config::ConfigNode::LoadFile(config_path_);

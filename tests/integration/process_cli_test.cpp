@@ -134,13 +134,13 @@ TEST(ProcessCli, HugeWorldBadLcmUrlAndADirectoryStateFileAreOneLine) {
   r = RunCommand(Bin("state_estimator") + " --config configs/rover.yaml --lcm-url 'udpm://999.1.1.1:99999'");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_EQ(r.output, "state_estimator: argument --lcm-url: udpm://999.1.1.1:99999: group '999.1.1.1' is not an "
-                      "IPv4 address (expected udpm://GROUP:PORT?ttl=N, GROUP in 224.0.0.0/4, PORT 1-65535)\n");
+                      "IPv4 address (expected udpm://GROUP:PORT?ttl=N, GROUP in 224.0.0.0/4, PORT 1-65535, ttl 0-255)\n");
   r = RunCommand("ROVER_LCM_URL='udpm://239.255.76.67:99999?ttl=0' " + Bin("hazard_monitor") + " --config configs/rover.yaml");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_EQ(CountLines(r.output), 1) << r.output;
   EXPECT_NE(r.output.find("hazard_monitor: $ROVER_LCM_URL: udpm://239.255.76.67:99999?ttl=0: port '99999' is not in "
                           "1-65535"), std::string::npos) << r.output;
-  for (const std::string tool : {"rover_console --once", "rover_seq status", "rover_recorder " + dir + "/x.lcm"}) {
+  for (const std::string& tool : {std::string("rover_console --once"), std::string("rover_seq status"), "rover_recorder " + dir + "/x.lcm"}) {
     r = RunCommand(Bin(tool) + " --lcm-url 'udpm://999.1.1.1:99999'");
     EXPECT_NE(r.exit_code, 0) << tool;
     EXPECT_EQ(CountLines(r.output), 1) << tool << ": " << r.output;

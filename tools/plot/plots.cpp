@@ -266,20 +266,22 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
                     "title 'step ends (on-board estimate)'");
   }
   // Where each aborted sequence stopped.
-  std::vector<rover_msgs::sequence_status_t> aborts;
+  std::vector<std::pair<std::string, rover_msgs::sequence_status_t>> aborts;  // sequence name, status
   for (const auto& r : log.runs) {
-    if (r.final_status && r.final_status->state == rover_msgs::sequence_status_t::STATE_ABORTED) aborts.push_back(*r.final_status);
+    if (r.final_status && r.final_status->state == rover_msgs::sequence_status_t::STATE_ABORTED) {
+      aborts.emplace_back(r.name, *r.final_status);
+    }
   }
   if (log.runs.empty() && log.final_status && log.final_status->state == rover_msgs::sequence_status_t::STATE_ABORTED) {
-    aborts.push_back(*log.final_status);
+    aborts.emplace_back(log.final_status->sequence_name, *log.final_status);
   }
   for (std::size_t i = 0; i < aborts.size(); ++i) {
-    const auto& st = aborts[i];
+    const auto& [name, st] = aborts[i];
     const std::string file = "traverse_abort" + (i ? std::to_string(i + 1) : std::string()) + ".dat";
     std::ofstream(dir + file) << Num(st.pose[0]) << " " << Num(st.pose[1]) << "\n";
     b.Add(st.pose[0], st.pose[1]);
     plots.push_back("'" + file + "' using 2:1 with points pt 2 ps 3 lw 3 lc rgb '#cc0000' title " +
-                    Quoted("abort: " + (log.runs.size() > 1 ? st.sequence_name + ": " : std::string()) + st.abort_reason));
+                    Quoted("abort: " + (log.runs.size() > 1 ? name + ": " : std::string()) + st.abort_reason));
   }
 
   // Equal axes over everything shown, with half a metre around it.

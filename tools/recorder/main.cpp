@@ -426,7 +426,8 @@ int main(int argc, char** argv) {
   if (!args) return 0;
   try {
     if (const std::string problem = rover::bus::LcmUrlProblem(args->url); !problem.empty()) {
-      std::cerr << "rover_recorder: argument --lcm-url: " << args->url << ": " << problem << "\n";
+      std::cerr << "rover_recorder: argument --lcm-url: " << args->url << ": " << problem << " (expected "
+                << rover::bus::kLcmUrlExpected << ")\n";
       return 2;
     }
     lcm::LCM lcm(args->url);

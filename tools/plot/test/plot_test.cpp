@@ -387,6 +387,7 @@ TEST(Plots, TraverseShowsBothSequencesTheirAbortsTheGoalRocksAndSteeringSteps) {
   EXPECT_NE(text.find("'traverse_abort.dat'"), std::string::npos) << text;
   EXPECT_NE(text.find("'traverse_abort2.dat'"), std::string::npos) << text;
   EXPECT_NE(text.find("abort: second.seq: hazard_map"), std::string::npos) << text;
+  EXPECT_NE(text.find("abort: synthetic.seq: progress"), std::string::npos) << text;
   EXPECT_NE(text.find("'traverse_goals.dat' using 2:1:3 with circles"), std::string::npos) << text;
   EXPECT_NE(text.find("'traverse_rocks.dat' using 2:1:3 with circles"), std::string::npos) << text;
   EXPECT_NE(text.find("'traverse_steer.dat'"), std::string::npos) << text;
