@@ -149,14 +149,26 @@ void HazardLines(const ConsoleState& s, double now, std::vector<std::string>& ou
 }
 
 // The set the executor last sent the hazard monitor (it replaces the previous one).
+// KEEPOUT_ZONES is sent when the set changes, so a console started later has not heard it:
+// then the hazard monitor's status (1 Hz) says whether it holds any, and the nearest.
 void ZoneLines(const ConsoleState& s, std::vector<std::string>& out) {
+  const std::string nearest = s.hazard ? s.hazard->msg.zone_name : "";
   if (!s.zones) {
-    out.push_back(Line("ZONES", "no KEEPOUT_ZONES heard yet (none sent since the console started)"));
+    if (!s.hazard) {
+      out.push_back(Line("ZONES", "no KEEPOUT_ZONES or HAZARD_STATUS heard yet"));
+    } else if (nearest.empty()) {
+      out.push_back(Line("ZONES", "none in force (the hazard monitor holds none)"));
+    } else {
+      out.push_back(Line("ZONES", "the hazard monitor holds zones, nearest " + nearest +
+                                      " (the whole set shows when the executor next sends it)"));
+    }
     return;
   }
   const auto& zones = s.zones->msg.zones;
   if (zones.empty()) {
-    out.push_back(Line("ZONES", "none in force (a sequence's zones are cleared when the next one starts)"));
+    out.push_back(Line("ZONES", "none in force (a sequence's zones are cleared when the next one starts)" +
+                                    (nearest.empty() ? std::string()
+                                                     : "; the hazard monitor's own config adds zones, nearest " + nearest)));
     return;
   }
   std::string text = std::to_string(zones.size()) + " in force:";
