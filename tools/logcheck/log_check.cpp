@@ -220,8 +220,8 @@ bool LossTracker::RunningBeforeTheLog(std::uint32_t publisher_id, std::int64_t l
 
 std::set<std::string> LossTracker::JoinedPublishers() const {
   std::set<std::string> out;
-  for (const auto& [id, joined] : running_before_) {
-    if (!joined) continue;
+  for (const auto& [id, before] : before_by_publisher_) {
+    if (before == 0) continue;
     auto it = names_.find(id);
     out.insert(it != names_.end() ? it->second : PublisherName(Hex32(id)));
   }
@@ -265,6 +265,7 @@ std::optional<Gap> LossTracker::ObserveAt(std::int64_t log_timestamp_us, const s
   if (first) {
     if (s.count > 0 && joined) {
       before_recording_ += s.count;
+      before_by_publisher_[s.publisher_id] += s.count;
     } else if (s.count > 0 && options_.from_start) {
       gap = make_gap(Gap::Kind::kAtStart, s.count);
     }

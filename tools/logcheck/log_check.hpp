@@ -135,7 +135,7 @@ class LossTracker {
   // A readable name for a publisher key: heartbeats name their processes, and each name's
   // FNV-1a id maps a pub_seq id back to it.
   std::string PublisherName(const std::string& key) const;
-  // detect_joined: the processes that were running before the recording began, and how
+  // detect_joined: the processes that had published before the recording began, and how
   // many of their messages (all channels) were published before it.
   std::set<std::string> JoinedPublishers() const;
   std::int64_t before_recording() const { return before_recording_; }
@@ -154,6 +154,7 @@ class LossTracker {
   std::int64_t messages_ = 0;
   std::int64_t first_timestamp_us_ = -1;                      // the log's first message
   std::map<std::uint32_t, bool> running_before_;              // publisher id -> joined?
+  std::map<std::uint32_t, std::int64_t> before_by_publisher_; // its messages before the log
   std::int64_t before_recording_ = 0;
 };
 
