@@ -414,6 +414,7 @@ int main(int argc, char** argv) {
     summary.process_events = partial.process_events;
     const std::string summary_path = out_dir + "/summary.json";
     const bool summary_written = WriteWhole(summary_path, rover::tools::SummaryJson(summary));
+    const std::string summary_error = summary_written ? "" : std::strerror(errno);
     std::cout << "\n" << rover::tools::SummaryText(summary);
     // The figures come from the log: a log that could not be written whole says less than
     // the drive did. The executor's own last word, heard live, says how the drive ended.
@@ -441,7 +442,7 @@ int main(int argc, char** argv) {
     if (summary_written && log_whole) {
       std::cout << "  wrote " << summary_path << " and " << log_path << "\n";
     } else {
-      std::cout << "  NOT WRITTEN: " << (summary_written ? "" : summary_path + " (" + std::strerror(errno) + ")")
+      std::cout << "  NOT WRITTEN: " << (summary_written ? "" : summary_path + " (" + summary_error + ")")
                 << (summary_written || log_whole ? "" : " and ") << (log_whole ? "" : log_path + " (partial)")
                 << "\n";
     }
