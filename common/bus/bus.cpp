@@ -1,6 +1,12 @@
 #include "bus/bus.hpp"
+#include "bus/lcm_url_check.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <optional>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <cerrno>
 #include <iostream>
 
@@ -8,7 +14,60 @@ namespace rover::bus {
 
 std::uint32_t PublisherId(const std::string& name) { return simtime::PublisherIdOf(name); }
 
-Bus::Bus(const std::string& url) : url_(url), lcm_(url) {
+namespace {
+
+// The URL itself when it is one LCM can open, else a one-line error before LCM sees it.
+const std::string& CheckedUrl(const std::string& url) {
+  if (const std::string problem = LcmUrlProblem(url); !problem.empty()) {
+    throw std::runtime_error("LCM URL " + url + ": " + problem + " (expected " + kLcmUrlExpected + ")");
+  }
+  return url;
+}
+
+// A whole decimal number in [lo, hi], or nullopt.
+std::optional<long> WholeNumber(const std::string& text, long lo, long hi) {
+  if (text.empty() || text.size() > 10 || !std::all_of(text.begin(), text.end(), ::isdigit)) return std::nullopt;
+  const long v = std::stol(text);
+  if (v < lo || v > hi) return std::nullopt;
+  return v;
+}
+
+}  // namespace
+
+// udpm://GROUP:PORT?key=value&...: LCM's own grammar; the group is read with inet_pton.
+std::string LcmUrlProblem(const std::string& url) {
+  const std::string scheme = "udpm://";
+  if (url.rfind(scheme, 0) != 0) return "";
+  const std::string rest = url.substr(scheme.size());
+  const std::size_t q = rest.find('?');
+  const std::string address = rest.substr(0, q);
+  const std::string options = q == std::string::npos ? "" : rest.substr(q + 1);
+  if (!address.empty()) {
+    const std::size_t colon = address.find(':');
+    const std::string group = address.substr(0, colon);
+    in_addr a{};
+    if (inet_pton(AF_INET, group.c_str(), &a) != 1) return "group '" + group + "' is not an IPv4 address";
+    if ((ntohl(a.s_addr) >> 28) != 0xE) return "group " + group + " is not a multicast address";
+    if (colon != std::string::npos && !WholeNumber(address.substr(colon + 1), 1, 65535)) {
+      return "port '" + address.substr(colon + 1) + "' is not in 1-65535";
+    }
+  }
+  std::size_t start = 0;
+  while (start < options.size()) {
+    const std::size_t end = std::min(options.find('&', start), options.size());
+    const std::string option = options.substr(start, end - start);
+    const std::size_t eq = option.find('=');
+    const std::string key = option.substr(0, eq), value = eq == std::string::npos ? "" : option.substr(eq + 1);
+    if (key == "ttl" && !WholeNumber(value, 0, 255)) return "ttl '" + value + "' is not in 0-255";
+    if (key == "recv_buf_size" && !WholeNumber(value, 1, 2147483647)) {
+      return "recv_buf_size '" + value + "' is not a positive whole number of bytes";
+    }
+    start = end + 1;
+  }
+  return "";
+}
+
+Bus::Bus(const std::string& url) : url_(url), lcm_(CheckedUrl(url)) {
   if (!lcm_.good()) {
     throw std::runtime_error("cannot open the LCM bus at " + url +
                              " (expected a working udpm:// URL; is there a multicast route? "

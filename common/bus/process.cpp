@@ -1,4 +1,5 @@
 #include "bus/process.hpp"
+#include "bus/lcm_url_check.hpp"
 
 #include "bus/channels.hpp"
 #include "bus/signing.hpp"
@@ -47,12 +48,26 @@ std::string Usage(const std::string& name, const std::string& summary,
   return os.str();
 }
 
-std::string ChooseUrl(int argc, char** argv) {
+// The bus URL, checked before LCM sees it (a bad one is a bad argument: exit 2, one line).
+std::string ChooseUrl(const std::string& name, int argc, char** argv) {
+  std::string url = kDefaultLcmUrl, from;
   for (int i = 1; i + 1 < argc; ++i) {
-    if (std::string(argv[i]) == "--lcm-url") return argv[i + 1];
+    if (std::string(argv[i]) == "--lcm-url") {
+      url = argv[i + 1];
+      from = "argument --lcm-url";
+    }
   }
-  if (const char* env = std::getenv("ROVER_LCM_URL"); env != nullptr && *env != '\0') return env;
-  return kDefaultLcmUrl;
+  if (from.empty()) {
+    if (const char* env = std::getenv("ROVER_LCM_URL"); env != nullptr && *env != '\0') {
+      url = env;
+      from = "$ROVER_LCM_URL";
+    }
+  }
+  if (const std::string problem = LcmUrlProblem(url); !problem.empty()) {
+    throw config::ConfigError(name + ": " + (from.empty() ? "LCM URL" : from) + ": " + url + ": " + problem +
+                              " (expected " + kLcmUrlExpected + ")");
+  }
+  return url;
 }
 
 // Parsed before the Bus is constructed so that --help works with no bus at all.
@@ -135,7 +150,7 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
                  std::vector<OptionSpec> options, std::vector<std::string> config_sections)
     : name_(std::move(name)),
       options_(ParseArgs(name_, summary, argc, argv, options)),
-      bus_(ChooseUrl(argc, argv)) {
+      bus_(ChooseUrl(name_, argc, argv)) {
   if (auto it = options_.find("--config"); it != options_.end()) {
     config_path_ = it->second;
     config_ = config::ConfigNode::LoadFile(config_path_);

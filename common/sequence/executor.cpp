@@ -61,6 +61,9 @@ void SequenceExecutor::Submit(Sequence sequence, int64_t submission_id, const st
   command_active_ = false;
   arrival_note_.clear();
   ResetSettings();
+  // The zones of an earlier sequence end with it: the hazard monitor is told too, or it
+  // would go on checking (and aborting on) zones this sequence never declared.
+  PublishZones();
   for (const Command& c : sequence_.commands) {
     if (const auto* v = std::get_if<VoSetting>(&c.action); v && v->enabled) sequence_uses_vo_ = true;
   }

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 namespace rover::sequence {
@@ -206,6 +207,7 @@ class LineParser {
         Fail(tok.col, "missing unit after " + std::string(tok.text) + " for " + what,
              UnitsOf(d));
       }
+      FailOnDecimalComma(tok, what);
       const std::size_t next_number = NumberLength(Peek().text);
       const bool looks_numeric = next_number > 0 || IsNonFiniteWord(Peek().text) ||
                                  Peek().text == ",";
@@ -278,6 +280,22 @@ class LineParser {
   const LanguageLimits& limits() const { return limits_; }
 
  private:
+  // "1,5 m" (a decimal comma, as many locales write it) reads as the number 1 followed by a
+  // ',' and would be reported as a missing unit: say what is wrong instead. Only a comma
+  // touching digits on both sides counts; "1 m 2 m, 3 m 2 m" (polygon vertices) is spaced.
+  void FailOnDecimalComma(const Token& number, const std::string& what) const {
+    if (pos_ + 1 >= tokens_.size() || tokens_[pos_].text != ",") return;
+    const Token& comma = tokens_[pos_];
+    const Token& after = tokens_[pos_ + 1];
+    const bool touching = comma.col == number.col + static_cast<int>(number.text.size()) &&
+                          after.col == comma.col + 1;
+    if (!touching || after.text.empty() || !std::isdigit(static_cast<unsigned char>(after.text[0]))) return;
+    const std::size_t digits = NumberLength(after.text);
+    const std::string fraction(after.text.substr(0, digits));
+    Fail(comma.col, "decimal comma in " + Quoted(std::string(number.text) + "," + fraction) + " for " + what,
+         "a decimal point: " + std::string(number.text) + "." + fraction);
+  }
+
   static bool LooksLikeUnit(std::string_view t) {
     // Any token right after a number is taken as its (possibly unknown) unit, so that
     // "3 ft" says "unknown unit"; keywords of the language are not units.
@@ -423,6 +441,10 @@ class SequenceParser {
   Turn ParseTurn(LineParser& p) {
     Turn t;
     int col = 0;
+    if (p.PeekIs("to")) {  // "turn to -10 deg": the operator wants an absolute heading
+      p.Fail(p.NextCol(), "unexpected 'to' after 'turn' (turn takes a relative angle)",
+             "a relative angle, e.g. turn 20 deg; for an absolute heading: turnto -10 deg");
+    }
     t.angle_rad = p.Quantity(Dimension::kAngle, "turn angle", &col);
     NonZeroAbs(p, t.angle_rad, col, "turn angle", limits_.max_turn_deg * kDeg, kDeg, "deg");
     return t;
@@ -605,7 +627,15 @@ class SequenceParser {
       const int col = p.NextCol();
       KeepOutRemove r{p.Name("zone name")};
       if (zones_.erase(r.name) == 0) {
-        p.Fail(col, "no zone named " + Quoted(r.name) + " is in force", "the name of a declared zone");
+        if (const auto other = ZoneDifferingInCase(r.name)) {
+          p.Fail(col, "no zone named " + Quoted(r.name) + " is in force (names are case-sensitive)",
+                 "'keepout remove " + other->first + "' (declared at line " + std::to_string(other->second) + ")");
+        }
+        // Zones live as long as the sequence that declared them: the executor clears them,
+        // for itself and the hazard monitor, when a sequence starts.
+        p.Fail(col, "no zone named " + Quoted(r.name) + " is in force in this sequence",
+               "the name of a zone declared earlier in this file (zones of an earlier sequence are "
+               "cleared when this one starts)");
       }
       return r;
     }
@@ -616,6 +646,14 @@ class SequenceParser {
       p.Fail(name_col, "duplicate zone name " + Quoted(z.name) + " (first declared at line " +
                            std::to_string(it->second) + ")",
              "a new name, or 'keepout remove " + z.name + "' first");
+    }
+    // Names are case-sensitive (the executor and hazard monitor match them exactly), so
+    // 'Mazatzal' and 'mazatzal' would be two zones that an operator reads as one: refused.
+    if (const auto other = ZoneDifferingInCase(z.name)) {
+      p.Fail(name_col, "zone name " + Quoted(z.name) + " differs only in case from zone " + Quoted(other->first) +
+                           " (declared at line " + std::to_string(other->second) + ")",
+             "a name that differs in more than case (names are case-sensitive), or 'keepout remove " +
+                 other->first + "' first");
     }
     const int shape_col = p.NextCol();
     int col = 0;
@@ -665,6 +703,14 @@ class SequenceParser {
                        : ImagePurpose::kVoBaseline;
     }
     return im;
+  }
+
+  // A zone in force whose name equals `name` but for case.
+  std::optional<std::pair<std::string, int>> ZoneDifferingInCase(const std::string& name) const {
+    for (const auto& [other, line] : zones_) {
+      if (other != name && Lower(other) == Lower(name)) return std::make_pair(other, line);
+    }
+    return std::nullopt;
   }
 
   void CheckPolygon(LineParser& p, const std::vector<Eigen::Vector2d>& v, const std::vector<int>& cols,

@@ -213,7 +213,7 @@ World::World(WorldOptions options) : options_(std::move(options)) {
   res_ = o.resolution_m;
   nx_ = static_cast<int>(std::ceil(o.map_size_m.x() / res_ - 1e-9)) + 1;
   ny_ = static_cast<int>(std::ceil(o.map_size_m.y() / res_ - 1e-9)) + 1;
-  if (static_cast<double>(nx_) * ny_ > 16.0e6) {
+  if (static_cast<double>(nx_) * ny_ > kMaxWorldCells) {
     throw std::invalid_argument("world \"" + o.name + "\": map of " + std::to_string(nx_) + "x" +
                                 std::to_string(ny_) +
                                 " cells is too large (at most 16 million; coarsen resolution_m)");

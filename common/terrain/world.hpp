@@ -166,6 +166,9 @@ struct WorldOptions {
   static WorldOptions LoadFile(const std::string& path);
 };
 
+// The most grid nodes a world's map may have (its grids are several arrays of this size).
+inline constexpr double kMaxWorldCells = 16.0e6;
+
 // Golombek cumulative fractional area F(D) = k exp(-q D).
 double GolombekCumulativeArea(double k, double diameter_m);
 double GolombekQ(double k);
@@ -184,6 +187,12 @@ class World {
   double Elevation(double x, double y) const;
   // Elevation of the ground without rocks.
   double GroundElevation(double x, double y) const;
+  // Site z (down) of the rover origin standing at x, y: on the ground, not on a rock there
+  // (the rover stands on its wheels), origin_height_m above the wheel contacts. Where the
+  // estimator starts in simulation.
+  double StartHeight(double x, double y, double origin_height_m) const {
+    return -GroundElevation(x, y) - origin_height_m;
+  }
   // Ground (bilinear) plus the exact half-ellipsoid rock shapes instead of their
   // grid-sampled version: for rendering rocks smaller than a few grid cells. Equals
   // Elevation() at grid nodes. Slower (visits the rocks near the point).

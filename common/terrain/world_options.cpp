@@ -1,7 +1,10 @@
 // WorldOptions from YAML. Every key is documented in WORLD_FORMAT.md.
-#include <stdexcept>
-
 #include "terrain/world.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
 
 namespace rover::terrain {
 
@@ -90,6 +93,17 @@ WorldOptions WorldOptions::Load(const ConfigNode& root) {
       m["size_m"].Fail("expected two sizes > 0 (metres)");
     }
     m.Get("resolution_m", o.resolution_m, 0.005, 1.0);
+    // The same count World builds its grids with: refused here, where the file and key are known.
+    const double cells = (std::ceil(o.map_size_m.x() / o.resolution_m - 1e-9) + 1.0) *
+                         (std::ceil(o.map_size_m.y() / o.resolution_m - 1e-9) + 1.0);
+    if (cells > kMaxWorldCells) {
+      std::ostringstream os;
+      os << "a map of " << o.map_size_m.x() << " x " << o.map_size_m.y() << " m at resolution_m "
+         << o.resolution_m << " is " << std::setprecision(3) << cells << " cells (expected at most "
+         << static_cast<long long>(kMaxWorldCells)
+         << ": a smaller size_m or a coarser resolution_m)";
+      m[m.Has("size_m") ? "size_m" : "resolution_m"].Fail(os.str());
+    }
   }
   root.Get("base_elevation_m", o.base_elevation_m);
 

@@ -109,8 +109,10 @@ for unit in "$HERE"/*.service "$HERE"/*.target; do
   installed_units+=("$name")
 done
 [ "${#installed_units[@]}" -gt 0 ] || die "no unit files found in $HERE"
-# rover-lcm-route.service's check of the bus settings (a shell script).
+# rover-lcm-route.service's check of the bus settings and rover-logger.service's rotation
+# of its logs (shell scripts).
 install -m 0755 "$HERE/rover-bus-check" "$OPT/rover-bus-check"
+install -m 0755 "$HERE/rover-log-rotate" "$OPT/rover-log-rotate"
 
 install_config "$ROOT/configs/rover.yaml" "$ETC/rover.yaml"
 install_config "$ROOT/configs/vo.yaml" "$ETC/vo.yaml"
@@ -140,8 +142,8 @@ else
 fi
 
 if [ -z "$PREFIX" ]; then
-  for tool in /usr/sbin/ip /usr/bin/lcm-logger; do
-    [ -x "$tool" ] || note "warning: $tool not found: the units need it (apt-get install iproute2 liblcm-bin)"
+  for tool in /usr/sbin/ip; do
+    [ -x "$tool" ] || note "warning: $tool not found: the units need it (apt-get install iproute2)"
   done
 fi
 
@@ -152,7 +154,9 @@ for name in "${installed_units[@]}"; do
   [ "$name" = rover.target ] && continue
   grep -q '^WantedBy=' "$UNITS/$name" || continue
   bin="$(unit_binary "$UNITS/$name")"
-  if [ -n "$HOST" ] && [ -n "$bin" ] && ! echo "$host_programs" | grep -qx "$bin"; then
+  # Every computer records the bus (the logger is in no deployment's process list).
+  if [ -n "$HOST" ] && [ -n "$bin" ] && [ "$name" != rover-logger.service ] &&
+     ! echo "$host_programs" | grep -qx "$bin"; then
     note "$name not enabled: $bin is not in host $HOST's share of $DEPLOYMENT"
     continue
   fi

@@ -30,6 +30,7 @@
 #include <rover_msgs/vo_update_t.hpp>
 
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 #include <optional>
 #include <type_traits>
@@ -195,6 +196,17 @@ int main(int argc, char** argv) {
     bool stop_unknown = false;  // the file could not be read: stop, whatever was running
     seq::RunState written;      // the record on disk
     if (!state_file.empty()) {
+      // Something other than a file there (a directory, a device) is a configuration
+      // mistake, not a record this executor could not read: one line, and no start.
+      std::error_code ec;
+      const auto kind = std::filesystem::status(state_file, ec).type();
+      if (kind != std::filesystem::file_type::not_found && kind != std::filesystem::file_type::regular &&
+          kind != std::filesystem::file_type::none) {
+        throw config::ConfigError(
+            "sequence_executor: " + std::string(proc.option("--state-file") ? "argument --state-file" : "executor.state_file") +
+            ": " + state_file + ": " + (kind == std::filesystem::file_type::directory ? "is a directory" : "is not a regular file") +
+            " (expected the path of a file the executor keeps its running sequence in)");
+      }
       try {
         if (auto previous = seq::ReadRunStateFile(state_file)) {
           written = *previous;

@@ -6,6 +6,7 @@
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
 #include "estimation/pose_estimator.hpp"
+#include "terrain/world.hpp"
 
 #include <rover_msgs/imu_t.hpp>
 #include <rover_msgs/new_site_t.hpp>
@@ -26,7 +27,9 @@ int main(int argc, char** argv) {
                       "Reads IMU, WHEEL_ODOMETRY, VO_UPDATE, NEW_SITE; writes POSE.\n"
                       "Config: the `estimator:` section (see configs/rover.yaml).",
                       argc, argv,
-                      {{"--start", "X,Y,Z,YAW_DEG", "initial pose in the site frame (default 0,0,0,0)"}});
+                      {{"--start", "X,Y,Z,YAW_DEG", "initial pose in the site frame (default 0,0,0,0)"},
+                       {"--world", "WORLD.yaml", "simulation: start where rover_sim does, at the world's start pose "
+                                                 "on its ground (--start, when given, wins)"}});
     const auto section = proc.config()["estimator"];
     const auto options = estimation::LoadEstimatorOptions(section, {"publish_hz"});
     double publish_hz = 10.0;
@@ -35,6 +38,16 @@ int main(int argc, char** argv) {
     if (auto s = proc.option("--start")) {
       const auto v = bus::ParseNumberList(*s, 4, "state_estimator: argument --start");
       start = geometry::PoseFromXyzRpy(v[0], v[1], v[2], 0, 0, v[3] * M_PI / 180.0);
+    } else if (auto w = proc.option("--world")) {
+      // Without it a hand-launched simulation starts the estimate at z = 0 while the rover
+      // stands on the world's ground: a height error that is only the start's.
+      double origin_height_m = 0.0;
+      proc.config()["mobility"]["geometry"].Get("origin_height_m", origin_height_m);
+      const auto world_options = terrain::WorldOptions::LoadFile(*w);
+      const terrain::World world(world_options);
+      const auto& p = world_options.start;
+      start = geometry::PoseFromXyzRpy(p.x, p.y, world.StartHeight(p.x, p.y, origin_height_m), 0, 0,
+                                       p.yaw_deg * M_PI / 180.0);
     }
 
     estimation::PoseEstimator estimator(options);

@@ -117,6 +117,44 @@ TEST(ProcessCli, ConfigThatIsNotARegularFileIsOneLineAtOnce) {
   EXPECT_EQ(w.output, "/dev/zero: not a regular file (expected a YAML file)\n");
 }
 
+// Three bad inputs an operator met, each answered with one line of ours that names where
+// and what was expected.
+TEST(ProcessCli, HugeWorldBadLcmUrlAndADirectoryStateFileAreOneLine) {
+  const std::string dir = OutDir("process_cli_bad_inputs");
+  // A world whose map would be 2e17 cells: the file and map.size_m, not just the world's name.
+  const std::string world = dir + "/huge.yaml";
+  std::ofstream(world) << "name: huge\nmap: {center: [0, 0], size_m: [1e7, 1e7], resolution_m: 0.05}\n";
+  auto r = RunCommand(Bin("rover_sim") + " --config configs/rover.yaml --world " + world);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(CountLines(r.output), 1) << r.output;
+  EXPECT_EQ(r.output.rfind(world + ": map.size_m: ", 0), 0u) << r.output;
+  EXPECT_NE(r.output.find("expected at most 16000000: a smaller size_m or a coarser resolution_m"), std::string::npos) << r.output;
+
+  // An impossible group and port: ours, with no "Error:" line of LCM's before it.
+  r = RunCommand(Bin("state_estimator") + " --config configs/rover.yaml --lcm-url 'udpm://999.1.1.1:99999'");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(r.output, "state_estimator: argument --lcm-url: udpm://999.1.1.1:99999: group '999.1.1.1' is not an "
+                      "IPv4 address (expected udpm://GROUP:PORT?ttl=N, GROUP in 224.0.0.0/4, PORT 1-65535, ttl 0-255)\n");
+  r = RunCommand("ROVER_LCM_URL='udpm://239.255.76.67:99999?ttl=0' " + Bin("hazard_monitor") + " --config configs/rover.yaml");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(CountLines(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find("hazard_monitor: $ROVER_LCM_URL: udpm://239.255.76.67:99999?ttl=0: port '99999' is not in "
+                          "1-65535"), std::string::npos) << r.output;
+  for (const std::string& tool : {std::string("rover_console --once"), std::string("rover_seq status"), "rover_recorder " + dir + "/x.lcm"}) {
+    r = RunCommand(Bin(tool) + " --lcm-url 'udpm://999.1.1.1:99999'");
+    EXPECT_NE(r.exit_code, 0) << tool;
+    EXPECT_EQ(CountLines(r.output), 1) << tool << ": " << r.output;
+    EXPECT_EQ(r.output.find("Error:"), std::string::npos) << tool << ": " << r.output;
+    EXPECT_NE(r.output.find("999.1.1.1"), std::string::npos) << tool << ": " << r.output;
+  }
+
+  // A directory where the executor keeps its running sequence.
+  r = RunCommand("timeout 10 " + Bin("sequence_executor") + " --config configs/rover.yaml --state-file " + dir);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(r.output, "sequence_executor: argument --state-file: " + dir +
+                          ": is a directory (expected the path of a file the executor keeps its running sequence in)\n");
+}
+
 TEST(SeqCheck, FifoDeviceDirectoryAndHugeFileAreErrorsAtOnce) {
   const std::string dir = OutDir("seq_check_files");
   const std::string fifo = dir + "/fifo.seq";

@@ -23,7 +23,6 @@ if ! unshare -rn true 2>/dev/null; then
   echo "SKIP: cannot create a private network namespace (unshare -rn) for the bus"
   exit 77
 fi
-command -v lcm-logger >/dev/null || fail "lcm-logger not installed (apt-get install liblcm-bin)"
 
 STAGE="$(mktemp -d "${TMPDIR:-/tmp}/rover-systemd-run.XXXXXX")" || fail "mktemp"
 trap 'rm -rf "$STAGE"' EXIT
@@ -33,8 +32,18 @@ echo "$out" | grep "not built" | sed 's/^install.sh: warning: /note: /'
 
 units=()
 for u in "$STAGE"/etc/systemd/system/rover-*.service; do
+  [ "$(basename "$u")" = rover-logger.service ] && continue  # started first, stopped last (below)
   grep -q '^ExecStart=/opt/rover/bin/' "$u" && units+=("$(basename "$u" .service)")
 done
+[ -f "$STAGE/etc/systemd/system/rover-logger.service" ] || fail "rover_recorder not built: rover-logger.service was not installed"
+# ExecStartPre: the rotation, run as systemd would before the logger starts.
+sed -n 's/^ExecStartPre=//p' "$STAGE/etc/systemd/system/rover-logger.service" | grep -q rover-log-rotate ||
+  fail "rover-logger.service has no ExecStartPre=rover-log-rotate"
+mkdir -p "$STAGE/var/log/rover"
+echo previous > "$STAGE/var/log/rover/rover.lcm"
+"$STAGE/opt/rover/bin/rover-log-rotate" "$STAGE/var/log/rover/rover.lcm" 10 || fail "rover-log-rotate failed"
+[ "$(cat "$STAGE/var/log/rover/rover.lcm.1" 2>/dev/null)" = previous ] || fail "rover-log-rotate did not move rover.lcm to rover.lcm.1"
+[ ! -e "$STAGE/var/log/rover/rover.lcm" ] || fail "rover-log-rotate left rover.lcm in place"
 if [ "${#units[@]}" -eq 0 ]; then
   echo "SKIP: no process built in $BUILD/bin"
   exit 77
@@ -94,7 +103,13 @@ for name in "${!pid[@]}"; do
   fi
 done
 if [ -n "${pid[rover-logger]:-}" ]; then
-  kill -TERM "${pid[rover-logger]}"; wait "${pid[rover-logger]}"
+  kill -TERM "${pid[rover-logger]}"; wait "${pid[rover-logger]}"; rc=$?
+  if [ $rc -ne 0 ]; then
+    echo "FAIL: rover-logger exited with status $rc on SIGTERM: $(tail -n 3 "$stage/rover-logger.out" | tr '\n' ' ')"
+    status=1
+  else
+    echo "ok: rover-logger (rover_recorder) exited 0 on SIGTERM"
+  fi
 fi
 exit $status
 EOF
@@ -108,7 +123,7 @@ env "${envs[@]}" unshare -rn bash "$STAGE/run.sh" "$STAGE" "$SETTLE_S"
 status=$?
 
 # Heartbeats (channel HEARTBEAT, name of the process in the message) in the logger's file.
-log="$(ls "$STAGE"/var/log/rover/rover.lcm* 2>/dev/null | head -n 1)"
+log="$STAGE/var/log/rover/rover.lcm"
 [ -n "$log" ] && [ -s "$log" ] || fail "the logger wrote nothing under /var/log/rover ($(cat "$STAGE/rover-logger.out"))"
 for name in "${units[@]}"; do
   bin="$(command_of "$name" | sed 's|^[^ ]*/bin/\([^ ]*\).*|\1|')"

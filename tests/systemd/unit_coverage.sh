@@ -80,8 +80,13 @@ grep -q '^ExecStart=/usr/sbin/ip route replace 224.0.0.0/4 dev ${ROVER_LCM_IFACE
 grep -Eq '^ROVER_LCM_URL=udpm://[0-9.]+:[0-9]+\?ttl=1&recv_buf_size=[0-9]+$' "$UNIT_DIR/rover.env" ||
   err "rover.env: ROVER_LCM_URL is not a udpm URL with ttl=1 and recv_buf_size"
 grep -Eq '^ROVER_LCM_IFACE=[A-Za-z0-9._-]+$' "$UNIT_DIR/rover.env" || err "rover.env: ROVER_LCM_IFACE missing"
-grep -Eq '^ExecStart=/usr/bin/lcm-logger --lcm-url=\$\{ROVER_LCM_URL\} .*(--rotate=[0-9]+|-i) .*/var/log/rover/' \
-  "$UNIT_DIR/rover-logger.service" || err "rover-logger.service does not log the bus under /var/log/rover with rotation"
+# The logger records with rover_recorder (lcm-logger loses messages), rotating at each start.
+grep -Eq '^ExecStart=/opt/rover/bin/rover_recorder /var/log/rover/[^ ]+$' "$UNIT_DIR/rover-logger.service" ||
+  err "rover-logger.service does not record the bus with rover_recorder under /var/log/rover"
+grep -Eq '^ExecStartPre=/opt/rover/bin/rover-log-rotate /var/log/rover/[^ ]+ [0-9]+$' "$UNIT_DIR/rover-logger.service" ||
+  err "rover-logger.service does not rotate its logs (ExecStartPre=rover-log-rotate)"
+grep -q '^ExecStart=.*lcm-logger' "$UNIT_DIR/rover-logger.service" &&
+  err "rover-logger.service runs lcm-logger, which loses messages"
 
 [ $errors -eq 0 ] || { echo "$errors problem(s)" >&2; exit 1; }
 echo "every process (${#wanted[@]}) has a unit"

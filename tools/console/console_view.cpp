@@ -148,6 +148,41 @@ void HazardLines(const ConsoleState& s, double now, std::vector<std::string>& ou
   if (!h.detail.empty()) out.push_back(Line("", h.detail));
 }
 
+// The set the executor last sent the hazard monitor (it replaces the previous one).
+// KEEPOUT_ZONES is sent when the set changes, so a console started later has not heard it:
+// then the hazard monitor's status (1 Hz) says whether it holds any, and the nearest.
+void ZoneLines(const ConsoleState& s, std::vector<std::string>& out) {
+  const std::string nearest = s.hazard ? s.hazard->msg.zone_name : "";
+  if (!s.zones) {
+    if (!s.hazard) {
+      out.push_back(Line("ZONES", "no KEEPOUT_ZONES or HAZARD_STATUS heard yet"));
+    } else if (nearest.empty()) {
+      out.push_back(Line("ZONES", "none in force (the hazard monitor holds none)"));
+    } else {
+      out.push_back(Line("ZONES", "the hazard monitor holds zones, nearest " + nearest +
+                                      " (the whole set shows when the executor next sends it)"));
+    }
+    return;
+  }
+  const auto& zones = s.zones->msg.zones;
+  if (zones.empty()) {
+    out.push_back(Line("ZONES", "none in force (a sequence's zones are cleared when the next one starts)" +
+                                    (nearest.empty() ? std::string()
+                                                     : "; the hazard monitor's own config adds zones, nearest " + nearest)));
+    return;
+  }
+  std::string text = std::to_string(zones.size()) + " in force:";
+  for (const auto& z : zones) {
+    text += " " + z.name;
+    if (z.shape == rover_msgs::keepout_zone_t::SHAPE_CIRCLE) {
+      text += " (circle " + Fixed(z.center[0], 2) + " " + Fixed(z.center[1], 2) + " m r " + Fixed(z.radius_m, 2) + " m)";
+    } else {
+      text += " (polygon, " + std::to_string(z.num_vertices) + " vertices)";
+    }
+  }
+  out.push_back(Line("ZONES", text));
+}
+
 void PoseLines(const ConsoleState& s, double now, std::vector<std::string>& out) {
   if (!s.pose) {
     out.push_back(Line("POSE", "no POSE heard yet"));
@@ -228,6 +263,12 @@ void ConsoleState::On(const rover_msgs::pose_t& m, double wall_s) {
   ++messages;
 }
 
+void ConsoleState::On(const rover_msgs::keepout_zones_t& m, double wall_s) {
+  zones = Heard<rover_msgs::keepout_zones_t>{m, wall_s};
+  rover_utime = std::max(rover_utime, m.utime);
+  ++messages;
+}
+
 void ConsoleState::On(const rover_msgs::heartbeat_t& m, double wall_s) {
   processes[m.process] = {m, wall_s};
   ++messages;
@@ -245,6 +286,7 @@ std::vector<std::string> RenderFrame(const ConsoleState& s, double now, const Fr
   out.push_back("");
   VoLines(s, now, out);
   HazardLines(s, now, out);
+  ZoneLines(s, out);
   PoseLines(s, now, out);
   out.push_back("");
   ProcessLines(s, now, o, out);

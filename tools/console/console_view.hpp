@@ -7,6 +7,8 @@
 //   steps      the last few STEP_REPORTs: commanded and measured motion, slip, VO or blind
 //   VO         the last VO_UPDATE: status, frames, feature counts, time; reason on a failure
 //   hazard     state, nearest zone and clearance, roll and pitch against their limits
+//   zones      the keep-out zones in force (KEEPOUT_ZONES: the running sequence's; the
+//              executor clears them when a sequence starts)
 //   pose       x y z, roll pitch yaw, 1-sigma of position (largest horizontal axis), height
 //              and heading from the covariance; source, site, odometer
 //   processes  each heartbeat: state and detail, age (SILENT past 3 s), dropped messages
@@ -14,6 +16,7 @@
 
 #include <rover_msgs/hazard_status_t.hpp>
 #include <rover_msgs/heartbeat_t.hpp>
+#include <rover_msgs/keepout_zones_t.hpp>
 #include <rover_msgs/pose_t.hpp>
 #include <rover_msgs/sequence_status_t.hpp>
 #include <rover_msgs/step_report_t.hpp>
@@ -40,6 +43,7 @@ struct ConsoleState {
   int vo_ok = 0, vo_failed = 0;  // updates heard (baselines are neither)
   std::optional<Heard<rover_msgs::hazard_status_t>> hazard;
   std::optional<Heard<rover_msgs::pose_t>> pose;
+  std::optional<Heard<rover_msgs::keepout_zones_t>> zones;
   std::map<std::string, Heard<rover_msgs::heartbeat_t>> processes;
   std::int64_t rover_utime = 0;  // newest rover time in any message
   std::int64_t messages = 0;
@@ -50,6 +54,7 @@ struct ConsoleState {
   void On(const rover_msgs::hazard_status_t& m, double wall_s);
   void On(const rover_msgs::pose_t& m, double wall_s);
   void On(const rover_msgs::heartbeat_t& m, double wall_s);
+  void On(const rover_msgs::keepout_zones_t& m, double wall_s);
 };
 
 struct FrameOptions {

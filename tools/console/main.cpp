@@ -75,9 +75,9 @@ int main(int argc, char** argv) {
         std::cout << "usage: rover_console [--once] [--wait S] [--period S] [--lcm-url URL]\n\n"
                      "One live screen for the running drive, redrawn in place: the sequence and its\n"
                      "state, the command and step, commanded and measured motion of the last steps,\n"
-                     "slip, the last VO status and its counts, the hazard state, the pose and its\n"
-                     "1-sigma, and every process's heartbeat (SILENT after 3 s) with its dropped-message\n"
-                     "count. Ctrl-C leaves.\n"
+                     "slip, the last VO status and its counts, the hazard state, the keep-out zones in\n"
+                     "force, the pose and its 1-sigma, and every process's heartbeat (SILENT after 3 s)\n"
+                     "with its dropped-message count. Ctrl-C leaves.\n"
                      "--once: listen --wait S (default 2.5), print one frame, exit (3: nothing heard).\n"
                      "--period S: redraw interval (default 0.5).\n"
                      "The bus: --lcm-url, else $ROVER_LCM_URL, else the default bus.\n";
@@ -110,6 +110,7 @@ int main(int argc, char** argv) {
     bus.Subscribe<rover_msgs::hazard_status_t>(ch::kHazardStatus, feed, 50);
     bus.Subscribe<rover_msgs::pose_t>(ch::kPose, feed, 100);
     bus.Subscribe<rover_msgs::heartbeat_t>(ch::kHeartbeat, feed, 100);
+    bus.Subscribe<rover_msgs::keepout_zones_t>(ch::kKeepOutZones, feed, 10);
     // The rover clock, as every process keeps it: messages with implausible times are dropped.
     bus.Subscribe<rover_msgs::rover_clock_t>(ch::kClock, [&](const rover_msgs::rover_clock_t& m) {
       bus.clock().ObserveClock(m.utime, m.rate, std::chrono::steady_clock::now());

@@ -204,7 +204,35 @@ StampRead ReadStamp(const ChannelType& type, const std::uint8_t* data, std::size
 
 std::optional<Gap> LossTracker::Observe(const std::string& channel, const std::uint8_t* data,
                                         std::size_t size, std::optional<Restart>* restart) {
+  return ObserveAt(-1, channel, data, size, restart);
+}
+
+// Decided once per process, at its first message in the log: heard within the window of
+// the log's first message means it was already publishing when the recording began.
+bool LossTracker::RunningBeforeTheLog(std::uint32_t publisher_id, std::int64_t log_timestamp_us) {
+  if (!options_.detect_joined || log_timestamp_us < 0) return false;
+  const auto [it, first] = running_before_.try_emplace(publisher_id, false);
+  if (first) {
+    it->second = log_timestamp_us - first_timestamp_us_ <= static_cast<std::int64_t>(options_.joined_window_s * 1e6);
+  }
+  return it->second;
+}
+
+std::set<std::string> LossTracker::JoinedPublishers() const {
+  std::set<std::string> out;
+  for (const auto& [id, before] : before_by_publisher_) {
+    if (before == 0) continue;
+    auto it = names_.find(id);
+    out.insert(it != names_.end() ? it->second : PublisherName(Hex32(id)));
+  }
+  return out;
+}
+
+std::optional<Gap> LossTracker::ObserveAt(std::int64_t log_timestamp_us, const std::string& channel,
+                                          const std::uint8_t* data, std::size_t size,
+                                          std::optional<Restart>* restart) {
   ++messages_;
+  if (first_timestamp_us_ < 0) first_timestamp_us_ = log_timestamp_us;
   ChannelReport& report = channels_[channel];
   ++report.count;
   const ChannelType* type = FindChannel(channel);
@@ -233,8 +261,14 @@ std::optional<Gap> LossTracker::Observe(const std::string& channel, const std::u
     g.lost = lost;
     return g;
   };
+  const bool joined = RunningBeforeTheLog(s.publisher_id, log_timestamp_us);
   if (first) {
-    if (s.count > 0 && options_.from_start) gap = make_gap(Gap::Kind::kAtStart, s.count);
+    if (s.count > 0 && joined) {
+      before_recording_ += s.count;
+      before_by_publisher_[s.publisher_id] += s.count;
+    } else if (s.count > 0 && options_.from_start) {
+      gap = make_gap(Gap::Kind::kAtStart, s.count);
+    }
   } else if (s.count > it->second.count + 1) {
     gap = make_gap(Gap::Kind::kSkipped, s.count - it->second.count - 1);
   } else if (s.count <= it->second.count) {
@@ -379,7 +413,7 @@ LogReport CheckLog(const std::string& path, TrackerOptions options) {
   for (const lcm::LogEvent* ev = log.readNextEvent(); ev != nullptr; ev = log.readNextEvent()) {
     const auto* data = static_cast<const std::uint8_t*>(ev->data);
     const auto size = static_cast<std::size_t>(std::max<std::int32_t>(ev->datalen, 0));
-    tracker.Observe(ev->channel, data, size);
+    tracker.ObserveAt(ev->timestamp, ev->channel, data, size);
     consistency.Observe(ev->channel, data, size);
     const std::int64_t event_end = ftello(log.getFilePtr());
     const auto event_bytes = static_cast<std::int64_t>(4 + 8 + 8 + 4 + ev->channel.size() + 4 + size);
@@ -410,6 +444,9 @@ LogReport Summarize(const std::string& path, const LossTracker& tracker,
   }
   report.lost = tracker.lost();
   report.unchecked = tracker.unchecked();
+  report.joined = tracker.JoinedPublishers();
+  report.before_recording = tracker.before_recording();
+  report.joined_window_s = tracker.options().joined_window_s;
   report.warnings = consistency.Warnings();
 
   std::vector<std::string> why;
@@ -485,6 +522,13 @@ std::string FormatReport(const LogReport& r) {
     }
   }
   for (const auto& w : r.warnings) os << "warning: " << w << "\n";
+  if (r.before_recording > 0) {
+    std::string names;
+    for (const auto& n : r.joined) names += (names.empty() ? "" : ", ") + n;
+    os << "joined: the recording began on a running bus: " << names << " (heard in the log's first "
+       << r.joined_window_s << " s) had published " << r.before_recording
+       << " messages before it; those are not counted as lost (logcheck --from-start counts them)\n";
+  }
   os << "log complete: " << (r.complete ? "yes" : "no");
   if (!r.complete) os << " (" << r.verdict_reason << ")";
   os << "\n";

@@ -9,7 +9,12 @@
 //   - a count that falls back to 0 is the publisher restarting, not a loss;
 //   - a count that falls back to N > 0 is a restart whose first N messages were lost;
 //   - a publisher whose first recorded count is N > 0 lost its first N messages, when the
-//     recording started before the publisher did (TrackerOptions::from_start).
+//     recording started before the publisher did (TrackerOptions::from_start);
+//   - unless the publisher was already running when the recording began, which a log
+//     shows by itself (TrackerOptions::detect_joined): every process heartbeats once a
+//     second, so a process heard in the log's first `joined_window_s` was publishing before
+//     the recording started, and its earlier messages are before the log, not lost. A
+//     process first heard later started after the recording and must count from 0.
 // Only those first bytes are read, so a check costs nothing per image and needs no decode of
 // the message body. A message whose bytes cannot say (too short, another type's fingerprint,
 // no pub_seq stamped) is "unchecked", and an unchecked message means completeness is unknown.
@@ -101,6 +106,11 @@ struct TrackerOptions {
   // The recording started before its publishers, so each publisher's first count must be
   // 0 (a scenario log). False for a recording that joined a running bus.
   bool from_start = true;
+  // With from_start: a publisher (process) heard within joined_window_s of the log's first
+  // message was running before the recording began; its first counts are not losses
+  // (`logcheck` and the recorder; a scenario, whose recorder starts first, checks strictly).
+  bool detect_joined = false;
+  double joined_window_s = 2.0;  // > the 1 s heartbeat period
 };
 
 // Follows every (channel, publisher) count, message by message: the recorder runs it live,
@@ -113,6 +123,10 @@ class LossTracker {
   // channel's report (and returned through `restart` when given).
   std::optional<Gap> Observe(const std::string& channel, const std::uint8_t* data,
                              std::size_t size, std::optional<Restart>* restart = nullptr);
+  // The same, with the message's log timestamp (microseconds), which detect_joined needs.
+  std::optional<Gap> ObserveAt(std::int64_t log_timestamp_us, const std::string& channel,
+                               const std::uint8_t* data, std::size_t size,
+                               std::optional<Restart>* restart = nullptr);
 
   const std::map<std::string, ChannelReport>& channels() const { return channels_; }
   std::int64_t messages() const { return messages_; }
@@ -121,8 +135,14 @@ class LossTracker {
   // A readable name for a publisher key: heartbeats name their processes, and each name's
   // FNV-1a id maps a pub_seq id back to it.
   std::string PublisherName(const std::string& key) const;
+  // detect_joined: the processes that had published before the recording began, and how
+  // many of their messages (all channels) were published before it.
+  std::set<std::string> JoinedPublishers() const;
+  std::int64_t before_recording() const { return before_recording_; }
+  const TrackerOptions& options() const { return options_; }
 
  private:
+  bool RunningBeforeTheLog(std::uint32_t publisher_id, std::int64_t log_timestamp_us);
   struct Last {
     std::int64_t count;
     std::int64_t utime;
@@ -132,6 +152,10 @@ class LossTracker {
   std::map<std::pair<std::string, std::string>, Last> last_;  // (channel, publisher)
   std::map<std::uint32_t, std::string> names_;                // publisher id -> process name
   std::int64_t messages_ = 0;
+  std::int64_t first_timestamp_us_ = -1;                      // the log's first message
+  std::map<std::uint32_t, bool> running_before_;              // publisher id -> joined?
+  std::map<std::uint32_t, std::int64_t> before_by_publisher_; // its messages before the log
+  std::int64_t before_recording_ = 0;
 };
 
 // Captures, frames, VO updates and steps that do not add up.
@@ -158,6 +182,9 @@ struct LogReport {
   std::map<std::string, std::string> publisher_names;  // key -> readable name
   std::int64_t lost = 0;
   std::int64_t unchecked = 0;
+  std::set<std::string> joined;         // processes running before the recording (detect_joined)
+  std::int64_t before_recording = 0;    // their messages published before it (not lost)
+  double joined_window_s = 0;
   std::string trailing;                 // non-empty: bytes after the last whole event
   std::vector<std::string> warnings;    // consistency
   bool complete = false;

@@ -5,6 +5,7 @@
 #include "bus/keepout_convert.hpp"
 #include "estimation/pose_estimator.hpp"
 #include "sequence/parser.hpp"
+#include "terrain/world.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/imu_t.hpp>
@@ -19,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <optional>
 #include <stdexcept>
 #include <variant>
@@ -55,6 +57,19 @@ std::map<int, double> SlipLimits(const rover_msgs::sequence_submit_t& submit) {
     if (in_force) limits[static_cast<int>(i)] = *in_force;
   }
   return limits;
+}
+
+// Every goto's goal disc in a submitted sequence.
+std::vector<GoalDisc> Goals(const rover_msgs::sequence_submit_t& submit) {
+  std::vector<GoalDisc> goals;
+  const auto parsed = sequence::ParseSequence(submit.text, submit.name);
+  if (!parsed.ok()) return goals;
+  for (std::size_t i = 0; i < parsed.sequence.commands.size(); ++i) {
+    if (const auto* g = std::get_if<sequence::Goto>(&parsed.sequence.commands[i].action)) {
+      goals.push_back({submit.submission_id, static_cast<int>(i), g->target, g->tolerance_m});
+    }
+  }
+  return goals;
 }
 
 bool IsFinal(const rover_msgs::sequence_status_t& s) {
@@ -164,15 +179,30 @@ DriveLog ReadDriveLog(const std::string& log_path) {
     } else if (ch == channels::kSequenceSubmit) {
       rover_msgs::sequence_submit_t m{};
       if (!Decode(*ev, m, out)) continue;
-      out.sequence_name = m.name;
+      if (out.sequence_name.empty()) out.sequence_name = m.name;
       out.slip_limit_pct = SlipLimits(m);
+      out.runs.push_back({m.submission_id, m.name, std::nullopt});
+      for (const auto& g : Goals(m)) out.goals.push_back(g);
     } else if (ch == channels::kSequenceStatus) {
       rover_msgs::sequence_status_t m{};
       if (!Decode(*ev, m, out)) continue;
       if (IsFinal(m) && !out.final_status) out.final_status = m;
+      if (IsFinal(m)) {
+        auto run = std::find_if(out.runs.begin(), out.runs.end(),
+                                [&](const SequenceRun& r) { return r.submission_id == m.submission_id; });
+        if (run == out.runs.end()) {  // submitted before the recording began
+          out.runs.push_back({m.submission_id, m.sequence_name, std::nullopt});
+          run = std::prev(out.runs.end());
+        }
+        if (!run->final_status) run->final_status = m;
+      }
       if (m.command_index >= 0 && m.command_text.rfind("goto", 0) == 0 &&
           m.command_text.find("avoid on") != std::string::npos) {
-        out.avoid_commands.insert(m.command_index);
+        out.avoid_commands.insert({m.submission_id, m.command_index});
+        // common/sequence/avoid_step.cpp's line for a step that needs no vote.
+        if (m.detail.find("steering straight at") != std::string::npos) {
+          out.steering_steps.insert({m.submission_id, m.command_index, m.step_index});
+        }
       }
     }
   }
@@ -181,6 +211,16 @@ DriveLog ReadDriveLog(const std::string& log_path) {
   out.wheel_only = std::move(wheel.path);
   for (auto& [name, z] : zones) out.zones.push_back(std::move(z));
   return out;
+}
+
+std::vector<RockMark> ReadWorldRocks(const std::string& world_path, double min_height_m) {
+  const terrain::World world(terrain::WorldOptions::LoadFile(world_path));
+  std::vector<RockMark> rocks;
+  for (const auto& r : world.rocks()) {
+    if (r.height_m < min_height_m) continue;
+    rocks.push_back({r.placed ? r.name : "", r.position, r.diameter_m, r.height_m});
+  }
+  return rocks;
 }
 
 std::map<std::int64_t, rover_msgs::stereo_frame_t> ReadStereoFrames(const std::string& log_path,

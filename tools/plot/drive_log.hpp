@@ -17,6 +17,8 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include <rover_msgs/sequence_status_t.hpp>
@@ -48,6 +50,33 @@ struct ZoneRecord {
   std::int64_t since_utime = 0;
 };
 
+// One submitted sequence and how it ended (a log may hold several, one after another).
+struct SequenceRun {
+  std::int64_t submission_id = 0;
+  std::string name;
+  std::optional<rover_msgs::sequence_status_t> final_status;  // none: still running at the log's end
+};
+
+// A goto's goal disc, from the submitted sequence text.
+struct GoalDisc {
+  std::int64_t submission_id = 0;
+  int command_index = 0;
+  Eigen::Vector2d target = Eigen::Vector2d::Zero();  // site x, y
+  double radius_m = 0.0;
+};
+
+// A rock of the simulated world (the log does not hold the world: ReadWorldRocks).
+struct RockMark {
+  std::string name;  // placed rocks' names; "" for random ones
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();
+  double diameter_m = 0.0;
+  double height_m = 0.0;
+};
+
+// (submission, command index) and (submission, command index, step index).
+using CommandKey = std::pair<std::int64_t, int>;
+using StepKey = std::tuple<std::int64_t, int, int>;
+
 struct DriveLog {
   std::string path;                         // the log file
   std::vector<EstimatePoint> estimate;      // POSE, in log order
@@ -56,19 +85,29 @@ struct DriveLog {
   std::vector<ZoneRecord> zones;            // every zone ever in force, by name (latest shape)
   std::vector<rover_msgs::step_report_t> steps;
   std::vector<rover_msgs::vo_update_t> vo_updates;
-  std::optional<rover_msgs::sequence_status_t> final_status;  // completed, aborted, rejected
-  std::string sequence_name;
+  std::optional<rover_msgs::sequence_status_t> final_status;  // the first completed, aborted, rejected
+  std::string sequence_name;                                  // the first submitted
+  std::vector<SequenceRun> runs;                              // every submitted sequence, in order
+  std::vector<GoalDisc> goals;                                // every goto's disc
+  std::vector<RockMark> rocks;                                // filled by the caller (ReadWorldRocks)
   // The slip limit in force for each command (command index -> percent), from the
   // submitted sequence's `slip limit` lines; absent where slip checks are off.
   std::map<int, double> slip_limit_pct;
-  // Commands that drive with hazard avoidance (`goto ... avoid on`), by index.
-  std::set<int> avoid_commands;
+  // Commands that drive with hazard avoidance (`goto ... avoid on`).
+  std::set<CommandKey> avoid_commands;
+  // Their steps that steered straight at the goal (the way clear) rather than by arc voting:
+  // the executor's status says so while the step runs.
+  std::set<StepKey> steering_steps;
   // Messages that did not decode (by channel): the pictures leave them out.
   std::map<std::string, int> undecodable;
 };
 
 // Reads the log. Throws std::runtime_error naming the file when it cannot be read.
 DriveLog ReadDriveLog(const std::string& log_path);
+
+// The rocks of a world file taller than `min_height_m` (what the traverse picture draws).
+// Throws config::ConfigError naming the file when it cannot be read.
+std::vector<RockMark> ReadWorldRocks(const std::string& world_path, double min_height_m);
 
 // The stereo frames with these ids (a second pass over the log: frames are large, so only
 // the few a picture needs are kept).

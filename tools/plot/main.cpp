@@ -13,7 +13,9 @@
 #include "plot/vo_steps.hpp"
 
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 namespace fs = std::filesystem;
 using rover::config::ConfigError;
@@ -21,24 +23,44 @@ using rover::config::ConfigError;
 namespace {
 
 constexpr const char* kUsage =
-    "usage: rover_plot LOG_OR_RUN_DIR [--out DIR] [--vo-steps N] [--vo-config FILE]\n\n"
+    "usage: rover_plot LOG_OR_RUN_DIR [--out DIR] [--world WORLD.yaml] [--vo-steps N] [--vo-config FILE]\n\n"
     "Draws a run's pictures from its LCM log (a scenario's DIR/log.lcm, or any log of the\n"
     "rover's channels) with gnuplot:\n"
-    "  traverse.png  on-board path by mode (blind, VO-corrected, hazard-avoidance steps),\n"
-    "                wheel-odometry-only path,\n"
-    "                true path, keep-out zones, step ends, abort point, 1 m grid\n"
+    "  traverse.png  on-board path by mode (blind, VO-corrected; hazard-avoidance steps by\n"
+    "                arc vote and those that steered straight at a clear goal), wheel-\n"
+    "                odometry-only path, true path, keep-out zones, goto goal discs, the\n"
+    "                world's rocks (simulation), step ends, each sequence's abort, 1 m grid\n"
     "  error.png     position error against distance travelled, with the 10 % line (needs truth)\n"
     "  slip.png      commanded against measured progress per step, slip and its limit\n"
-    "  vo_steps/     for up to N steps VO measured (default 6), the left image with the\n"
-    "                features tracked from the previous frame: inliers and outliers\n"
+    "  vo_steps/     for up to N steps VO measured (default 6), spread evenly over the\n"
+    "                drive, the left image with the features tracked from the previous\n"
+    "                frame: inliers and outliers\n"
     "Data files and gnuplot scripts go to DIR/plot/. DIR defaults to the log's folder.\n"
-    "--vo-config: the VO options for vo_steps (default configs/vo.yaml).\n";
+    "--vo-config: the VO options for vo_steps (default configs/vo.yaml).\n"
+    "--world: the simulated world, for its rocks (default: rover_sim's --world in a run\n"
+    "DIR's commands.txt, as the scenario runner writes it).\n";
+
+// The world rover_sim ran on, from a scenario's commands.txt; "" when there is none.
+std::string WorldOfRun(const std::string& run_dir) {
+  std::ifstream commands(run_dir + "/commands.txt");
+  std::string line;
+  while (std::getline(commands, line)) {
+    std::istringstream words(line);
+    std::string word;
+    words >> word;
+    if (word != "rover_sim") continue;
+    while (words >> word) {
+      if (word == "--world" && words >> word) return word;
+    }
+  }
+  return "";
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
   return rover::bus::RunMain("rover_plot", [&]() -> int {
-    std::string input, out_dir, vo_config = "configs/vo.yaml";
+    std::string input, out_dir, world, vo_config = "configs/vo.yaml";
     int vo_steps = 6;
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
@@ -47,6 +69,8 @@ int main(int argc, char** argv) {
         return 0;
       } else if (arg == "--out" && i + 1 < argc) {
         out_dir = argv[++i];
+      } else if (arg == "--world" && i + 1 < argc) {
+        world = argv[++i];
       } else if (arg == "--vo-config" && i + 1 < argc) {
         vo_config = argv[++i];
       } else if (arg == "--vo-steps" && i + 1 < argc) {
@@ -84,9 +108,22 @@ int main(int argc, char** argv) {
       return 1;
     }
 
-    const auto log = rover::plot::ReadDriveLog(log_path);
+    auto log = rover::plot::ReadDriveLog(log_path);
+    if (world.empty()) world = WorldOfRun(fs::path(log_path).parent_path().string());
+    if (!world.empty()) {
+      std::error_code exists_ec;
+      if (fs::is_regular_file(world, exists_ec)) {
+        log.rocks = rover::plot::ReadWorldRocks(world, 0.10);
+      } else {
+        std::cout << "plot: " << world << ": no such world file; traverse.png is drawn without rocks\n";
+      }
+    }
     const std::string run_name = fs::absolute(log_path).parent_path().filename().string();
-    place.title = run_name + (log.sequence_name.empty() ? "" : " (" + fs::path(log.sequence_name).filename().string() + ")");
+    // Every sequence the log holds, by file name.
+    std::string names;
+    for (const auto& r : log.runs) names += (names.empty() ? "" : ", ") + fs::path(r.name).filename().string();
+    if (names.empty() && !log.sequence_name.empty()) names = fs::path(log.sequence_name).filename().string();
+    place.title = run_name + (names.empty() ? "" : " (" + names + ")");
     for (const auto& [channel, n] : log.undecodable) {
       std::cout << "plot: " << n << " " << channel << " messages did not decode and are left out\n";
     }

@@ -19,6 +19,9 @@ constexpr const char* kWheelColour = "#777777";
 constexpr const char* kTruthColour = "#000000";
 constexpr const char* kZoneColour = "#e69f00";
 constexpr const char* kAvoidColour = "#cc79a7";
+constexpr const char* kSteerColour = "#56b4e9";
+constexpr const char* kRockColour = "#8c8c8c";
+constexpr const char* kGoalColour = "#009e73";
 
 // Site x is north and y east: a map puts east across and north up.
 std::string MapRow(const Eigen::Vector3d& p) { return Num(p.x()) + " " + Num(p.y()); }
@@ -91,12 +94,24 @@ std::string FinalErrorLine(const DriveLog& log) {
   return os.str();
 }
 
-std::string OutcomeText(const DriveLog& log) {
-  if (!log.final_status) return "no final sequence status in the log";
+std::string StatusText(const rover_msgs::sequence_status_t& st) {
   static const char* names[] = {"idle", "running", "paused", "completed", "aborted", "rejected"};
-  const int s = log.final_status->state;
+  const int s = st.state;
   std::string text = s >= 0 && s < 6 ? names[s] : "state " + std::to_string(s);
-  if (!log.final_status->abort_reason.empty()) text += " (" + log.final_status->abort_reason + ")";
+  if (!st.abort_reason.empty()) text += " (" + st.abort_reason + ")";
+  return text;
+}
+
+// How each sequence in the log ended; with several, each is named.
+std::string OutcomeText(const DriveLog& log) {
+  if (log.runs.size() <= 1) {
+    return log.final_status ? StatusText(*log.final_status) : "no final sequence status in the log";
+  }
+  std::string text;
+  for (const auto& r : log.runs) {
+    text += (text.empty() ? "" : "; ") + r.name + " " +
+            (r.final_status ? StatusText(*r.final_status) : std::string("without a final status"));
+  }
   return text;
 }
 
@@ -123,7 +138,31 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
   Bounds b;
   std::vector<std::string> plots;
 
-  // Keep-out zones first, so the paths are drawn over them.
+  // The world's rocks (simulation), under everything; they do not widen the picture.
+  if (!log.rocks.empty()) {
+    std::ofstream rocks(dir + "traverse_rocks.dat"), labels(dir + "traverse_rock_labels.dat");
+    for (const auto& r : log.rocks) {
+      rocks << Num(r.position.x()) << " " << Num(r.position.y()) << " " << Num(0.5 * r.diameter_m) << "\n";
+      if (!r.name.empty()) labels << Num(r.position.x()) << " " << Num(r.position.y()) << " \"" << r.name << "\"\n";
+    }
+    plots.push_back(std::string("'traverse_rocks.dat' using 2:1:3 with circles fc rgb '") + kRockColour +
+                    "' fs transparent solid 0.55 noborder title 'rocks of the world (taller than 10 cm)'");
+    plots.push_back("'traverse_rock_labels.dat' using 2:1:3 with labels offset 0,-0.9 tc rgb '#555555' notitle");
+  }
+  // Each goto's goal disc, and its target.
+  if (!log.goals.empty()) {
+    std::ofstream goals(dir + "traverse_goals.dat");
+    for (const auto& g : log.goals) {
+      goals << Num(g.target.x()) << " " << Num(g.target.y()) << " " << Num(g.radius_m) << "\n";
+      b.Add(g.target.x() + g.radius_m, g.target.y() + g.radius_m);
+      b.Add(g.target.x() - g.radius_m, g.target.y() - g.radius_m);
+    }
+    plots.push_back(std::string("'traverse_goals.dat' using 2:1:3 with circles lw 2 lc rgb '") + kGoalColour +
+                    "' fs empty title 'goto goal disc'");
+    plots.push_back(std::string("'traverse_goals.dat' using 2:1 with points pt 1 ps 1.5 lw 2 lc rgb '") + kGoalColour +
+                    "' notitle");
+  }
+  // Keep-out zones, so the paths are drawn over them.
   if (!log.zones.empty()) {
     std::ofstream zones(dir + "traverse_zones.dat"), labels(dir + "traverse_zone_labels.dat");
     for (const auto& z : log.zones) {
@@ -190,21 +229,27 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
                         : "on-board estimate: blind steps (wheel odometry + IMU)") +
                     "'");
   }
-  // Steps chosen by hazard avoidance (arc voting, `goto ... avoid on`): their own colour
-  // over the estimate, from each step's start to its end.
+  // Steps of hazard avoidance (`goto ... avoid on`): their own colours over the estimate,
+  // from each step's start to its end: those arc voting chose, and those that steered
+  // straight at the goal because the way was clear.
   {
-    std::ofstream f(dir + "traverse_avoid.dat");
-    int n = 0;
+    std::ofstream voted(dir + "traverse_avoid.dat"), steered(dir + "traverse_steer.dat");
+    int n_voted = 0, n_steered = 0;
     for (const auto& s : log.steps) {
-      if (!log.avoid_commands.count(s.command_index)) continue;
-      f << Num(s.pose_before[0]) << " " << Num(s.pose_before[1]) << "\n"
-        << Num(s.pose_after[0]) << " " << Num(s.pose_after[1]) << "\n\n";
+      if (!log.avoid_commands.count({s.submission_id, s.command_index})) continue;
+      const bool steer = log.steering_steps.count({s.submission_id, s.command_index, s.step_index}) > 0;
+      (steer ? steered : voted) << Num(s.pose_before[0]) << " " << Num(s.pose_before[1]) << "\n"
+                                << Num(s.pose_after[0]) << " " << Num(s.pose_after[1]) << "\n\n";
       b.Add(s.pose_after[0], s.pose_after[1]);
-      ++n;
+      ++(steer ? n_steered : n_voted);
     }
-    if (n > 0) {
+    if (n_voted > 0) {
       plots.push_back(std::string("'traverse_avoid.dat' using 2:1 with lines lw 4 lc rgb '") + kAvoidColour +
                       "' title 'hazard-avoidance steps (arc voting)'");
+    }
+    if (n_steered > 0) {
+      plots.push_back(std::string("'traverse_steer.dat' using 2:1 with lines lw 4 lc rgb '") + kSteerColour +
+                      "' title 'avoid on, way clear: steered straight at the goal (no vote)'");
     }
   }
   if (!log.estimate.empty()) {
@@ -220,12 +265,23 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
     plots.push_back("'traverse_step_ends.dat' using 2:1 with points pt 6 ps 0.9 lw 1.2 lc rgb '#333333' "
                     "title 'step ends (on-board estimate)'");
   }
-  if (log.final_status && log.final_status->state == rover_msgs::sequence_status_t::STATE_ABORTED) {
-    const auto& st = *log.final_status;
-    std::ofstream(dir + "traverse_abort.dat") << Num(st.pose[0]) << " " << Num(st.pose[1]) << "\n";
+  // Where each aborted sequence stopped.
+  std::vector<std::pair<std::string, rover_msgs::sequence_status_t>> aborts;  // sequence name, status
+  for (const auto& r : log.runs) {
+    if (r.final_status && r.final_status->state == rover_msgs::sequence_status_t::STATE_ABORTED) {
+      aborts.emplace_back(r.name, *r.final_status);
+    }
+  }
+  if (log.runs.empty() && log.final_status && log.final_status->state == rover_msgs::sequence_status_t::STATE_ABORTED) {
+    aborts.emplace_back(log.final_status->sequence_name, *log.final_status);
+  }
+  for (std::size_t i = 0; i < aborts.size(); ++i) {
+    const auto& [name, st] = aborts[i];
+    const std::string file = "traverse_abort" + (i ? std::to_string(i + 1) : std::string()) + ".dat";
+    std::ofstream(dir + file) << Num(st.pose[0]) << " " << Num(st.pose[1]) << "\n";
     b.Add(st.pose[0], st.pose[1]);
-    plots.push_back("'traverse_abort.dat' using 2:1 with points pt 2 ps 3 lw 3 lc rgb '#cc0000' title " +
-                    Quoted("abort: " + st.abort_reason));
+    plots.push_back("'" + file + "' using 2:1 with points pt 2 ps 3 lw 3 lc rgb '#cc0000' title " +
+                    Quoted("abort: " + (log.runs.size() > 1 ? name + ": " : std::string()) + st.abort_reason));
   }
 
   // Equal axes over everything shown, with half a metre around it.
@@ -264,7 +320,9 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
     int vo_steps = 0;
     for (const auto& s : log.steps) vo_steps += s.vo_status == rover_msgs::vo_update_t::STATUS_OK;
     out.note = std::to_string(log.steps.size()) + " steps (" + std::to_string(vo_steps) +
-               " VO-corrected), " + std::to_string(log.zones.size()) + " keep-out zones" +
+               " VO-corrected), " + std::to_string(log.zones.size()) + " keep-out zones, " +
+               std::to_string(log.goals.size()) + " goal discs, " + std::to_string(log.rocks.size()) + " rocks" +
+               (log.runs.size() > 1 ? ", " + std::to_string(log.runs.size()) + " sequences" : "") +
                (log.truth.empty() ? ", no truth" : "");
   }
   return out;

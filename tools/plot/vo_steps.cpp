@@ -15,6 +15,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <iomanip>
 #include <sstream>
 
@@ -71,6 +72,15 @@ VoStepsOutcome WriteVoSteps(const DriveLog& log, const std::string& vo_config, i
     readme << out.note << "\n";
     return out;
   }
+  // Which steps: not every one, but up to max_steps spread evenly over the drive.
+  const std::size_t measured = ChooseVoSteps(log, std::numeric_limits<int>::max()).size();
+  readme << "These are " << choices.size() << " of the " << measured << " steps VO measured";
+  if (choices.size() < measured) {
+    readme << ", spread evenly over the drive (about every "
+           << static_cast<int>(std::lround(double(measured - 1) / std::max<std::size_t>(1, choices.size() - 1)))
+           << " steps)";
+  }
+  readme << "; ./rover plot --vo-steps N draws N of them (default 6).\n\n";
   vo::VoOptions options;
   vo::MotionPriorOptions prior;
   try {

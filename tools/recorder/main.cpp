@@ -23,6 +23,7 @@
 // flushes, prints counts per channel and exits 0 (1 if the log could not be written).
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
+#include "bus/lcm_url_check.hpp"
 #include "bus/virtual_time.hpp"
 #include "logcheck/log_check.hpp"
 #include "recorder/event_queue.hpp"
@@ -33,6 +34,7 @@
 #include <atomic>
 #include <chrono>
 #include <cerrno>
+#include <cstring>
 #include <condition_variable>
 #include <csignal>
 #include <cstdlib>
@@ -196,7 +198,7 @@ class Writer {
  public:
   Writer(const std::string& path, EventQueue& queue)
       : path_(path), log_(path, "w"), queue_(queue),
-        tracker_(rover::logcheck::TrackerOptions{.from_start = false}) {
+        tracker_(rover::logcheck::TrackerOptions{.from_start = true, .detect_joined = true}) {
     if (!log_.good()) throw std::runtime_error(path + ": cannot open for writing");
   }
 
@@ -207,18 +209,34 @@ class Writer {
       ev.channel = e->channel;
       ev.datalen = static_cast<std::int32_t>(e->data.size());
       ev.data = e->data.data();
-      if (log_.writeEvent(&ev) != 0 && !write_failed_) {
-        write_failed_ = true;
-        std::cerr << "rover_recorder: " << path_ << ": write failed (disk full?); "
-                  << "messages from now on are not recorded\n";
+      if (!write_failed_ && (log_.writeEvent(&ev) != 0 || std::ferror(log_.getFilePtr()))) {
+        FailWrite(std::strerror(errno));
       }
       if (!write_failed_) {
         ++written_;
         bytes_ += static_cast<std::int64_t>(e->data.size());
+        // An event on disk: magic, event number, timestamp, channel and data lengths, both.
+        file_bytes_ += 4 + 8 + 8 + 4 + static_cast<std::int64_t>(ev.channel.size()) + 4 + ev.datalen;
+      } else {
+        ++not_written_;
       }
       Check(*e);
     }
-    std::fflush(log_.getFilePtr());
+    // The C library buffers: a full disk may show only now, or only in the file's size.
+    if (!write_failed_ && std::fflush(log_.getFilePtr()) != 0) FailWrite(std::strerror(errno));
+    struct stat st {};
+    if (!write_failed_ && ::stat(path_.c_str(), &st) == 0 && st.st_size < file_bytes_) {
+      FailWrite("the file holds " + std::to_string(st.st_size) + " of the " + std::to_string(file_bytes_) +
+                " bytes written");
+    }
+  }
+
+  // Why the log is not whole, or empty when it is (for the closing report's verdict).
+  std::string WriteProblem() const {
+    if (!write_failed_) return "";
+    return "writing the log failed (" + write_error_ + ")" +
+           (not_written_ > 0 ? ": " + std::to_string(not_written_) + " messages not written" : "") +
+           "; the log's end is missing";
   }
 
   // For the heartbeat (read from another thread).
@@ -229,13 +247,20 @@ class Writer {
   std::int64_t bytes() const { return bytes_; }
   // Only after Run() has returned.
   rover::logcheck::LogReport Report() const {
-    return rover::logcheck::Summarize(path_, tracker_, consistency_);
+    return rover::logcheck::Summarize(path_, tracker_, consistency_, WriteProblem());
   }
 
  private:
+  void FailWrite(const std::string& why) {
+    write_failed_ = true;
+    write_error_ = why;
+    std::cerr << "rover_recorder: " << path_ << ": write failed (" << why << "); "
+              << "messages from now on are not recorded\n";
+  }
+
   void Check(const Event& e) {
     std::optional<rover::logcheck::Restart> restart;
-    const auto gap = tracker_.Observe(e.channel, e.data.data(), e.data.size(), &restart);
+    const auto gap = tracker_.ObserveAt(e.timestamp, e.channel, e.data.data(), e.data.size(), &restart);
     consistency_.Observe(e.channel, e.data.data(), e.data.size());
     if (e.channel == rover::channels::kClock && e.data.size() >= 16) {
       std::int64_t utime = 0;
@@ -282,6 +307,9 @@ class Writer {
   rover::logcheck::ConsistencyCheck consistency_;
   std::atomic<std::int64_t> written_{0}, lost_{0}, rover_utime_{0}, bytes_{0};
   std::atomic<bool> write_failed_{false};
+  std::string write_error_;             // writer thread only (read after it ends)
+  std::int64_t file_bytes_ = 0;         // what the file must hold
+  std::int64_t not_written_ = 0;
   std::chrono::steady_clock::time_point window_start_ = std::chrono::steady_clock::now();
   int in_window_ = 0;
   std::int64_t suppressed_ = 0;
@@ -361,6 +389,11 @@ int main(int argc, char** argv) {
   }
   if (!args) return 0;
   try {
+    if (const std::string problem = rover::bus::LcmUrlProblem(args->url); !problem.empty()) {
+      std::cerr << "rover_recorder: argument --lcm-url: " << args->url << ": " << problem << " (expected "
+                << rover::bus::kLcmUrlExpected << ")\n";
+      return 2;
+    }
     lcm::LCM lcm(args->url);
     if (!lcm.good()) throw std::runtime_error("cannot open the LCM bus " + args->url);
     EventQueue queue;

@@ -31,6 +31,10 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstring>
+#include <cstdio>
+#include <cerrno>
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -88,6 +92,22 @@ void SetOption(std::vector<std::string>& args, const std::string& flag, const st
   }
   args.push_back(flag);
   args.push_back(value);
+}
+
+// Writes a whole file, or returns false (errno says why): a full disk must not pass for
+// a written summary.
+bool WriteWhole(const std::string& path, const std::string& text) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return false;
+  const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size() && std::fflush(f) == 0;
+  const int saved = errno;
+  const bool closed = std::fclose(f) == 0;
+  if (!written) errno = saved;
+  return written && closed;
+}
+
+bool HasOption(const std::vector<std::string>& args, const std::string& flag) {
+  return std::find(args.begin(), args.end(), flag) != args.end();
 }
 
 // The key the deployment's executor holds (its --key, else its config's auth.key_file,
@@ -181,7 +201,7 @@ int main(int argc, char** argv) {
     const rover::terrain::World world(rover::terrain::WorldOptions::LoadFile(configs.world));
     double origin_height_m = 0.0;
     rover_config["mobility"]["geometry"].Get("origin_height_m", origin_height_m);
-    const double start_z = -world.GroundElevation(spec.start_x, spec.start_y) - origin_height_m;
+    const double start_z = world.StartHeight(spec.start_x, spec.start_y, origin_height_m);
     if (url.empty()) url = PrivateUrl();
 
     fs::create_directories(out_dir);
@@ -285,6 +305,7 @@ int main(int argc, char** argv) {
       } else if (p.name == "sequence_executor") {
         SetOption(p.args, "--state-file", state_path);
       } else if (p.name == "state_estimator") {
+        if (HasOption(p.args, "--world")) SetOption(p.args, "--world", configs.world);
         SetOption(p.args, "--start", Num(spec.start_x) + "," + Num(spec.start_y) + "," +
                                          Num(start_z) + "," + Num(spec.start_yaw_deg));
       }
@@ -378,10 +399,12 @@ int main(int argc, char** argv) {
     for (const double until = wall() + 5; set.Running("rover_sim") && wall() < until;) set.Poll(20);
     set.StopAll();
     recorder.Signal("rover_recorder", SIGTERM);  // it writes what it holds, then exits
+    bool log_whole = true;
     for (const double until = wall() + 10; recorder.Running("rover_recorder") && wall() < until;) {
       for (const auto& [name, how] : recorder.Poll(50)) {
         if (how != "exited with code 0") {
           note(name + " " + how + " (see " + out_dir + "/rover_recorder.log)");
+          log_whole = false;  // exit 1: a write failed (a full disk); a crash: the same for us
         }
       }
     }
@@ -403,8 +426,26 @@ int main(int argc, char** argv) {
     summary.scenario = spec.name;
     summary.wall_time_s = wall();
     summary.process_events = partial.process_events;
-    std::ofstream(out_dir + "/summary.json") << rover::tools::SummaryJson(summary);
+    const std::string summary_path = out_dir + "/summary.json";
+    const bool summary_written = WriteWhole(summary_path, rover::tools::SummaryJson(summary));
+    const std::string summary_error = summary_written ? "" : std::strerror(errno);
     std::cout << "\n" << rover::tools::SummaryText(summary);
+    // The figures come from the log: a log that could not be written whole says less than
+    // the drive did. The executor's own last word, heard live, says how the drive ended.
+    if (!log_whole) {
+      std::cout << "  THE LOG IS NOT WHOLE: rover_recorder could not write " << log_path
+                << " (see " << out_dir << "/rover_recorder.log; a full disk?): the figures above are of "
+                << "what it holds";
+      if (final_status) {
+        std::cout << "; on the bus the executor reported the sequence "
+                  << (final_status->state == rover_msgs::sequence_status_t::STATE_COMPLETED ? "completed"
+                      : final_status->state == rover_msgs::sequence_status_t::STATE_ABORTED
+                          ? "aborted (" + final_status->abort_reason + ")"
+                          : "rejected")
+                  << " at command " << final_status->command_index + 1 << " of " << final_status->num_commands;
+      }
+      std::cout << "\n";
+    }
     std::string missed;
     const bool as_expected = rover::tools::AsExpected(spec, summary, &missed);
     if (!spec.expect_outcome.empty()) {
@@ -412,9 +453,16 @@ int main(int argc, char** argv) {
                 << (spec.expect_abort_reason.empty() ? "" : " (" + spec.expect_abort_reason + ")")
                 << (as_expected ? " - as expected\n" : " - NOT as expected: " + missed + "\n");
     }
-    std::cout << "  wrote " << out_dir << "/summary.json and " << log_path << "\n";
-    if (plot) RunPlot(out_dir);
-    // Exit 1 when the run did not end, or ended other than the scenario expects.
-    return summary.outcome == "incomplete" || !as_expected ? 1 : 0;
+    if (summary_written && log_whole) {
+      std::cout << "  wrote " << summary_path << " and " << log_path << "\n";
+    } else {
+      std::cout << "  NOT WRITTEN: " << (summary_written ? "" : summary_path + " (" + summary_error + ")")
+                << (summary_written || log_whole ? "" : " and ") << (log_whole ? "" : log_path + " (partial)")
+                << "\n";
+    }
+    if (plot && log_whole) RunPlot(out_dir);
+    // Exit 1 when the run did not end, ended other than the scenario expects, or its
+    // record could not be written.
+    return summary.outcome == "incomplete" || !as_expected || !summary_written || !log_whole ? 1 : 0;
   });
 }

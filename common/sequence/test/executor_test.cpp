@@ -397,8 +397,9 @@ TEST(SequenceExecutor, PredictiveKeepOutStopsBeforeTheStepIsCommanded) {
   EXPECT_EQ(w.queries.size(), 4u);
   EXPECT_NEAR(w.truth.x, 1.8, 1e-9);
   EXPECT_FALSE(w.InZone(w.truth.x, w.truth.y));
-  ASSERT_EQ(w.zone_sets.size(), 1u);
-  EXPECT_EQ(w.zone_sets[0].zones[0].name, "rock");
+  ASSERT_EQ(w.zone_sets.size(), 2u);
+  EXPECT_TRUE(w.zone_sets[0].zones.empty());  // the start: no zones from an earlier sequence
+  EXPECT_EQ(w.zone_sets[1].zones[0].name, "rock");
   EXPECT_EQ(w.stops.size(), 1u);
   EXPECT_NE(last.detail.find("rock"), std::string::npos);
   // The query samples the step's swept path from the current pose, ends included.
@@ -711,6 +712,24 @@ TEST(SequenceExecutor, MobilityFaultAndSilenceAbort) {
   }
 }
 
+// The zones of one sequence end with it: the next one starts by sending the hazard monitor
+// an empty set, so a sequence that declares none is not aborted on an old zone it drives into.
+TEST(SequenceExecutor, ZonesOfAnEarlierSequenceAreClearedForTheMonitor) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  SubmitText(ex, "keepout mazatzal circle 3 m 0 m radius 0.5 m\nturn 90 deg\n", 1);
+  w.Run();
+  ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+  ASSERT_EQ(w.zones.size(), 1u);  // the monitor holds it after the sequence ended
+  SubmitText(ex, "turnto 0 deg\ndrive 4 m\n", 2);
+  w.Run();
+  EXPECT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+  EXPECT_TRUE(w.zones.empty());
+  EXPECT_GT(w.truth.x, 3.5);  // it drove through where the old zone was
+  ASSERT_FALSE(w.zone_sets.empty());
+  EXPECT_TRUE(w.zone_sets.back().zones.empty());
+}
+
 TEST(SequenceExecutor, SiteAndZonesAndRejections) {
   SequenceExecutor ex(FastOptions());
   FakeWorld w(ex);
@@ -719,8 +738,8 @@ TEST(SequenceExecutor, SiteAndZonesAndRejections) {
   ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
   ASSERT_EQ(w.sites.size(), 1u);
   EXPECT_EQ(w.sites[0].new_site_index, 1);
-  ASSERT_EQ(w.zone_sets.size(), 2u);
-  EXPECT_TRUE(w.zone_sets[1].zones.empty());  // zones of the old site are cleared
+  ASSERT_EQ(w.zone_sets.size(), 3u);          // the start's empty set, the zone, the new site's
+  EXPECT_TRUE(w.zone_sets[2].zones.empty());  // zones of the old site are cleared
   EXPECT_NEAR(w.estimate.x, 1.0, 1e-9);        // 1 m from the new site's origin
 
   // A check failure is rejected with the file:line:col line; nothing is commanded.

@@ -345,3 +345,34 @@ TEST(SequenceParser, GotoAvoid) {
   ExpectError("goto 1 m 2 m within 1 m avoid maybe\n", 1, 31, "unknown goto avoid mode");
   ExpectError("goto 1 m 2 m within 1 m avoid on avoid off\n", 1, 34, "'avoid' given twice");
 }
+
+// The operator's slips get a hint that names the fix, not a generic complaint.
+TEST(SequenceParser, HintsForCommonSlips) {
+  // "turn to" is turnto's absolute heading written as two words.
+  ExpectError("turn to -10 deg\n", 1, 6, "unexpected 'to' after 'turn'");
+  EXPECT_NE(FirstError("turn to -10 deg\n").expected.find("turnto -10 deg"), std::string::npos);
+  // A decimal comma: the error is at the comma and shows the number with a point.
+  ExpectError("drive 1,5 m\n", 1, 8, "decimal comma in '1,5' for drive distance");
+  EXPECT_EQ(FirstError("drive 1,5 m\n").expected, "a decimal point: 1.5");
+  ExpectError("goto 2 m 0,25m within 0.3 m\n", 1, 11, "decimal comma in '0,25'");
+  // Spaced commas are still polygon separators; a missing unit before one is still that.
+  ExpectError("keepout p polygon 1 m 2, 3 m 2 m, 3 m 5 m\n", 1, 23, "missing unit after 2");
+  EXPECT_TRUE(ParseSequence("keepout p polygon 1 m 2 m,3 m 2 m, 3 m 5 m\n", "t").ok());
+}
+
+// Zone names are case-sensitive everywhere (the executor and the hazard monitor match them
+// exactly), so two names that differ only in case are refused as a clash.
+TEST(SequenceParser, ZoneNamesDifferingOnlyInCaseClash) {
+  ExpectError("keepout mazatzal circle 1 m 1 m radius 1 m\nkeepout Mazatzal circle 5 m 1 m radius 1 m\n", 2, 9,
+              "zone name 'Mazatzal' differs only in case from zone 'mazatzal' (declared at line 1)");
+  ExpectError("keepout Mazatzal circle 1 m 1 m radius 1 m\nkeepout remove mazatzal\n", 2, 16,
+              "no zone named 'mazatzal' is in force (names are case-sensitive)");
+  EXPECT_EQ(FirstError("keepout Mazatzal circle 1 m 1 m radius 1 m\nkeepout remove mazatzal\n").expected,
+            "'keepout remove Mazatzal' (declared at line 1)");
+  // Once one is removed (or after a new site), the other spelling is a new zone.
+  EXPECT_TRUE(ParseSequence("keepout mazatzal circle 1 m 1 m radius 1 m\nkeepout remove mazatzal\n"
+                            "keepout Mazatzal circle 5 m 1 m radius 1 m\n", "t").ok());
+  // A zone of an earlier sequence is not in force: the message says why.
+  const SequenceError e = FirstError("keepout remove mazatzal\n");
+  EXPECT_NE(e.expected.find("cleared when this one starts"), std::string::npos) << e.ToString();
+}

@@ -149,6 +149,42 @@ TEST(ConsoleFrame, AFinishedSequenceShowsNoCurrentStepAndTheRecentStepsAreBounde
   EXPECT_EQ(f.find("11.9 "), std::string::npos) << f;  // only the last three
 }
 
+// The zones in force: the set the executor sent, and, for a console started after it was
+// sent, what the hazard monitor's status says.
+TEST(ConsoleFrame, ZonesInForceFromTheExecutorOrTheMonitor) {
+  FrameOptions o;
+  ConsoleState s = FullState();  // the monitor's status names humphrey as nearest
+  std::string f = Join(RenderFrame(s, 100.0, o));
+  EXPECT_NE(f.find("ZONES     the hazard monitor holds zones, nearest humphrey (the whole set shows when the "
+                   "executor next sends it)"), std::string::npos) << f;
+  rover_msgs::keepout_zones_t set{};
+  set.num_zones = 2;
+  set.zones.resize(2);
+  set.zones[0].name = "humphrey";
+  set.zones[0].shape = rover_msgs::keepout_zone_t::SHAPE_CIRCLE;
+  set.zones[0].center[0] = 3.0;
+  set.zones[0].center[1] = -2.8;
+  set.zones[0].radius_m = 0.7;
+  set.zones[1].name = "ridge";
+  set.zones[1].shape = rover_msgs::keepout_zone_t::SHAPE_POLYGON;
+  set.zones[1].num_vertices = 3;
+  s.On(set, 99.0);
+  f = Join(RenderFrame(s, 100.0, o));
+  EXPECT_NE(f.find("ZONES     2 in force: humphrey (circle 3.00 -2.80 m r 0.70 m) ridge (polygon, 3 vertices)"),
+            std::string::npos) << f;
+  // The next sequence starts: the executor sends an empty set.
+  s.On(rover_msgs::keepout_zones_t{}, 99.5);
+  auto h = s.hazard->msg;
+  h.zone_name.clear();
+  s.On(h, 99.6);
+  f = Join(RenderFrame(s, 100.0, o));
+  EXPECT_NE(f.find("ZONES     none in force (a sequence's zones are cleared when the next one starts)\n"),
+            std::string::npos) << f;
+  ConsoleState nothing;
+  EXPECT_NE(Join(RenderFrame(nothing, 100.0, o)).find("ZONES     no KEEPOUT_ZONES or HAZARD_STATUS heard yet"),
+            std::string::npos);
+}
+
 TEST(ConsoleFrame, NothingHeardSaysSoInEverySection) {
   FrameOptions o;
   o.listened_s = 2.5;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/capture_request_t.hpp>
+#include <rover_msgs/hazard_status_t.hpp>
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/imu_t.hpp>
 #include <rover_msgs/mobility_command_t.hpp>
@@ -21,6 +22,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <memory>
 #include <string>
 #include <vector>
@@ -57,6 +59,13 @@ rover_msgs::pose_t Pose(std::int64_t utime, std::int64_t count) {
   return m;
 }
 
+rover_msgs::hazard_status_t HazardStatus(std::int64_t utime, std::int64_t count) {
+  rover_msgs::hazard_status_t m{};
+  m.utime = utime;
+  m.pub_seq = PubSeq("hazard_monitor", count);
+  return m;
+}
+
 rover_msgs::heartbeat_t Heartbeat(const std::string& process, std::int64_t seq) {
   rover_msgs::heartbeat_t m{};
   m.utime = seq * 1000000;
@@ -79,6 +88,12 @@ class TestLog {
   template <class Msg>
   void Add(const std::string& channel, const Msg& m) {
     AddRaw(channel, Encode(m));
+  }
+  // At a log timestamp (microseconds); later Adds go on from it.
+  template <class Msg>
+  void AddAt(std::int64_t timestamp_us, const std::string& channel, const Msg& m) {
+    timestamp_ = timestamp_us - 1;
+    Add(channel, m);
   }
   void AddRaw(const std::string& channel, std::vector<std::uint8_t> bytes) {
     lcm::LogEvent ev{};
@@ -240,6 +255,38 @@ TEST(CheckLog, AFirstCountAboveZeroIsALossOnlyFromTheStart) {
   const auto joined = CheckLog(path, TrackerOptions{.from_start = false});
   EXPECT_EQ(joined.lost, 0);
   EXPECT_TRUE(joined.complete) << joined.verdict_reason;
+}
+
+// A recorder started after the launcher (as the README orders them): the processes heard
+// in the log's first 2 s were running before it, and their earlier messages are not
+// losses; a process that starts 3 s into the recording must count from 0.
+TEST(CheckLog, ALateStartIsToldApartFromALossByWhenEachProcessIsFirstHeard) {
+  TestLog log("late");
+  log.AddAt(0, "HEARTBEAT", Heartbeat("rover_sim", 7));
+  for (int c = 140; c < 150; ++c) log.AddAt(100'000 * (c - 139), "IMU", Imu(c * 1000, "rover_sim", c));
+  log.AddAt(1'500'000, "HEARTBEAT", Heartbeat("state_estimator", 3));
+  log.AddAt(1'600'000, "POSE", Pose(1000, 70));
+  // hazard_monitor starts 3 s in, and its first 4 messages were lost.
+  log.AddAt(3'000'000, "HEARTBEAT", Heartbeat("hazard_monitor", 0));
+  log.AddAt(3'100'000, "HAZARD_STATUS", HazardStatus(2000, 4));
+  const std::string& path = log.Close();
+
+  TrackerOptions detect;
+  detect.detect_joined = true;
+  const auto report = CheckLog(path, detect);
+  EXPECT_FALSE(report.complete);
+  EXPECT_EQ(report.lost, 4);  // hazard_monitor's, and only those
+  ASSERT_EQ(report.channels.at("HAZARD_STATUS").gaps.size(), 1u);
+  EXPECT_EQ(report.channels.at("HAZARD_STATUS").gaps[0].kind, Gap::Kind::kAtStart);
+  EXPECT_EQ(report.joined, (std::set<std::string>{"rover_sim", "state_estimator"}));
+  EXPECT_EQ(report.before_recording, 7 + 140 + 3 + 70);
+  const std::string text = FormatReport(report);
+  EXPECT_NE(text.find("joined: the recording began on a running bus: rover_sim, state_estimator (heard in the "
+                      "log's first 2 s) had published 220 messages before it"), std::string::npos) << text;
+  EXPECT_NE(text.find("log complete: no (4 messages lost in 1 gap)"), std::string::npos) << text;
+  // Strict: every first count above 0 is a loss; joined: none is.
+  EXPECT_EQ(CheckLog(path).lost, 7 + 140 + 3 + 70 + 4);
+  EXPECT_EQ(CheckLog(path, TrackerOptions{.from_start = false}).lost, 0);
 }
 
 TEST(CheckLog, ARestartThatMissesItsFirstMessagesIsALoss) {

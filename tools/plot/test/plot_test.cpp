@@ -23,8 +23,10 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 namespace fs = std::filesystem;
 
@@ -297,6 +299,109 @@ TEST(Plots, WithoutTruthErrorPngIsSkippedWithAReason) {
   std::ifstream script(dir + "/plot/slip.gp");
   const std::string text((std::istreambuf_iterator<char>(script)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("no step was driven"), std::string::npos) << text;
+}
+
+// A second sequence after the first, in the same log: a goto with avoidance whose first
+// step steered straight at the goal and whose second was voted, aborted on the map.
+std::string AppendSecondSequence(const std::string& dir) {
+  const std::string path = dir + "/two.lcm";
+  fs::copy_file(WriteDriveLog(dir), path, fs::copy_options::overwrite_existing);
+  lcm::LogFile file(path, "a");
+  auto write = [&](const char* channel, const auto& msg, std::int64_t utime) {
+    std::vector<std::uint8_t> buf(msg.getEncodedSize());
+    msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    lcm::LogEvent ev{};
+    ev.timestamp = utime;
+    ev.channel = channel;
+    ev.datalen = static_cast<int32_t>(buf.size());
+    ev.data = buf.data();
+    ASSERT_EQ(file.writeEvent(&ev), 0);
+  };
+  const std::int64_t t = kT0 + 20 * kSecond;
+  rover_msgs::sequence_submit_t submit{};
+  submit.submission_id = 2;
+  submit.name = "second.seq";
+  submit.text = "goto 3 m 0 m within 0.5 m avoid on\n";
+  write(channels::kSequenceSubmit, submit, t);
+  rover_msgs::sequence_status_t st{};
+  st.submission_id = 2;
+  st.sequence_name = "second.seq";
+  st.state = rover_msgs::sequence_status_t::STATE_RUNNING;
+  st.command_index = 0;
+  st.command_text = "goto 3 m 0 m within 0.5 m avoid on";
+  st.detail = "avoid: the goal is in reach and the way to it clear: steering straight at it (2.10 m to go)";
+  write(channels::kSequenceStatus, st, t + kSecond);
+  rover_msgs::step_report_t step = Step(0, t, t + 2 * kSecond, -1);
+  step.submission_id = 2;
+  step.command_index = 0;
+  write(channels::kStepReport, step, t + 2 * kSecond);
+  st.step_index = 1;
+  st.detail = "avoid: arc -10.0 deg (goodness 0.8, goal 0.9, 1.60 m to go)";
+  write(channels::kSequenceStatus, st, t + 3 * kSecond);
+  step = Step(1, t + 2 * kSecond, t + 4 * kSecond, -1);
+  step.submission_id = 2;
+  step.command_index = 0;
+  write(channels::kStepReport, step, t + 4 * kSecond);
+  st.state = rover_msgs::sequence_status_t::STATE_ABORTED;
+  st.abort_reason = "hazard_map";
+  st.pose[0] = 1.4;
+  st.pose[1] = 0.2;
+  write(channels::kSequenceStatus, st, t + 5 * kSecond);
+  return path;
+}
+
+TEST(DriveLog, TwoSequencesGoalDiscsAndStepsThatOnlySteered) {
+  const auto log = ReadDriveLog(AppendSecondSequence(FreshDir("two_read")));
+  ASSERT_EQ(log.runs.size(), 2u);
+  EXPECT_EQ(log.runs[0].name, "synthetic.seq");
+  ASSERT_TRUE(log.runs[0].final_status && log.runs[1].final_status);
+  EXPECT_EQ(log.runs[0].final_status->abort_reason, "progress");
+  EXPECT_EQ(log.runs[1].name, "second.seq");
+  EXPECT_EQ(log.runs[1].final_status->abort_reason, "hazard_map");
+  ASSERT_EQ(log.goals.size(), 1u);
+  EXPECT_EQ(log.goals[0].submission_id, 2);
+  EXPECT_DOUBLE_EQ(log.goals[0].target.x(), 3.0);
+  EXPECT_DOUBLE_EQ(log.goals[0].radius_m, 0.5);
+  EXPECT_TRUE(log.avoid_commands.count({2, 0}));
+  EXPECT_FALSE(log.avoid_commands.count({0, 2}));  // the first sequence's drive is no goto
+  EXPECT_EQ(log.steering_steps, (std::set<StepKey>{{2, 0, 0}}));
+}
+
+TEST(Plots, TraverseShowsBothSequencesTheirAbortsTheGoalRocksAndSteeringSteps) {
+  const std::string terminal = PngTerminal();
+  if (terminal.empty()) GTEST_SKIP() << "gnuplot is not installed (Debian gnuplot-nox; ./rover setup installs it)";
+  const std::string dir = FreshDir("two_pictures");
+  auto log = ReadDriveLog(AppendSecondSequence(dir));
+  log.rocks = ReadWorldRocks(std::string(ROVER_SOURCE_DIR) + "/configs/worlds/flat_rock_course.yaml", 0.10);
+  ASSERT_FALSE(log.rocks.empty());
+  EXPECT_TRUE(std::any_of(log.rocks.begin(), log.rocks.end(), [](const RockMark& r) { return r.name == "Adirondack"; }));
+  for (const auto& r : log.rocks) EXPECT_GE(r.height_m, 0.10);
+  PlotPlace place{dir, dir + "/plot", terminal, "two"};
+  fs::create_directories(place.data_dir);
+  const auto out = WriteTraversePlot(log, place);
+  ASSERT_TRUE(out.written) << out.note;
+  EXPECT_TRUE(IsPng(out.file));
+  std::ifstream script(dir + "/plot/traverse.gp");
+  const std::string text((std::istreambuf_iterator<char>(script)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("synthetic.seq aborted (progress); second.seq aborted (hazard_map)"), std::string::npos) << text;
+  EXPECT_NE(text.find("'traverse_abort.dat'"), std::string::npos) << text;
+  EXPECT_NE(text.find("'traverse_abort2.dat'"), std::string::npos) << text;
+  EXPECT_NE(text.find("abort: second.seq: hazard_map"), std::string::npos) << text;
+  EXPECT_NE(text.find("abort: synthetic.seq: progress"), std::string::npos) << text;
+  EXPECT_NE(text.find("'traverse_goals.dat' using 2:1:3 with circles"), std::string::npos) << text;
+  EXPECT_NE(text.find("'traverse_rocks.dat' using 2:1:3 with circles"), std::string::npos) << text;
+  EXPECT_NE(text.find("'traverse_steer.dat'"), std::string::npos) << text;
+  EXPECT_NE(text.find("'traverse_avoid.dat'"), std::string::npos) << text;
+  // One step each: the steered one and the voted one.
+  auto lines = [&](const std::string& file) {
+    std::ifstream in(dir + "/plot/" + file);
+    int n = 0;
+    for (std::string line; std::getline(in, line);) n += !line.empty();
+    return n;
+  };
+  EXPECT_EQ(lines("traverse_steer.dat"), 2);
+  EXPECT_EQ(lines("traverse_avoid.dat"), 2);
+  EXPECT_EQ(lines("traverse_goals.dat"), 1);
 }
 
 }  // namespace

@@ -212,6 +212,12 @@ function drawTables(s) {
     r.push(['tilt', 'roll ' + fix(h.roll_deg, 1) + '/' + fix(h.roll_limit_deg, 0) + '  pitch ' + fix(h.pitch_deg, 1) + '/' + fix(h.pitch_limit_deg, 0) + ' deg']);
     if (h.detail) r.push(['', h.detail]);
   } else r.push(['hazard', 'no HAZARD_STATUS heard']);
+  // The set in force, drawn or not: a sequence's zones are cleared when the next one starts.
+  // KEEPOUT_ZONES comes only when the set changes: a console started later learns from the
+  // hazard monitor's status that it holds zones (the nearest one).
+  r.push(['zones', s.zones.length ? s.zones.map((z) => z.name).join(', ')
+                   : h && h.zone ? 'none heard from the executor; the hazard monitor holds zones, nearest ' + h.zone
+                                 : 'none in force']);
   if (s.map) r.push(['map', s.map.rows + 'x' + s.map.cols + ' cells of ' + s.map.cell_m + ' m: unsafe ' + s.map.unsafe +
                      ', caution ' + s.map.caution + ', safe ' + s.map.safe + ', unknown ' + s.map.unknown]);
   kv($('vohaz'), r);
