@@ -131,7 +131,7 @@ TEST(AuthenticatedCommands, ForgedAndReplayedSubmitsAreRefusedAndASignedOneRuns)
       p.args.push_back("--hold-for");
       p.args.push_back(others);
     }
-    set.Start(p, {"ROVER_LCM_URL=" + url});
+    set.Start(p, {"ROVER_LCM_URL=" + url, "ROVER_TIME=" + deployment.time});  // virtual: load cannot change it
   }
   const auto start = Clock::now();
   while (alive.size() < deployment.processes.size() && Seconds(start) < 60) bus.Handle(50);

@@ -148,13 +148,13 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
       p.args.push_back("--hold-for");
       p.args.push_back(others);
     }
-    set.Start(p, {"ROVER_LCM_URL=" + url});
+    set.Start(p, {"ROVER_LCM_URL=" + url, "ROVER_TIME=" + deployment.time});  // virtual: load cannot change it
   }
   launch::ProcessSpec web;
   web.name = "rover_web";
   web.program = "rover_web";
   web.args = {"--port", "0", "--secret-file", secret_file, "--key", key};  // any free port
-  set.Start(web, {"ROVER_LCM_URL=" + url});
+  set.Start(web, {"ROVER_LCM_URL=" + url, "ROVER_TIME=" + deployment.time});
 
   const auto start = Clock::now();
   auto count_alive = [&] {
