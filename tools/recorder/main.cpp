@@ -85,7 +85,6 @@ class Receiver {
     }
     // LCM's own probe, sent whenever a process opens the bus: when is up to the scheduler.
     if (channel == "LCM_SELF_TEST") return;
-    ++received_total_;
     changed_ = true;
     // The instant's batch is bounded per channel as the queue is (a flood cannot make it
     // grow without end while the clock waits); a message dropped here is counted.
@@ -151,6 +150,10 @@ class Receiver {
   };
   // Writes the held batch, sorted, stamped with its instant, and moves to `next`.
   void FlushInstant(std::int64_t next) {
+    // Counted by the instants written, not as they arrive: a heartbeat that overtook the
+    // clock message of its own instant arrives early, and a count of arrivals in the
+    // heartbeat's detail would then differ from run to run.
+    received_total_ += static_cast<std::int64_t>(held_.size());
     std::sort(held_.begin(), held_.end(), [](const Held& a, const Held& b) { return a.key < b.key; });
     for (auto& h : held_) {
       h.event.timestamp = instant_ > 0 ? instant_ : next;
