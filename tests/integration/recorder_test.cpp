@@ -10,8 +10,10 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/heartbeat_t.hpp>
+#include <rover_msgs/pose_t.hpp>
 
 #include <chrono>
+#include <cstdio>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -193,6 +195,23 @@ TEST(Recorder, AFloodOnOneChannelStaysWithinItsBoundAndTheLossesAreNamed) {
     set.StopAll();
   }
   EXPECT_GT(flood_sent, 1000);
+  // A known loss, after the flood: POSE from a publisher of the test's own, counts 0-59 with
+  // 20-29 and 45-47 never sent. The recorder must name exactly these two gaps (by the last
+  // count before each and the first after it).
+  const std::string gap_publisher = "recorder_test_gaps";
+  {
+    lcm::LCM lcm(url);
+    ASSERT_TRUE(lcm.good());
+    for (std::int64_t count = 0; count < 60; ++count) {
+      if ((count >= 20 && count < 30) || (count >= 45 && count < 48)) continue;
+      rover_msgs::pose_t pose{};
+      pose.utime = 1000000 + count * 100000;
+      pose.pub_seq = (static_cast<std::int64_t>(logcheck::PublisherId(gap_publisher)) << 32) | count;
+      lcm.publish(channels::kPose, &pose);
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the last messages arrive
   EXPECT_EQ(recording.Stop(), "exited with code 0");
   const std::string says = ReadText(out + "/rover_recorder.log");
 
@@ -220,6 +239,21 @@ TEST(Recorder, AFloodOnOneChannelStaysWithinItsBoundAndTheLossesAreNamed) {
                                                      << " that the recorder did not name:\n" << says;
     }
   }
+
+  // 3. The known loss is named exactly: publisher, counts and number.
+  char hex_id[16];
+  std::snprintf(hex_id, sizeof(hex_id), "0x%08x", logcheck::PublisherId(gap_publisher));
+  const std::string hex(hex_id);
+  for (const char* known : {": 10 lost (count 19 then 30)", ": 3 lost (count 44 then 48)"}) {
+    const std::string line = "gap: " + std::string(channels::kPose) + " from " + hex + known;
+    EXPECT_NE(says.find(line), std::string::npos) << "missing '" << line << "' in:\n" << says;
+  }
+  const auto& pose = report.channels.at(channels::kPose);
+  std::int64_t known_lost = 0;
+  for (const auto& gap : pose.gaps) {
+    if (gap.publisher == hex) known_lost += gap.lost;
+  }
+  EXPECT_EQ(known_lost, 13) << logcheck::FormatReport(report);
 }
 
 }  // namespace

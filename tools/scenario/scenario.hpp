@@ -29,7 +29,8 @@ struct ScenarioSpec {
   std::string rover_config = "configs/rover.yaml";
   double start_x = 0, start_y = 0, start_yaw_deg = 0;
   double sim_rate = 50;       // rover seconds per wall second
-  double timeout_s = 300;     // wall-clock limit for the whole run
+  double timeout_s = 300;     // the run's limit: wall seconds on a real clock; in virtual time
+                              // timeout_s x sim_rate seconds of rover time from the submission
   // Fault injection: kill `kill_process` once `kill_after_steps` step reports were seen.
   std::string kill_process;
   int kill_after_steps = 0;

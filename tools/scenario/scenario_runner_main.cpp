@@ -52,6 +52,11 @@ using rover::config::ConfigError;
 
 namespace {
 
+// In virtual time, the runner gives up when the clock has not moved for this long of wall
+// time: a hung member is declared lost after sim.barrier_timeout_s (10 s) and the clock
+// runs on without it, so only a hung clock itself stands still this long.
+constexpr double kClockStallS = 60;
+
 volatile std::sig_atomic_t g_stop = 0;
 void OnSignal(int) { g_stop = 1; }
 
@@ -355,7 +360,23 @@ int main(int argc, char** argv) {
     std::optional<double> done_at;
     std::optional<std::int64_t> final_utime;
     auto last_sync = wall();
-    while (!g_stop && wall() < spec.timeout_s) {
+    // The run's limit. On a real clock it is timeout_s of wall time. In virtual time it is
+    // rover time, timeout_s x the scenario's sim_rate from the submission (what timeout_s
+    // means at the rate the scenario was written for), so that load cannot change where a
+    // run is cut; the one wall-time rule is a liveness limit on the clock itself.
+    const std::int64_t submitted_at = std::max<std::int64_t>(clock_seen, 0);
+    const auto rover_limit_us = static_cast<std::int64_t>(spec.timeout_s * spec.sim_rate * 1e6);
+    std::int64_t clock_moved = clock_seen;
+    double clock_moved_wall = wall();
+    auto within_limit = [&] {
+      if (!virtual_time) return wall() < spec.timeout_s;
+      if (clock_seen != clock_moved) {
+        clock_moved = clock_seen;
+        clock_moved_wall = wall();
+      }
+      return clock_seen - submitted_at < rover_limit_us && wall() - clock_moved_wall < kClockStallS;
+    };
+    while (!g_stop && within_limit()) {
       if (virtual_time) {
         // One instant at a time: what came in it is counted, then the runner reports it
         // finished. It ends 2 s of rover time after the final status (the last messages:
@@ -392,7 +413,14 @@ int main(int argc, char** argv) {
       // Let the last messages (stop, final pose, truth) reach the log.
       if (!virtual_time && done_at && wall() - *done_at > 1.0) break;
     }
-    if (!final_status) note("no final status within " + Num(spec.timeout_s) + " s");
+    if (!final_status && !virtual_time) note("no final status within " + Num(spec.timeout_s) + " s");
+    if (!final_status && virtual_time && wall() - clock_moved_wall >= kClockStallS) {
+      note("the clock stood still for " + Num(kClockStallS) +
+           " s of wall time with no final status (a hung rover_sim? see rover_sim.log)");
+    } else if (!final_status && virtual_time) {
+      note("no final status within " + Num(rover_limit_us / 1e6) + " s of rover time (timeout_s " +
+           Num(spec.timeout_s) + " at sim_rate " + Num(spec.sim_rate) + ")");
+    }
     // The clock first, so that nothing moves while the others stop (in virtual time it
     // waits for this runner, which has stopped reporting: the log ends at one instant).
     set.Signal("rover_sim", SIGTERM);
