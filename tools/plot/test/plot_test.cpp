@@ -377,9 +377,9 @@ TEST(DriveLog, TwoSequencesGoalDiscsAndStepsThatOnlySteered) {
   // the command's own, the goto's first steered at the goal, its second was voted.
   std::map<std::pair<std::int64_t, int>, int> choices;
   for (const auto& s : log.steps) choices[{s.submission_id, s.step_index}] = s.choice;
-  EXPECT_EQ(choices.at({0, 0}), rover_msgs::step_report_t::CHOICE_COMMAND);
-  EXPECT_EQ(choices.at({2, 0}), rover_msgs::step_report_t::CHOICE_STEER_AT_GOAL);
-  EXPECT_EQ(choices.at({2, 1}), rover_msgs::step_report_t::CHOICE_ARC_VOTE);
+  EXPECT_EQ(choices.at({0, 0}), int{rover_msgs::step_report_t::CHOICE_COMMAND});
+  EXPECT_EQ(choices.at({2, 0}), int{rover_msgs::step_report_t::CHOICE_STEER_AT_GOAL});
+  EXPECT_EQ(choices.at({2, 1}), int{rover_msgs::step_report_t::CHOICE_ARC_VOTE});
 }
 
 TEST(Plots, TraverseShowsBothSequencesTheirAbortsTheGoalRocksAndSteeringSteps) {
