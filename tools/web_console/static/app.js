@@ -322,6 +322,7 @@ function stopPlaying() {
 function startPlayback(s) {
   const p = s.playback, slider = $('slider');
   $('playbar').hidden = false;
+  $('conn').textContent = 'playback';
   $('plog').textContent = p.log;
   slider.min = p.first_s; slider.max = p.last_s; slider.value = p.at_s;
   const label = () => { $('ptime').textContent = 'log time ' + fix(slider.value, 1) + ' s (' + fix(slider.value - p.first_s, 1) + ' of ' + fix(p.last_s - p.first_s, 1) + ')'; };

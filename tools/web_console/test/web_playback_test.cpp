@@ -4,6 +4,8 @@
 //     steps reported by then, heartbeat ages in log time; scrubbing back gives the earlier
 //     state again (the state is rebuilt), and a POSE that fails the bus's checks is left out;
 //   - every command is refused (403), and a bad ?at= gets 400;
+//   - with chromium installed, the page in a headless browser shows the slider at the
+//     playback's time with every command disabled (build/test-out/web_playback/screenshot.png);
 //   - a missing log, or a log with an operator secret, is one clear line and exit 2.
 // Run it alone: ./rover private ctest --test-dir build -R WebConsole
 #include "bus/channels.hpp"
@@ -25,6 +27,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -238,6 +241,24 @@ TEST(WebConsolePlayback, StateAtATimeIsTheLogsPoseThenAndCommandsAreRefused) {
   auto no_image = http.Get("/api/image.png?at=55");
   ASSERT_TRUE(no_image);
   EXPECT_EQ(no_image->status, 404) << "the log holds no STEREO_FRAME";
+  // The page in a browser (chromium is optional): the script finds the playback, shows the
+  // slider at the playback's time and disables every command; a screenshot is kept.
+  if (RunCommand("command -v chromium").exit_code != 0) {
+    std::cout << "[  SKIPPED ] browser check: chromium is not installed (apt-get install chromium)\n";
+  } else {
+    state_at(56.0);  // the page opens where the playback is
+    const std::string url = " http://127.0.0.1:" + std::to_string(port) + "/";
+    const std::string flags = "timeout 90 chromium --headless --no-sandbox --disable-gpu --hide-scrollbars ";
+    const auto dom = RunCommand(flags + "--user-data-dir=" + dir + "/chromium --dump-dom" + url + " 2>/dev/null");
+    EXPECT_NE(dom.output.find("<section id=\"playbar\">"), std::string::npos) << "the playback bar is hidden:\n" << dom.output;
+    EXPECT_NE(dom.output.find("<span id=\"ptime\">log time 56.0 s (6.0 of 12.0)"), std::string::npos) << dom.output;
+    EXPECT_NE(dom.output.find("<button id=\"abort\" class=\"abort\" disabled"), std::string::npos) << dom.output;
+    EXPECT_NE(dom.output.find("<span id=\"conn\">playback"), std::string::npos) << dom.output;
+    const std::string shot = dir + "/screenshot.png";
+    RunCommand(flags + "--user-data-dir=" + dir + "/chromium --window-size=1400,1000 --screenshot=" + shot + url);
+    EXPECT_TRUE(std::filesystem::exists(shot)) << "chromium wrote no screenshot";
+    std::cout << "screenshot: " << shot << "\n";
+  }
   set.StopAll();
 
   // Bad input: one line, exit 2.
