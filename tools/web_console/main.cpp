@@ -42,6 +42,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <deque>
@@ -275,8 +276,10 @@ int main(int argc_in, char** argv_in) {
       } catch (const std::runtime_error& e) {
         throw ConfigError(std::string("rover_web: argument --log: ") + e.what());
       }
-      std::cout << "rover_web: playing back " << *log_path << ": " << playback->messages() << " messages, log time "
-                << playback->first_utime() * 1e-6 << " to " << playback->last_utime() * 1e-6 << " s"
+      char span[96];
+      std::snprintf(span, sizeof(span), "log time %.3f to %.3f s (%.1f s)", playback->first_utime() * 1e-6,
+                    playback->last_utime() * 1e-6, (playback->last_utime() - playback->first_utime()) * 1e-6);
+      std::cout << "rover_web: playing back " << *log_path << ": " << playback->messages() << " messages, " << span
                 << (playback->rejected() > 0 ? ", " + std::to_string(playback->rejected()) +
                                                    " left out (they do not decode or fail the bus's checks)"
                                              : std::string())

@@ -258,7 +258,7 @@ function drawTables(s) {
       : s.commands.enabled
       ? 'Commands need the operator secret' + (s.commands.signed ? ' and are signed with the deployment key.' : ' (no key: unsigned).')
       : 'Read-only: rover_web was started without an operator secret.';
-  $('bus').textContent = s.playback ? 'playback' : s.bus;
+  $('bus').textContent = s.playback ? '' : s.bus;
   $('clock').textContent = 'rover time ' + fix(s.rover_time_s, 1) + ' s, ' + s.messages + ' messages';
 }
 
