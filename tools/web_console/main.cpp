@@ -211,7 +211,8 @@ std::optional<std::int64_t> RequestedTime(const httplib::Request& req, std::stri
   try {
     std::size_t used = 0;
     const double s = std::stod(text, &used);
-    if (used == text.size() && std::isfinite(s)) return static_cast<std::int64_t>(std::llround(s * 1e6));
+    // Far outside any log clamps to its ends anyway; the bound keeps the microseconds in range.
+    if (used == text.size() && std::isfinite(s)) return std::llround(std::clamp(s, -9.0e12, 9.0e12) * 1e6);
   } catch (const std::exception&) {
   }
   *bad = "at: \"" + text + "\": expected a log time in seconds (the state's playback.first_s to last_s)";
