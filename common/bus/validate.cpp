@@ -178,7 +178,7 @@ std::string Problem(const rover_msgs::sim_truth_t& m) {
 
 std::string Problem(const rover_msgs::step_report_t& m) {
   if (m.vo_status < -1 || m.vo_status > 10) return "vo_status " + std::to_string(m.vo_status) + " is unknown";
-  return "";
+  return Enum("choice", m.choice, 0, 2);
 }
 
 std::string Problem(const rover_msgs::stereo_frame_t& m) {

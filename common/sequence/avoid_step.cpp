@@ -153,6 +153,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     if (s.unsafe == 0 && avoidance::JudgeUnknown(s, o.unknown) == avoidance::UnknownVerdict::kAcceptable &&
         l.unsafe == 0) {
       *step = direct.step;
+      step_choice_ = StepChoice::kSteerAtGoal;
       detail_ = "avoid: the goal is in reach and the way to it clear: steering straight at it (" +
                 Fixed(remaining) + " m to go)";
       return AvoidOutcome::kStep;
@@ -219,6 +220,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   if (loop_broken) d += "; the vote's first choice was made here before: the next best instead";
   d += ")";
   detail_ = std::move(d);
+  step_choice_ = StepChoice::kArcVote;
   return AvoidOutcome::kStep;
 }
 

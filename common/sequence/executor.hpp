@@ -263,6 +263,12 @@ struct SequenceStatus {  // sequence_status_t
   double elapsed_s = 0.0;
   int vo_failures = 0;
 };
+// How a step was chosen (step_report_t.choice): the command's own step (drive, turn, a
+// plain goto), or in a `goto ... avoid on` by the arc vote, or steered straight at the
+// goal because the way to it was clear (no vote). The values are the message's.
+enum class StepChoice { kCommand = 0, kArcVote = 1, kSteerAtGoal = 2 };
+const char* ToString(StepChoice choice);
+
 struct StepReport {  // step_report_t
   int64_t utime = 0;
   int64_t submission_id = 0;
@@ -281,6 +287,7 @@ struct StepReport {  // step_report_t
   int64_t utime_after = 0;
   int64_t utime_plan_start = 0;  // the rover time charged for choosing the step (0, 0: none)
   int64_t utime_plan_end = 0;
+  StepChoice choice = StepChoice::kCommand;
 };
 
 using ExecutorOutput = std::variant<MobilityCommand, CaptureRequest, HazardQuery, KeepOutZoneSet,
@@ -551,6 +558,7 @@ class SequenceExecutor {
   // in hand has been paid for (the next NextStepOfCommand commands it).
   PlannedStep planned_;
   int64_t plan_start_utime_ = 0, plan_end_utime_ = 0;
+  StepChoice step_choice_ = StepChoice::kCommand;  // how the step in hand was chosen
   int64_t query_id_ = -1;
   std::optional<HazardReply> hazard_reply_;
   int64_t mobility_id_ = -1;

@@ -85,6 +85,7 @@ void SequenceExecutor::ReportStep(const StepEnd& end) {
   r.utime_after = end.after.utime;
   r.utime_plan_start = plan_start_utime_;
   r.utime_plan_end = plan_end_utime_;
+  r.choice = step_choice_;
   Emit(r);
 }
 

@@ -19,6 +19,15 @@ const char* ToString(SequenceState state) {
   return "?";
 }
 
+const char* ToString(StepChoice choice) {
+  switch (choice) {
+    case StepChoice::kCommand: return "command";
+    case StepChoice::kArcVote: return "arc_vote";
+    case StepChoice::kSteerAtGoal: return "steer_at_goal";
+  }
+  return "?";
+}
+
 void SequenceExecutor::Finish(SequenceState state, const std::string& reason, const std::string& detail) {
   state_ = state;
   abort_reason_ = reason;

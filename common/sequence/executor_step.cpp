@@ -22,6 +22,7 @@ bool SequenceExecutor::NextStepOfCommand() {
     return true;
   }
   PlannedStep step;
+  step_choice_ = StepChoice::kCommand;  // AvoidStep says otherwise
   if (is_goto_ && goto_.avoid) {
     switch (AvoidStep(&step)) {
       case AvoidOutcome::kStep: break;

@@ -153,6 +153,7 @@ class OutputPublisher {
     m.utime_before = r.utime_before;
     m.utime_after = r.utime_after;
     m.utime_plan_start = r.utime_plan_start;
+    m.choice = static_cast<std::int8_t>(r.choice);
     m.utime_plan_end = r.utime_plan_end;
     proc_.bus().Publish(channels::kStepReport, m);
   }

@@ -196,14 +196,6 @@ DriveLog ReadDriveLog(const std::string& log_path) {
         }
         if (!run->final_status) run->final_status = m;
       }
-      if (m.command_index >= 0 && m.command_text.rfind("goto", 0) == 0 &&
-          m.command_text.find("avoid on") != std::string::npos) {
-        out.avoid_commands.insert({m.submission_id, m.command_index});
-        // common/sequence/avoid_step.cpp's line for a step that needs no vote.
-        if (m.detail.find("steering straight at") != std::string::npos) {
-          out.steering_steps.insert({m.submission_id, m.command_index, m.step_index});
-        }
-      }
     }
   }
   std::sort(out.truth.begin(), out.truth.end(),

@@ -73,10 +73,6 @@ struct RockMark {
   double height_m = 0.0;
 };
 
-// (submission, command index) and (submission, command index, step index).
-using CommandKey = std::pair<std::int64_t, int>;
-using StepKey = std::tuple<std::int64_t, int, int>;
-
 struct DriveLog {
   std::string path;                         // the log file
   std::vector<EstimatePoint> estimate;      // POSE, in log order
@@ -93,11 +89,6 @@ struct DriveLog {
   // The slip limit in force for each command (command index -> percent), from the
   // submitted sequence's `slip limit` lines; absent where slip checks are off.
   std::map<int, double> slip_limit_pct;
-  // Commands that drive with hazard avoidance (`goto ... avoid on`).
-  std::set<CommandKey> avoid_commands;
-  // Their steps that steered straight at the goal (the way clear) rather than by arc voting:
-  // the executor's status says so while the step runs.
-  std::set<StepKey> steering_steps;
   // Messages that did not decode (by channel): the pictures leave them out.
   std::map<std::string, int> undecodable;
 };

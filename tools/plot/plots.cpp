@@ -231,13 +231,13 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
   }
   // Steps of hazard avoidance (`goto ... avoid on`): their own colours over the estimate,
   // from each step's start to its end: those arc voting chose, and those that steered
-  // straight at the goal because the way was clear.
+  // straight at the goal because the way was clear (each step report's `choice`).
   {
     std::ofstream voted(dir + "traverse_avoid.dat"), steered(dir + "traverse_steer.dat");
     int n_voted = 0, n_steered = 0;
     for (const auto& s : log.steps) {
-      if (!log.avoid_commands.count({s.submission_id, s.command_index})) continue;
-      const bool steer = log.steering_steps.count({s.submission_id, s.command_index, s.step_index}) > 0;
+      if (s.choice == rover_msgs::step_report_t::CHOICE_COMMAND) continue;
+      const bool steer = s.choice == rover_msgs::step_report_t::CHOICE_STEER_AT_GOAL;
       (steer ? steered : voted) << Num(s.pose_before[0]) << " " << Num(s.pose_before[1]) << "\n"
                                 << Num(s.pose_after[0]) << " " << Num(s.pose_after[1]) << "\n\n";
       b.Add(s.pose_after[0], s.pose_after[1]);

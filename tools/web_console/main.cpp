@@ -3,9 +3,11 @@
 // (cpp-httplib) on 127.0.0.1 by default:
 //
 //   GET  /                 the page (static/index.html, static/app.js, embedded at build time)
-//   GET  /api/state        the whole picture, one JSON object (web_state.hpp)
+//   GET  /api/state        the whole picture, one JSON object (web_state.hpp); in playback
+//                          ?at=SECONDS picks the log time (else where the playback is)
 //   GET  /api/events       the same as Server-Sent Events, twice a second
-//   GET  /api/image.png    the newest NAVCAM left image, reduced (?width=N, 32 to 1024)
+//   GET  /api/image.png    the newest NAVCAM left image, reduced (?width=N, 32 to 1024; in
+//                          playback ?at=SECONDS as for /api/state)
 //   POST /api/submit       body: a sequence's text (?name=NAME); checked here first (400 with
 //                          the checker's line), then published on SEQUENCE_SUBMIT
 //   POST /api/pause, /api/resume, /api/abort   body: an optional one-line reason
@@ -14,12 +16,17 @@
 // is signed with the deployment's key when one is held (--key, auth.key_file,
 // $ROVER_KEY_FILE), through the same Bus signing as every process and rover_seq.
 // Requests whose Host header is not this console's (DNS rebinding) are refused.
+//
+// With --log FILE it plays back a recorded log instead (log_playback.hpp): the same state,
+// the page gets a time slider, no bus is joined (memq://, unless --lcm-url says otherwise)
+// and every command is refused.
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
 #include "bus/process.hpp"
 #include "config/file_read.hpp"
 #include "config/yaml_config.hpp"
 #include "sequence/parser.hpp"
+#include "web_console/log_playback.hpp"
 #include "web_console/static_files.hpp"
 #include "web_console/web_state.hpp"
 
@@ -34,7 +41,10 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <deque>
 #include <future>
 #include <iostream>
@@ -178,9 +188,43 @@ std::string CheckReason(const std::string& body, std::string* reason) {
   return "";
 }
 
+// A playback joins no bus: LCM's in-process transport, unless --lcm-url names one.
+std::vector<char*> PlaybackArguments(int argc, char** argv) {
+  std::vector<char*> args(argv, argv + argc);
+  bool log = false, url = false;
+  for (int i = 1; i < argc; ++i) {
+    log = log || std::strcmp(argv[i], "--log") == 0;
+    url = url || std::strcmp(argv[i], "--lcm-url") == 0;
+  }
+  static char flag[] = "--lcm-url", memq[] = "memq://";
+  if (log && !url) {
+    args.push_back(flag);
+    args.push_back(memq);
+  }
+  return args;
+}
+
+// ?at=SECONDS (log time) in a playback request; none: where the playback is.
+std::optional<std::int64_t> RequestedTime(const httplib::Request& req, std::string* bad) {
+  if (!req.has_param("at")) return std::nullopt;
+  const std::string text = req.get_param_value("at");
+  try {
+    std::size_t used = 0;
+    const double s = std::stod(text, &used);
+    // Far outside any log clamps to its ends anyway; the bound keeps the microseconds in range.
+    if (used == text.size() && std::isfinite(s)) return std::llround(std::clamp(s, -9.0e12, 9.0e12) * 1e6);
+  } catch (const std::exception&) {
+  }
+  *bad = "at: \"" + text + "\": expected a log time in seconds (the state's playback.first_s to last_s)";
+  return std::nullopt;
+}
+
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc_in, char** argv_in) {
+  std::vector<char*> arguments = PlaybackArguments(argc_in, argv_in);
+  const int argc = static_cast<int>(arguments.size());
+  char** argv = arguments.data();
   return rover::bus::RunMain("rover_web", [&]() -> int {
     rover::bus::Process proc(
         "rover_web",
@@ -191,13 +235,16 @@ int main(int argc, char** argv) {
         "Commands (submit, pause, resume, abort) need the operator secret (--secret-file or\n"
         "--secret; the page asks for it and sends it in the X-Rover-Secret header); without one\n"
         "the console is read-only. With the deployment's key (--key) they are signed.\n"
-        "Listens on 127.0.0.1 unless told otherwise: anyone who can reach the port sees the bus.",
+        "Listens on 127.0.0.1 unless told otherwise: anyone who can reach the port sees the bus.\n"
+        "With --log FILE it plays back a recorded LCM log instead (rover_recorder, ./rover scenario\n"
+        "--out): the same page with a time slider; no bus is joined and commands are refused.",
         argc, argv,
         {{"--listen", "ADDR:PORT", "where to listen (default 127.0.0.1:8080; port 0: any free port)"},
          {"--port", "P", "the port on 127.0.0.1 (short for --listen 127.0.0.1:P)"},
          {"--secret-file", "FILE", "the operator secret for commands: a file no other user can read"},
          {"--secret", "TOKEN", "the operator secret on the command line (other local users may see it in ps)"},
-         {"--image-width", "PX", "width of the NAVCAM image served (default 256, 32 to 1024)"}});
+         {"--image-width", "PX", "width of the NAVCAM image served (default 256, 32 to 1024)"},
+         {"--log", "FILE", "play back this LCM log instead of showing the live bus (commands off)"}});
 
     Listen listen;
     if (auto l = proc.option("--listen")) listen = ParseListen(*l);
@@ -213,12 +260,39 @@ int main(int argc, char** argv) {
       }
     }
     const std::string secret = LoadSecret(proc.option("--secret-file"), proc.option("--secret"));
+    const std::optional<std::string> log_path = proc.option("--log");
+    if (log_path && !secret.empty()) {
+      throw ConfigError("rover_web: --log and an operator secret: a playback sends no commands (expected one of them)");
+    }
 
     rover::web::WebStateOptions options;
-    options.bus_url = proc.bus().url();
+    options.bus_url = log_path ? "" : proc.bus().url();
     options.commands_enabled = !secret.empty();
-    options.signing = proc.bus().has_auth();
+    options.signing = !log_path && proc.bus().has_auth();
     rover::web::WebState state(options);
+    std::unique_ptr<rover::web::LogPlayback> playback;
+    if (log_path) {
+      try {
+        playback = std::make_unique<rover::web::LogPlayback>(*log_path, options);
+      } catch (const std::runtime_error& e) {
+        throw ConfigError(std::string("rover_web: argument --log: ") + e.what());
+      }
+      char span[96];
+      std::snprintf(span, sizeof(span), "log time %.3f to %.3f s (%.1f s)", playback->first_utime() * 1e-6,
+                    playback->last_utime() * 1e-6, (playback->last_utime() - playback->first_utime()) * 1e-6);
+      std::cout << "rover_web: playing back " << *log_path << ": " << playback->messages() << " messages, " << span
+                << (playback->rejected() > 0 ? ", " + std::to_string(playback->rejected()) +
+                                                   " left out (they do not decode or fail the bus's checks)"
+                                             : std::string())
+                << "\n" << std::flush;
+    }
+    // The picture a request asks for: the live state, or the playback's at ?at= (else where
+    // it is). "" with `bad` set for a bad ?at=.
+    auto state_json = [&](const httplib::Request& req, std::string* bad) -> std::string {
+      if (!playback) return state.StateJson(Now());
+      const auto at = RequestedTime(req, bad);
+      return bad->empty() ? playback->StateJsonAt(at) : "";
+    };
 
     namespace ch = rover::channels;
     auto& bus = proc.bus();
@@ -278,11 +352,13 @@ int main(int argc, char** argv) {
       }
       Text(res, res.status, line);
     });
-    server.Get("/", [&](const httplib::Request&, httplib::Response& res) {
+    server.Get("/", [&](const httplib::Request& req, httplib::Response& res) {
       // The page carries the state it was served with (in a JSON data block, which no
       // browser runs), so its first picture needs no round trip. '<' never appears in JSON
       // outside strings, and as \u003c no string can close the block.
-      std::string json = state.StateJson(Now());
+      std::string bad;
+      std::string json = state_json(req, &bad);
+      if (!bad.empty()) return Text(res, 400, bad);
       std::string escaped;
       escaped.reserve(json.size());
       for (char c : json) escaped += c == '<' ? std::string("\\u003c") : std::string(1, c);
@@ -296,12 +372,17 @@ int main(int argc, char** argv) {
     server.Get("/app.js", [](const httplib::Request&, httplib::Response& res) {
       res.set_content(rover::web::kAppJs, "text/javascript; charset=utf-8");
     });
-    server.Get("/api/state", [&](const httplib::Request&, httplib::Response& res) {
-      res.set_content(state.StateJson(Now()), "application/json");
+    server.Get("/api/state", [&](const httplib::Request& req, httplib::Response& res) {
+      std::string bad;
+      std::string json = state_json(req, &bad);
+      if (!bad.empty()) return Text(res, 400, bad);
+      res.set_content(json, "application/json");
     });
     server.Get("/api/events", [&](const httplib::Request&, httplib::Response& res) {
       res.set_chunked_content_provider("text/event-stream", [&](std::size_t, httplib::DataSink& sink) {
-        const std::string event = "data: " + state.StateJson(Now()) + "\n\n";
+        // In playback: where the playback is (the page asks /api/state?at= itself).
+        const std::string event =
+            "data: " + (playback ? playback->StateJsonAt(std::nullopt) : state.StateJson(Now())) + "\n\n";
         if (!sink.write(event.data(), event.size())) return false;
         for (int i = 0; i < 10 && !stopping; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
         if (stopping) {
@@ -322,6 +403,13 @@ int main(int argc, char** argv) {
         if (width < 32 || width > 1024) return Text(res, 400, "width: expected a number of pixels, 32 to 1024");
       }
       std::string why;
+      if (playback) {
+        const auto at = RequestedTime(req, &why);
+        if (!why.empty()) return Text(res, 400, why);
+        std::string png = playback->LeftImagePngAt(at, width, &why);
+        if (png.empty()) return Text(res, 404, why);
+        return res.set_content(png, "image/png");
+      }
       std::string png = state.LeftImagePng(width, &why);
       if (png.empty()) return Text(res, 404, why);
       res.set_content(png, "image/png");
@@ -329,6 +417,10 @@ int main(int argc, char** argv) {
 
     // Commands: the secret, then the input, then the bus thread publishes (and signs).
     auto authorised = [&](const httplib::Request& req, httplib::Response& res) {
+      if (playback) {
+        Text(res, 403, "refused: rover_web is playing back " + playback->path() + ", not on a bus: commands are off");
+        return false;
+      }
       if (secret.empty()) {
         Text(res, 403, "refused: rover_web was started without --secret-file or --secret, so commands are off");
         return false;
@@ -422,29 +514,39 @@ int main(int argc, char** argv) {
       if (port == 80) allowed_hosts.push_back(h);  // browsers leave the default port out
     }
     std::thread http([&] { server.listen_after_bind(); });
-    std::cout << "rover_web: listening on http://" << listen.host << ":" << port << "/ (bus " << bus.url()
-              << "; commands " << (secret.empty() ? "off: no operator secret" : "need the operator secret")
-              << (options.signing ? ", signed with the deployment's key" : ", unsigned (no key)") << ")\n"
-              << std::flush;
+    if (playback) {
+      std::cout << "rover_web: listening on http://" << listen.host << ":" << port << "/ (playback of " << *log_path
+                << "; commands off)\n" << std::flush;
+    } else {
+      std::cout << "rover_web: listening on http://" << listen.host << ":" << port << "/ (bus " << bus.url()
+                << "; commands " << (secret.empty() ? "off: no operator secret" : "need the operator secret")
+                << (options.signing ? ", signed with the deployment's key" : ", unsigned (no key)") << ")\n"
+                << std::flush;
+    }
     if (!IsLoopback(listen.host)) {
       std::cout << "rover_web: warning: listening on " << listen.host
                 << ", not loopback: anyone who reaches this port reads the bus (plain HTTP, no TLS)\n";
     }
 
-    proc.Run([&] {
-      for (auto& p : commands.Take()) {
-        try {
-          if (p->kind == Pending::kSubmit) {
-            bus.Publish(ch::kSequenceSubmit, p->submit);
-          } else {
-            bus.Publish(ch::kSequenceControl, p->control);
+    if (playback) {
+      // Nothing to hear or send: serve until SIGINT or SIGTERM.
+      while (!proc.stopping()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    } else {
+      proc.Run([&] {
+        for (auto& p : commands.Take()) {
+          try {
+            if (p->kind == Pending::kSubmit) {
+              bus.Publish(ch::kSequenceSubmit, p->submit);
+            } else {
+              bus.Publish(ch::kSequenceControl, p->control);
+            }
+            p->done.set_value("");
+          } catch (const std::exception& e) {
+            p->done.set_value(e.what());
           }
-          p->done.set_value("");
-        } catch (const std::exception& e) {
-          p->done.set_value(e.what());
         }
-      }
-    }, 20);
+      }, 20);
+    }
 
     stopping = true;
     server.stop();

@@ -278,7 +278,7 @@ std::string WebState::LeftImagePng(int max_width, std::string* why) const {
   return bytes;
 }
 
-std::string WebState::StateJson(double wall_now_s) const {
+std::string WebState::StateJson(double wall_now_s, const PlaybackInfo* playback) const {
   std::lock_guard<std::mutex> lock(mutex_);
   Json j;
   j.Begin('{');
@@ -289,6 +289,14 @@ std::string WebState::StateJson(double wall_now_s) const {
   j.Key("enabled").Bool(options_.commands_enabled);
   j.Key("signed").Bool(options_.signing);
   j.End('}');
+  j.Key("playback");
+  if (playback != nullptr) {
+    j.Begin('{').Key("log").Str(playback->log);
+    j.Key("first_s").Fixed(playback->first_utime * 1e-6, 6).Key("last_s").Fixed(playback->last_utime * 1e-6, 6);
+    j.Key("at_s").Fixed(playback->at_utime * 1e-6, 6).End('}');
+  } else {
+    j.Null();
+  }
 
   j.Key("pose");
   if (pose_) {
@@ -423,6 +431,8 @@ std::string WebState::StateJson(double wall_now_s) const {
     j.Key("measured_m").Num(s.estimated_distance_m).Key("measured_deg").Num(s.estimated_turn_rad * kDeg);
     j.Key("slip_pct").Num(s.slip_pct);
     j.Key("vo").Str(s.vo_status < 0 ? "blind" : VoStatusName(s.vo_status));
+    j.Key("choice").Str(s.choice >= 0 && s.choice <= 2 ? sequence::ToString(static_cast<sequence::StepChoice>(s.choice))
+                                                      : "choice " + std::to_string(s.choice));
     j.End('}');
   }
   j.End(']');

@@ -45,6 +45,12 @@ struct Ellipse {
 };
 Ellipse ThreeSigmaEllipse(double cxx, double cxy, double cyy);
 
+// Where a playback of a log is (log_playback.hpp): the state's "playback" key.
+struct PlaybackInfo {
+  std::string log;
+  std::int64_t first_utime = 0, last_utime = 0, at_utime = 0;
+};
+
 struct WebStateOptions {
   std::string bus_url;
   bool commands_enabled = false;  // an operator secret is configured
@@ -72,8 +78,8 @@ class WebState {
   void On(const rover_msgs::stereo_frame_t& m, double wall_s);
   void OnRoverClock(std::int64_t utime);
 
-  // The whole picture as one JSON object.
-  std::string StateJson(double wall_now_s) const;
+  // The whole picture as one JSON object; "playback" is null live, else `playback`.
+  std::string StateJson(double wall_now_s, const PlaybackInfo* playback = nullptr) const;
 
   // The newest left image as a PNG at most `max_width` pixels wide (8-bit gray); empty
   // with `why` set when there is none or it cannot be decoded.

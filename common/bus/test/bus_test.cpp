@@ -7,11 +7,13 @@
 #include <rover_msgs/pose_t.hpp>
 
 #include <rover_msgs/sequence_control_t.hpp>
+#include <rover_msgs/step_report_t.hpp>
 #include <rover_msgs/wheel_odometry_t.hpp>
 #include <rover_msgs/imu_t.hpp>
 
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 using rover::bus::Bus;
 
@@ -140,6 +142,26 @@ TEST(Bus, NonFiniteAndUnknownValuesAreDropped) {
   EXPECT_EQ(received, 1);
   EXPECT_EQ(bus.dropped(), 2);
   EXPECT_NE(bus.last_drop().find("source 7 is unknown"), std::string::npos) << bus.last_drop();
+}
+
+// A step report's choice is one of its three values: 0 (the command's own step, also what a
+// publisher that does not say leaves), the arc vote, or steered at the goal.
+TEST(Bus, StepReportChoiceIsKnownOrDropped) {
+  Bus bus("memq://");
+  std::vector<int> choices;
+  bus.Subscribe<rover_msgs::step_report_t>(rover::channels::kStepReport,
+                                           [&](const rover_msgs::step_report_t& m) { choices.push_back(m.choice); });
+  rover_msgs::step_report_t step{};
+  step.vo_status = -1;
+  for (int c : {0, 1, 2, 3, -1}) {
+    step.choice = static_cast<std::int8_t>(c);
+    bus.Publish(rover::channels::kStepReport, step);
+  }
+  while (bus.Handle(0)) {
+  }
+  EXPECT_EQ(choices, (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(bus.dropped(), 2);
+  EXPECT_NE(bus.last_drop().find("choice -1 is unknown (expected 0 to 2)"), std::string::npos) << bus.last_drop();
 }
 
 // A tick after a stall must see what arrived during it: HandleReceived handles the

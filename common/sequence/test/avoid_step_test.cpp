@@ -28,6 +28,7 @@ class MapWorld {
   std::vector<PlanePose> trail;  // the pose after each motion
   std::vector<CaptureRequest> captures;
   std::vector<SequenceStatus> statuses;
+  std::vector<StepReport> steps;
   int64_t utime = 1'000'000;
   double wall = 100.0;
 
@@ -114,6 +115,7 @@ class MapWorld {
     pending_.push_back([this, r] { ex_.OnHazardReply(r); });
   }
   void Handle(const SequenceStatus& s) { statuses.push_back(s); }
+  void Handle(const StepReport& r) { steps.push_back(r); }
   template <class T>
   void Handle(const T&) {}
 
@@ -150,6 +152,33 @@ TEST(AvoidStep, GotoWithAvoidanceGoesRoundTheRock) {
   bool steered = false;
   for (const auto& m : w.motions) steered = steered || std::abs(m.curvature_per_m) > 1e-6 || std::abs(m.turn_rad) > 1e-6;
   EXPECT_TRUE(steered);
+}
+
+// Each step report says how its step was chosen: with the rock ahead by the arc vote, and
+// once the goal is in reach with the way clear, straight at it; without avoidance, by the
+// command (what ./rover plot colours from).
+TEST(AvoidStep, StepReportsSayHowEachStepWasChosen) {
+  {
+    SequenceExecutor ex(Fast());
+    MapWorld w(ex);
+    Rock(&w.grid);
+    ex.SubmitText("goto 5 m 0 m within 0.4 m distance 12 m avoid on\n", 1, "t.seq");
+    w.Run();
+    ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+    ASSERT_GE(w.steps.size(), 2u);
+    EXPECT_EQ(w.steps.front().choice, StepChoice::kArcVote) << "the rock is ahead: the first step is voted";
+    EXPECT_EQ(w.steps.back().choice, StepChoice::kSteerAtGoal) << "the goal in reach, the way clear";
+    for (const auto& s : w.steps) EXPECT_NE(s.choice, StepChoice::kCommand) << "step " << s.step_index;
+  }
+  {
+    SequenceExecutor ex(Fast());
+    MapWorld w(ex);
+    ex.SubmitText("goto 3 m 0 m within 0.4 m avoid off\ndrive 1 m\n", 1, "t.seq");
+    w.Run();
+    ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+    ASSERT_GE(w.steps.size(), 2u);
+    for (const auto& s : w.steps) EXPECT_EQ(s.choice, StepChoice::kCommand) << "step " << s.step_index;
+  }
 }
 
 TEST(AvoidStep, WithoutAvoidanceTheMapStopsTheRover) {

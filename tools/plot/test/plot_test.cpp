@@ -26,7 +26,9 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
+#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -301,6 +303,13 @@ TEST(Plots, WithoutTruthErrorPngIsSkippedWithAReason) {
   EXPECT_NE(text.find("no step was driven"), std::string::npos) << text;
 }
 
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
 // A second sequence after the first, in the same log: a goto with avoidance whose first
 // step steered straight at the goal and whose second was voted, aborted on the map.
 std::string AppendSecondSequence(const std::string& dir) {
@@ -329,18 +338,20 @@ std::string AppendSecondSequence(const std::string& dir) {
   st.state = rover_msgs::sequence_status_t::STATE_RUNNING;
   st.command_index = 0;
   st.command_text = "goto 3 m 0 m within 0.5 m avoid on";
-  st.detail = "avoid: the goal is in reach and the way to it clear: steering straight at it (2.10 m to go)";
+  st.detail = "avoid: step 0";  // the colours come from the step reports' choice, not this text
   write(channels::kSequenceStatus, st, t + kSecond);
   rover_msgs::step_report_t step = Step(0, t, t + 2 * kSecond, -1);
   step.submission_id = 2;
   step.command_index = 0;
+  step.choice = rover_msgs::step_report_t::CHOICE_STEER_AT_GOAL;
   write(channels::kStepReport, step, t + 2 * kSecond);
   st.step_index = 1;
-  st.detail = "avoid: arc -10.0 deg (goodness 0.8, goal 0.9, 1.60 m to go)";
+  st.detail = "avoid: step 1";
   write(channels::kSequenceStatus, st, t + 3 * kSecond);
   step = Step(1, t + 2 * kSecond, t + 4 * kSecond, -1);
   step.submission_id = 2;
   step.command_index = 0;
+  step.choice = rover_msgs::step_report_t::CHOICE_ARC_VOTE;
   write(channels::kStepReport, step, t + 4 * kSecond);
   st.state = rover_msgs::sequence_status_t::STATE_ABORTED;
   st.abort_reason = "hazard_map";
@@ -362,9 +373,13 @@ TEST(DriveLog, TwoSequencesGoalDiscsAndStepsThatOnlySteered) {
   EXPECT_EQ(log.goals[0].submission_id, 2);
   EXPECT_DOUBLE_EQ(log.goals[0].target.x(), 3.0);
   EXPECT_DOUBLE_EQ(log.goals[0].radius_m, 0.5);
-  EXPECT_TRUE(log.avoid_commands.count({2, 0}));
-  EXPECT_FALSE(log.avoid_commands.count({0, 2}));  // the first sequence's drive is no goto
-  EXPECT_EQ(log.steering_steps, (std::set<StepKey>{{2, 0, 0}}));
+  // Each step's choice as the executor reported it: the first sequence's drive steps are
+  // the command's own, the goto's first steered at the goal, its second was voted.
+  std::map<std::pair<std::int64_t, int>, int> choices;
+  for (const auto& s : log.steps) choices[{s.submission_id, s.step_index}] = s.choice;
+  EXPECT_EQ(choices.at({0, 0}), int{rover_msgs::step_report_t::CHOICE_COMMAND});
+  EXPECT_EQ(choices.at({2, 0}), int{rover_msgs::step_report_t::CHOICE_STEER_AT_GOAL});
+  EXPECT_EQ(choices.at({2, 1}), int{rover_msgs::step_report_t::CHOICE_ARC_VOTE});
 }
 
 TEST(Plots, TraverseShowsBothSequencesTheirAbortsTheGoalRocksAndSteeringSteps) {
@@ -401,6 +416,11 @@ TEST(Plots, TraverseShowsBothSequencesTheirAbortsTheGoalRocksAndSteeringSteps) {
   };
   EXPECT_EQ(lines("traverse_steer.dat"), 2);
   EXPECT_EQ(lines("traverse_avoid.dat"), 2);
+  // Which is which: step 0 (x 0 to 0.45) steered, step 1 (x 0.45 to 0.9) was voted.
+  const std::string steer_rows = ReadAll(dir + "/plot/traverse_steer.dat");
+  const std::string avoid_rows = ReadAll(dir + "/plot/traverse_avoid.dat");
+  EXPECT_EQ(steer_rows.rfind("0 0\n0.45 0\n", 0), 0u) << steer_rows;
+  EXPECT_EQ(avoid_rows.rfind("0.45 0\n0.9 0\n", 0), 0u) << avoid_rows;
   EXPECT_EQ(lines("traverse_goals.dat"), 1);
 }
 

@@ -1,5 +1,7 @@
 // The web console's page: reads /api/events (Server-Sent Events, one JSON state each) and
 // draws it. Every text from the bus goes in with textContent, never as HTML.
+// Playing back a log (rover_web --log, the state's "playback" is set), it asks for the
+// state at the slider's time instead (/api/state?at=SECONDS) and sends no commands.
 'use strict';
 const $ = (id) => document.getElementById(id);
 const fix = (v, d) => (v === null || v === undefined || !isFinite(v)) ? '-' : Number(v).toFixed(d);
@@ -246,15 +248,17 @@ function drawTables(s) {
 
   if (s.image && s.image.frame_id !== imageFrame) {
     imageFrame = s.image.frame_id;
-    $('navcam').src = 'api/image.png?frame=' + encodeURIComponent(imageFrame);
+    $('navcam').src = 'api/image.png?frame=' + encodeURIComponent(imageFrame) +
+        (s.playback ? '&at=' + encodeURIComponent(s.playback.at_s) : '');
     $('navcam').hidden = false;
     $('imginfo').textContent = 'frame ' + s.image.frame_id + ' (' + s.image.purpose + '), ' + s.image.width + 'x' +
         s.image.height + ' ' + s.image.encoding;
   }
-  $('cmdstate').textContent = s.commands.enabled
+  $('cmdstate').textContent = s.playback ? 'Playback of a log: commands are off.'
+      : s.commands.enabled
       ? 'Commands need the operator secret' + (s.commands.signed ? ' and are signed with the deployment key.' : ' (no key: unsigned).')
       : 'Read-only: rover_web was started without an operator secret.';
-  $('bus').textContent = s.bus;
+  $('bus').textContent = s.playback ? '' : s.bus;
   $('clock').textContent = 'rover time ' + fix(s.rover_time_s, 1) + ' s, ' + s.messages + ' messages';
 }
 
@@ -289,10 +293,62 @@ async function command(path, body) {
   }
 }
 
+// ---- playback: the slider is the log's time; play moves it at the chosen speed ----
+const playback = { timer: null, busy: false, wanted: null };
+
+async function showAt(t) {
+  playback.wanted = t;
+  if (playback.busy) return;  // the newest wish is fetched when the request in flight ends
+  playback.busy = true;
+  while (playback.wanted !== null) {
+    const at = playback.wanted;
+    playback.wanted = null;
+    try {
+      const res = await fetch('api/state?at=' + encodeURIComponent(at.toFixed(3)));
+      if (!res.ok) throw new Error(res.status + ': ' + (await res.text()).trim());
+      render(await res.json());
+      $('conn').textContent = 'playback'; $('conn').className = '';
+    } catch (e) { $('conn').textContent = 'playback: ' + e; $('conn').className = 'bad'; }
+  }
+  playback.busy = false;
+}
+
+function stopPlaying() {
+  clearInterval(playback.timer);
+  playback.timer = null;
+  $('play').textContent = 'Play';
+}
+
+function startPlayback(s) {
+  const p = s.playback, slider = $('slider');
+  $('playbar').hidden = false;
+  $('conn').textContent = 'playback';
+  $('plog').textContent = p.log;
+  slider.min = p.first_s; slider.max = p.last_s; slider.value = p.at_s;
+  const label = () => { $('ptime').textContent = 'log time ' + fix(slider.value, 1) + ' s (' + fix(slider.value - p.first_s, 1) + ' of ' + fix(p.last_s - p.first_s, 1) + ')'; };
+  label();
+  slider.oninput = () => { label(); showAt(Number(slider.value)); };
+  $('play').onclick = () => {
+    if (playback.timer) return stopPlaying();
+    if (Number(slider.value) >= p.last_s) slider.value = p.first_s;  // from the start again
+    $('play').textContent = 'Pause';
+    const tick_s = 0.2;
+    playback.timer = setInterval(() => {
+      const next = Math.min(p.last_s, Number(slider.value) + tick_s * Number($('speed').value));
+      slider.value = next;
+      label();
+      showAt(next);
+      if (next >= p.last_s) stopPlaying();
+    }, tick_s * 1000);
+  };
+  for (const id of ['submit', 'pause', 'resume', 'abort', 'text', 'secret']) $(id).disabled = true;
+}
+
 $('submit').onclick = () => command('api/submit?name=web', $('text').value);
 $('pause').onclick = () => command('api/pause', '');
 $('resume').onclick = () => command('api/resume', '');
 $('abort').onclick = () => { if (confirm('Abort the running sequence? The rover stops.')) command('api/abort', ''); };
 window.addEventListener('resize', () => { if (last) drawMap(last); });
-try { render(JSON.parse($('initial-state').textContent)); } catch (e) { /* the events will draw it */ }
-connect();
+let initial = null;
+try { initial = JSON.parse($('initial-state').textContent); render(initial); } catch (e) { /* the events will draw it */ }
+if (initial && initial.playback) startPlayback(initial); else connect();

@@ -125,6 +125,7 @@ TEST(WebState, JsonCarriesEveryPanel) {
   step.vo_status = rover_msgs::vo_update_t::STATUS_OK;
   state.On(step, t);
   step.vo_status = -1;
+  step.choice = rover_msgs::step_report_t::CHOICE_STEER_AT_GOAL;
   state.On(step, t);
 
   rover_msgs::vo_update_t vo{};
@@ -182,6 +183,9 @@ TEST(WebState, JsonCarriesEveryPanel) {
   EXPECT_NEAR(j["steps"][0]["measured_m"].as<double>(), 0.45, 1e-9);
   EXPECT_EQ(j["steps"][0]["vo"].as<std::string>(), "ok");
   EXPECT_EQ(j["steps"][1]["vo"].as<std::string>(), "blind");
+  EXPECT_EQ(j["steps"][0]["choice"].as<std::string>(), "command");
+  EXPECT_EQ(j["steps"][1]["choice"].as<std::string>(), "steer_at_goal");
+  EXPECT_TRUE(j["playback"].IsNull()) << "live: no playback";
   EXPECT_EQ(j["vo"]["ok"].as<int>(), 1);
   EXPECT_EQ(j["vo"]["failed"].as<int>(), 1);
   EXPECT_EQ(j["vo"]["reason"].as<std::string>(), "too few");
