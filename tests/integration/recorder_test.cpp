@@ -38,12 +38,27 @@ class Recording {
     bus_.Subscribe<rover_msgs::heartbeat_t>(channels::kHeartbeat,
                                             [this](const rover_msgs::heartbeat_t& hb) {
                                               heard_.insert(hb.process);
+                                              if (hb.process == "rover_recorder" &&
+                                                  hb.detail.rfind("wrote ", 0) == 0) {
+                                                wrote_.push_back(std::stoll(hb.detail.substr(6)));
+                                              }
                                             });
     set_.Start({"rover_recorder", "rover_recorder", {"--lcm-url", url, log_path}});
     const auto deadline = Clock::now() + std::chrono::seconds(10);
     while (!heard_.count("rover_recorder") && Clock::now() < deadline) bus_.Handle(50);
   }
   bool ready() const { return heard_.count("rover_recorder") > 0; }
+  // Waits until the recorder has caught up with what it received: two of its heartbeats in
+  // a row (1 s apart) say it wrote no more than its own heartbeats in between.
+  bool WaitUntilDrained(std::chrono::seconds limit) {
+    const auto deadline = Clock::now() + limit;
+    const std::size_t from = wrote_.size();
+    while (Clock::now() < deadline) {
+      bus_.Handle(50);
+      if (wrote_.size() >= from + 2 && wrote_.back() - wrote_[wrote_.size() - 2] <= 3) return true;
+    }
+    return false;
+  }
   // SIGTERM, then its exit status ("exited with code 0" when it wrote everything).
   std::string Stop() {
     set_.Signal("rover_recorder", SIGTERM);
@@ -60,6 +75,7 @@ class Recording {
   bus::Bus bus_;
   launch::ProcessSet set_;
   std::set<std::string> heard_;
+  std::vector<std::int64_t> wrote_;  // "wrote N messages" of each recorder heartbeat
 };
 
 // Each channel's payloads, in log order.
@@ -195,6 +211,8 @@ TEST(Recorder, AFloodOnOneChannelStaysWithinItsBoundAndTheLossesAreNamed) {
     set.StopAll();
   }
   EXPECT_GT(flood_sent, 1000);
+  // The flood's backlog in the recorder's socket would drop what comes next.
+  ASSERT_TRUE(recording.WaitUntilDrained(std::chrono::seconds(60))) << "the recorder did not catch up";
   // A known loss, after the flood: POSE from a publisher of the test's own, counts 0-59 with
   // 20-29 and 45-47 never sent. The recorder must name exactly these two gaps (by the last
   // count before each and the first after it).
