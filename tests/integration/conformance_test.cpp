@@ -95,6 +95,7 @@ TEST(ConformanceKit, WithKeysOnRoverSimPassesAKitThatSignsAndRefusesOneThatDoesN
   // answer: it fails, naming the rules.
   const auto unsigned_kit = Kit(rig.url(), "mobility --config configs/rover.yaml");
   EXPECT_EQ(unsigned_kit.exit_code, 1);
+  EXPECT_TRUE(Has(unsigned_kit, "FAIL mobility.arc.moving: expected MOVING"));
   EXPECT_TRUE(Has(unsigned_kit, "FAIL mobility.stop.answer"));
   EXPECT_TRUE(rig.Running("rover_sim"));
 }
