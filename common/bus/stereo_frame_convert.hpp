@@ -5,6 +5,7 @@
 #pragma once
 
 #include "bus/convert.hpp"
+#include "bus/image_view.hpp"
 #include "geometry/camera_model.hpp"
 #include "imaging/image_check.hpp"
 #include "vo/visual_odometry.hpp"
@@ -14,17 +15,6 @@
 #include <string>
 
 namespace rover::bus {
-
-inline imaging::ImageView ImageViewOf(const rover_msgs::image_t& img) {
-  imaging::ImageView v;
-  v.encoding = img.encoding;
-  v.width = img.width;
-  v.height = img.height;
-  v.declared_size = img.size;
-  v.data = img.data.data();
-  v.data_size = img.data.size();
-  return v;
-}
 
 // Fills `out` (images, rig, time, id, attitude at capture). Returns "" or why the frame
 // cannot be used ("left image: ...", "camera model: ...").

@@ -21,6 +21,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <thread>
 
 namespace rover::test {
@@ -37,13 +38,15 @@ bool Has(const CommandResult& r, const std::string& text) { return r.output.find
 // rover_sim on a real clock at rate 1, as a rover's mobility runs.
 class SimRig {
  public:
-  explicit SimRig(const std::string& name, int offset, bool cameras = false)
+  // `key`: the deployment's key file (keys on), or "" (keys off).
+  explicit SimRig(const std::string& name, int offset, bool cameras = false, const std::string& key = "")
       : url_(PrivateUrl(offset)), set_(std::string(ROVER_BINARY_DIR) + "/bin", OutDir(name), false) {
     const std::string world = SourceDir() + "/configs/worlds/featureless_sand.yaml";
     const std::vector<std::string> env = {"ROVER_LCM_URL=" + url_, "ROVER_TIME=real"};
-    set_.Start({"rover_sim", "rover_sim",
-                {"--config", SourceDir() + "/configs/rover.yaml", "--world", world, "--start", "0,0,0", "--rate", "1"}},
-               env);
+    std::vector<std::string> args = {"--config", SourceDir() + "/configs/rover.yaml", "--world", world,
+                                     "--start", "0,0,0", "--rate", "1"};
+    if (!key.empty()) args.insert(args.end(), {"--key", key});
+    set_.Start({"rover_sim", "rover_sim", args}, env);
     if (cameras) {
       set_.Start({"camera_capture", "camera_capture", {"--config", SourceDir() + "/configs/rover.yaml", "--world", world}},
                  env);
@@ -76,6 +79,24 @@ TEST(ConformanceKit, RoverSimPassesMobilityImuAndWheelOdometry) {
   const auto earth = Kit(rig.url(), "imu --gravity 9.81 --listen-s 2");
   EXPECT_EQ(earth.exit_code, 1);
   EXPECT_TRUE(Has(earth, "FAIL imu.units.accel: expected |accel| 9.81 m/s^2 at rest (10 %); seen |accel| 3.7"));
+  EXPECT_TRUE(rig.Running("rover_sim"));
+}
+
+TEST(ConformanceKit, WithKeysOnRoverSimPassesAKitThatSignsAndRefusesOneThatDoesNot) {
+  // The deployment's key, made as docs/HARDWARE.md says (./rover seq keygen).
+  const std::string key = OutDir("conformance_keys") + "/rover.key";
+  std::filesystem::remove(key);
+  ASSERT_EQ(RunCommand(Bin("rover_seq") + " keygen " + key).exit_code, 0);
+  SimRig rig("conformance_sim_keys", 49, false, key);
+  const auto signed_kit = Kit(rig.url(), "mobility --config configs/rover.yaml --key " + key);
+  EXPECT_EQ(signed_kit.exit_code, 0);
+  EXPECT_TRUE(Has(signed_kit, "conformance mobility: PASS (25 held, 0 failed, 0 not checked)"));
+  // Without the key its commands are refused, and the kit sees a driver that does not
+  // answer: it fails, naming the rules.
+  const auto unsigned_kit = Kit(rig.url(), "mobility --config configs/rover.yaml");
+  EXPECT_EQ(unsigned_kit.exit_code, 1);
+  EXPECT_TRUE(Has(unsigned_kit, "FAIL mobility.arc.moving: expected MOVING"));
+  EXPECT_TRUE(Has(unsigned_kit, "FAIL mobility.stop.answer"));
   EXPECT_TRUE(rig.Running("rover_sim"));
 }
 

@@ -1,6 +1,7 @@
 // calib_check: the rectification error of a rig file on a stereo pair of a chessboard
 // (tools/calib/rectification_check.hpp; ./rover calib check). Exit 0 when the RMS row error
 // is within --max-rms, 1 when not, 2 on a bad argument or file.
+#include "calib/arguments.hpp"
 #include "calib/rectification_check.hpp"
 #include "config/file_read.hpp"
 #include "config/yaml_config.hpp"
@@ -24,9 +25,7 @@ const char* kUsage =
     "  --max-rms PX   the RMS row error that passes (default 0.5)\n"
     "Exit code: 0 within --max-rms, 1 over it, 2 on a bad argument or file.\n";
 
-struct BadArgument : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using calib::BadArgument;
 
 cv::Mat ReadGray(const std::string& path) {
   config::CheckRegularFile(path, config::kMaxImageFileBytes, "image");
@@ -40,35 +39,29 @@ int Run(int argc, char** argv) {
   std::string rig_path, left_path, right_path;
   cv::Size board;
   double max_rms = 0.5;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw BadArgument("argument " + arg + ": missing value");
-      return argv[++i];
-    };
-    if (arg == "--help" || arg == "-h") {
+  calib::Arguments args(argc, argv);
+  while (args.Next()) {
+    const std::string& arg = args.option();
+    if (args.IsHelp()) {
       std::cout << kUsage;
       return 0;
     } else if (arg == "--rig") {
-      rig_path = value();
+      rig_path = args.Value();
     } else if (arg == "--left") {
-      left_path = value();
+      left_path = args.Value();
     } else if (arg == "--right") {
-      right_path = value();
+      right_path = args.Value();
     } else if (arg == "--board") {
-      const std::string v = value();
-      if (std::sscanf(v.c_str(), "%dx%d", &board.width, &board.height) != 2 || board.width < 2 || board.height < 2) {
-        throw BadArgument("argument --board: \"" + v + "\": expected COLSxROWS inner corners, e.g. 9x6");
-      }
+      args.Size(2, "COLSxROWS inner corners, e.g. 9x6", &board.width, &board.height);
     } else if (arg == "--max-rms") {
-      const std::string v = value();
+      const std::string v = args.Value();
       char* end = nullptr;
       max_rms = std::strtod(v.c_str(), &end);
       if (end == v.c_str() || *end != '\0' || !(max_rms > 0)) {
         throw BadArgument("argument --max-rms: \"" + v + "\": expected a number of pixels > 0");
       }
     } else {
-      throw BadArgument("argument " + arg + ": unknown option (expected one of the options in --help)");
+      throw args.Unknown();
     }
   }
   if (rig_path.empty() || left_path.empty() || right_path.empty() || board.width == 0) {

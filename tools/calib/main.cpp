@@ -1,10 +1,10 @@
 // calib_import: writes a rig file (configs/cameras/*.yaml) from a stereo calibration made
 // by OpenCV's stereoCalibrate or ROS's camera_calibration (tools/calib/calib_import.hpp).
+#include "calib/arguments.hpp"
 #include "calib/calib_import.hpp"
 #include "config/number_list.hpp"
 #include "config/yaml_config.hpp"
 
-#include <cstdio>
 #include <fstream>
 #include <iostream>
 
@@ -24,9 +24,7 @@ const char* kUsage =
     "  --t-unit U      the unit of T (the calibration target's): m (default), cm or mm\n"
     "  --ros-left/--ros-right FILE   ROS camera_info YAML of each camera (camera_calibration)\n";
 
-struct BadArgument : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using calib::BadArgument;
 
 Eigen::Vector3d Triple(const std::string& option, const std::string& text) {
   std::vector<double> v;
@@ -41,41 +39,35 @@ int Run(int argc, char** argv) {
   bool have_position = false, have_rpy = false;
   int width = 0, height = 0;
   calib::Mount mount;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw BadArgument("argument " + arg + ": missing value");
-      return argv[++i];
-    };
-    if (arg == "--help" || arg == "-h") {
+  calib::Arguments args(argc, argv);
+  while (args.Next()) {
+    const std::string& arg = args.option();
+    if (args.IsHelp()) {
       std::cout << kUsage;
       return 0;
     } else if (arg == "--opencv") {
-      opencv = value();
+      opencv = args.Value();
     } else if (arg == "--ros-left") {
-      ros_left = value();
+      ros_left = args.Value();
     } else if (arg == "--ros-right") {
-      ros_right = value();
+      ros_right = args.Value();
     } else if (arg == "--out") {
-      out = value();
+      out = args.Value();
     } else if (arg == "--t-unit") {
-      unit = value();
+      unit = args.Value();
       if (unit != "m" && unit != "cm" && unit != "mm") {
         throw BadArgument("argument --t-unit: \"" + unit + "\": expected m, cm or mm");
       }
     } else if (arg == "--size") {
-      const std::string v = value();
-      if (std::sscanf(v.c_str(), "%dx%d", &width, &height) != 2 || width <= 0 || height <= 0) {
-        throw BadArgument("argument --size: \"" + v + "\": expected WIDTHxHEIGHT in pixels, e.g. 1024x1024");
-      }
+      args.Size(1, "WIDTHxHEIGHT in pixels, e.g. 1024x1024", &width, &height);
     } else if (arg == "--left-position") {
-      mount.position = Triple(arg, value());
+      mount.position = Triple(arg, args.Value());
       have_position = true;
     } else if (arg == "--left-rpy") {
-      mount.rpy_deg = Triple(arg, value());
+      mount.rpy_deg = Triple(arg, args.Value());
       have_rpy = true;
     } else {
-      throw BadArgument("argument " + arg + ": unknown option (expected one of the options in --help)");
+      throw args.Unknown();
     }
   }
   if (opencv.empty() == (ros_left.empty() && ros_right.empty())) {

@@ -1,5 +1,6 @@
 #include "conformance/camera_checks.hpp"
 
+#include "bus/image_view.hpp"
 #include "bus/validate.hpp"
 #include "geometry/camera_model.hpp"
 #include "imaging/image_check.hpp"
@@ -14,17 +15,6 @@ namespace {
 
 using rover_msgs::heartbeat_t;
 using rover_msgs::stereo_frame_t;
-
-imaging::ImageView ViewOf(const rover_msgs::image_t& img) {
-  imaging::ImageView v;
-  v.encoding = img.encoding;
-  v.width = img.width;
-  v.height = img.height;
-  v.declared_size = img.size;
-  v.data = img.data.data();
-  v.data_size = img.data.size();
-  return v;
-}
 
 std::string Size(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
 
@@ -75,7 +65,7 @@ void CheckFrame(const Received<stereo_frame_t>& f, const SentRequest* request, c
   const imaging::ImageLimits image_limits;
   for (const auto& [img, model, side] : {std::tuple{&m.left, &m.left_model, "left"},
                                          std::tuple{&m.right, &m.right_model, "right"}}) {
-    std::string bad = imaging::CheckImage(ViewOf(*img), model->width, model->height, image_limits);
+    std::string bad = imaging::CheckImage(bus::ImageViewOf(*img), model->width, model->height, image_limits);
     if (bad.empty() && limits.width > 0 && (img->width != limits.width || img->height != limits.height)) {
       bad = Size(img->width, img->height) + " (expected " + Size(limits.width, limits.height) + ")";
     }

@@ -1,6 +1,6 @@
 #include "web_console/web_state.hpp"
 
-#include "bus/stereo_frame_convert.hpp"
+#include "bus/image_view.hpp"
 #include "imaging/image_check.hpp"
 #include "report/json_writer.hpp"
 #include "sequence/executor.hpp"
