@@ -141,6 +141,30 @@ TEST(GlobalPlanner, CulDeSacIsLeftByItsMouth) {
   EXPECT_GT(plan.path_length_m(), 14.0);
 }
 
+// The closed end of a deep pocket is a row of rocks with gaps narrower than the rover
+// between them (as the map sees a wall of round rocks), and the way round is long: the
+// squeeze through a gap, the cheaper by cost per metre times length, must not undercut the
+// free way (only a rover already in the squeeze band is led out by it).
+TEST(GlobalPlanner, PocketClosedByRocksWithNarrowGapsIsLeftByItsMouth) {
+  Grid g = Field();
+  for (double y = -3.0; y <= 3.01; y += 0.8) Rocks(&g, 4.0, 4.4, y - 0.2, y + 0.2);  // 0.4 m gaps
+  Rocks(&g, -8.0, 4.4, -3.2, -2.8);  // the side walls, 8 m deep
+  Rocks(&g, -8.0, 4.4, 2.8, 3.2);
+  PlannerOptions o;
+  const GlobalPlan plan = PlanOnGrid(g, Request(2.0, 0, 7, 0), o);
+  ASSERT_TRUE(plan.reachable()) << plan.why_unreachable();
+  double min_x = 1e9;
+  for (const auto& p : plan.path()) min_x = std::min(min_x, p.x());
+  EXPECT_LT(min_x, -8.0) << "the path squeezes through the closed end";
+  EXPECT_GE(PathClearance(plan, g), o.inscribed_radius_m);
+  EXPECT_GT(plan.path_length_m(), 25.0);  // out by the mouth (10 m), round (6 m) and back (12 m)
+  EXPECT_GT(std::abs(plan.WayHeading(1.0)), kPi / 2);
+  // The field agrees with the path: south is the way, though the wall is 2 m north.
+  EXPECT_LT(plan.DistanceAt(1.0, 0.0), plan.DistanceAt(3.0, 0.0));
+  EXPECT_NEAR(plan.cost_at_start(), plan.DistanceAt(2.0, 0.0), 1e-9);
+  EXPECT_GT(plan.cost_at_start(), 25.0);
+}
+
 TEST(GlobalPlanner, PriorCostMapSteersThePathOverUnknownGround) {
   const Grid g = Field(CellClass::kUnknown);
   // A dune field (cost 4) across the way from y = -6 to y = 1, open ground east of it.
