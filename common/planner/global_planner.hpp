@@ -31,7 +31,9 @@
 // cells that can hold its centre. The field is still defined, at squeeze_cost per metre,
 // in the inscribed band (never across an obstacle cell), so that a rover standing in it
 // (squeezing past a rock, the map having grown a rock's edge since the last step) still
-// sees which way leads out.
+// sees which way leads out. It only leads out: a cell joined to the goal through free cells
+// keeps that cost, so that a squeeze through a wall's narrow gaps never undercuts the way
+// round (a cul-de-sac closed by a row of rocks).
 #pragma once
 
 #include "avoidance/goal_field.hpp"
