@@ -165,6 +165,33 @@ TEST(GlobalPlanner, PocketClosedByRocksWithNarrowGapsIsLeftByItsMouth) {
   EXPECT_GT(plan.cost_at_start(), 25.0);
 }
 
+// The closed end of a pocket as the map rates a wall of rocks: a caution band with unsafe
+// pairs along it 1.2 m apart (the gaps between them narrower than the rover). Arc voting
+// refuses every unsafe cell, so the plan may not cross between them: it leaves by the mouth.
+TEST(GlobalPlanner, CautionWallWithUnsafePairsIsNoWay) {
+  Grid g = Field();
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j)
+      if (std::abs(g.CellCentreX(i) - 4.2) < 0.3 && std::abs(g.CellCentreY(j)) < 3.2)
+        g.state[static_cast<std::size_t>(i) * g.cols + j] = CellClass::kCaution;
+  for (double y = -3.0; y <= 3.01; y += 1.2) Rocks(&g, 4.05, 4.15, y - 0.15, y + 0.15);  // two cells
+  PlannerOptions o;
+  EXPECT_EQ(PlanOnGrid(g, Request(2.0, 0, 7, 0), o).obstacle_cells(), 2 * 6);
+  Rocks(&g, -2.0, 4.4, -3.2, -2.8);
+  Rocks(&g, -2.0, 4.4, 2.8, 3.2);
+  const GlobalPlan plan = PlanOnGrid(g, Request(2.0, 0, 7, 0), o);
+  ASSERT_TRUE(plan.reachable()) << plan.why_unreachable();
+  double min_x = 1e9;
+  for (const auto& p : plan.path()) min_x = std::min(min_x, p.x());
+  EXPECT_LT(min_x, -2.0) << "the path crosses the wall between its unsafe pairs";
+  EXPECT_GT(plan.path_length_m(), 14.0);
+  EXPECT_GT(std::abs(plan.WayHeading(1.0)), kPi / 2);
+  // Pairs taken for noise (2 unsafe neighbours needed): the plan runs straight through.
+  PlannerOptions pairs_ignored = o;
+  pairs_ignored.min_obstacle_neighbours = 2;
+  EXPECT_LT(PlanOnGrid(g, Request(2.0, 0, 7, 0), pairs_ignored).path_length_m(), 6.0);
+}
+
 TEST(GlobalPlanner, PriorCostMapSteersThePathOverUnknownGround) {
   const Grid g = Field(CellClass::kUnknown);
   // A dune field (cost 4) across the way from y = -6 to y = 1, open ground east of it.
