@@ -168,6 +168,7 @@ TEST(GlobalPlanner, PocketClosedByRocksWithNarrowGapsIsLeftByItsMouth) {
 // The closed end of a pocket as the map rates a wall of rocks: a caution band with unsafe
 // pairs along it 1.2 m apart (the gaps between them narrower than the rover). Arc voting
 // refuses every unsafe cell, so the plan may not cross between them: it leaves by the mouth.
+// (With lone cells taken for noise pairs still count; with pairs too, it runs through.)
 TEST(GlobalPlanner, CautionWallWithUnsafePairsIsNoWay) {
   Grid g = Field();
   for (int i = 0; i < g.rows; ++i)
@@ -186,6 +187,9 @@ TEST(GlobalPlanner, CautionWallWithUnsafePairsIsNoWay) {
   EXPECT_LT(min_x, -2.0) << "the path crosses the wall between its unsafe pairs";
   EXPECT_GT(plan.path_length_m(), 14.0);
   EXPECT_GT(std::abs(plan.WayHeading(1.0)), kPi / 2);
+  PlannerOptions lone_ignored = o;
+  lone_ignored.min_obstacle_neighbours = 1;
+  EXPECT_GT(PlanOnGrid(g, Request(2.0, 0, 7, 0), lone_ignored).path_length_m(), 14.0);
   // Pairs taken for noise (2 unsafe neighbours needed): the plan runs straight through.
   PlannerOptions pairs_ignored = o;
   pairs_ignored.min_obstacle_neighbours = 2;
@@ -283,12 +287,20 @@ TEST(GlobalPlanner, KeepOutZonesAreObstaclesGrownByTheUncertainty) {
   EXPECT_FALSE(PlanOnGrid(g, r, o).reachable());
 }
 
-TEST(GlobalPlanner, LoneUnsafeCellIsNoObstacle) {
+// A lone unsafe cell is an obstacle by default (arc voting refuses it too: the path keeps
+// the inscribed radius from it); with min_obstacle_neighbours 1 it is taken for noise.
+TEST(GlobalPlanner, LoneUnsafeCellIsAnObstacleUnlessNoiseIsAsked) {
   Grid g = Field();
   Rocks(&g, 5.0, 5.15, 0.0, 0.15);  // one cell
-  const GlobalPlan plan = PlanOnGrid(g, Request(0, 0, 10, 0), PlannerOptions{});
-  EXPECT_EQ(plan.obstacle_cells(), 0);
+  PlannerOptions o;
+  const GlobalPlan plan = PlanOnGrid(g, Request(0, 0, 10, 0), o);
+  EXPECT_EQ(plan.obstacle_cells(), 1);
   EXPECT_TRUE(plan.reachable());
+  EXPECT_GE(PathClearance(plan, g), o.inscribed_radius_m);
+  o.min_obstacle_neighbours = 1;
+  const GlobalPlan noise = PlanOnGrid(g, Request(0, 0, 10, 0), o);
+  EXPECT_EQ(noise.obstacle_cells(), 0);
+  EXPECT_NEAR(noise.path_length_m(), 10.0, 0.25);
 }
 
 // A rover already inside the inscribed band of a rock (the map grew the rock's edge) still
