@@ -186,6 +186,26 @@ TEST(ArcVoting, BoxedInBacksUpOrStopsWithTheHazard) {
   const Choice s = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, no_backup);
   EXPECT_FALSE(s.found);
   EXPECT_NE(s.detail.find("step 0.50 m at"), std::string::npos) << s.detail;
+  // The lane behind never seen (unknown, wide enough to hide a rock): no backing into it,
+  // though it lies within the blind ring that excuses unknown ground elsewhere.
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j) {
+      const double x = g.CellCentreX(i), y = g.CellCentreY(j);
+      if (x < -0.9 && x > -2.0 && std::abs(y) < 0.8) g.state[static_cast<std::size_t>(i) * g.cols + j] = CellClass::kUnknown;
+    }
+  VoteOptions hidden;
+  hidden.unknown.hidden_patch_m = 0.6;
+  ASSERT_GT(hidden.blind_margin_m, 0.3);  // the 0.3 m back-up lies within the ring
+  const Choice blind = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, hidden);
+  EXPECT_FALSE(blind.found);
+  bool judged = false;
+  for (const Candidate& b : blind.candidates)
+    if (b.kind == Candidate::Kind::kBackup) {
+      judged = true;
+      EXPECT_TRUE(b.vetoed);
+      EXPECT_NE(b.why.find("could hide a rock"), std::string::npos) << b.why;
+    }
+  EXPECT_TRUE(judged);
 }
 
 TEST(ArcVoting, UnknownAheadAllowsOnlyTheBlindRing) {
