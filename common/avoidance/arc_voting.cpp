@@ -269,12 +269,18 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     }
     return best;
   };
+  // Backing up goes where the cameras, on the mast and facing ahead, have not looked since
+  // the rover turned: the blind ring is no excuse behind it. Unknown ground there counts as
+  // anywhere else, so the rover backs out along ground it has seen (the way it came)
+  // and not into a rock beside the way it turned from.
+  VoteOptions behind = o;
+  behind.blind_margin_m = 0.0;
   auto backup = [&] {
     Candidate c;
     c.kind = Candidate::Kind::kBackup;
     c.distance_m = -o.backup_m;
     const auto step = SamplePath(pose, 0.0, -o.backup_m, 0.0);
-    Judge(grid, heights, field, pose, gx, gy, o, step, step, &c);
+    Judge(grid, heights, field, pose, gx, gy, behind, step, step, &c);
     choice.candidates.push_back(c);
   };
   if (way_behind && o.backup_m > 0.0) backup();

@@ -6,7 +6,8 @@
 // to hard right (straight included), judged over a look-ahead longer than the step but
 // driven one step at a time; turns in place left and right to headings up to 90 deg round
 // (then straight ahead), driven max_turn_rad a step; and,
-// when nothing else is allowed, backing up.
+// when nothing else is allowed, backing up (over ground the map knows: unknown ground in
+// the blind ring behind the rover counts, since the mast cameras face ahead).
 //
 // A candidate is vetoed when the step itself (not the look-ahead) crosses an unsafe cell
 // (with a suspension: reaches a pose whose clearance bounds break its limits),

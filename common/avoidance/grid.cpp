@@ -115,6 +115,12 @@ bool Footprint::Contains(const Pose2& p, double x, double y, double grow_m) cons
   return std::abs(u) <= 0.5 * length_m + grow_m && std::abs(v) <= 0.5 * width_m + grow_m;
 }
 
+double Footprint::Outside(const Pose2& p, double x, double y) const {
+  const double c = std::cos(p.yaw), s = std::sin(p.yaw);
+  const double dx = x - (p.x + center_forward_m * c), dy = y - (p.y + center_forward_m * s);
+  return std::max(std::abs(c * dx + s * dy) - 0.5 * length_m, std::abs(-s * dx + c * dy) - 0.5 * width_m);
+}
+
 std::vector<Pose2> SamplePath(const Pose2& start, double turn_rad, double distance_m, double k,
                               double spacing_m, double angle_rad) {
   if (!std::isfinite(turn_rad) || !std::isfinite(distance_m) || !std::isfinite(k) || !(spacing_m > 0.0) ||
@@ -221,8 +227,43 @@ Sweep SweepFootprint(const Grid& grid, const Footprint& fp, const std::vector<Po
   const double reach = std::hypot(0.5 * fp.length_m + std::abs(fp.center_forward_m), 0.5 * fp.width_m) + cell;
   std::vector<char> seen(static_cast<std::size_t>(grid.rows) * grid.cols, 0);
   std::set<std::pair<long, long>> seen_outside;
+  // Unsafe cells at the standing footprint's edge, and how far outside it each lies (the
+  // header: the body may not come nearer to them).
+  struct EdgeCell {
+    std::size_t k;
+    double x, y, outside;
+  };
+  std::vector<EdgeCell> edge;
+  {
+    const long i0 = static_cast<long>(std::floor((standing.x - reach - grid.origin_x) / cell));
+    const long j0 = static_cast<long>(std::floor((standing.y - reach - grid.origin_y) / cell));
+    const long i1 = static_cast<long>(std::floor((standing.x + reach - grid.origin_x) / cell));
+    const long j1 = static_cast<long>(std::floor((standing.y + reach - grid.origin_y) / cell));
+    for (long i = std::max(0L, i0); i <= std::min<long>(grid.rows - 1, i1); ++i)
+      for (long j = std::max(0L, j0); j <= std::min<long>(grid.cols - 1, j1); ++j) {
+        const std::size_t k = static_cast<std::size_t>(i) * grid.cols + j;
+        if (grid.state[k] != CellClass::kUnsafe) continue;
+        const double x = grid.origin_x + (i + 0.5) * cell, y = grid.origin_y + (j + 0.5) * cell;
+        const double out = fp.Outside(standing, x, y);
+        if (out <= grow && out > -grow) edge.push_back({k, x, y, out});
+      }
+  }
+  constexpr double kNearer = 0.02;  // m: nearer than this counts (not rounding along a turn)
   for (std::size_t n = 0; n < path.size(); ++n) {
     const Pose2& p = path[n];
+    for (EdgeCell& e : edge) {
+      if (e.outside == -1e9 || fp.Outside(p, e.x, e.y) >= e.outside - kNearer) continue;
+      e.outside = -1e9;  // counted once
+      ++sw.unsafe;
+      sw.min_goodness = 0.0;
+      if (sw.first_unsafe_pose < 0) sw.first_unsafe_pose = static_cast<int>(n);
+      if (sw.unsafe == 1 || grid.step_m[e.k] > sw.worst_step_m) {
+        sw.worst_step_m = grid.step_m[e.k];
+        sw.worst_tilt_deg = grid.tilt_deg.empty() ? -1.0 : grid.tilt_deg[e.k];
+        sw.worst_x = e.x;
+        sw.worst_y = e.y;
+      }
+    }
     const long i0 = static_cast<long>(std::floor((p.x - reach - grid.origin_x) / cell));
     const long i1 = static_cast<long>(std::floor((p.x + reach - grid.origin_x) / cell));
     const long j0 = static_cast<long>(std::floor((p.y - reach - grid.origin_y) / cell));

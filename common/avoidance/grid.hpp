@@ -69,6 +69,8 @@ struct Footprint {
   double center_forward_m = 0.0;
   // Whether site point (x, y) is inside the rectangle at pose p, grown by `grow_m`.
   bool Contains(const Pose2& p, double x, double y, double grow_m = 0.0) const;
+  // The least growth at which the rectangle at p contains (x, y) (< 0: inside it).
+  double Outside(const Pose2& p, double x, double y) const;
 };
 
 // Poses along a turn in place by turn_rad and then an arc of signed length distance_m and
@@ -79,7 +81,13 @@ std::vector<Pose2> SamplePath(const Pose2& start, double turn_rad, double distan
 
 // The cells a footprint swept along a path crosses (each once, by its centre inside the
 // rectangle grown by half a cell, so a cell partly under the body counts), except those
-// under the footprint at `standing` (where the rover stands: it is on them). Unknown cells within blind_margin_m of the standing footprint
+// under the footprint at `standing` (where the rover stands: it is on them). An unsafe cell
+// at the standing footprint's edge (its centre within half a cell inside or outside the
+// rectangle: a rock the rover is already that close to, by the last step's slip, or a
+// rock's flank the map grew since) still counts at every pose that brings the body nearer
+// to it than it stands now: the rover may move away from it or past it, never into it (a
+// turn in place swings a corner into a rock beside the body, and that once grazed one).
+// Unknown cells within blind_margin_m of the standing footprint
 // are not counted as unknown: NAVCAM on the mast cannot see that ring from where the rover
 // stands (see common/hazards/README.md).
 struct Sweep {

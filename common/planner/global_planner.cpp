@@ -128,9 +128,9 @@ CostGrid BuildCosts(const avoidance::Grid& g, const PlanRequest& r, const Planne
 // that are not obstacles (nor squeezes, unless allow_squeeze). A metre of a step costs half
 // its length at each end cell's factor (squeeze cells: squeeze_cost). A diagonal step needs
 // both cells beside it passable, so that the way never slips between two obstacle cells
-// that touch at a corner.
+// that touch at a corner. Cells marked in `frozen` keep their value (they are only sources).
 void Spread(const avoidance::Grid& g, const CostGrid& c, const PlannerOptions& o, bool allow_squeeze,
-            std::vector<double>* field) {
+            std::vector<double>* field, const std::vector<unsigned char>* frozen = nullptr) {
   using Item = std::pair<double, std::size_t>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
   for (std::size_t k = 0; k < field->size(); ++k)
@@ -153,6 +153,7 @@ void Spread(const avoidance::Grid& g, const CostGrid& c, const PlannerOptions& o
         if ((di == 0 && dj == 0) || !passable(i + di, j + dj)) continue;
         if (di != 0 && dj != 0 && (!passable(i + di, j) || !passable(i, j + dj))) continue;
         const std::size_t next = static_cast<std::size_t>(i + di) * g.cols + (j + dj);
+        if (frozen && (*frozen)[next]) continue;
         const double step = (di != 0 && dj != 0 ? diagonal : g.cell_m) * 0.5 * (factor(k) + factor(next));
         if (d + step < (*field)[next]) {
           (*field)[next] = d + step;
@@ -230,7 +231,13 @@ GlobalPlan PlanOnGrid(const avoidance::Grid& grid, const PlanRequest& r, const P
     const std::size_t g = static_cast<std::size_t>(IndexOf(grid, r.goal_x, r.goal_y));
     if (!costs.obstacle[g]) field[g] = 0.0;
   }
-  Spread(grid, costs, o, true, &field);
+  // The squeeze band only leads out, to the way through free cells: a cell joined to the
+  // goal through free cells keeps that cost, so that no squeeze through a gap narrower than
+  // the rover (a closed wall of rocks seen as a row of obstacle cells with gaps between
+  // them) can undercut the way round, however long that is.
+  std::vector<unsigned char> frozen(n, 0);
+  for (std::size_t k = 0; k < n; ++k) frozen[k] = std::isfinite(through_free[k]);
+  Spread(grid, costs, o, true, &field, &frozen);
   plan.field_ = std::move(field);
 
   // Reachable: the rover's cell is connected to the disc through cells that hold its centre,

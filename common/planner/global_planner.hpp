@@ -16,8 +16,11 @@
 // recomputed at every step, the plan being the whole field.
 //
 // The configuration space. Obstacles: map cells rated unsafe with at least
-// min_obstacle_neighbours unsafe neighbours (a rock over the step limit is wider than a
-// cell; a lone unsafe cell is more often stereo noise, and costs as caution), the cells of
+// min_obstacle_neighbours unsafe neighbours (0, the default: every unsafe cell, as arc
+// voting refuses every one; the map rates a wall of rocks mostly caution, the body-scale
+// plane leaning on it, with lone unsafe cells and pairs along it, and a plan through the
+// caution between them leads the vote to a wall it cannot cross; more: lone cells are
+// taken for stereo noise and cost as caution), the cells of
 // keep-out zones grown by the position uncertainty (as the hazard monitor grows them), and
 // ground the prior map calls impassable that the cameras have not rated. A cell within
 // the rover's inscribed radius (half its width) of an obstacle cannot hold the rover's
@@ -31,7 +34,9 @@
 // cells that can hold its centre. The field is still defined, at squeeze_cost per metre,
 // in the inscribed band (never across an obstacle cell), so that a rover standing in it
 // (squeezing past a rock, the map having grown a rock's edge since the last step) still
-// sees which way leads out.
+// sees which way leads out. It only leads out: a cell joined to the goal through free cells
+// keeps that cost, so that a squeeze through a wall's narrow gaps never undercuts the way
+// round (a cul-de-sac closed by a row of rocks).
 #pragma once
 
 #include "avoidance/goal_field.hpp"
@@ -54,7 +59,7 @@ struct PlannerOptions {
   double caution_cost = 3.0;
   double near_cost = 3.0;
   double squeeze_cost = 10.0;
-  int min_obstacle_neighbours = 2;
+  int min_obstacle_neighbours = 0;
   double margin_m = 10.0;                // the planning window: the map, start and goal, plus this
   int max_cells = 1'000'000;             // a larger window is cut round the start and the goal
 

@@ -57,6 +57,43 @@ TEST(Sweep, FindsTheWorstUnsafeCellAndTheBlindRing) {
   EXPECT_GT(SweepFootprint(Open(), fp, SamplePath(edge, 0.0, 0.6, 0.0), edge, 0.0).outside, 0);
 }
 
+// A rock cell right at the body's side (its centre on the side line, within the half-cell
+// border that counts as standing on it): driving straight past it or away from it is allowed,
+// but a turn in place that swings the side toward it is not, nor an arc to the left, whose
+// turn swings the right side out into it.
+TEST(Sweep, AnUnsafeCellAtTheBodysEdgeMayNotBeApproached) {
+  Grid g = Open();
+  const int k = g.IndexAt(0.1, 0.75);  // the cell centred at (0.1, 0.7)
+  ASSERT_GE(k, 0);
+  g.state[static_cast<std::size_t>(k)] = CellClass::kUnsafe;
+  g.goodness[static_cast<std::size_t>(k)] = 0.0f;
+  g.step_m[static_cast<std::size_t>(k)] = 0.4f;
+  const double cx = g.CellCentreX(k / g.cols), cy = g.CellCentreY(k % g.cols);
+  Footprint fp;
+  const Pose2 p{0, 0, 0};
+  const double out = fp.Outside(p, cx, cy);
+  ASSERT_GT(out, -0.1);
+  ASSERT_LE(out, 0.1) << "the cell lies in the border counted as under the standing body";
+  EXPECT_NEAR(fp.Outside(p, 0.0, 1.0), 0.3, 1e-9);
+  EXPECT_NEAR(fp.Outside(p, 0.0, 0.0), -0.7, 1e-9);
+  // Straight on past it, or back: allowed.
+  EXPECT_EQ(SweepFootprint(g, fp, SamplePath(p, 0.0, 0.6, 0.0), p, 0.5).unsafe, 0);
+  EXPECT_EQ(SweepFootprint(g, fp, SamplePath(p, 0.0, -0.3, 0.0), p, 0.5).unsafe, 0);
+  // A turn in place to the right (the side ahead of the centre swings toward it), or an arc
+  // toward it: the body comes nearer.
+  const Sweep turn = SweepFootprint(g, fp, SamplePath(p, 18.0 * kDeg, 0.0, 0.0), p, 0.5);
+  EXPECT_EQ(turn.unsafe, 1);
+  EXPECT_NEAR(turn.worst_step_m, 0.4, 1e-6);
+  EXPECT_NEAR(turn.worst_x, cx, 1e-9);
+  EXPECT_NEAR(turn.worst_y, cy, 1e-9);
+  EXPECT_GT(turn.first_unsafe_pose, 0);
+  EXPECT_EQ(SweepFootprint(g, fp, SamplePath(p, 0.0, 0.6, -0.5), p, 0.5).unsafe, 1);
+  // The same cell well under the body (a false rating where the rover stands) pins nothing.
+  Grid h = Open();
+  h.state[static_cast<std::size_t>(h.IndexAt(0.1, 0.3))] = CellClass::kUnsafe;
+  EXPECT_EQ(SweepFootprint(h, fp, SamplePath(p, 18.0 * kDeg, 0.0, 0.0), p, 0.5).unsafe, 0);
+}
+
 TEST(Grid, DistrustEdgesKeepsTheInsideOfARock) {
   Grid g = Grid::Filled(0, 0, 0.2, 20, 20, CellClass::kUnknown, 0.0f);
   g.Paint(2.0, 2.0, 1.2, CellClass::kSafe, 0.9f, 0.0f);   // the seen patch
@@ -149,6 +186,26 @@ TEST(ArcVoting, BoxedInBacksUpOrStopsWithTheHazard) {
   const Choice s = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, no_backup);
   EXPECT_FALSE(s.found);
   EXPECT_NE(s.detail.find("step 0.50 m at"), std::string::npos) << s.detail;
+  // The lane behind never seen (unknown, wide enough to hide a rock): no backing into it,
+  // though it lies within the blind ring that excuses unknown ground elsewhere.
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j) {
+      const double x = g.CellCentreX(i), y = g.CellCentreY(j);
+      if (x < -0.9 && x > -2.0 && std::abs(y) < 0.8) g.state[static_cast<std::size_t>(i) * g.cols + j] = CellClass::kUnknown;
+    }
+  VoteOptions hidden;
+  hidden.unknown.hidden_patch_m = 0.6;
+  ASSERT_GT(hidden.blind_margin_m, 0.3);  // the 0.3 m back-up lies within the ring
+  const Choice blind = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, hidden);
+  EXPECT_FALSE(blind.found);
+  bool judged = false;
+  for (const Candidate& b : blind.candidates)
+    if (b.kind == Candidate::Kind::kBackup) {
+      judged = true;
+      EXPECT_TRUE(b.vetoed);
+      EXPECT_NE(b.why.find("could hide a rock"), std::string::npos) << b.why;
+    }
+  EXPECT_TRUE(judged);
 }
 
 TEST(ArcVoting, UnknownAheadAllowsOnlyTheBlindRing) {

@@ -141,6 +141,61 @@ TEST(GlobalPlanner, CulDeSacIsLeftByItsMouth) {
   EXPECT_GT(plan.path_length_m(), 14.0);
 }
 
+// The closed end of a deep pocket is a row of rocks with gaps narrower than the rover
+// between them (as the map sees a wall of round rocks), and the way round is long: the
+// squeeze through a gap, the cheaper by cost per metre times length, must not undercut the
+// free way (only a rover already in the squeeze band is led out by it).
+TEST(GlobalPlanner, PocketClosedByRocksWithNarrowGapsIsLeftByItsMouth) {
+  Grid g = Field();
+  for (double y = -3.0; y <= 3.01; y += 0.8) Rocks(&g, 4.0, 4.4, y - 0.2, y + 0.2);  // 0.4 m gaps
+  Rocks(&g, -8.0, 4.4, -3.2, -2.8);  // the side walls, 8 m deep
+  Rocks(&g, -8.0, 4.4, 2.8, 3.2);
+  PlannerOptions o;
+  const GlobalPlan plan = PlanOnGrid(g, Request(2.0, 0, 7, 0), o);
+  ASSERT_TRUE(plan.reachable()) << plan.why_unreachable();
+  double min_x = 1e9;
+  for (const auto& p : plan.path()) min_x = std::min(min_x, p.x());
+  EXPECT_LT(min_x, -8.0) << "the path squeezes through the closed end";
+  EXPECT_GE(PathClearance(plan, g), o.inscribed_radius_m);
+  EXPECT_GT(plan.path_length_m(), 25.0);  // out by the mouth (10 m), round (6 m) and back (12 m)
+  EXPECT_GT(std::abs(plan.WayHeading(1.0)), kPi / 2);
+  // The field agrees with the path: south is the way, though the wall is 2 m north.
+  EXPECT_LT(plan.DistanceAt(1.0, 0.0), plan.DistanceAt(3.0, 0.0));
+  EXPECT_NEAR(plan.cost_at_start(), plan.DistanceAt(2.0, 0.0), 1e-9);
+  EXPECT_GT(plan.cost_at_start(), 25.0);
+}
+
+// The closed end of a pocket as the map rates a wall of rocks: a caution band with unsafe
+// pairs along it 1.2 m apart (the gaps between them narrower than the rover). Arc voting
+// refuses every unsafe cell, so the plan may not cross between them: it leaves by the mouth.
+// (With lone cells taken for noise pairs still count; with pairs too, it runs through.)
+TEST(GlobalPlanner, CautionWallWithUnsafePairsIsNoWay) {
+  Grid g = Field();
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j)
+      if (std::abs(g.CellCentreX(i) - 4.2) < 0.3 && std::abs(g.CellCentreY(j)) < 3.2)
+        g.state[static_cast<std::size_t>(i) * g.cols + j] = CellClass::kCaution;
+  for (double y = -3.0; y <= 3.01; y += 1.2) Rocks(&g, 4.05, 4.15, y - 0.15, y + 0.15);  // two cells
+  PlannerOptions o;
+  EXPECT_EQ(PlanOnGrid(g, Request(2.0, 0, 7, 0), o).obstacle_cells(), 2 * 6);
+  Rocks(&g, -2.0, 4.4, -3.2, -2.8);
+  Rocks(&g, -2.0, 4.4, 2.8, 3.2);
+  const GlobalPlan plan = PlanOnGrid(g, Request(2.0, 0, 7, 0), o);
+  ASSERT_TRUE(plan.reachable()) << plan.why_unreachable();
+  double min_x = 1e9;
+  for (const auto& p : plan.path()) min_x = std::min(min_x, p.x());
+  EXPECT_LT(min_x, -2.0) << "the path crosses the wall between its unsafe pairs";
+  EXPECT_GT(plan.path_length_m(), 14.0);
+  EXPECT_GT(std::abs(plan.WayHeading(1.0)), kPi / 2);
+  PlannerOptions lone_ignored = o;
+  lone_ignored.min_obstacle_neighbours = 1;
+  EXPECT_GT(PlanOnGrid(g, Request(2.0, 0, 7, 0), lone_ignored).path_length_m(), 14.0);
+  // Pairs taken for noise (2 unsafe neighbours needed): the plan runs straight through.
+  PlannerOptions pairs_ignored = o;
+  pairs_ignored.min_obstacle_neighbours = 2;
+  EXPECT_LT(PlanOnGrid(g, Request(2.0, 0, 7, 0), pairs_ignored).path_length_m(), 6.0);
+}
+
 TEST(GlobalPlanner, PriorCostMapSteersThePathOverUnknownGround) {
   const Grid g = Field(CellClass::kUnknown);
   // A dune field (cost 4) across the way from y = -6 to y = 1, open ground east of it.
@@ -232,12 +287,20 @@ TEST(GlobalPlanner, KeepOutZonesAreObstaclesGrownByTheUncertainty) {
   EXPECT_FALSE(PlanOnGrid(g, r, o).reachable());
 }
 
-TEST(GlobalPlanner, LoneUnsafeCellIsNoObstacle) {
+// A lone unsafe cell is an obstacle by default (arc voting refuses it too: the path keeps
+// the inscribed radius from it); with min_obstacle_neighbours 1 it is taken for noise.
+TEST(GlobalPlanner, LoneUnsafeCellIsAnObstacleUnlessNoiseIsAsked) {
   Grid g = Field();
   Rocks(&g, 5.0, 5.15, 0.0, 0.15);  // one cell
-  const GlobalPlan plan = PlanOnGrid(g, Request(0, 0, 10, 0), PlannerOptions{});
-  EXPECT_EQ(plan.obstacle_cells(), 0);
+  PlannerOptions o;
+  const GlobalPlan plan = PlanOnGrid(g, Request(0, 0, 10, 0), o);
+  EXPECT_EQ(plan.obstacle_cells(), 1);
   EXPECT_TRUE(plan.reachable());
+  EXPECT_GE(PathClearance(plan, g), o.inscribed_radius_m);
+  o.min_obstacle_neighbours = 1;
+  const GlobalPlan noise = PlanOnGrid(g, Request(0, 0, 10, 0), o);
+  EXPECT_EQ(noise.obstacle_cells(), 0);
+  EXPECT_NEAR(noise.path_length_m(), 10.0, 0.25);
 }
 
 // A rover already inside the inscribed band of a rock (the map grew the rock's edge) still
