@@ -73,6 +73,7 @@ struct DriveResult {
   std::vector<double> window_offsets_px;  // each full window's own estimate
   double filter_offset_px = 0, filter_sigma_px = 0;  // the drive-wide filter at the end
   std::vector<double> nees;  // each published delta's error under WindowSolution::covariance
+  int with_correction = 0, step_only = 0;  // deltas published either way (carries_correction)
 };
 
 // Runs a window of `size` keyframes along the scene (size 2: frame-to-frame), each new
@@ -100,8 +101,13 @@ DriveResult Drive(const Scene& scene, int size, double sigma_px, double offset_p
     if (!w.ok) return out;
     EXPECT_TRUE(w.covariance.allFinite());
     EXPECT_GT(w.covariance.diagonal().minCoeff(), 0.0);
-    // Published as VisualOdometry does: the newest pose against the last one published.
-    const Eigen::Isometry3d delta = last.inverse() * window.pose(window.size() - 1);
+    // Published as VisualOdometry does: the newest pose against the last one published
+    // while the covariance carries that pose's correction, else the window's last step
+    // (every frame here is a keyframe, so `last` is the reference pose before refining).
+    EXPECT_EQ(w.carries_correction, k >= 2 && k < size) << "frame " << k;
+    ++(w.carries_correction ? out.with_correction : out.step_only);
+    const Eigen::Isometry3d delta =
+        w.carries_correction ? last.inverse() * window.pose(window.size() - 1) : w.T_prev_last;
     last = window.pose(window.size() - 1);
     out.max_delta_error_m = std::max(out.max_delta_error_m, (delta.translation() - truth.translation()).norm());
     geometry::Vector6d e = geometry::XyzRpyFromPose(delta) - geometry::XyzRpyFromPose(truth);
@@ -136,17 +142,25 @@ TEST(SlidingWindow, WindowOfFiveDriftsLessThanFrameToFrame) {
 }
 
 // The covariance VO publishes with a refined delta (the window's own, with the previous
-// pose's correction) agrees with the delta's real errors when the match covariances are
+// pose's correction while the window fills, the last step's alone once keyframes leave
+// it) agrees with the delta's real errors when the match covariances are
 // right: the mean NEES over many deltas is near 6 (6 degrees of freedom), not far below
 // (the correction double-counted) nor above (the correction left out: the delta starts
 // from the previous pose as it was published, before this refinement moved it).
 TEST(SlidingWindow, PublishedDeltaCovarianceMatchesItsErrors) {
-  std::vector<double> nees;
+  std::vector<double> nees, filling;
   for (unsigned seed : {81u, 82u, 83u, 84u}) {
     const Scene scene(25, seed);
     const DriveResult r = Drive(scene, 5, 0.3, 0.0, 0.0, seed);
+    EXPECT_EQ(r.with_correction, 3);  // frames 2 to 4, while the window fills
+    EXPECT_EQ(r.step_only, 21);       // frame 1 (no previous refinement), then full windows
+    filling.insert(filling.end(), r.nees.begin() + 1, r.nees.begin() + 4);  // with the correction
     nees.insert(nees.end(), r.nees.begin() + 4, r.nees.end());  // full windows only
   }
+  double filling_mean = 0;
+  for (double v : filling) filling_mean += v / double(filling.size());
+  EXPECT_GT(filling_mean, 2.5) << filling.size() << " deltas with the correction";
+  EXPECT_LT(filling_mean, 11.0) << filling.size() << " deltas with the correction";
   ASSERT_GE(nees.size(), 60u);
   double mean = 0;
   for (double v : nees) mean += v / double(nees.size());
