@@ -297,6 +297,7 @@ MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c
   Eigen::Matrix<double, kModes, 1> var;
   var << f2, f2, f2, f2, shared.disparity_sigma_px * shared.disparity_sigma_px;
   out.shared = G * var.asDiagonal() * G.transpose();
+  out.disparity_sensitivity = G.col(4);
   const double cs2 = shared.cell_shift_sigma_px * shared.cell_shift_sigma_px;
   const double cd2 = shared.cell_disparity_sigma_px * shared.cell_disparity_sigma_px;
   const Eigen::Vector4d cell_var(cs2, cs2, cd2, cd2);

@@ -141,6 +141,9 @@ struct MotionUncertainty {
   double cluster_factor = 0;       // k (0 with fewer than two clusters)
   int redundancy = 0;              // 3n - 6
   int clusters = 0;                // clusters holding features
+  // The motion's response to one pixel of disparity offset common to both pairs (the
+  // disparity column of G), for comparing this fit with one that holds an offset.
+  Eigen::Matrix<double, 6, 1> disparity_sensitivity = Eigen::Matrix<double, 6, 1>::Zero();
 
   // VO-13's covariance of a fit whose inverse normal matrix is `fit`: scaled by the larger
   // factor, plus the shared errors (`covariance` is Scaled(inverse_normal); the sliding

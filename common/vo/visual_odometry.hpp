@@ -256,7 +256,7 @@ struct VoOptions {
   // fails it; under the pair's covariance alone, 4 % of the window deltas on rendered rock
   // fields lay beyond the 99.7 % NEES bound.
   double window_max_chi2 = 20.06;
-  double window_consistency_min_fraction = 0.05;
+  double window_consistency_min_fraction = 0.15;
   // The window also estimates one disparity offset of the rig (right x, pixels), which
   // scales every range and so every step: one drive-wide estimate, a scalar filter fed by
   // every full window (window.hpp), starting from a zero-mean prior of this sigma; 0 = not
