@@ -3,6 +3,7 @@
 #include "geometry/pose.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
 
@@ -136,6 +137,25 @@ double MahalanobisSquared(const Correspondence& c, const Eigen::Isometry3d& T_pr
   const Eigen::Vector3d r = c.P_curr - Rcp * (c.P_prev - T_prev_curr.translation());
   const Eigen::Matrix3d S = c.Sigma_curr + Rcp * c.Sigma_prev * Rcp.transpose();
   return r.dot(S.ldlt().solve(r));
+}
+
+double NestedDifferenceChi2(const Eigen::Matrix<double, 6, 1>& d, const Eigen::Matrix<double, 6, 6>& Sigma_a,
+                            const Eigen::Matrix<double, 6, 6>& Sigma_b, double min_fraction) {
+  using Matrix6 = Eigen::Matrix<double, 6, 6>;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  if (!d.allFinite() || !Sigma_a.allFinite() || !Sigma_b.allFinite()) return kInf;
+  const Eigen::LLT<Matrix6> llt(0.5 * (Sigma_b + Sigma_b.transpose()));
+  if (llt.info() != Eigen::Success) return kInf;
+  // Whitened by Sigma_b = L L^T: b's covariance is the identity, the difference's
+  // I - L^-1 Sigma_a L^-T, whose eigenvalues lie in [0, 1] when a is the better estimate.
+  const Matrix6 L_inv = llt.matrixL().solve(Matrix6::Identity());
+  const Matrix6 M = L_inv * (Sigma_b - Sigma_a) * L_inv.transpose();
+  const Eigen::SelfAdjointEigenSolver<Matrix6> eig(0.5 * (M + M.transpose()));
+  if (eig.info() != Eigen::Success) return kInf;
+  const Eigen::Matrix<double, 6, 1> y = eig.eigenvectors().transpose() * (L_inv * d);
+  double chi2 = 0;
+  for (int i = 0; i < 6; ++i) chi2 += y(i) * y(i) / std::max(eig.eigenvalues()(i), min_fraction);
+  return chi2;
 }
 
 MlOutcome MaximumLikelihoodMotion(const std::vector<Correspondence>& c,
@@ -277,6 +297,7 @@ MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c
   Eigen::Matrix<double, kModes, 1> var;
   var << f2, f2, f2, f2, shared.disparity_sigma_px * shared.disparity_sigma_px;
   out.shared = G * var.asDiagonal() * G.transpose();
+  out.disparity_sensitivity = G.col(4);
   const double cs2 = shared.cell_shift_sigma_px * shared.cell_shift_sigma_px;
   const double cd2 = shared.cell_disparity_sigma_px * shared.cell_disparity_sigma_px;
   const Eigen::Vector4d cell_var(cs2, cs2, cd2, cd2);

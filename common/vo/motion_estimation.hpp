@@ -141,6 +141,9 @@ struct MotionUncertainty {
   double cluster_factor = 0;       // k (0 with fewer than two clusters)
   int redundancy = 0;              // 3n - 6
   int clusters = 0;                // clusters holding features
+  // The motion's response to one pixel of disparity offset common to both pairs (the
+  // disparity column of G), for comparing this fit with one that holds an offset.
+  Eigen::Matrix<double, 6, 1> disparity_sensitivity = Eigen::Matrix<double, 6, 1>::Zero();
 
   // VO-13's covariance of a fit whose inverse normal matrix is `fit`: scaled by the larger
   // factor, plus the shared errors (`covariance` is Scaled(inverse_normal); the sliding
@@ -157,6 +160,20 @@ MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c
                                             const Eigen::Isometry3d& T_prev_curr,
                                             const std::vector<int>& cluster, int num_clusters,
                                             const SharedErrors& shared);
+
+// VO-13: the chi-square (6 dof) of the difference d = a - b between two estimates of one
+// motion where `a` (covariance Sigma_a) uses all the data of `b` (Sigma_b) and more, as
+// the sliding window's delta uses its newest pair's. If both covariances are honest,
+// Cov(a, b) = Sigma_a and so Cov(d) = Sigma_b - Sigma_a (Hausman's test of an efficient
+// against a consistent estimator); an `a` that claims more than its data give differs
+// from `b` by more than that. The difference's covariance is taken in the frame whitened
+// by Sigma_b, each eigenvalue floored at `min_fraction` of b's own variance there: the
+// two estimates are never exactly nested (the window re-triangulates its points and
+// weights its observations by a Huber loss), and a direction where `a` claims no gain
+// over `b` must not make a tiny difference look huge. +inf when Sigma_b is not positive
+// definite or anything is not finite.
+double NestedDifferenceChi2(const Eigen::Matrix<double, 6, 1>& d, const Eigen::Matrix<double, 6, 6>& Sigma_a,
+                            const Eigen::Matrix<double, 6, 6>& Sigma_b, double min_fraction);
 
 // r_j^T W_j r_j of one correspondence under T_prev_curr.
 double MahalanobisSquared(const Correspondence& c, const Eigen::Isometry3d& T_prev_curr);

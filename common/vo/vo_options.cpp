@@ -59,6 +59,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "covariance_disparity_sigma_px", "covariance_cell_shift_sigma_px",
                   "covariance_cell_disparity_sigma_px",
                   "window_size", "window_max_iterations", "window_huber_sigmas", "window_max_chi2",
+                  "window_consistency_min_fraction",
                   "window_disparity_offset_sigma_px", "window_disparity_offset_drift_px",
                   "window_disparity_offset_systematic_px", "window_disparity_offset_min_sigmas",
                   "track_min_distance_px", "keyframe_min_translation_m", "keyframe_min_rotation_deg"});
@@ -129,6 +130,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   node.Get("window_max_iterations", o.window_max_iterations, 1, 100);
   node.Get("window_huber_sigmas", o.window_huber_sigmas, 0.5, 100.0);
   node.Get("window_max_chi2", o.window_max_chi2, 0.0, kInf);
+  node.Get("window_consistency_min_fraction", o.window_consistency_min_fraction, 1e-6, 1.0);
   node.Get("window_disparity_offset_sigma_px", o.window_disparity_offset_sigma_px, 0.0, 10.0);
   node.Get("window_disparity_offset_drift_px", o.window_disparity_offset_drift_px, 0.0, 10.0);
   node.Get("window_disparity_offset_systematic_px", o.window_disparity_offset_systematic_px, 0.0, 10.0);

@@ -77,9 +77,17 @@ struct WindowSolution {
   // the variance factor). The delta VO publishes starts from the previous keyframe's pose
   // as it was published (before this refinement moved it by c), so the covariance also
   // holds that correction's: Cov(c) = Sigma_then - Sigma_now of that pose's marginal
-  // (the smoother's correction is orthogonal to its error), carried into the delta.
+  // (the smoother's correction is orthogonal to its error), carried into the delta. That
+  // holds only while no keyframe has left the window since pose a was published: the
+  // dropped keyframe's information is lost, not marginalised, and the pose fixed in its
+  // place changes the gauge. `carries_correction` says whether the covariance holds Cov(c)
+  // (true) or is the delta T_prev_last's alone (false: a frame left, or the window
+  // restarted), and so which delta it belongs to.
   Eigen::Isometry3d T_prev_last = Eigen::Isometry3d::Identity();
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  bool carries_correction = false;
+  // The covariance of T_prev_last alone (without Cov(c)), in the same units.
+  Eigen::Matrix<double, 6, 6> step_covariance = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 class SlidingWindow {

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <random>
 
@@ -253,6 +254,116 @@ TEST(MotionUncertainty, VO13_DefaultCellErrorsStayModestForSpreadFeatures) {
   const MonteCarlo none = RunMonteCarlo(noise, Untold(), 200, 6);
   EXPECT_GT(cells.nees_mean, 0.6 * none.nees_mean);
   EXPECT_LT(cells.nees_mean, none.nees_mean);
+}
+
+
+// VO-13, the window's consistency test (NestedDifferenceChi2): two estimates of one
+// motion, `a` using all of `b`'s data and more (a = x + e_a, b = a + n with n independent
+// of a, so Cov(a, b) = Sigma_a). Drawn with honest covariances, the statistic of a - b is
+// chi-square with 6 degrees of freedom; an `a` that claims a larger gain over `b` than it
+// has fails it far more often.
+namespace nested {
+
+struct Draws {
+  double mean = 0;
+  double beyond = 0;  // fraction beyond 20.06, the 99.7 % bound
+};
+
+Draws DrawNested(std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_real_distribution<double> gain(0.15, 0.9);
+  // A covariance of b with correlated translation and rotation, millimetres and
+  // milliradians as VO reports them.
+  Matrix6d A;
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) A(r, c) = (r < 3 ? 1e-3 : 3e-4) * (r == c ? 1.0 : 0.3 * g(rng));
+  }
+  const Matrix6d Sigma_b = A * A.transpose();
+  // a's covariance: b's, shrunk per direction of b's whitened frame by a gain in
+  // [0.15, 0.9] (what a's extra data buy).
+  const Eigen::LLT<Matrix6d> llt(Sigma_b);
+  const Matrix6d L = llt.matrixL();
+  Vector6d f;
+  for (int i = 0; i < 6; ++i) f(i) = gain(rng);
+  const Matrix6d Sigma_a = L * f.asDiagonal() * L.transpose();
+  const Matrix6d L_a = Eigen::LLT<Matrix6d>(Sigma_a).matrixL();
+  const Matrix6d L_n = Eigen::LLT<Matrix6d>(Sigma_b - Sigma_a).matrixL();
+  const int trials = 20000;
+  Draws out;
+  for (int t = 0; t < trials; ++t) {
+    Vector6d za, zn;
+    for (int i = 0; i < 6; ++i) {
+      za(i) = g(rng);
+      zn(i) = g(rng);
+    }
+    const Vector6d e_a = L_a * za;
+    const Vector6d e_b = e_a + L_n * zn;
+    const double chi2 = NestedDifferenceChi2(e_a - e_b, Sigma_a, Sigma_b, 0.05);
+    out.mean += chi2 / trials;
+    out.beyond += (chi2 > 20.06) / double(trials);
+  }
+  return out;
+}
+
+}  // namespace nested
+
+TEST(MotionUncertainty, VO13_NestedDifferenceIsChiSquareWhenBothAreHonest) {
+  for (std::uint32_t seed : {1u, 2u, 3u}) {
+    const nested::Draws d = nested::DrawNested(seed);
+    // Gains up to 0.9 leave eigenvalues of 0.1 above the 0.05 floor: the statistic is exact.
+    EXPECT_NEAR(d.mean, 6.0, 0.25) << "seed " << seed;
+    EXPECT_LT(d.beyond, 0.006) << "seed " << seed;
+    EXPECT_GT(d.beyond, 0.0005) << "seed " << seed;  // 0.27 % expected
+  }
+}
+
+TEST(MotionUncertainty, VO13_NestedDifferenceRejectsAnOverconfidentRefinement) {
+  // The difference between the two does not depend on a's own error, only on what b
+  // adds; so an a that is honest about its own error but claims a larger gain over b
+  // than it has (here: the noise b adds is twice what Sigma_b - Sigma_a says) is what
+  // the statistic sees. Drawn as b = a + n with n at twice the variance.
+  std::mt19937 rng(7);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Matrix6d Sigma_b = Matrix6d::Zero();
+  Sigma_b.diagonal() << 4e-6, 1e-6, 2e-6, 1e-7, 1e-7, 5e-8;
+  const Matrix6d Sigma_a = 0.5 * Sigma_b;  // claims half b's variance
+  int beyond = 0, trials = 5000;
+  for (int t = 0; t < trials; ++t) {
+    Vector6d n;
+    // Real Cov(n) = 0.9 Sigma_b (a really gains almost nothing), claimed 0.5 Sigma_b.
+    for (int i = 0; i < 6; ++i) n(i) = std::sqrt(0.9 * Sigma_b(i, i)) * g(rng);
+    beyond += NestedDifferenceChi2(n, Sigma_a, Sigma_b, 0.05) > 20.06;
+  }
+  // chi2 = 1.8 x chi-square(6): beyond 20.06 when chi-square(6) > 11.1, 8.5 % of draws.
+  EXPECT_GT(beyond, trials * 6 / 100);
+  // Judged under b's covariance alone (the old test), the same differences pass: 0.9 x chi2(6).
+  int beyond_b = 0;
+  std::mt19937 rng2(7);
+  for (int t = 0; t < trials; ++t) {
+    Vector6d n;
+    for (int i = 0; i < 6; ++i) n(i) = std::sqrt(0.9 * Sigma_b(i, i)) * g(rng2);
+    beyond_b += n.dot(Sigma_b.ldlt().solve(n)) > 20.06;
+  }
+  EXPECT_LT(beyond_b, trials / 100);
+}
+
+TEST(MotionUncertainty, VO13_NestedDifferenceFloorsDirectionsWithoutGainAndRefusesBadInput) {
+  Matrix6d Sigma_b = Matrix6d::Zero();
+  Sigma_b.diagonal() << 4e-6, 1e-6, 2e-6, 1e-7, 1e-7, 5e-8;
+  // a claims no gain at all: every direction is floored at 5 % of b's variance.
+  Vector6d d = Vector6d::Zero();
+  d(0) = std::sqrt(4e-6);  // one sigma of b in x
+  EXPECT_NEAR(NestedDifferenceChi2(d, Sigma_b, Sigma_b, 0.05), 1.0 / 0.05, 1e-9);
+  // Half b's variance in x: d of one b-sigma is 2 in chi-square.
+  Matrix6d Sigma_a = Sigma_b;
+  Sigma_a(0, 0) = 2e-6;
+  EXPECT_NEAR(NestedDifferenceChi2(d, Sigma_a, Sigma_b, 0.05), 2.0, 1e-9);
+  Matrix6d bad = Sigma_b;
+  bad(2, 2) = -1e-6;
+  EXPECT_TRUE(std::isinf(NestedDifferenceChi2(d, Sigma_a, bad, 0.05)));
+  d(1) = std::nan("");
+  EXPECT_TRUE(std::isinf(NestedDifferenceChi2(d, Sigma_a, Sigma_b, 0.05)));
 }
 
 }  // namespace
