@@ -7,7 +7,7 @@
 //
 // The vectors are used exactly as given (A, H, V, O are not normalised): label A vectors
 // are off unit length by up to ~1e-6, and normalising A moves pixels by up to 8.6e-3 px on
-// real Spirit models (../shared/data/mars/README.md). The reference frame is the frame of
+// real Spirit models (their PDS label vectors). The reference frame is the frame of
 // the vectors (the rover frame for a label's rover-frame model). Pixels follow
 // camera_model.hpp: (0,0) is the centre of the top-left pixel.
 //

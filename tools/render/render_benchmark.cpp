@@ -276,7 +276,7 @@ int main(int argc, char** argv) {
   const render::ImageStatistics sand_stats = render::MeasureImage(sand_1024.left);
   PrintRow("rendered rocky " + rocky.options().name, rocky_stats);
   PrintRow("rendered sand " + sand.options().name, sand_stats);
-  const std::filesystem::path dir = std::filesystem::path(ROVER_SHARED_DATA) / "mars" / "images";
+  const std::filesystem::path dir = std::filesystem::path(ROVER_DATA_DIR) / "mars" / "images";
   if (!std::filesystem::is_directory(dir)) {
     std::printf("  (real NAVCAM images not found in %s: comparison skipped)\n", dir.c_str());
     return 0;

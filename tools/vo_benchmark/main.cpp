@@ -18,7 +18,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: vo_benchmark [--kitti DIR] [--frames N] [--config FILE] [--working-scale S]\n"
-    "  --kitti DIR        KITTI-layout sequence (default: ../shared/data/kitti_06_0000_0050 if present)\n"
+    "  --kitti DIR        KITTI-layout sequence (default: the build's ROVER_DATA_DIR/kitti_06_0000_0050 if present)\n"
     "  --frames N         frames per input (default: all KITTI frames, 20 synthetic)\n"
     "  --config FILE      VO config (default: configs/vo.yaml)\n"
     "  --working-scale S  override vo.working_scale for every input\n";
@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
     }
   }
   const bool kitti_given = !kitti_dir.empty();
-  if (!kitti_given) kitti_dir = std::string(ROVER_SHARED_DATA) + "/kitti_06_0000_0050";
+  if (!kitti_given) kitti_dir = std::string(ROVER_DATA_DIR) + "/kitti_06_0000_0050";
 
   try {
     if (config_path.empty()) config_path = vo_eval::DefaultVoConfigPath();

@@ -33,7 +33,7 @@ const std::string kP1 =
 }  // namespace
 
 TEST(KittiCalib, RealSequence06GivesDisparityFxBOverZ) {
-  const std::string path = std::string(ROVER_SHARED_DATA) + "/kitti_06_0000_0050/calib.txt";
+  const std::string path = std::string(ROVER_DATA_DIR) + "/kitti_06_0000_0050/calib.txt";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is absent: skipped";
   const StereoRig rig = LoadKittiCalib(path, 1226, 370);
   const auto& left = dynamic_cast<const PinholeCamera&>(*rig.left);

@@ -1,5 +1,5 @@
 // Perseverance NAVCAM and Curiosity hazcam CAHVORE models against the independent test
-// vectors in ../shared/data/mars/cahvore_test_vectors.yaml (O normalised, as the file says).
+// vectors in ROVER_DATA_DIR/mars/cahvore_test_vectors.yaml (O normalised, as the file says).
 #include "geometry/cahvore_camera.hpp"
 #include "geometry/test/camera_test_support.hpp"
 
@@ -20,7 +20,7 @@ Eigen::Vector3d Vec3(const YAML::Node& n) {
 }  // namespace
 
 TEST(MarsCahvoreVectors, PointsProjectAndPixelsBackProjectExactly) {
-  const std::string path = std::string(ROVER_SHARED_DATA) + "/mars/cahvore_test_vectors.yaml";
+  const std::string path = std::string(ROVER_DATA_DIR) + "/mars/cahvore_test_vectors.yaml";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is absent: skipped";
   const YAML::Node root = YAML::LoadFile(path);
   int models = 0, points = 0, pixels = 0;

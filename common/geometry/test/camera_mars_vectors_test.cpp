@@ -1,5 +1,5 @@
 // Real Spirit and Curiosity NAVCAM models against the independent test vectors in
-// ../shared/data/mars/cahvor_test_vectors.yaml (label vectors used exactly as given).
+// ROVER_DATA_DIR/mars/cahvor_test_vectors.yaml (label vectors used exactly as given).
 #include "geometry/cahv_camera.hpp"
 #include "geometry/test/camera_test_support.hpp"
 
@@ -14,7 +14,7 @@ using rover::geometry::test::AngleBetween;
 
 namespace {
 
-const std::string kVectors = std::string(ROVER_SHARED_DATA) + "/mars/cahvor_test_vectors.yaml";
+const std::string kVectors = std::string(ROVER_DATA_DIR) + "/mars/cahvor_test_vectors.yaml";
 
 Eigen::Vector3d Vec3(const YAML::Node& n) {
   return Eigen::Vector3d(n[0].as<double>(), n[1].as<double>(), n[2].as<double>());

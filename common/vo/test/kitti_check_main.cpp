@@ -39,7 +39,7 @@ static std::vector<Eigen::Isometry3d> ReadPoses(const std::string& path) {
 
 int main(int argc, char** argv) {
   cv::setNumThreads(1);
-  std::string dir = std::string(ROVER_SHARED_DATA) + "/kitti_06_0000_0050";
+  std::string dir = std::string(ROVER_DATA_DIR) + "/kitti_06_0000_0050";
   std::string yaml;
   double scale = -1;
   for (int i = 1; i < argc; ++i) {

@@ -43,9 +43,9 @@ EvalOptions ProjectOptions() {
 }
 
 TEST(VoEvaluation, Kitti06MeetsTheIssueTargets) {
-  const fs::path data = fs::path(ROVER_SHARED_DATA) / "kitti_06_0000_0050";
+  const fs::path data = fs::path(ROVER_DATA_DIR) / "kitti_06_0000_0050";
   if (!fs::is_directory(data)) {
-    GTEST_SKIP() << "KITTI data absent: " << data << " (see ../shared/data/README.md)";
+    GTEST_SKIP() << "KITTI data absent: " << data << " (set -DROVER_DATA_DIR)";
   }
   const KittiSequence seq = OpenKittiSequence(data.string());
   const EvalInput input = KittiInput(seq);
@@ -185,7 +185,7 @@ TEST(VoEvaluationCommandLine, MissingDatasetExitsTwoWithOneLine) {
 }
 
 TEST(VoEvaluationCommandLine, WrongImageSizeExitsTwoNamingTheImage) {
-  const fs::path data = fs::path(ROVER_SHARED_DATA) / "kitti_06_0000_0050";
+  const fs::path data = fs::path(ROVER_DATA_DIR) / "kitti_06_0000_0050";
   if (!fs::is_directory(data)) GTEST_SKIP() << "KITTI data absent: " << data;
   // A three-frame copy whose last right image is cropped.
   const fs::path dir = FreshDir("vo_eval_badsize");
