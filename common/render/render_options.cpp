@@ -8,7 +8,7 @@ RenderOptions LoadRenderOptions(const config::ConfigNode& node) {
   node.CheckKeys({"image_scale", "noise_sigma_dn", "noise_seed", "exposure_dn", "auto_exposure",
                   "target_mean_dn", "ambient", "sky_dn",
                   "far_ground_dn", "max_range_m", "shadow_reach_m", "grid_near_range_m",
-                  "grid_cell_pixels", "sun", "rover_shadow"});
+                  "grid_cell_pixels", "sun", "rover_shadow", "threads"});
   node.Get("image_scale", o.image_scale, 1e-3, 4.0);
   node.Get("noise_sigma_dn", o.noise_sigma_dn, 0.0, 100.0);
   node.Get("noise_seed", o.noise_seed);
@@ -22,6 +22,7 @@ RenderOptions LoadRenderOptions(const config::ConfigNode& node) {
   node.Get("shadow_reach_m", o.shadow_reach_m, 0.0, 1e3);
   node.Get("grid_near_range_m", o.grid_near_range_m, 0.1, 1e3);
   node.Get("grid_cell_pixels", o.grid_cell_pixels, 0.1, 100.0);
+  node.Get("threads", o.threads, 1, 2);
   const config::ConfigNode sun = node["sun"];
   if (!sun.IsNull()) {
     sun.CheckKeys({"azimuth_deg", "elevation_deg"});

@@ -69,6 +69,9 @@ struct RenderOptions {
   double sun_azimuth_deg = 135.0;
   double sun_elevation_deg = 45.0;
   RoverShadowOptions rover_shadow;
+  // 2: the left and right images are traced at once on two threads (the same images, bit
+  // for bit); 1: one after the other, on the caller's thread (the benchmark's figure).
+  int threads = 1;
 };
 
 // Reads the `render:` section (the node itself, not its parent). Unknown keys throw.

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <exception>
+#include <thread>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -470,10 +472,13 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
   // Scene radiance first, in DN at exposure_dn; the exposure and the sensor come after,
   // once both images are known.
   cv::Mat radiance[2];
-  // One row's hits, so that the ground's albedo is asked for a row at a time.
-  std::vector<double> hit_x, hit_y, hit_footprint, hit_albedo, hit_light;
-  std::vector<int> hit_column;
-  for (int cam = 0; cam < 2; ++cam) {
+  cv::Mat depths[2];
+  // Traces one camera. The two share nothing they write, so they may run at once
+  // (options.threads = 2) and give the same images, bit for bit.
+  auto trace = [&](int cam) {
+    // One row's hits, so that the ground's albedo is asked for a row at a time.
+    std::vector<double> hit_x, hit_y, hit_footprint, hit_albedo, hit_light;
+    std::vector<int> hit_column;
     const RayTable& tab = *tables[cam];
     for (auto* a : {&hit_x, &hit_y, &hit_footprint, &hit_albedo, &hit_light}) a->resize(tab.width);
     hit_column.resize(tab.width);
@@ -559,8 +564,32 @@ StereoImages StereoRenderer::RenderPair(const Ground& ground, const Sun& world_s
       for (int h = 0; h < hits; ++h) rrow[hit_column[h]] = static_cast<float>(hit_albedo[h] * hit_light[h]);
     }
     radiance[cam] = rad;
-    (cam == 0 ? out.depth_left : out.depth_right) = depth;
+    depths[cam] = depth;
+  };
+  if (o.threads >= 2) {
+    // A second thread, not OpenCV's pool: two equal halves, and no pool to size.
+    std::exception_ptr right_failed;
+    std::thread right([&] {
+      try {
+        trace(1);
+      } catch (...) {
+        right_failed = std::current_exception();
+      }
+    });
+    try {
+      trace(0);
+    } catch (...) {
+      right.join();
+      throw;
+    }
+    right.join();
+    if (right_failed) std::rethrow_exception(right_failed);
+  } else {
+    trace(0);
+    trace(1);
   }
+  out.depth_left = depths[0];
+  out.depth_right = depths[1];
 
   // Automatic exposure, as the NAVCAMs had: one gain for both cameras (stereo matching
   // wants the pair alike), from the left image's mean, so that low sun is not simply

@@ -275,6 +275,29 @@ TEST(StereoRenderer, SameSeedGivesIdenticalBytes) {
   EXPECT_GT(cv::norm(i1.left, i3.left, cv::NORM_L1), 1000);
 }
 
+TEST(StereoRenderer, TwoThreadsGiveTheSameBytesAsOne) {
+  terrain::WorldOptions wo;
+  wo.map_size_m = {20, 20};
+  wo.random_rocks.abundance_k = 0.1;
+  const terrain::World world(wo);
+  const Eigen::Isometry3d T = geometry::PoseFromXyzRpy(0.5, -0.3, -world.Elevation(0.5, -0.3), 0.02, -0.03, 0.4);
+  RenderOptions opt;
+  opt.noise_sigma_dn = 2.0;
+  StereoRenderer one(opt);
+  opt.threads = 2;
+  StereoRenderer two(opt);
+  const StereoImages a = one.RenderPair(world, NavcamRig(160), T, 7);
+  const StereoImages b = two.RenderPair(world, NavcamRig(160), T, 7);
+  ASSERT_EQ(a.left.size(), b.left.size());
+  EXPECT_TRUE(std::equal(a.left.datastart, a.left.dataend, b.left.datastart));
+  EXPECT_TRUE(std::equal(a.right.datastart, a.right.dataend, b.right.datastart));
+  EXPECT_EQ(cv::norm(a.depth_left, b.depth_left, cv::NORM_L1), 0);
+  EXPECT_EQ(cv::norm(a.depth_right, b.depth_right, cv::NORM_L1), 0);
+  EXPECT_EQ(a.exposure_gain, b.exposure_gain);
+  // The right image is not the left one: each thread traced its own camera.
+  EXPECT_GT(cv::norm(b.left, b.right, cv::NORM_L1), 1000);
+}
+
 // The fraction of the left image darker than `fraction` of the same pixel lit without the
 // rover's shadow.
 double ShadowedFraction(const Ground& ground, const Eigen::Isometry3d& T, double az, double el) {
