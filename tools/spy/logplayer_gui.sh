@@ -12,6 +12,9 @@ set -euo pipefail
 JAVA_DIR=/usr/share/java
 DEFAULT_URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608"  # common/bus/bus.hpp
 
+# shellcheck source=java_window.sh
+source "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/java_window.sh"
+
 die() { echo "rover logplayer-gui: $*" >&2; exit 2; }
 
 usage() {
@@ -47,13 +50,8 @@ done
 [ -f "$log" ] && [ -r "$log" ] || die "$log: not a readable file (expected an LCM log)"
 [ -n "$url" ] || die "--lcm-url: empty URL (expected udpm://ADDR:PORT?ttl=0)"
 
-java_bin="$(command -v java || true)"
-[ -n "$java_bin" ] || die "java not found (install openjdk-17-jre: apt-get install openjdk-17-jre)"
-java_home="$(dirname "$(dirname "$(readlink -f "$java_bin")")")"
-[ -f "$java_home/lib/libawt_xawt.so" ] \
-  || die "$java_home is a headless Java without X11 windows (install openjdk-17-jre)"
-[ -f "$JAVA_DIR/lcm.jar" ] || die "$JAVA_DIR/lcm.jar is missing (install liblcm-java)"
-[ -n "${DISPLAY:-}" ] || die "no X display (DISPLAY is not set): run it on a desktop, over ssh -X, or under xvfb-run"
+require_java_window
+require_display
 
 # Debian's lcm-logplayer-gui options less -Xincgc, with the serial collector (a small heap).
 exec "$java_bin" -Djava.net.preferIPv4Stack=true -XX:+UseSerialGC -Xms32m -Xmx128m -ea \

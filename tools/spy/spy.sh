@@ -15,6 +15,9 @@ BUILD="${ROVER_BUILD_DIR:-$ROOT/build}"
 JAVA_DIR=/usr/share/java
 DEFAULT_URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608"  # common/bus/bus.hpp
 
+# shellcheck source=java_window.sh
+source "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/java_window.sh"
+
 die() { echo "rover spy: $*" >&2; exit 2; }
 
 usage() {
@@ -41,18 +44,13 @@ while [ $# -gt 0 ]; do
 done
 [ -n "$url" ] || die "--lcm-url: empty URL (expected udpm://ADDR:PORT?ttl=0)"
 
-java_bin="$(command -v java || true)"
-[ -n "$java_bin" ] || die "java not found (install openjdk-17-jre: apt-get install openjdk-17-jre)"
-java_home="$(dirname "$(dirname "$(readlink -f "$java_bin")")")"
-[ -f "$java_home/lib/libawt_xawt.so" ] \
-  || die "$java_home is a headless Java without X11 windows (install openjdk-17-jre)"
-[ -f "$JAVA_DIR/lcm.jar" ] || die "$JAVA_DIR/lcm.jar is missing (install liblcm-java)"
+require_java_window
 # jchart2d.jar's manifest brings in jide-oss.jar and xmlgraphics-commons.jar.
 jchart2d="$JAVA_DIR/jchart2d.jar"
 [ -f "$jchart2d" ] || die "$jchart2d is missing (install libjchart2d-java)"
 msgs_jar="$BUILD/share/java/rover_msgs.jar"
 [ -f "$msgs_jar" ] || die "$msgs_jar is missing (install openjdk-17-jdk-headless and liblcm-java, then ./rover build)"
-[ -n "${DISPLAY:-}" ] || die "no X display (DISPLAY is not set): run it on a desktop, over ssh -X, or under xvfb-run"
+require_display
 
 classpath="$JAVA_DIR/lcm.jar:$jchart2d:$msgs_jar${ROVER_SPY_EXTRA_CLASSPATH:+:$ROVER_SPY_EXTRA_CLASSPATH}"
 # Debian's lcm-spy options less -Xincgc (gone since Java 9); a little more heap for images,
