@@ -208,12 +208,16 @@ std::optional<Gap> LossTracker::Observe(const std::string& channel, const std::u
 }
 
 // Decided once per process, at its first message in the log: heard within the window of
-// the log's first message means it was already publishing when the recording began.
-bool LossTracker::RunningBeforeTheLog(std::uint32_t publisher_id, std::int64_t log_timestamp_us) {
+// the log's first message means it was already publishing when the recording began,
+// unless that first message is its count 0 (a heartbeat's seq 0, say): then it started
+// after the recording did, however soon, and every count it skipped is a loss.
+bool LossTracker::RunningBeforeTheLog(std::uint32_t publisher_id, std::int64_t count,
+                                      std::int64_t log_timestamp_us) {
   if (!options_.detect_joined || log_timestamp_us < 0) return false;
   const auto [it, first] = running_before_.try_emplace(publisher_id, false);
   if (first) {
-    it->second = log_timestamp_us - first_timestamp_us_ <= static_cast<std::int64_t>(options_.joined_window_s * 1e6);
+    it->second = count > 0 &&
+                 log_timestamp_us - first_timestamp_us_ <= static_cast<std::int64_t>(options_.joined_window_s * 1e6);
   }
   return it->second;
 }
@@ -261,7 +265,7 @@ std::optional<Gap> LossTracker::ObserveAt(std::int64_t log_timestamp_us, const s
     g.lost = lost;
     return g;
   };
-  const bool joined = RunningBeforeTheLog(s.publisher_id, log_timestamp_us);
+  const bool joined = RunningBeforeTheLog(s.publisher_id, s.count, log_timestamp_us);
   if (first) {
     if (s.count > 0 && joined) {
       before_recording_ += s.count;

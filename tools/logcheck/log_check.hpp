@@ -14,7 +14,8 @@
 //     shows by itself (TrackerOptions::detect_joined): every process heartbeats once a
 //     second, so a process heard in the log's first `joined_window_s` was publishing before
 //     the recording started, and its earlier messages are before the log, not lost. A
-//     process first heard later started after the recording and must count from 0.
+//     process first heard later, or first heard at its count 0 (it started after the
+//     recording, however soon), must count from 0 on every channel.
 // Only those first bytes are read, so a check costs nothing per image and needs no decode of
 // the message body. A message whose bytes cannot say (too short, another type's fingerprint,
 // no pub_seq stamped) is "unchecked", and an unchecked message means completeness is unknown.
@@ -142,7 +143,7 @@ class LossTracker {
   const TrackerOptions& options() const { return options_; }
 
  private:
-  bool RunningBeforeTheLog(std::uint32_t publisher_id, std::int64_t log_timestamp_us);
+  bool RunningBeforeTheLog(std::uint32_t publisher_id, std::int64_t count, std::int64_t log_timestamp_us);
   struct Last {
     std::int64_t count;
     std::int64_t utime;

@@ -289,6 +289,27 @@ TEST(CheckLog, ALateStartIsToldApartFromALossByWhenEachProcessIsFirstHeard) {
   EXPECT_EQ(CheckLog(path, TrackerOptions{.from_start = false}).lost, 0);
 }
 
+// A process that starts just after the recorder (inside the joined window) and whose first
+// POSEs were lost (a flood on the bus, say): its heartbeat at seq 0 is in the log, so it
+// did not join a running bus, and the POSEs it skipped are losses, not "before the log".
+TEST(CheckLog, AProcessFirstHeardAtCountZeroStartedDuringTheRecording) {
+  TestLog log("early_start");
+  log.AddAt(0, "HEARTBEAT", Heartbeat("rover_sim", 7));
+  log.AddAt(200'000, "HEARTBEAT", Heartbeat("state_estimator", 0));
+  log.AddAt(1'300'000, "POSE", Pose(1000, 77));
+  log.AddAt(1'400'000, "POSE", Pose(1100, 78));
+  TrackerOptions detect;
+  detect.detect_joined = true;
+  const auto report = CheckLog(log.Close(), detect);
+  EXPECT_EQ(report.joined, (std::set<std::string>{"rover_sim"}));
+  EXPECT_EQ(report.lost, 77);
+  ASSERT_EQ(report.channels.at("POSE").gaps.size(), 1u);
+  EXPECT_EQ(report.channels.at("POSE").gaps[0].kind, Gap::Kind::kAtStart);
+  EXPECT_NE(FormatReport(report).find("gap: POSE from state_estimator: 77 lost before its first recorded message"),
+            std::string::npos)
+      << FormatReport(report);
+}
+
 TEST(CheckLog, ARestartThatMissesItsFirstMessagesIsALoss) {
   TestLog log("restart_loss");
   for (int c = 0; c < 6; ++c) log.Add("IMU", Imu(c * 1000, "rover_sim", c));
