@@ -300,6 +300,11 @@ int main(int argc_in, char** argv_in) {
          {"--image-width", "PX", "width of the NAVCAM image served (default 256, 32 to 1024)"},
          {"--log", "FILE", "play back this LCM log instead of showing the live bus (commands off)"}});
 
+    // Started by hand on a running simulation, the console is outside its barrier and runs
+    // in real time: it follows the virtual clock as an observer rather than dropping it and
+    // then every message stamped with it. (The tests start it inside the barrier.)
+    proc.set_clock_observer(true);
+
     Listen listen;
     if (auto l = proc.option("--listen")) listen = ParseListen(*l);
     if (auto p = proc.option("--port")) {

@@ -151,10 +151,10 @@ class PageAgent {
 
 // Why the browser test cannot run here, or "".
 std::string MissingTool(const std::string& modules, std::string* chromium) {
-  if (RunCommand("command -v node").exit_code != 0) return "node is not installed (apt-get install nodejs, or ./rover setup)";
+  if (RunCommand("command -v node").exit_code != 0) return "node is not installed (apt-get install nodejs; ./rover test installs it)";
   const char* env = std::getenv("ROVER_CHROMIUM");
   *chromium = env != nullptr ? env : "/usr/bin/chromium";
-  if (access(chromium->c_str(), X_OK) != 0) return *chromium + " is not installed (apt-get install chromium, or ./rover setup)";
+  if (access(chromium->c_str(), X_OK) != 0) return *chromium + " is not installed (apt-get install chromium; ./rover test installs it)";
   if (!fs::exists(modules + "/node_modules/playwright-core/package.json")) {
     return "playwright-core is not installed in " + modules +
            " (./rover test installs it with npm ci; it failed or was not run, see its output)";
