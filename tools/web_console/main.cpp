@@ -37,7 +37,6 @@
 
 #include <httplib.h>
 
-#include <rover_msgs/rover_clock_t.hpp>
 #include <rover_msgs/sequence_control_t.hpp>
 
 #include <arpa/inet.h>
@@ -367,9 +366,10 @@ int main(int argc_in, char** argv_in) {
     bus.Subscribe<rover_msgs::hazard_status_t>(ch::kHazardStatus, feed, 50);
     bus.Subscribe<rover_msgs::heartbeat_t>(ch::kHeartbeat, feed, 100);
     bus.Subscribe<rover_msgs::stereo_frame_t>(ch::kStereoFrame, feed, 4);
-    bus.Subscribe<rover_msgs::rover_clock_t>(ch::kClock, [&state](const rover_msgs::rover_clock_t& m) {
-      state.OnRoverClock(m.utime);
-    });
+    // Rover time: the Process keeps the clock (ROVER_CLOCK, checked and, with a key, its
+    // signature verified once); each tick hands its newest time to the state. A second
+    // subscription to ROVER_CLOCK here would verify each signed clock message twice, and
+    // the second time drop it as a replay.
 
     CommandQueue commands;
     std::atomic<bool> stopping{false};
@@ -607,6 +607,7 @@ int main(int argc_in, char** argv_in) {
       while (!proc.stopping()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
     } else {
       proc.Run([&] {
+        state.OnRoverClock(proc.now());
         for (auto& p : commands.Take()) {
           try {
             if (p->kind == Pending::kSubmit) {

@@ -294,6 +294,18 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
         << s["status"]["detail"].as<std::string>("");
   }
 
+  // rover_web dropped nothing: each signed ROVER_CLOCK verified once (a second
+  // subscription of its own once dropped every one as a replay).
+  {
+    const YAML::Node s = state();
+    int found = 0;
+    for (const auto& p : s["processes"]) {
+      if (p["name"].as<std::string>("") != "rover_web") continue;
+      ++found;
+      EXPECT_EQ(p["dropped"].as<int>(-1), 0) << p["detail"].as<std::string>("");
+    }
+    EXPECT_EQ(found, 1) << "rover_web's own heartbeat is not on the page";
+  }
   EXPECT_EQ(set.RunningNames().size(), deployment.processes.size() + 1);
   set.StopAll();
   // rover_web logged the refused guess and each command it sent, signed.
