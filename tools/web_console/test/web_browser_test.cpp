@@ -152,6 +152,11 @@ class PageAgent {
 // Why the browser test cannot run here, or "".
 std::string MissingTool(const std::string& modules, std::string* chromium) {
   if (RunCommand("command -v node").exit_code != 0) return "node is not installed (apt-get install nodejs; ./rover test installs it)";
+  if (const auto v = RunCommand("node -e 'process.exit(parseInt(process.versions.node) >= 20 ? 0 : 1)'"); v.exit_code != 0) {
+    std::string version = RunCommand("node --version").output;
+    version = version.substr(0, version.find('\n'));
+    return "node " + version + " is older than 20 (playwright-core needs 20 or newer)";
+  }
   const char* env = std::getenv("ROVER_CHROMIUM");
   *chromium = env != nullptr ? env : "/usr/bin/chromium";
   if (access(chromium->c_str(), X_OK) != 0) return *chromium + " is not installed (apt-get install chromium; ./rover test installs it)";
