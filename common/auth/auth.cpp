@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <utility>
 
 namespace rover::auth {
@@ -228,6 +229,15 @@ void GenerateKeyFile(const std::string& path) {
   sodium_memzero(bytes, sizeof bytes);
   const std::string text = std::string(hex) + "\n";
   sodium_memzero(hex, sizeof hex);
+  // The guide's `./rover seq keygen build/keys/rover.key` names a folder no build makes:
+  // a missing folder is made, and only the user may enter it (0700).
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  if (!folder.empty() && !std::filesystem::exists(folder)) {
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);
+    if (!ec) std::filesystem::permissions(folder, std::filesystem::perms::owner_all, ec);
+    if (ec) throw KeyError(path + ": cannot make its folder " + folder.string() + ": " + ec.message());
+  }
   // O_EXCL: never replace a key (receivers holding the old one would refuse everything);
   // mode 0600 from the start, so the key is never readable by others, even briefly.
   Fd file{::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600)};

@@ -209,6 +209,10 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
           return;
         }
         const bool virtual_clock = msg.mode == rover_msgs::rover_clock_t::MODE_VIRTUAL;
+        if (virtual_clock != virtual_ && clock_observer_ && !virtual_) {
+          bus_.clock().ObserveClock(msg.utime, msg.rate, std::chrono::steady_clock::now());
+          return;
+        }
         if (virtual_clock != virtual_) {
           bus_.Drop(channels::kClock, type,
                     std::string(virtual_clock ? "a virtual" : "a real-time") + " clock, and this process runs in " +

@@ -53,6 +53,12 @@ class Process {
   // to the callbacks once per clock tick, in one canonical order; ticks and heartbeats
   // run on rover time; and after each tick this process sends its sync report.
   bool virtual_time() const { return virtual_; }
+  // A real-time process that only watches (a console started by hand on a running
+  // simulation, outside its barrier) follows the time source's clock in either mode, as
+  // rover_console does: a virtual clock is observed, so the messages stamped with it pass
+  // the time checks, instead of being dropped as another mode's. It never joins the
+  // barrier. Off by default: a process that acts on time must run in the bus's mode.
+  void set_clock_observer(bool on) { clock_observer_ = on; }
   // The one clock every guard reads (dead-man, heartbeat loss, waits for answers): rover
   // seconds in virtual time, wall seconds otherwise (a real rover, where a limit on a
   // silent peer means wall time).
@@ -108,6 +114,7 @@ class Process {
   std::int64_t heartbeat_seq_ = 0;
   double heartbeat_period_s_ = 0.25;
   bool virtual_ = false;
+  bool clock_observer_ = false;
   std::string time_source_ = "rover_sim";
   std::function<bool()> pending_work_;
   simtime::ComputeProfile compute_;

@@ -17,6 +17,11 @@
 // $ROVER_KEY_FILE), through the same Bus signing as every process and rover_seq.
 // Requests whose Host header is not this console's (DNS rebinding) are refused.
 //
+// --listen unix:PATH serves on a Unix socket instead (mode 0600): the way out of a private
+// network namespace, whose loopback no browser outside can reach, since the file system
+// is shared. `./rover console --web --private NAME` runs it so inside the named private
+// bus and forwards this computer's 127.0.0.1:PORT to it with socat.
+//
 // With --log FILE it plays back a recorded log instead (log_playback.hpp): the same state,
 // the page gets a time slider, no bus is joined (memq://, unless --lcm-url says otherwise)
 // and every command is refused.
@@ -32,11 +37,15 @@
 
 #include <httplib.h>
 
-#include <rover_msgs/rover_clock_t.hpp>
 #include <rover_msgs/sequence_control_t.hpp>
 
 #include <arpa/inet.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cerrno>
 
 #include <algorithm>
 #include <atomic>
@@ -67,6 +76,7 @@ double Now() {
 struct Listen {
   std::string host = "127.0.0.1";
   int port = 8080;
+  std::string unix_path;  // --listen unix:PATH; host and port unused
 };
 
 int ParsePort(const std::string& text, const std::string& flag) {
@@ -80,9 +90,19 @@ int ParsePort(const std::string& text, const std::string& flag) {
 }
 
 Listen ParseListen(const std::string& text) {
+  if (text.rfind("unix:", 0) == 0) {
+    Listen l;
+    l.unix_path = text.substr(5);
+    sockaddr_un addr{};
+    if (l.unix_path.empty() || l.unix_path.size() >= sizeof(addr.sun_path)) {
+      throw ConfigError("rover_web: argument --listen: \"" + text + "\": expected unix:PATH with a path of 1 to " +
+                        std::to_string(sizeof(addr.sun_path) - 1) + " characters");
+    }
+    return l;
+  }
   const auto colon = text.rfind(':');
   if (colon == std::string::npos || colon == 0) {
-    throw ConfigError("rover_web: argument --listen: \"" + text + "\": expected ADDR:PORT, e.g. 127.0.0.1:8080");
+    throw ConfigError("rover_web: argument --listen: \"" + text + "\": expected ADDR:PORT (e.g. 127.0.0.1:8080) or unix:PATH");
   }
   Listen l;
   l.host = text.substr(0, colon);
@@ -96,6 +116,38 @@ Listen ParseListen(const std::string& text) {
 }
 
 bool IsLoopback(const std::string& host) { return host.rfind("127.", 0) == 0; }
+
+// A Host header naming this computer's loopback, with any port or none: what a browser
+// sends through a forwarder (socat) to a console on a Unix socket, whose port the console
+// cannot know. Another site's name (DNS rebinding) is not one.
+bool IsLoopbackHostHeader(const std::string& host) {
+  for (const char* name : {"127.0.0.1", "localhost", "[::1]"}) {
+    const std::size_t n = std::strlen(name);
+    if (host.compare(0, n, name) != 0) continue;
+    if (host.size() == n) return true;
+    if (host[n] != ':' || host.size() == n + 1) return false;
+    return std::all_of(host.begin() + static_cast<std::ptrdiff_t>(n) + 1, host.end(),
+                       [](char c) { return c >= '0' && c <= '9'; });
+  }
+  return false;
+}
+
+// Ready to bind a Unix socket at `path`: a socket left by a console that died is removed;
+// one that answers, or a file that is not a socket, is an error.
+void ClearStaleSocket(const std::string& path) {
+  struct stat st {};
+  if (lstat(path.c_str(), &st) != 0) return;
+  const std::string where = "rover_web: argument --listen: unix:" + path + ": ";
+  if (!S_ISSOCK(st.st_mode)) throw ConfigError(where + "exists and is not a socket (expected a free path)");
+  const int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, path.c_str(), sizeof(addr.sun_path) - 1);
+  const bool answers = fd >= 0 && connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) == 0;
+  if (fd >= 0) close(fd);
+  if (answers) throw ConfigError(where + "another console listens there (expected a free path)");
+  if (unlink(path.c_str()) != 0) throw ConfigError(where + "a stale socket that cannot be removed: " + std::strerror(errno));
+}
 
 // The operator secret from --secret-file (a regular file no other user can read) or
 // --secret; "" when neither is given (commands are then refused).
@@ -239,12 +291,18 @@ int main(int argc_in, char** argv_in) {
         "With --log FILE it plays back a recorded LCM log instead (rover_recorder, ./rover scenario\n"
         "--out): the same page with a time slider; no bus is joined and commands are refused.",
         argc, argv,
-        {{"--listen", "ADDR:PORT", "where to listen (default 127.0.0.1:8080; port 0: any free port)"},
+        {{"--listen", "ADDR:PORT|unix:PATH",
+          "where to listen (default 127.0.0.1:8080; port 0: any free port; unix:PATH a Unix socket, mode 0600)"},
          {"--port", "P", "the port on 127.0.0.1 (short for --listen 127.0.0.1:P)"},
          {"--secret-file", "FILE", "the operator secret for commands: a file no other user can read"},
          {"--secret", "TOKEN", "the operator secret on the command line (other local users may see it in ps)"},
          {"--image-width", "PX", "width of the NAVCAM image served (default 256, 32 to 1024)"},
          {"--log", "FILE", "play back this LCM log instead of showing the live bus (commands off)"}});
+
+    // Started by hand on a running simulation, the console is outside its barrier and runs
+    // in real time: it follows the virtual clock as an observer rather than dropping it and
+    // then every message stamped with it. (The tests start it inside the barrier.)
+    proc.set_clock_observer(true);
 
     Listen listen;
     if (auto l = proc.option("--listen")) listen = ParseListen(*l);
@@ -308,9 +366,10 @@ int main(int argc_in, char** argv_in) {
     bus.Subscribe<rover_msgs::hazard_status_t>(ch::kHazardStatus, feed, 50);
     bus.Subscribe<rover_msgs::heartbeat_t>(ch::kHeartbeat, feed, 100);
     bus.Subscribe<rover_msgs::stereo_frame_t>(ch::kStereoFrame, feed, 4);
-    bus.Subscribe<rover_msgs::rover_clock_t>(ch::kClock, [&state](const rover_msgs::rover_clock_t& m) {
-      state.OnRoverClock(m.utime);
-    });
+    // Rover time: the Process keeps the clock (ROVER_CLOCK, checked and, with a key, its
+    // signature verified once); each tick hands its newest time to the state. A second
+    // subscription to ROVER_CLOCK here would verify each signed clock message twice, and
+    // the second time drop it as a replay.
 
     CommandQueue commands;
     std::atomic<bool> stopping{false};
@@ -325,9 +384,12 @@ int main(int argc_in, char** argv_in) {
     server.set_pre_routing_handler([&](const httplib::Request& req, httplib::Response& res) {
       // A page from another site that a DNS name re-pointed at 127.0.0.1 sends its own
       // name in Host: refuse it, so no other site can read the bus through the browser.
-      if (IsLoopback(listen.host)) {
+      if (!listen.unix_path.empty() || IsLoopback(listen.host)) {
         const std::string host = req.get_header_value("Host");
-        if (std::find(allowed_hosts.begin(), allowed_hosts.end(), host) == allowed_hosts.end()) {
+        const bool allowed = listen.unix_path.empty()
+                                 ? std::find(allowed_hosts.begin(), allowed_hosts.end(), host) != allowed_hosts.end()
+                                 : IsLoopbackHostHeader(host);
+        if (!allowed) {
           Text(res, 403, "refused: Host \"" + host + "\" is not this console (expected 127.0.0.1 or localhost with its port)");
           return httplib::Server::HandlerResponse::Handled;
         }
@@ -502,7 +564,17 @@ int main(int argc_in, char** argv_in) {
     control("/api/abort", rover_msgs::sequence_control_t::ACTION_ABORT, "abort");
 
     int port = listen.port;
-    if (port == 0) {
+    if (!listen.unix_path.empty()) {
+      ClearStaleSocket(listen.unix_path);
+      server.set_address_family(AF_UNIX);
+      const mode_t old_mask = umask(0177);  // the socket is born 0600: only this user connects
+      const bool bound = server.bind_to_port(listen.unix_path, 80);
+      umask(old_mask);
+      if (!bound) {
+        throw ConfigError("rover_web: cannot listen on unix:" + listen.unix_path + ": " + std::strerror(errno) +
+                          " (expected a path in a directory this user can write)");
+      }
+    } else if (port == 0) {
       port = server.bind_to_any_port(listen.host);
       if (port < 0) throw std::runtime_error("cannot listen on " + listen.host + " (any port)");
     } else if (!server.bind_to_port(listen.host, port)) {
@@ -514,16 +586,18 @@ int main(int argc_in, char** argv_in) {
       if (port == 80) allowed_hosts.push_back(h);  // browsers leave the default port out
     }
     std::thread http([&] { server.listen_after_bind(); });
+    const std::string where = listen.unix_path.empty() ? "http://" + listen.host + ":" + std::to_string(port) + "/"
+                                                       : "unix:" + listen.unix_path;
     if (playback) {
-      std::cout << "rover_web: listening on http://" << listen.host << ":" << port << "/ (playback of " << *log_path
-                << "; commands off)\n" << std::flush;
+      std::cout << "rover_web: listening on " << where << " (playback of " << *log_path << "; commands off)\n"
+                << std::flush;
     } else {
-      std::cout << "rover_web: listening on http://" << listen.host << ":" << port << "/ (bus " << bus.url()
+      std::cout << "rover_web: listening on " << where << " (bus " << bus.url()
                 << "; commands " << (secret.empty() ? "off: no operator secret" : "need the operator secret")
                 << (options.signing ? ", signed with the deployment's key" : ", unsigned (no key)") << ")\n"
                 << std::flush;
     }
-    if (!IsLoopback(listen.host)) {
+    if (listen.unix_path.empty() && !IsLoopback(listen.host)) {
       std::cout << "rover_web: warning: listening on " << listen.host
                 << ", not loopback: anyone who reaches this port reads the bus (plain HTTP, no TLS)\n";
     }
@@ -533,6 +607,7 @@ int main(int argc_in, char** argv_in) {
       while (!proc.stopping()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
     } else {
       proc.Run([&] {
+        state.OnRoverClock(proc.now());
         for (auto& p : commands.Take()) {
           try {
             if (p->kind == Pending::kSubmit) {
@@ -551,6 +626,7 @@ int main(int argc_in, char** argv_in) {
     stopping = true;
     server.stop();
     http.join();
+    if (!listen.unix_path.empty()) unlink(listen.unix_path.c_str());
     for (auto& p : commands.Take()) p->done.set_value("rover_web is stopping");
     return 0;
   });

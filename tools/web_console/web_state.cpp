@@ -183,6 +183,14 @@ void WebState::On(const rover_msgs::step_report_t& m, double) {
   ++messages_;
   steps_.push_back(m);
   while (static_cast<int>(steps_.size()) > options_.recent_steps) steps_.pop_front();
+  auto count = std::find_if(step_counts_.begin(), step_counts_.end(),
+                            [&m](const auto& c) { return c.first == m.submission_id; });
+  if (count != step_counts_.end()) {
+    ++count->second;
+  } else {
+    step_counts_.emplace_back(m.submission_id, 1);
+    while (step_counts_.size() > 8) step_counts_.pop_front();
+  }
 }
 
 void WebState::On(const rover_msgs::vo_update_t& m, double) {
@@ -422,6 +430,11 @@ std::string WebState::StateJson(double wall_now_s, const PlaybackInfo* playback)
     j.Null();
   }
 
+  // Every step heard for the sequence in the status (the table below keeps the last few).
+  int step_count = 0;
+  for (const auto& [id, n] : step_counts_)
+    if (status_ && id == status_->submission_id) step_count = n;
+  j.Key("step_count").Int(step_count);
   j.Key("steps").Begin('[');
   for (const auto& s : steps_) {
     j.Begin('{');

@@ -108,6 +108,9 @@ class WebState {
   std::optional<rover_msgs::sequence_status_t> status_;
   std::deque<std::pair<std::int64_t, rover_msgs::sequence_submit_t>> submits_;  // id, newest last
   std::deque<rover_msgs::step_report_t> steps_;
+  // Steps heard per submission (the newest few), for the step count of the sequence shown:
+  // the table keeps only the last recent_steps.
+  std::deque<std::pair<std::int64_t, int>> step_counts_;
   std::optional<rover_msgs::vo_update_t> vo_;
   int vo_ok_ = 0, vo_failed_ = 0;
   std::optional<rover_msgs::hazard_status_t> hazard_;

@@ -342,3 +342,13 @@ TEST(KeyFile, GeneratedKeyIsPrivateRandomAndNeverOverwritten) {
   }
   EXPECT_EQ(TagOf(Key::LoadFile(a), "m"), before);
 }
+
+TEST(KeyFile, GenerateKeyFileMakesAMissingFolderTheUsersAlone) {
+  const fs::path dir = TempDir("folder");
+  const std::string key = (dir / "keys" / "rover.key").string();
+  rover::auth::GenerateKeyFile(key);
+  EXPECT_EQ(Key::LoadFile(key).size(), 32u);
+  struct stat st {};
+  ASSERT_EQ(::stat((dir / "keys").c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0700u);
+}

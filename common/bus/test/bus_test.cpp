@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/pose_t.hpp>
+#include <rover_msgs/rover_clock_t.hpp>
 
 #include <rover_msgs/sequence_control_t.hpp>
 #include <rover_msgs/step_report_t.hpp>
@@ -192,6 +193,30 @@ TEST(Process, HandleReceivedLetsATickSeeEveryMessageReceivedBeforeIt) {
       },
       25);
   EXPECT_EQ(seen_at_first_tick, 5);
+}
+
+// A real-time process drops a virtual clock (another mode's); one that only watches (the
+// web console started by hand on a simulation) observes it instead, and so takes messages
+// stamped with rover time.
+TEST(Process, AClockObserverFollowsAVirtualClockThatOthersDrop) {
+  constexpr std::int64_t kBase = 10'000'000'000;  // rover time far from the wall clock
+  for (const bool observer : {false, true}) {
+    const char* argv[] = {"test_process", "--lcm-url", "memq://"};
+    rover::bus::Process proc("test_process", "test", 3, const_cast<char**>(argv));
+    ASSERT_FALSE(proc.virtual_time());
+    proc.set_clock_observer(observer);
+    proc.bus().set_publisher("rover_sim");  // memq: the time source publishes on this bus
+    rover_msgs::rover_clock_t clock{};
+    clock.utime = kBase;
+    clock.rate = 50;
+    clock.mode = rover_msgs::rover_clock_t::MODE_VIRTUAL;
+    proc.bus().Publish(rover::channels::kClock, clock);
+    proc.bus().set_publisher("test_process");
+    while (proc.bus().Handle(0)) {
+    }
+    EXPECT_EQ(proc.bus().dropped(), observer ? 0 : 1) << "observer " << observer;
+    EXPECT_EQ(proc.now(), observer ? kBase : 0) << "observer " << observer;
+  }
 }
 
 TEST(Bus, PublishStampsPublisherAndCountPerChannel) {

@@ -1,5 +1,10 @@
 // The web console's page: reads /api/events (Server-Sent Events, one JSON state each) and
 // draws it. Every text from the bus goes in with textContent, never as HTML.
+// What it shows is also kept in data- attributes, for scripts (the browser test,
+// tools/web_console/browser_test): #pose data-x/y/z (as displayed) and data-utime (of the
+// POSE shown), #steps data-count (steps of the sequence shown), #seqhead data-state and
+// data-submission, and on the #map canvas data-zones (names drawn), data-goal ("x y r"
+// drawn) and data-view (the site-to-canvas transform drawMap used, see sx and sy there).
 // Playing back a log (rover_web --log, the state's "playback" is set), it asks for the
 // state at the slider's time instead (/api/state?at=SECONDS) and sends no commands.
 'use strict';
@@ -56,6 +61,9 @@ function drawMap(s) {
   const cx = (minY + maxY) / 2, cy = (minX + maxX) / 2;
   const sx = (x, y) => W / 2 + (y - cx) * scale;   // screen x from site y (east)
   const sy = (x, y) => H / 2 - (x - cy) * scale;   // screen y from site x (north)
+  canvas.dataset.view = JSON.stringify({ W, H, scale, cx, cy });
+  canvas.dataset.zones = s.zones.map((z) => z.name).join(',');
+  canvas.dataset.goal = s.goal ? s.goal.x + ' ' + s.goal.y + ' ' + s.goal.radius_m : '';
 
   // The traversability map.
   if (m && m.rows > 0) {
@@ -158,6 +166,8 @@ function drawSequence(s) {
   const head = $('seqhead');
   const pre = $('seq');
   pre.replaceChildren();
+  head.dataset.state = st ? st.state : '';
+  head.dataset.submission = st ? st.submission_id : '';
   if (!st) { head.textContent = 'no sequence status heard'; return; }
   const cls = { running: 'ok', paused: 'warn', aborted: 'bad', rejected: 'bad', completed: 'ok' }[st.state] || '';
   head.replaceChildren();
@@ -189,6 +199,9 @@ function drawSequence(s) {
 function drawTables(s) {
   const p = s.pose, t = s.truth;
   const rows = [];
+  const shown = $('pose').dataset;
+  shown.x = p ? fix(p.x, 3) : ''; shown.y = p ? fix(p.y, 3) : ''; shown.z = p ? fix(p.z, 3) : '';
+  shown.utime = p ? p.utime : '';
   if (p) {
     rows.push(['estimate', 'x ' + fix(p.x, 3) + '  y ' + fix(p.y, 3) + '  z ' + fix(p.z, 3) + ' m  yaw ' + fix(p.yaw_deg, 2) + ' deg']);
     rows.push(['', 'roll ' + fix(p.roll_deg, 2) + '  pitch ' + fix(p.pitch_deg, 2) + ' deg  source ' + p.source + ', site ' + p.site]);
@@ -226,6 +239,8 @@ function drawTables(s) {
 
   const steps = $('steps').tBodies[0];
   steps.replaceChildren();
+  $('steps').dataset.count = s.step_count;
+  $('stepcount').textContent = s.status ? s.step_count + ' in this sequence' + (s.step_count > s.steps.length ? ', the last ' + s.steps.length + ' below' : '') : '';
   for (const st of s.steps.slice().reverse()) {
     const tr = steps.insertRow();
     cell(tr, (st.command_index + 1) + '.' + (st.step_index + 1));

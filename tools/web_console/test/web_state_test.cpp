@@ -117,6 +117,9 @@ TEST(WebState, JsonCarriesEveryPanel) {
   state.On(st, t);
 
   rover_msgs::step_report_t step{};
+  step.submission_id = 41;  // an earlier sequence's step: not counted for this one
+  state.On(step, t);
+  step.submission_id = 42;
   step.command_index = 0;
   step.step_index = 1;
   step.commanded_distance_m = 0.5;
@@ -179,12 +182,13 @@ TEST(WebState, JsonCarriesEveryPanel) {
   EXPECT_NEAR(j["goal"]["x"].as<double>(), 5.0, 1e-9);
   EXPECT_NEAR(j["goal"]["y"].as<double>(), 3.0, 1e-9);
   EXPECT_NEAR(j["goal"]["radius_m"].as<double>(), 0.3, 1e-9);
-  ASSERT_EQ(j["steps"].size(), 2u);
-  EXPECT_NEAR(j["steps"][0]["measured_m"].as<double>(), 0.45, 1e-9);
-  EXPECT_EQ(j["steps"][0]["vo"].as<std::string>(), "ok");
-  EXPECT_EQ(j["steps"][1]["vo"].as<std::string>(), "blind");
-  EXPECT_EQ(j["steps"][0]["choice"].as<std::string>(), "command");
-  EXPECT_EQ(j["steps"][1]["choice"].as<std::string>(), "steer_at_goal");
+  ASSERT_EQ(j["steps"].size(), 3u);
+  EXPECT_EQ(j["step_count"].as<int>(), 2) << "the steps of the sequence in the status";
+  EXPECT_NEAR(j["steps"][1]["measured_m"].as<double>(), 0.45, 1e-9);
+  EXPECT_EQ(j["steps"][1]["vo"].as<std::string>(), "ok");
+  EXPECT_EQ(j["steps"][2]["vo"].as<std::string>(), "blind");
+  EXPECT_EQ(j["steps"][1]["choice"].as<std::string>(), "command");
+  EXPECT_EQ(j["steps"][2]["choice"].as<std::string>(), "steer_at_goal");
   EXPECT_TRUE(j["playback"].IsNull()) << "live: no playback";
   EXPECT_EQ(j["vo"]["ok"].as<int>(), 1);
   EXPECT_EQ(j["vo"]["failed"].as<int>(), 1);
@@ -204,6 +208,7 @@ TEST(WebState, JsonCarriesEveryPanel) {
   const YAML::Node k = YAML::Load(state.StateJson(t));
   EXPECT_TRUE(k["sequence_text"].IsNull());
   EXPECT_TRUE(k["goal"].IsNull());
+  EXPECT_EQ(k["step_count"].as<int>(), 0);
 }
 
 TEST(WebState, LeftImageIsAReducedPng) {
