@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <sstream>
+#include <utility>
 
 namespace rover::simtime {
 
@@ -18,12 +19,12 @@ Barrier::Barrier(std::vector<std::string> members, double liveness_s) : liveness
   for (auto& name : members) members_[name].id = PublisherIdOf(name);
 }
 
-void Barrier::Report(const SyncReport& report, double wall_s) {
+void Barrier::Report(SyncReport report, double wall_s) {
   auto it = members_.find(report.process);
   if (it == members_.end()) return;
   Member& m = it->second;
   const bool rejoining = m.lost;
-  m.last = report;
+  m.last = std::move(report);
   m.heard = true;
   m.lost = false;  // a lost member that speaks again is waited for again
   m.last_wall_s = wall_s;

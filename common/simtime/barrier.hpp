@@ -44,7 +44,7 @@ class Barrier {
 
   // A report from a process; reports from non-members are ignored. Wall seconds are for
   // liveness only.
-  void Report(const SyncReport& report, double wall_s);
+  void Report(SyncReport report, double wall_s);
 
   // Every member has reported at least once (the clock may start).
   bool AllHeard() const;
