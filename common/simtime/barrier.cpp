@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <sstream>
+#include <utility>
 
 namespace rover::simtime {
 
@@ -18,12 +19,12 @@ Barrier::Barrier(std::vector<std::string> members, double liveness_s) : liveness
   for (auto& name : members) members_[name].id = PublisherIdOf(name);
 }
 
-void Barrier::Report(const SyncReport& report, double wall_s) {
+void Barrier::Report(SyncReport report, double wall_s) {
   auto it = members_.find(report.process);
   if (it == members_.end()) return;
   Member& m = it->second;
   const bool rejoining = m.lost;
-  m.last = report;
+  m.last = std::move(report);
   m.heard = true;
   m.lost = false;  // a lost member that speaks again is waited for again
   m.last_wall_s = wall_s;
@@ -64,6 +65,19 @@ bool Barrier::AllHeard() const {
   return true;
 }
 
+// Holds without the words: the clock's wait loop asks this on every pass, so it builds no
+// strings.
+bool Barrier::Waiting(const Member& m, std::int64_t utime) const {
+  if (m.lost) return false;
+  if (!m.heard || m.last.utime < utime || m.last.busy) return true;
+  for (const auto& [pub_name, pub] : members_) {
+    if (!pub.heard) continue;
+    for (const auto& entry : pub.last.published)
+      if (Missing(m, entry.first, pub) > 0) return true;
+  }
+  return false;
+}
+
 std::string Barrier::Holds(const std::string& name, const Member& m, std::int64_t utime) const {
   if (m.lost) return "";
   if (!m.heard) return name + " has not reported";
@@ -85,8 +99,8 @@ std::string Barrier::Holds(const std::string& name, const Member& m, std::int64_
 }
 
 bool Barrier::Finished(std::int64_t utime) const {
-  for (const auto& [name, m] : members_)
-    if (!Holds(name, m, utime).empty()) return false;
+  for (const auto& entry : members_)
+    if (Waiting(entry.second, utime)) return false;
   return true;
 }
 
@@ -105,14 +119,15 @@ std::vector<std::string> Barrier::DeclareLost(std::int64_t utime, double wall_s,
                                               std::vector<std::string>* forgiven) {
   std::vector<std::string> lost;
   for (auto& [name, m] : members_) {
-    const std::string why = Holds(name, m, utime);
-    if (why.empty()) continue;
     const double since = wall_s - std::max(m.heard ? m.last_wall_s : tick_wall_s, tick_wall_s);
-    if (since > liveness_s_) {
+    const bool silent = since > liveness_s_;
+    const bool missing_only = wall_s - tick_wall_s > liveness_s_ && m.heard && m.last.utime >= utime && !m.last.busy;
+    if ((!silent && !missing_only) || !Waiting(m, utime)) continue;
+    if (silent) {
       m.lost = true;
       lost.push_back(name);
-    } else if (wall_s - tick_wall_s > liveness_s_ && m.heard && m.last.utime >= utime && !m.last.busy) {
-      if (forgiven) forgiven->push_back(why);
+    } else {
+      if (forgiven) forgiven->push_back(Holds(name, m, utime));
       ForgiveMissing(m);
     }
   }

@@ -44,7 +44,7 @@ class Barrier {
 
   // A report from a process; reports from non-members are ignored. Wall seconds are for
   // liveness only.
-  void Report(const SyncReport& report, double wall_s);
+  void Report(SyncReport report, double wall_s);
 
   // Every member has reported at least once (the clock may start).
   bool AllHeard() const;
@@ -85,6 +85,8 @@ class Barrier {
   std::int64_t Missing(const Member& m, const std::string& channel, const Member& pub) const;
   // Forgives every message `m` misses now (adds it to `excused`).
   void ForgiveMissing(Member& m);
+  // Whether `m` holds the clock at `utime` (Holds is its reason in words).
+  bool Waiting(const Member& m, std::int64_t utime) const;
   // "" when `name` does not hold the clock at `utime`, else why it does.
   std::string Holds(const std::string& name, const Member& m, std::int64_t utime) const;
 

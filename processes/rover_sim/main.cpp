@@ -353,7 +353,9 @@ int main(int argc, char** argv) {
             std::cerr << "rover_sim: the clock waits at " << t << ": " << barrier.Holding(t) << "\n";
             last_note = proc.wall_seconds();
           }
-          HandleEither(proc.bus().lcm(), &sync_bus, 2);
+          // Woken by any report or message; the timeout serves only the wall-time rules
+          // above (0.5 s and more), so it need not spin.
+          HandleEither(proc.bus().lcm(), &sync_bus, 20);
         }
         if (proc.stopping()) break;  // stopped while waiting: the instant is not finished
         // 2. No faster than `rate` times the wall clock.

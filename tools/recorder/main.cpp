@@ -63,6 +63,7 @@ constexpr int kLcmQueueCapacity = 100000;          // messages LCM may hold for 
 constexpr int kReportsPerSecond = 20;              // loss lines on stderr, then a count
 
 std::atomic<bool> g_stop{false};
+const std::uint32_t kClockSource = rover::bus::PublisherId("rover_sim");
 void OnSignal(int) { g_stop = true; }
 
 // LCM's dispatch thread: copies each message into the queue and nothing else (in virtual
@@ -85,7 +86,6 @@ class Receiver {
     }
     // LCM's own probe, sent whenever a process opens the bus: when is up to the scheduler.
     if (channel == "LCM_SELF_TEST") return;
-    changed_ = true;
     // The instant's batch is bounded per channel as the queue is (a flood cannot make it
     // grow without end while the clock waits); a message dropped here is counted.
     std::size_t& held_bytes = held_bytes_[channel];
@@ -95,18 +95,24 @@ class Receiver {
     }
     held_bytes += e.data.size();
     Held h{{channel, 0u, 0, arrivals_++}, std::move(e)};
+    bool due = true;
     if (const auto* type = rover::logcheck::FindChannel(channel)) {
       const auto read = rover::logcheck::ReadStamp(*type, h.event.data.data(), h.event.data.size());
       if (read.stamp) {
+        // Worth a sync report unless it is rover_sim's next instant, sent just before the
+        // clock message that starts it (Bus::TakeReportDue says why).
+        due = read.stamp->publisher_id != kClockSource || read.stamp->utime <= instant_ ||
+              channel == rover::channels::kClock;
         auto& seen = received_[channel][read.stamp->publisher_id];
         seen = std::max(seen, read.stamp->count + 1);
         h.key = {channel, read.stamp->publisher_id, read.stamp->count, 0};
-        if (channel == rover::channels::kClock && read.stamp->publisher_id == rover::bus::PublisherId("rover_sim") &&
+        if (channel == rover::channels::kClock && read.stamp->publisher_id == kClockSource &&
             read.stamp->utime > instant_) {
           FlushInstant(read.stamp->utime);
         }
       }
     }
+    if (due) changed_ = true;
     // A heartbeat stamped after this instant overtook the clock message of its own (it
     // can on a multi-core computer): it waits for its instant (Bus::SealBatch says why).
     if (channel == rover::channels::kHeartbeat && instant_ > 0) {

@@ -268,7 +268,10 @@ int main(int argc, char** argv) {
     // the set too, so that the sequence goes in at the first instant and the log holds
     // every message of every instant, whatever the machine's load.
     const bool virtual_time = deployment.time == "virtual";
-    if (virtual_time) bus.clock().set_virtual(true);
+    if (virtual_time) {
+      bus.clock().set_virtual(true);
+      bus.set_time_source("rover_sim");  // what is worth a sync report (Bus::TakeReportDue)
+    }
     const std::vector<std::string> env = {"ROVER_LCM_URL=" + url, "ROVER_TIME=" + deployment.time};
     rover::bus::SyncSender sync(url);
     std::int64_t instant = -1;  // the rover time the runner has finished (-1: before the clock)
@@ -381,16 +384,14 @@ int main(int argc, char** argv) {
         // One instant at a time: what came in it is counted, then the runner reports it
         // finished. It ends 2 s of rover time after the final status (the last messages:
         // stop, final pose, truth) by not finishing that instant: the clock stops there.
-        bool moved = false;
         if (bus.Handle(20)) {
           const auto burst_end = wall() + 0.02;
           while (wall() < burst_end && bus.Handle(0)) {
           }
-          moved = true;
         }
         if (final_status && !final_utime) final_utime = final_status->utime;  // the executor's instant
         if (final_utime && clock_seen >= *final_utime + 2000000) break;
-        if (moved || wall() - last_sync > 0.25) {
+        if (bus.TakeReportDue() || clock_seen != instant || wall() - last_sync > 0.25) {
           instant = clock_seen;
           send_sync();
           last_sync = wall();

@@ -11,6 +11,7 @@
 #include <rover_msgs/step_report_t.hpp>
 #include <rover_msgs/wheel_odometry_t.hpp>
 #include <rover_msgs/imu_t.hpp>
+#include <rover_msgs/rover_clock_t.hpp>
 
 #include <cmath>
 #include <stdexcept>
@@ -233,6 +234,74 @@ TEST(Bus, PublishStampsPublisherAndCountPerChannel) {
   const std::int64_t id = static_cast<std::int64_t>(rover::bus::PublisherId("state_estimator")) << 32;
   EXPECT_EQ(seqs, (std::vector<std::int64_t>{id, id + 1, id + 2}));
   EXPECT_NE(rover::bus::PublisherId("state_estimator"), rover::bus::PublisherId("rover_sim"));
+}
+
+// Virtual time: a new sync report is due only for what can hold the current instant. The
+// time source publishes nothing while the clock waits, so its messages stamped after its
+// latest clock message are the next instant's (sent just before the clock that starts it).
+TEST(Bus, OnlyWhatCanHoldTheCurrentInstantMakesASyncReportDue) {
+  Bus bus("memq://");
+  bus.set_time_source("rover_sim");
+  bus.Subscribe<rover_msgs::rover_clock_t>(rover::channels::kClock, [](const rover_msgs::rover_clock_t&) {});
+  bus.Subscribe<rover_msgs::imu_t>(rover::channels::kImu, [](const rover_msgs::imu_t&) {});
+  bus.Subscribe<rover_msgs::pose_t>(rover::channels::kPose, [](const rover_msgs::pose_t&) {});
+  auto handle_all = [&] {
+    while (bus.Handle(0)) {
+    }
+  };
+  auto clock_from = [&](const std::string& publisher, std::int64_t utime) {
+    bus.set_publisher(publisher);
+    rover_msgs::rover_clock_t c{};
+    c.utime = utime;
+    c.mode = rover_msgs::rover_clock_t::MODE_VIRTUAL;
+    bus.Publish(rover::channels::kClock, c);
+    handle_all();
+  };
+  auto imu_from = [&](const std::string& publisher, std::int64_t utime) {
+    bus.set_publisher(publisher);
+    rover_msgs::imu_t m{};
+    m.utime = utime;
+    m.orientation[0] = 1;
+    bus.Publish(rover::channels::kImu, m);
+    handle_all();
+  };
+  EXPECT_TRUE(bus.TakeReportDue()) << "before anything: report";
+  EXPECT_FALSE(bus.TakeReportDue()) << "taking it clears it";
+  clock_from("rover_sim", 1'100'000);
+  EXPECT_TRUE(bus.TakeReportDue()) << "the clock starts an instant";
+  imu_from("rover_sim", 1'150'000);
+  imu_from("rover_sim", 1'200'000);
+  EXPECT_FALSE(bus.TakeReportDue()) << "the next instant's IMU cannot hold this one";
+  imu_from("rover_sim", 1'100'000);
+  EXPECT_TRUE(bus.TakeReportDue()) << "stamped at the clock: it can";
+  imu_from("state_estimator", 1'200'000);
+  EXPECT_TRUE(bus.TakeReportDue()) << "any other publisher's message can, whatever its stamp";
+  bus.set_publisher("state_estimator");
+  rover_msgs::pose_t pose{};
+  pose.utime = 1'150'000;
+  pose.orientation[0] = 1;
+  bus.Publish(rover::channels::kPose, pose);
+  handle_all();
+  EXPECT_TRUE(bus.TakeReportDue());
+  clock_from("rover_sim", 1'200'000);
+  EXPECT_TRUE(bus.TakeReportDue());
+  imu_from("rover_sim", 1'200'000);
+  EXPECT_TRUE(bus.TakeReportDue()) << "the clock has reached its stamp";
+}
+
+// Without a time source (a real clock), every message is worth a report.
+TEST(Bus, WithoutATimeSourceEveryMessageMakesAReportDue) {
+  Bus bus("memq://");
+  bus.set_publisher("rover_sim");
+  bus.Subscribe<rover_msgs::imu_t>(rover::channels::kImu, [](const rover_msgs::imu_t&) {});
+  EXPECT_TRUE(bus.TakeReportDue());
+  rover_msgs::imu_t m{};
+  m.utime = 5'000'000;
+  m.orientation[0] = 1;
+  bus.Publish(rover::channels::kImu, m);
+  while (bus.Handle(0)) {
+  }
+  EXPECT_TRUE(bus.TakeReportDue());
 }
 
 TEST(Bus, FarFutureOrFarPastTimesAreDroppedAndNeverMoveTheClock) {
