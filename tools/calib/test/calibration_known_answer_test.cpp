@@ -22,6 +22,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 using namespace rover;
 namespace fs = std::filesystem;
@@ -204,11 +205,12 @@ const cv::TermCriteria kUntilConverged(cv::TermCriteria::COUNT + cv::TermCriteri
 // OpenCV's calibration with the true model's form: k1 k2 p1 p2 (k3 held at 0; free, it
 // is fitted to the corners' errors and bends the image's corners, where no board corner
 // is, by up to 0.7 px).
-Calibration Calibrate(const std::vector<View>& views, Side View::*side, Placed placed, const Chessboard& board) {
+Calibration Calibrate(const std::vector<View>& views, Side View::*side, std::optional<Placed> placed,
+                      const Chessboard& board) {
   std::vector<std::vector<cv::Point3f>> object;
   std::vector<std::vector<cv::Point2f>> image;
   for (const auto& v : views) {
-    if (!(v.*side).seen || v.placed != placed) continue;
+    if (!(v.*side).seen || (placed && v.placed != *placed)) continue;
     object.push_back(BoardPoints(board));
     image.push_back((v.*side).found);
   }
@@ -263,8 +265,8 @@ std::vector<cv::Point2f> RefineFrontoParallel(const cv::Mat& image, const Chessb
 // Calibrate on the views placed for the camera, refine the corners of every view it sees
 // through the result (the board's pose from the calibration, or for a view placed for the
 // other camera from solvePnP through it), and calibrate again.
-Calibration CalibrateAndRefine(std::vector<View>& views, Side View::*side, Placed placed, const Chessboard& board,
-                               int rounds) {
+Calibration CalibrateAndRefine(std::vector<View>& views, Side View::*side, std::optional<Placed> placed,
+                               const Chessboard& board, int rounds) {
   Calibration c = Calibrate(views, side, placed, board);
   for (int round = 0; round < rounds; ++round) {
     std::size_t k = 0;
@@ -272,7 +274,7 @@ Calibration CalibrateAndRefine(std::vector<View>& views, Side View::*side, Place
       Side& s = v.*side;
       if (!s.seen) continue;
       cv::Mat rvec, tvec;
-      if (v.placed == placed) {
+      if (!placed || v.placed == *placed) {
         rvec = c.rvecs[k];
         tvec = c.tvecs[k];
         ++k;
@@ -299,7 +301,7 @@ TEST(CalibrationKnownAnswer, OpenCvCalibrationOfRenderedViewsRecoversTheTrueRigW
   const DetectionError detected = ErrorOf(views);
   // One round of refinement: a second moves the figures below by under 0.01 px.
   const Calibration left = CalibrateAndRefine(views, &View::left, Placed::kLeft, board, 1);
-  const Calibration right = CalibrateAndRefine(views, &View::right, Placed::kRight, board, 1);
+  const Calibration right = CalibrateAndRefine(views, &View::right, std::nullopt, board, 1);
   const DetectionError refined = ErrorOf(views);
   std::cout << "calibrated by " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()
             << " s\n";
