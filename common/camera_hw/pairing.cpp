@@ -1,5 +1,6 @@
 #include "camera_hw/stereo_source.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
@@ -38,6 +39,17 @@ StereoFrames PairFrames(const std::function<Frame(Side)>& next, std::int64_t tol
     }
     ++pair.advances;
   }
+}
+
+ExposureTimes ExposureUtimes(const StereoFrames& pair, std::int64_t utime) {
+  const std::int64_t right_minus_left_us =
+      static_cast<std::int64_t>(std::llround(static_cast<double>(pair.right.timestamp_ns - pair.left.timestamp_ns) / 1e3));
+  ExposureTimes t;
+  // The left one half the difference before the mean (rounded down, so that the two stay
+  // exactly the difference apart).
+  t.left_utime = utime - static_cast<std::int64_t>(std::floor(static_cast<double>(right_minus_left_us) / 2.0));
+  t.right_utime = t.left_utime + right_minus_left_us;
+  return t;
 }
 
 }  // namespace rover::camera_hw

@@ -51,4 +51,15 @@ inline const char* SideName(Side s) { return s == Side::kLeft ? "left" : "right"
 StereoFrames PairFrames(const std::function<Frame(Side)>& next, std::int64_t tolerance_ns,
                         int max_advances, const std::string& source_name);
 
+// When each image of `pair` was exposed, in rover time: the two timestamps keep their
+// difference (rounded to microseconds) and their mean becomes `utime`, the pair's capture
+// time in rover time. A camera's clock (host or device, see the sources' options) has its
+// own epoch; only the difference between the two is carried over, so that a
+// STEREO_FRAME says how far apart its images were taken (stereo_frame_t left_utime,
+// right_utime).
+struct ExposureTimes {
+  std::int64_t left_utime = 0, right_utime = 0;
+};
+ExposureTimes ExposureUtimes(const StereoFrames& pair, std::int64_t utime);
+
 }  // namespace rover::camera_hw

@@ -42,7 +42,10 @@ namespace {
 struct CapturedPair {
   cv::Mat left, right;
   geometry::StereoRig rig;
-  std::int64_t utime = 0;
+  std::int64_t utime = 0;  // 0: the request's bus time
+  // Real cameras: each image's own timestamp (ns, the camera's clock), to carry their
+  // difference into the frame's left_utime and right_utime. Unset: both at the capture time.
+  std::optional<camera_hw::StereoFrames> timestamps;
 };
 
 // A source of stereo pairs. `truth` is given only to the simulator source.
@@ -88,7 +91,7 @@ class SimulatedCameras : public ImageSource {
     T.linear() = bus::QuaternionFromArray(truth.orientation).toRotationMatrix();
     T.translation() = Eigen::Vector3d(truth.position[0], truth.position[1], truth.position[2]);
     auto images = renderer_.RenderPair(world_, rig_, T, frame_id);
-    return {images.left, images.right, images.rig, truth.utime};
+    return {images.left, images.right, images.rig, truth.utime, std::nullopt};
   }
 
  private:
@@ -202,7 +205,12 @@ class HardwareCameras : public ImageSource {
                                  " (capture.rig against the region and binning)");
       }
     }
-    return {frames.left.image, frames.right.image, rig_, 0};  // stamped with the bus time of the request
+    // Stamped with the bus time of the request; each image's exposure from its own timestamp.
+    CapturedPair pair{frames.left.image, frames.right.image, rig_, 0, std::nullopt};
+    frames.left.image.release();
+    frames.right.image.release();
+    pair.timestamps = std::move(frames);
+    return pair;
   }
 
  private:
@@ -303,6 +311,12 @@ int main(int argc, char** argv) {
       const auto pair = cameras->Capture(request.frame_id);
       rover_msgs::stereo_frame_t frame{};
       frame.utime = pair.utime != 0 ? pair.utime : now;
+      frame.left_utime = frame.right_utime = frame.utime;  // one renderer, one dataset pair: at once
+      if (pair.timestamps) {
+        const auto exposed = camera_hw::ExposureUtimes(*pair.timestamps, frame.utime);
+        frame.left_utime = exposed.left_utime;
+        frame.right_utime = exposed.right_utime;
+      }
       frame.frame_id = request.frame_id;
       frame.purpose = request.purpose;
       // The two images compress at once on two cores (PNG encoding is most of a

@@ -21,6 +21,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
+#include <iostream>
 #include <iterator>
 #include <optional>
 
@@ -116,6 +117,11 @@ TEST(CameraCaptureGenicam, FakeGigECamerasOnTheBusSurviveAKill) {
     EXPECT_EQ(RampMismatches(*image), 0);
   }
   EXPECT_EQ(frame->left_model.width, 256);
+  // Each image's exposure, from its camera's own timestamp: apart by what the pairing
+  // accepted, centred on the capture time.
+  EXPECT_LE(std::llabs(frame->right_utime - frame->left_utime), 110'000);
+  EXPECT_LE(std::llabs(frame->left_utime + frame->right_utime - 2 * frame->utime), 1);
+  std::cout << "right exposed " << (frame->right_utime - frame->left_utime) / 1e3 << " ms after left\n";
 
   // The capture process's heartbeat says whether its last capture failed (the camera
   // contract, docs/HARDWARE.md): OK now, DEGRADED with the failure after the kill.

@@ -2,9 +2,13 @@
 // rover_sim (mobility, imu, wheel_odometry), the sample mobility driver, and camera_capture
 // on the simulator source; it fails, naming the broken rule, against drivers made here
 // with one fault each: a wheel distance in millimetres, no dead-man, no answer to STOP, an
-// IMU with Z up, a camera that fails in silence.
+// IMU with Z up, a driver that obeys commands not signed with the key, a camera that fails
+// in silence, a camera whose two images are taken too far apart.
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
+#include "bus/signing.hpp"
+#include "config/yaml_config.hpp"
+#include "geometry/camera_io.hpp"
 #include "integration/run_support.hpp"
 #include "launch/process_set.hpp"
 #include "mobility/deadman.hpp"
@@ -15,6 +19,7 @@
 #include <rover_msgs/imu_t.hpp>
 #include <rover_msgs/mobility_command_t.hpp>
 #include <rover_msgs/mobility_status_t.hpp>
+#include <rover_msgs/stereo_frame_t.hpp>
 #include <rover_msgs/wheel_odometry_t.hpp>
 
 #include <gtest/gtest.h>
@@ -66,7 +71,8 @@ TEST(ConformanceKit, RoverSimPassesMobilityImuAndWheelOdometry) {
   const auto mobility = Kit(rig.url(), "mobility --config configs/rover.yaml");
   EXPECT_EQ(mobility.exit_code, 0);
   EXPECT_TRUE(Has(mobility, "ok   mobility.deadman.stop"));
-  EXPECT_TRUE(Has(mobility, "conformance mobility: PASS (25 held, 0 failed, 0 not checked)"));
+  EXPECT_TRUE(Has(mobility, "conformance mobility: PASS (25 held, 0 failed, 2 not checked)"));
+  EXPECT_TRUE(Has(mobility, "--   mobility.auth.unsigned (not checked: needs --key)"));
   const auto imu = Kit(rig.url(), "imu --config configs/rover.yaml --listen-s 3 --drive");
   EXPECT_EQ(imu.exit_code, 0);
   EXPECT_TRUE(Has(imu, "ok   imu.frame.gravity"));
@@ -90,7 +96,9 @@ TEST(ConformanceKit, WithKeysOnRoverSimPassesAKitThatSignsAndRefusesOneThatDoesN
   SimRig rig("conformance_sim_keys", 49, false, key);
   const auto signed_kit = Kit(rig.url(), "mobility --config configs/rover.yaml --key " + key);
   EXPECT_EQ(signed_kit.exit_code, 0);
-  EXPECT_TRUE(Has(signed_kit, "conformance mobility: PASS (25 held, 0 failed, 0 not checked)"));
+  EXPECT_TRUE(Has(signed_kit, "conformance mobility: PASS (27 held, 0 failed, 0 not checked)"));
+  EXPECT_TRUE(Has(signed_kit, "ok   mobility.auth.unsigned"));
+  EXPECT_TRUE(Has(signed_kit, "ok   mobility.auth.wrong_key"));
   // Without the key its commands are refused, and the kit sees a driver that does not
   // answer: it fails, naming the rules.
   const auto unsigned_kit = Kit(rig.url(), "mobility --config configs/rover.yaml");
@@ -106,7 +114,7 @@ TEST(ConformanceKit, SampleDriverPasses) {
   set.Start({"mobility_driver", "sample_mobility_driver", {}}, {"ROVER_LCM_URL=" + url, "ROVER_TIME=real"});
   const auto mobility = Kit(url, "mobility");
   EXPECT_EQ(mobility.exit_code, 0);
-  EXPECT_TRUE(Has(mobility, "conformance mobility: PASS (25 held, 0 failed, 0 not checked)"));
+  EXPECT_TRUE(Has(mobility, "conformance mobility: PASS (25 held, 0 failed, 2 not checked)"));
   EXPECT_EQ(Kit(url, "imu --listen-s 2 --drive").exit_code, 0);
   EXPECT_EQ(Kit(url, "wheel_odometry --listen-s 2 --drive").exit_code, 0);
   set.StopAll();
@@ -114,11 +122,15 @@ TEST(ConformanceKit, SampleDriverPasses) {
 
 // A mobility driver on this test's thread: the sample driver's logic, wired to the bus
 // with one fault.
-enum class Fault { kMillimetres, kNoDeadman, kIgnoresStop, kImuZUp };
+// kIgnoresKey: no key at all, so it obeys anyone; kObeysUnsigned: it holds the key and
+// checks the tags it is given, but obeys a command with none (bus::MakeBusAuth's
+// reject_unsigned false).
+enum class Fault { kMillimetres, kNoDeadman, kIgnoresStop, kImuZUp, kIgnoresKey, kObeysUnsigned };
 
 class BrokenDriver {
  public:
-  BrokenDriver(const std::string& url, Fault fault) : url_(url), fault_(fault), thread_([this] { Loop(); }) {}
+  BrokenDriver(const std::string& url, Fault fault, const std::string& key = "")
+      : url_(url), fault_(fault), key_(key), thread_([this] { Loop(); }) {}
   ~BrokenDriver() {
     stop_ = true;
     thread_.join();
@@ -145,6 +157,9 @@ class BrokenDriver {
   void Loop() {
     bus::Bus bus(url_);
     bus.set_publisher("mobility_driver");
+    if (fault_ == Fault::kObeysUnsigned) {
+      bus.set_auth(bus::MakeBusAuth(auth::Key::LoadFile(key_), "mobility_driver", /*reject_unsigned=*/false));
+    }
     sample_driver::SampleMobility drive;
     mobility::Deadman deadman;
     bus.Subscribe<rover_msgs::mobility_command_t>(channels::kMobilityCommand, [&](const rover_msgs::mobility_command_t& m) {
@@ -201,9 +216,46 @@ class BrokenDriver {
 
   std::string url_;
   Fault fault_;
+  std::string key_;
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
+
+std::string FreshKey(const std::string& name) {
+  const std::string key = OutDir(name) + "/rover.key";
+  std::filesystem::remove(key);
+  EXPECT_EQ(RunCommand(Bin("rover_seq") + " keygen " + key).exit_code, 0);
+  return key;
+}
+
+TEST(ConformanceKit, WithKeysOnADriverThatObeysUnsignedOrForeignCommandsFailsTheAuthRules) {
+  const std::string key = FreshKey("conformance_ignores_key");
+  {
+    // No key at all: it obeys the kit's signed commands (every other rule holds), and the
+    // unsigned and the foreign ones too.
+    const std::string url = PrivateUrl(51);
+    BrokenDriver driver(url, Fault::kIgnoresKey);
+    const auto r = Kit(url, "mobility --key " + key);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_TRUE(Has(r, "FAIL mobility.auth.unsigned: expected command "));
+    EXPECT_TRUE(Has(r, " (an ARC unsigned) not obeyed: no MOVING or DONE, wheels still; seen MOVING for command "));
+    EXPECT_TRUE(Has(r, "FAIL mobility.auth.wrong_key: expected command "));
+    // The signed ones it obeys as it should (the dead-man's timing, on a loaded machine, is
+    // not this test's business).
+    EXPECT_TRUE(Has(r, "ok   mobility.arc.done"));
+    EXPECT_TRUE(Has(r, "ok   mobility.stop.answer"));
+  }
+  {
+    // The key, checked when a tag comes, but an untagged command obeyed.
+    const std::string url = PrivateUrl(52);
+    BrokenDriver driver(url, Fault::kObeysUnsigned, key);
+    const auto r = Kit(url, "mobility --key " + key);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_TRUE(Has(r, "FAIL mobility.auth.unsigned: expected command "));
+    EXPECT_TRUE(Has(r, "ok   mobility.auth.wrong_key"));
+    EXPECT_TRUE(Has(r, "ok   mobility.arc.done"));
+  }
+}
 
 TEST(ConformanceKit, WheelDistanceInMillimetresFailsTheDistanceUnit) {
   const std::string url = PrivateUrl(43);
@@ -253,6 +305,7 @@ TEST(ConformanceKit, CameraCapturePassesAndASilentFailureDoesNot) {
     EXPECT_EQ(r.exit_code, 0);
     EXPECT_TRUE(Has(r, "ok   camera.pairing"));
     EXPECT_TRUE(Has(r, "ok   camera.time.capture"));
+    EXPECT_TRUE(Has(r, "ok   camera.time.pair"));
     EXPECT_TRUE(rig.Running("camera_capture"));
   }
   // A capture process that heartbeats OK and never answers.
@@ -278,6 +331,101 @@ TEST(ConformanceKit, CameraCapturePassesAndASilentFailureDoesNot) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(Has(r, "FAIL camera.answer: expected STEREO_FRAME "));
   EXPECT_TRUE(Has(r, "FAIL camera.frames: expected at least one STEREO_FRAME; seen none for 1 requests"));
+}
+
+// A capture process on this test's thread that answers every request with a well-formed
+// frame whose right image was exposed `skew_us` after its left one.
+class SkewedCamera {
+ public:
+  SkewedCamera(const std::string& url, std::int64_t skew_us)
+      : url_(url), skew_us_(skew_us), thread_([this] { Loop(); }) {}
+  ~SkewedCamera() {
+    stop_ = true;
+    thread_.join();
+  }
+
+ private:
+  static std::int64_t Now() {
+    return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  }
+  static rover_msgs::camera_model_t Model(const geometry::CameraModel& m) {
+    rover_msgs::camera_model_t out{};
+    out.type = m.type();
+    out.width = m.width();
+    out.height = m.height();
+    out.params = m.Params();
+    out.num_params = static_cast<std::int32_t>(out.params.size());
+    return out;
+  }
+  static rover_msgs::image_t Gray(int w, int h) {
+    rover_msgs::image_t img{};
+    img.width = w;
+    img.height = h;
+    img.encoding = rover_msgs::image_t::ENCODING_GRAY8;
+    img.data.assign(static_cast<std::size_t>(w) * h, 128);
+    img.size = static_cast<std::int32_t>(img.data.size());
+    return img;
+  }
+  void Loop() {
+    const auto rig = geometry::LoadStereoRig(config::ConfigNode::FromString(
+        "left: {type: pinhole, width: 64, height: 48, fx: 60, fy: 60, cx: 31.5, cy: 23.5, position: [0, -0.1, -1], rpy_deg: [0, 0, 0]}\n"
+        "right: {type: pinhole, width: 64, height: 48, fx: 60, fy: 60, cx: 31.5, cy: 23.5, position: [0, 0.1, -1], rpy_deg: [0, 0, 0]}\n",
+        "rig"));
+    bus::Bus bus(url_);
+    bus.set_publisher("camera_capture");
+    bus.Subscribe<rover_msgs::capture_request_t>(channels::kCaptureRequest, [&](const rover_msgs::capture_request_t& r) {
+      rover_msgs::stereo_frame_t f{};
+      f.utime = Now();
+      f.frame_id = r.frame_id;
+      f.purpose = r.purpose;
+      f.left = Gray(64, 48);
+      f.right = Gray(64, 48);
+      f.left_model = Model(*rig.left);
+      f.right_model = Model(*rig.right);
+      f.pose_at_capture.orientation[0] = 1;
+      f.left_utime = f.utime - skew_us_ / 2;
+      f.right_utime = f.left_utime + skew_us_;
+      bus.Publish(channels::kStereoFrame, f);
+    });
+    std::int64_t seq = 0;
+    double next_heartbeat = 0;
+    while (!stop_) {
+      bus.Handle(10);
+      const double now = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+      if (now >= next_heartbeat) {
+        rover_msgs::heartbeat_t hb{};
+        hb.utime = Now();
+        hb.process = "camera_capture";
+        hb.seq = seq++;
+        bus.Publish(channels::kHeartbeat, hb);
+        next_heartbeat = now + 0.25;
+      }
+    }
+  }
+
+  std::string url_;
+  std::int64_t skew_us_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+TEST(ConformanceKit, APairTakenFurtherApartThanTheToleranceFailsThePairTime) {
+  const std::string url = PrivateUrl(50);
+  SkewedCamera camera(url, 7500);  // the right image 7.5 ms after the left
+  // Within a tolerance of 10 ms it passes (so the frames are otherwise good) ...
+  const auto loose = Kit(url, "camera --requests 2 --timeout-s 5 --pair-tolerance-ms 10");
+  EXPECT_EQ(loose.exit_code, 0);
+  EXPECT_TRUE(Has(loose, "ok   camera.time.pair"));
+  // ... and against genicam's 2 ms, from the config the capture process runs with.
+  const auto r = Kit(url, "camera --requests 2 --timeout-s 5 --config configs/cameras/capture_genicam.yaml");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(Has(r, "FAIL camera.time.pair: expected left_utime and right_utime within 2.000 ms of each other, "
+                     "both within 0.50 s of utime; seen frame "));
+  EXPECT_TRUE(Has(r, ": right exposed 7.500 ms after left"));
+  EXPECT_TRUE(Has(r, "ok   camera.pairing"));
+  EXPECT_TRUE(Has(r, "ok   camera.time.capture"));
+  EXPECT_TRUE(Has(r, "conformance camera: FAIL (9 held, 1 failed, 0 not checked)"));
 }
 
 }  // namespace

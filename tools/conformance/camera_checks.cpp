@@ -96,6 +96,23 @@ void CheckFrame(const Received<stereo_frame_t>& f, const SentRequest* request, c
   report.Expect(pairing.empty(), "camera.pairing", "left and right alike, the right camera to the right",
                 which + ": " + pairing);
 
+  // The pair taken at once: each image's own exposure time, the two within the pairing
+  // tolerance of each other and both near the frame's capture time (a source that leaves
+  // them unset, 0, fails here rather than passing as "equal").
+  const double skew_ms = static_cast<double>(m.right_utime - m.left_utime) / 1e3;
+  const auto near_us = static_cast<std::int64_t>(limits.clock_tolerance_s * 1e6);
+  std::string pair_time;
+  if (std::llabs(m.left_utime - m.utime) > near_us || std::llabs(m.right_utime - m.utime) > near_us) {
+    pair_time = which + ": left_utime " + std::to_string(m.left_utime) + ", right_utime " +
+                std::to_string(m.right_utime) + " with utime " + std::to_string(m.utime);
+  } else if (!(std::abs(skew_ms) <= limits.pair_tolerance_ms)) {
+    pair_time = which + ": right exposed " + Num(skew_ms, 3) + " ms after left";
+  }
+  report.Expect(pair_time.empty(), "camera.time.pair",
+                "left_utime and right_utime within " + Num(limits.pair_tolerance_ms, 3) + " ms of each other, both within " +
+                    Num(limits.clock_tolerance_s, 2) + " s of utime",
+                pair_time);
+
   if (request) {
     const auto tolerance = static_cast<std::int64_t>(limits.clock_tolerance_s * 1e6);
     report.Expect(m.utime >= request->utime - tolerance && m.utime <= f.at.clock_utime + tolerance,

@@ -32,6 +32,7 @@ struct CameraLimits {
   double answer_s = 20.0;          // a request's frame, or the failure status
   double clock_tolerance_s = 0.5;
   int width = 0, height = 0;       // expected image size; 0: any
+  double pair_tolerance_ms = 2.0;  // left_utime and right_utime at most this far apart
 };
 
 void CheckCamera(const CameraTrace& trace, const CameraLimits& limits, Report& report);

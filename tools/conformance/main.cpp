@@ -20,10 +20,13 @@ const char* kSummary =
     "  mobility        MOBILITY_COMMAND in, MOBILITY_STATUS out: status rate, units, timestamps, the\n"
     "                  answer to STOP, the dead-man, bad commands. MOVES THE ROVER a few centimetres:\n"
     "                  lift the wheels or clear the bench. No sequence_executor may run meanwhile.\n"
+    "                  With --key (keys on): also that an unsigned command and one signed with\n"
+    "                  another key are not obeyed.\n"
     "  imu             IMU: rate, units, frame (Z down), timestamps; the rover at rest (--drive: and\n"
     "                  in a turn, which moves the rover)\n"
     "  wheel_odometry  WHEEL_ODOMETRY: rate, fields, timestamps at rest; --drive: units and wheel signs\n"
-    "  camera          CAPTURE_REQUEST in, STEREO_FRAME out: sizes, pairing, timestamps, status on failure\n"
+    "  camera          CAPTURE_REQUEST in, STEREO_FRAME out: sizes, pairing, timestamps (each image's\n"
+    "                  exposure within --pair-tolerance-ms of the other's), status on failure\n"
     "usage: rover_conformance NAME [options]. Prints one line per rule (ok or FAIL: expected; seen);\n"
     "exit code 0 when every rule held, 1 when one failed, 2 on a bad argument.";
 
@@ -39,6 +42,15 @@ double NumberOption(const bus::Process& proc, const std::string& flag, double fa
 }
 
 
+// The capture process's own pairing tolerance, as its config gives it: that of the
+// hardware source it uses (with that source's default), else 2 ms.
+double PairingTolerance(const config::ConfigNode& capture) {
+  std::string source = "sim";
+  capture.Get("source", source);
+  double ms = source == "gstreamer" ? 5.0 : 2.0;  // camera_hw's defaults (camera_options.hpp)
+  if (source == "genicam" || source == "gstreamer") capture[source].Get("pairing_tolerance_ms", ms, 0.0, 10000.0);
+  return ms;
+}
 
 }  // namespace
 
@@ -67,6 +79,7 @@ int main(int argc, char** argv) {
                        {"--requests", "N", "camera: captures to ask for (default 3)"},
                        {"--timeout-s", "S", "camera: seconds a capture may take (default 20)"},
                        {"--size", "WxH", "camera: the image size expected (default: any)"},
+                       {"--pair-tolerance-ms", "MS", "camera: how far apart a pair's two exposures may be (default the config's capture.genicam or capture.gstreamer pairing_tolerance_ms, else 2)"},
                        {"--capture-process", "NAME", "camera: the capture process's heartbeat name (default camera_capture)"},
                        {"--clock-tolerance-s", "S", "how far a utime may be from rover time (default 0.5)"}});
     const auto& contracts = conformance::ContractNames();
@@ -116,6 +129,8 @@ int main(int argc, char** argv) {
       conformance::CameraLimits limits;
       limits.answer_s = NumberOption(proc, "--timeout-s", 20.0, 0.1, 3600.0);
       limits.clock_tolerance_s = tolerance;
+      limits.pair_tolerance_ms = PairingTolerance(root["capture"]);
+      limits.pair_tolerance_ms = NumberOption(proc, "--pair-tolerance-ms", limits.pair_tolerance_ms, 0.0, 10000.0);
       if (auto v = proc.option("--size")) {
         if (std::sscanf(v->c_str(), "%dx%d", &limits.width, &limits.height) != 2 || limits.width <= 0 ||
             limits.height <= 0) {
@@ -132,8 +147,9 @@ int main(int argc, char** argv) {
     for (const auto& f : report.failures()) std::cout << conformance::FailureLine(f) << "\n";
     const auto unchecked = report.Unchecked(name);
     for (const auto& id : unchecked) {
-      const bool needs_drive = conformance::NeedsDrive(name, id) && !options.drive;
-      std::cout << "--   " << id << (needs_drive ? " (not checked: needs --drive)" : " (not checked: an earlier step failed)")
+      const std::string needs = conformance::NeededOption(name, id);
+      const bool missing = (needs == "--drive" && !options.drive) || (needs == "--key" && !proc.bus().has_auth());
+      std::cout << "--   " << id << (missing ? " (not checked: needs " + needs + ")" : " (not checked: an earlier step failed)")
                 << "\n";
     }
     std::cout << "conformance " << name << ": " << (report.ok() ? "PASS" : "FAIL") << " ("

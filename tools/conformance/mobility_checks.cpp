@@ -286,4 +286,29 @@ void CheckRefusal(const MobilityTrace& trace, std::int64_t id, const std::string
                                           : ""));
 }
 
+void CheckNotObeyed(const MobilityTrace& trace, std::int64_t id, const std::string& rule, const std::string& how,
+                    Report& report) {
+  const SentCommand* c = Sent(trace, id);
+  if (c == nullptr) return;
+  const double until = NextCommandWall(trace, id);
+  std::string obeyed;
+  if (const auto s = First(trace, id, {mobility_status_t::STATE_MOVING, mobility_status_t::STATE_DONE}, c->wall_s,
+                           until)) {
+    obeyed = Describe(*s) + " " + Num(s->at.wall_s - c->wall_s, 2) + " s after it";
+  } else {
+    std::optional<double> first_d, last_d;
+    for (const auto& o : trace.odometry) {
+      if (o.at.wall_s < c->wall_s || o.at.wall_s >= until) continue;
+      if (!first_d) first_d = o.msg.distance_m;
+      last_d = o.msg.distance_m;
+    }
+    if (first_d && std::abs(*last_d - *first_d) > 0.01) {
+      obeyed = "WHEEL_ODOMETRY distance_m went on by " + Num(*last_d - *first_d, 3) + " m";
+    }
+  }
+  report.Expect(obeyed.empty(), rule,
+                "command " + std::to_string(id) + " (an ARC " + how + ") not obeyed: no MOVING or DONE, wheels still",
+                obeyed);
+}
+
 }  // namespace rover::conformance

@@ -63,4 +63,11 @@ void CheckDeadman(const MobilityTrace& trace, std::int64_t motion_id, const Mobi
 void CheckRefusal(const MobilityTrace& trace, std::int64_t id, const std::string& rule, bool drop_allowed,
                   const MobilityLimits& limits, Report& report);
 
+// `rule` (mobility.auth.*): command `id`, a motion sent `how` (unsigned, or signed with
+// another key) to a driver that holds the deployment's key, not obeyed: no MOVING or DONE
+// for it and WHEEL_ODOMETRY still (1 cm) until the next command. Refusing it aloud (FAULT)
+// or in silence (dropped) are both fine.
+void CheckNotObeyed(const MobilityTrace& trace, std::int64_t id, const std::string& rule, const std::string& how,
+                    Report& report);
+
 }  // namespace rover::conformance

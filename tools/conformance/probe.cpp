@@ -2,6 +2,7 @@
 
 #include "bus/channels.hpp"
 #include "bus/guard.hpp"
+#include "bus/signing.hpp"
 
 #include <rover_msgs/capture_request_t.hpp>
 #include <rover_msgs/heartbeat_t.hpp>
@@ -23,6 +24,14 @@ struct RawHandler {
   std::function<void(const lcm::ReceiveBuffer*, const std::string&)> on;
   void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) { on(rbuf, channel); }
 };
+
+// A key that is not the deployment's (fixed: any other key is as wrong, and a fixed one
+// keeps the kit's commands the same from run to run).
+auth::Key NotTheDeploymentsKey() {
+  std::vector<std::uint8_t> bytes(auth::kMinKeyBytes);
+  for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<std::uint8_t>(0x5a ^ (i * 37));
+  return auth::Key::FromBytes(std::move(bytes), "the conformance kit's wrong key");
+}
 
 // A heartbeat the kit sends as the commander says so in its detail, so that another
 // commander on the bus (a running sequence_executor) can be told from the kit.
@@ -129,7 +138,7 @@ void Probe::Spin(double seconds, const std::function<bool()>& done) {
 }
 
 std::int64_t Probe::Command(std::int8_t type, double distance_m, double curvature, double turn_rad, double speed,
-                            double turn_rate) {
+                            double turn_rate, bus::Bus* via) {
   mobility_command_t c{};
   c.utime = RoverNow();
   c.command_id = ++next_command_id_;
@@ -140,7 +149,7 @@ std::int64_t Probe::Command(std::int8_t type, double distance_m, double curvatur
   c.speed_mps = speed;
   c.turn_rate_rps = turn_rate;
   mobility_.commands.push_back({c.command_id, type, distance_m, curvature, turn_rad, speed, turn_rate, Wall()});
-  bus_.Publish(channels::kMobilityCommand, c);
+  (via ? *via : bus_).Publish(channels::kMobilityCommand, c);
   return c.command_id;
 }
 
@@ -210,6 +219,22 @@ void Probe::RunMobility(const MobilityLimits& limits, Report& report) {
   Spin(1.5);
   const std::int64_t unknown = Command(7, 0.10, 0, 0, 0.05, 0);
   Spin(1.5);
+
+  // With the deployment's key: commands anyone on the network could send, which a driver
+  // must not obey. An ARC of 0.10 m unsigned (from a bus with no key), then one signed
+  // with a key that is not the deployment's.
+  std::int64_t unsigned_arc = 0, forged_arc = 0;
+  if (bus_.has_auth()) {
+    bus::Bus plain(bus_.url());
+    plain.set_publisher("rover_conformance_unsigned");
+    unsigned_arc = Command(mobility_command_t::TYPE_ARC, 0.10, 0, 0, 0.05, 0, &plain);
+    Spin(1.5);
+    bus::Bus forged(bus_.url());
+    forged.set_publisher("rover_conformance_forged");
+    forged.set_auth(bus::MakeBusAuth(NotTheDeploymentsKey(), "rover_conformance"));
+    forged_arc = Command(mobility_command_t::TYPE_ARC, 0.10, 0, 0, 0.05, 0, &forged);
+    Spin(1.5);
+  }
   Command(mobility_command_t::TYPE_STOP, 0, 0, 0, 0, 0);
   Spin(0.5);
   mobility_.end_wall_s = Wall();
@@ -226,6 +251,10 @@ void Probe::RunMobility(const MobilityLimits& limits, Report& report) {
   CheckRefusal(mobility_, negative, "mobility.bad.speed", false, limits, report);
   CheckRefusal(mobility_, nan, "mobility.bad.not_finite", true, limits, report);
   CheckRefusal(mobility_, unknown, "mobility.bad.type", true, limits, report);
+  if (unsigned_arc != 0) {
+    CheckNotObeyed(mobility_, unsigned_arc, "mobility.auth.unsigned", "unsigned", report);
+    CheckNotObeyed(mobility_, forged_arc, "mobility.auth.wrong_key", "signed with another key", report);
+  }
 }
 
 DriveRecord Probe::Drive() {

@@ -52,8 +52,9 @@ class Probe {
   // Handles messages for `seconds` of wall time or until `done()`; the commander heartbeats
   // meanwhile unless silent.
   void Spin(double seconds, const std::function<bool()>& done = nullptr);
+  // Sends a command through `via` (default: the kit's own bus, signed when it has a key).
   std::int64_t Command(std::int8_t type, double distance_m, double curvature, double turn_rad, double speed,
-                       double turn_rate);
+                       double turn_rate, bus::Bus* via = nullptr);
   void WaitForClock();
   // Drives an ARC of 0.10 m and a TURN of 0.10 rad as the commander (--drive).
   DriveRecord Drive();

@@ -37,7 +37,9 @@ const std::map<std::string, std::vector<Rule>>& Contracts() {
         {"mobility.bad.curvature", "an ARC beyond the curvature limit is refused FAULT, naming the value; nothing moves"},
         {"mobility.bad.speed", "a negative speed is refused FAULT; nothing moves"},
         {"mobility.bad.not_finite", "a NaN distance is refused FAULT or dropped (counted in the heartbeat); nothing moves"},
-        {"mobility.bad.type", "an unknown command type is refused FAULT or dropped (counted); nothing moves"}}},
+        {"mobility.bad.type", "an unknown command type is refused FAULT or dropped (counted); nothing moves"},
+        {"mobility.auth.unsigned", "--key: with keys on, an unsigned command is not obeyed; nothing moves"},
+        {"mobility.auth.wrong_key", "--key: with keys on, a command signed with another key is not obeyed; nothing moves"}}},
       {"imu",
        {{"imu.present", "IMU is published"},
         {"imu.fields", "finite rates and accelerations, a unit quaternion"},
@@ -69,7 +71,8 @@ const std::map<std::string, std::vector<Rule>>& Contracts() {
         {"camera.size", "each image has its camera model's size (and the expected size when given)"},
         {"camera.pairing", "left and right of one size and encoding; the right camera to the right of the left"},
         {"camera.time.order", "frame utimes strictly increase"},
-        {"camera.time.capture", "a frame's utime is between its request and its arrival, in rover time"}}},
+        {"camera.time.capture", "a frame's utime is between its request and its arrival, in rover time"},
+        {"camera.time.pair", "the two images' exposure times (left_utime, right_utime) agree within the pairing tolerance"}}},
   };
   return contracts;
 }
@@ -89,10 +92,13 @@ const std::vector<Rule>& RulesOf(const std::string& contract) {
   return it->second;
 }
 
-bool NeedsDrive(const std::string& contract, const std::string& rule) {
-  for (const auto& r : RulesOf(contract))
-    if (r.id == rule) return r.text.rfind("--drive:", 0) == 0;
-  return false;
+std::string NeededOption(const std::string& contract, const std::string& rule) {
+  for (const auto& r : RulesOf(contract)) {
+    if (r.id != rule) continue;
+    for (const char* option : {"--drive", "--key"})
+      if (r.text.rfind(std::string(option) + ":", 0) == 0) return option;
+  }
+  return "";
 }
 
 std::string FailureLine(const Finding& f) { return "FAIL " + f.rule + ": expected " + f.expected + "; seen " + f.seen; }

@@ -22,8 +22,9 @@ const std::vector<std::string>& ContractNames();
 // naming the contract when there is no such one.
 const std::vector<Rule>& RulesOf(const std::string& contract);
 
-// Whether a rule of `contract` is checked only with --drive (its text starts so).
-bool NeedsDrive(const std::string& contract, const std::string& rule);
+// The option without which a rule of `contract` is not checked ("--drive" or "--key": its
+// text starts so), or "".
+std::string NeededOption(const std::string& contract, const std::string& rule);
 
 struct Finding {
   std::string rule;

@@ -147,6 +147,7 @@ rover_msgs::stereo_frame_t SampleFrame(std::int64_t now, std::int64_t frame_id) 
   f.left_model = PinholeModel(kW, kH, 0.0);
   f.right_model = PinholeModel(kW, kH, 0.2);
   f.pose_at_capture = SamplePose(now);
+  f.left_utime = f.right_utime = now;
   return f;
 }
 

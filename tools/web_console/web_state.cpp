@@ -222,6 +222,7 @@ void WebState::On(const rover_msgs::stereo_frame_t& m, double) {
   left_ = m.left;
   left_frame_id_ = m.frame_id;
   left_utime_ = m.utime;
+  pair_skew_us_ = m.right_utime - m.left_utime;
   left_model_width_ = m.left_model.width;
   left_model_height_ = m.left_model.height;
   left_purpose_ = m.purpose;
@@ -494,7 +495,7 @@ std::string WebState::StateJson(double wall_now_s, const PlaybackInfo* playback)
   j.Key("image");
   if (left_) {
     j.Begin('{').Key("frame_id").Int(left_frame_id_).Key("utime").Int(left_utime_);
-    j.Key("width").Int(left_->width).Key("height").Int(left_->height);
+    j.Key("width").Int(left_->width).Key("height").Int(left_->height).Key("pair_skew_us").Int(pair_skew_us_);
     j.Key("encoding").Str(imaging::EncodingName(left_->encoding)).Key("purpose").Str(left_purpose_).End('}');
   } else {
     j.Null();

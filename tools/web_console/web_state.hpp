@@ -118,6 +118,7 @@ class WebState {
   // The newest left image and the size its camera model says it has.
   std::optional<rover_msgs::image_t> left_;
   std::int64_t left_frame_id_ = -1, left_utime_ = 0;
+  std::int64_t pair_skew_us_ = 0;  // right_utime - left_utime of that frame
   int left_model_width_ = 0, left_model_height_ = 0;
   std::string left_purpose_;
   // One cached PNG (frame id, width) -> bytes: every page asks for the same one.

@@ -75,3 +75,23 @@ TEST(Pairing, ASideThatStopsIsTheCapturesError) {
     EXPECT_STREQ(e.what(), "right: no frame");
   }
 }
+
+TEST(Pairing, ExposureTimesKeepTheDifferenceAndCentreOnTheCaptureTime) {
+  StereoFrames pair;
+  // Device clocks count from the camera's power-on: only the difference is carried over.
+  pair.left.timestamp_ns = 987'654'321'000;
+  pair.right.timestamp_ns = 987'654'321'000 + 1'500'400;  // the right 1.5004 ms later
+  const ExposureTimes t = ExposureUtimes(pair, 5'000'000);
+  EXPECT_EQ(t.right_utime - t.left_utime, 1500);
+  EXPECT_EQ(t.left_utime, 5'000'000 - 750);
+  // The right one first, by an odd number of microseconds.
+  pair.right.timestamp_ns = pair.left.timestamp_ns - 3'000;
+  const ExposureTimes u = ExposureUtimes(pair, 5'000'000);
+  EXPECT_EQ(u.right_utime - u.left_utime, -3);
+  EXPECT_LE(std::abs(u.left_utime + u.right_utime - 2 * 5'000'000), 1);
+  // Equal timestamps: both at the capture time.
+  pair.right.timestamp_ns = pair.left.timestamp_ns;
+  const ExposureTimes e = ExposureUtimes(pair, 42);
+  EXPECT_EQ(e.left_utime, 42);
+  EXPECT_EQ(e.right_utime, 42);
+}

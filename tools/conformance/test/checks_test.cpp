@@ -307,10 +307,37 @@ TEST(ConformanceCamera, FramesAnswersAndSwappedCameras) {
   f.left_model = Model(*rig.left);
   f.right_model = Model(*rig.right);
   f.pose_at_capture.orientation[0] = 1;
+  f.left_utime = 999400;  // the right exposed 1.2 ms after the left
+  f.right_utime = 1000600;
   trace.frames.push_back({{0.5, f.utime, 1100000}, f});
   trace.end_wall_s = 3.0;
   CameraLimits limits;
   limits.answer_s = 0.9;
+  {
+    Report paired;
+    CheckCamera(trace, limits, paired);
+    EXPECT_TRUE(paired.Passed("camera.time.pair"));
+    // Further apart than the pairing tolerance, either way round.
+    limits.pair_tolerance_ms = 1.0;
+    Report apart;
+    CheckCamera(trace, limits, apart);
+    EXPECT_EQ(LineOf(apart, "camera.time.pair"),
+              "FAIL camera.time.pair: expected left_utime and right_utime within 1.000 ms of each other, both within "
+              "0.50 s of utime; seen frame 11: right exposed 1.200 ms after left");
+    std::swap(trace.frames[0].msg.left_utime, trace.frames[0].msg.right_utime);
+    Report before;
+    CheckCamera(trace, limits, before);
+    EXPECT_NE(LineOf(before, "camera.time.pair").find("right exposed -1.200 ms after left"), std::string::npos);
+    limits.pair_tolerance_ms = 2.0;
+    // A source that leaves them unset.
+    trace.frames[0].msg.left_utime = trace.frames[0].msg.right_utime = 0;
+    Report unset;
+    CheckCamera(trace, limits, unset);
+    EXPECT_NE(LineOf(unset, "camera.time.pair").find("frame 11: left_utime 0, right_utime 0 with utime 1000000"),
+              std::string::npos)
+        << LineOf(unset, "camera.time.pair");
+    trace.frames[0].msg.left_utime = trace.frames[0].msg.right_utime = f.utime;
+  }
   // Request 12 got nothing, and nothing said why.
   Report silent;
   CheckCamera(trace, limits, silent);

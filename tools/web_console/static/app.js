@@ -267,7 +267,8 @@ function drawTables(s) {
         (s.playback ? '&at=' + encodeURIComponent(s.playback.at_s) : '');
     $('navcam').hidden = false;
     $('imginfo').textContent = 'frame ' + s.image.frame_id + ' (' + s.image.purpose + '), ' + s.image.width + 'x' +
-        s.image.height + ' ' + s.image.encoding;
+        s.image.height + ' ' + s.image.encoding + ', right exposed ' + (s.image.pair_skew_us / 1000).toFixed(3) +
+        ' ms after left';
   }
   $('cmdstate').textContent = s.playback ? 'Playback of a log: commands are off.'
       : s.commands.enabled

@@ -227,7 +227,10 @@ TEST(WebState, LeftImageIsAReducedPng) {
   f.left.size = 128 * 96;
   f.left.data.resize(128 * 96);
   for (int i = 0; i < 128 * 96; ++i) f.left.data[i] = static_cast<std::uint8_t>(i % 128 * 2);
+  f.left_utime = 1'000'000;
+  f.right_utime = 1'001'250;  // the right image exposed 1.25 ms after the left
   state.On(f, 0);
+  EXPECT_EQ(YAML::Load(state.StateJson(0))["image"]["pair_skew_us"].as<int>(), 1250);
   const std::string png = state.LeftImagePng(64, &why);
   ASSERT_FALSE(png.empty()) << why;
   const cv::Mat img = cv::imdecode(std::vector<unsigned char>(png.begin(), png.end()), cv::IMREAD_UNCHANGED);
