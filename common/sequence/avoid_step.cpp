@@ -108,7 +108,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.lookahead_m = options_.avoid_lookahead_m;
   o.step_m = StepLength();
   o.max_turn_rad = MaxTurn();
-  o.blind_margin_m = map_->blind_margin_m;
+  o.blind_margin_m = options_.avoid_blind_margin_m;
   o.unknown = map_->unknown;
   o.suspension = map_->suspension;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
@@ -118,6 +118,11 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   // footprint grown by half a cell), are unsafe to the vote.
   const double zone_grow = options_.avoid_zone_sigma_multiplier * hazards::HorizontalSigma(pose_->covariance);
   avoidance::Grid grid = map_->grid;
+  // Ground known without the cameras: what the rover has driven over, and the ring round
+  // where the goto began (avoid_start_ring_known).
+  site_map_.MarkDrivenOn(&grid);
+  if (options_.avoid_start_ring_known && goto_start_pose_)
+    grid.MarkKnown(map_->footprint, *goto_start_pose_, map_->blind_margin_m);
   if (!zones_.empty()) {
     const auto cells = planner::ZoneCells(grid, HazardZones(zones_), zone_grow + grid.cell_m);
     for (std::size_t k = 0; k < cells.size(); ++k)

@@ -112,6 +112,15 @@ struct ExecutorOptions {
   // Keep-out zones are obstacles for arc voting and the planner, grown by this many sigma
   // of the pose's horizontal position (as the hazard monitor's hazards.sigma_multiplier).
   double avoid_zone_sigma_multiplier = 3.0;
+  // Unknown ground the vote lets a step cross in the ring round the rover the mast cameras
+  // cannot see from where it stands (m beyond the body). 0: none: a step, a turn in place's
+  // corners included, covers only ground the map has seen and rated or the rover has driven
+  // over (common/avoidance/README.md). The hazard monitor's own check keeps its ring.
+  double avoid_blind_margin_m = 0.0;
+  // Where a goto begins, the ring round the rover (the monitor's blind margin) counts as
+  // known: the drive begins where the last one ended, whose end-of-drive images saw it,
+  // or where the operators put the rover. false: not even there.
+  bool avoid_start_ring_known = true;
   // The global planner (common/planner): a cost-to-go over the site map the executor
   // accumulates from the monitor's maps; arc voting's goal vote scores progress along it.
   // false: the vote's local field over the monitor's latest map only.
@@ -546,6 +555,7 @@ class SequenceExecutor {
   bool is_goto_ = false;
   Goto goto_;
   int64_t goto_start_utime_ = 0;
+  std::optional<avoidance::Pose2> goto_start_pose_;  // where the goto began (avoid_start_ring_known)
   double goto_start_distance_ = 0.0;
   double goto_distance_limit_ = 0.0;
   bool baseline_done_ = false;
