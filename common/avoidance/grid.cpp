@@ -218,6 +218,7 @@ class HiddenGround {
 
 UnknownVerdict JudgeUnknown(const Sweep& s, const UnknownLimits& l) {
   const double f = s.UnknownFraction();
+  if (l.hidden_at_any_share && l.hidden_patch_m > 0.0 && s.hidden > 0) return UnknownVerdict::kHidden;
   if (f <= l.max_fraction) return UnknownVerdict::kAcceptable;
   if (l.hidden_patch_m <= 0.0) return UnknownVerdict::kTooMuch;
   if (s.hidden > 0) return UnknownVerdict::kHidden;

@@ -138,6 +138,10 @@ struct UnknownLimits {
   double max_fraction = 0.2;
   double hidden_patch_m = 0.0;  // 0: the fraction alone
   double max_scattered_fraction = 0.5;
+  // With hidden_patch_m: a step that crosses ground that could hide a rock is refused
+  // however small a share of its cells that is (a body corner swept into unseen ground
+  // beside the view is a few cells of a step). false: only over max_fraction.
+  bool hidden_at_any_share = false;
 };
 enum class UnknownVerdict { kAcceptable, kHidden, kTooMuch };
 // `s` was swept with limits.hidden_patch_m.

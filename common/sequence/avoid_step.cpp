@@ -110,6 +110,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.max_turn_rad = MaxTurn();
   o.blind_margin_m = options_.avoid_blind_margin_m;
   o.unknown = map_->unknown;
+  // Ground that could hide a rock is not swept at all, not even by a corner (avoidance/README.md).
+  o.unknown.hidden_at_any_share = true;
   o.suspension = map_->suspension;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
   o.previous_turn_rad = last_turn_rad_;

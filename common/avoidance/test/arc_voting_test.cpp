@@ -475,6 +475,45 @@ TEST(ArcVoting, ATurnIntoGroundNeverSeenIsVetoedUnlessTheRingIsExcused) {
   EXPECT_LT(d.best.turn_rad, 0.0);
 }
 
+// An arc whose body corner sweeps a few cells of unseen ground beside the view: under the
+// 20 % share of unknown cells a step may cross, but the ground there is wide enough to hide
+// a rock (a 0.30 m rock once stood beside the view and was struck so, on an arc). With
+// hidden_at_any_share the arc is refused whatever the share; without, it is allowed.
+TEST(ArcVoting, ACornerSweptIntoGroundThatCouldHideARockIsRefusedAtAnyShare) {
+  Grid g = Open();
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j)
+      if (g.CellCentreY(j) > 0.8 && g.CellCentreX(i) > 0.5 && g.CellCentreX(i) < 3.0) {
+        const std::size_t k = static_cast<std::size_t>(i) * g.cols + j;
+        g.state[k] = CellClass::kUnknown;
+        g.goodness[k] = 0.0f;
+      }
+  VoteOptions o;
+  o.blind_margin_m = 0.0;
+  o.unknown = {0.2, 0.6, 0.5};
+  const auto right_arc = [](const Choice& c) -> const Candidate* {
+    for (const auto& k : c.candidates)
+      if (k.kind == Candidate::Kind::kArc && std::abs(k.curvature_per_m - 0.3) < 1e-9) return &k;
+    return nullptr;
+  };
+  const Choice share = VoteArcs(g, {0, 0, 0}, 5.0, 2.0, o);
+  const Candidate* a = right_arc(share);
+  ASSERT_NE(a, nullptr);
+  ASSERT_GT(a->step_sweep.unknown, 0);
+  ASSERT_GT(a->step_sweep.hidden, 0);
+  EXPECT_LE(a->step_sweep.UnknownFraction(), 0.2);
+  EXPECT_FALSE(a->vetoed) << a->why;  // the share alone lets it through
+
+  o.unknown.hidden_at_any_share = true;
+  const Choice strict = VoteArcs(g, {0, 0, 0}, 5.0, 2.0, o);
+  const Candidate* b = right_arc(strict);
+  ASSERT_NE(b, nullptr);
+  EXPECT_TRUE(b->vetoed);
+  EXPECT_NE(b->why.find("could hide a rock"), std::string::npos) << b->why;
+  ASSERT_TRUE(strict.found);  // straight ahead is seen ground
+  EXPECT_EQ(strict.best.step_sweep.hidden, 0);
+}
+
 TEST(ArcVoting, BadInputThrowsOneLine) {
   Grid g = Open();
   g.goodness.pop_back();
