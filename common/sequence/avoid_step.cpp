@@ -246,11 +246,23 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
   r.start_x = p.x, r.start_y = p.y;
   r.goal_x = goto_.target.x(), r.goal_y = goto_.target.y();
   r.goal_radius_m = disc.radius_m;
-  r.zones = HazardZones(zones_);
   r.zone_grow_m = zone_grow;
   r.prior = prior_ ? &*prior_ : nullptr;
-  try {
+  // Keep-out zones and the ways this goto could not follow (planner/blocked_ways.hpp).
+  auto plan_once = [&] {
+    r.zones = HazardZones(zones_);
+    r.zones.insert(r.zones.end(), blocked_ways_.zones().begin(), blocked_ways_.zones().end());
     *plan = planner::PlanOnSiteMap(site_map_, r, po);
+  };
+  try {
+    plan_once();
+    if (blocked_ways_.Update(**plan)) {
+      const hazards::KeepOutZone& z = blocked_ways_.zones().back();
+      step_note_ += "no progress along the plan in " + std::to_string(options_.planner_block_after_steps) +
+                    " steps: its way at " + Fixed(z.center.x()) + "," + Fixed(z.center.y()) +
+                    " blocked, planning round it; ";
+      plan_once();
+    }
   } catch (const std::invalid_argument& e) {
     AbortWith(abort_reason::kGoalUnreachable, std::string("the planner cannot plan: ") + e.what());
     return PlanVerdict::kAborted;
@@ -260,8 +272,13 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
     return PlanVerdict::kFollow;
   }
   if (++unreachable_plans_ >= options_.planner_unreachable_plans) {
-    AbortWith(abort_reason::kGoalUnreachable, "goal unreachable on " + std::to_string(unreachable_plans_) +
-                                                  " plans in a row: " + (*plan)->why_unreachable());
+    const std::size_t blocked = blocked_ways_.zones().size();
+    AbortWith(abort_reason::kGoalUnreachable,
+              "goal unreachable on " + std::to_string(unreachable_plans_) + " plans in a row: " +
+                  (*plan)->why_unreachable() +
+                  (blocked == 0 ? ""
+                                : " (" + std::to_string(blocked) +
+                                      " ways blocked where the rover made no progress along the plan)"));
     return PlanVerdict::kAborted;
   }
   step_note_ += "plan " + std::to_string(unreachable_plans_) + " finds no way (" + (*plan)->why_unreachable() + "); ";

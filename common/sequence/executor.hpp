@@ -11,6 +11,7 @@
 #include "avoidance/grid.hpp"
 #include "avoidance/loop_breaker.hpp"
 #include "config/yaml_config.hpp"
+#include "planner/blocked_ways.hpp"
 #include "planner/global_planner.hpp"
 #include "planner/prior_map.hpp"
 #include "planner/site_map.hpp"
@@ -131,6 +132,15 @@ struct ExecutorOptions {
   // A goal the plan finds unreachable this many steps running aborts the goto (the map
   // changes as the rover looks again; one unlucky map is not the end).
   int planner_unreachable_plans = 3;
+  // Dead ends (planner/blocked_ways.hpp): when the plan's cost to go from the rover has not
+  // fallen by planner_block_min_gain_m in planner_block_after_steps steps, the way it leads
+  // (planner_block_ahead_m down its path) is blocked, a disc of planner_block_radius_m the
+  // planner treats as an obstacle, and the plan goes another way; when no way is left the
+  // goal is unreachable (goal_unreachable). 0 steps: never.
+  int planner_block_after_steps = 15;
+  double planner_block_min_gain_m = 0.5;
+  double planner_block_ahead_m = 1.5;
+  double planner_block_radius_m = 0.4;
   // Optional prior cost map (planner/prior_map.hpp), relative to the config file. "" = none.
   std::string planner_prior_map;
 
@@ -596,6 +606,7 @@ class SequenceExecutor {
   // The site map merged from every map the monitor sends, and where the rover has been
   // (common/planner), in the site frame of map_site_; it starts again with a new site.
   planner::SiteMap site_map_;
+  planner::BlockedWays blocked_ways_;  // ways this goto could not follow (reset per goto)
   std::vector<avoidance::Visit> avoid_history_;  // this goto's votes, where (loop_breaker.hpp)
   int map_site_ = -1;
   std::optional<planner::PriorCostMap> prior_;
