@@ -20,7 +20,7 @@
 namespace rover::planner {
 
 struct BlockOptions {
-  int stall_steps = 15;      // steps without progress before the way is blocked (0: never)
+  int stall_steps = 20;      // steps without progress before the way is blocked (0: never)
   double min_gain_m = 0.5;   // progress: the cost to go falling by this much
   double ahead_m = 1.5;      // the way blocked: this far down the plan's path
   double radius_m = 0.4;     // the disc blocked (the planner keeps the rover's centre off it)

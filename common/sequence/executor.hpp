@@ -137,7 +137,7 @@ struct ExecutorOptions {
   // (planner_block_ahead_m down its path) is blocked, a disc of planner_block_radius_m the
   // planner treats as an obstacle, and the plan goes another way; when no way is left the
   // goal is unreachable (goal_unreachable). 0 steps: never.
-  int planner_block_after_steps = 15;
+  int planner_block_after_steps = 20;
   double planner_block_min_gain_m = 0.5;
   double planner_block_ahead_m = 1.5;
   double planner_block_radius_m = 0.4;

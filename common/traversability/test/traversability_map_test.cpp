@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <random>
 
@@ -495,22 +496,30 @@ TEST(TraversabilityMap, AWallOfRocksSeenFromOneSideIsUnsafe) {
     return z;
   };
   TraversabilityMap map(o);
+  MapOptions leaning_options = o;
+  leaning_options.ground_band_fraction = 0.0;  // the least-squares plane alone
+  TraversabilityMap leaning(leaning_options);
   std::mt19937 rng(3);
   std::normal_distribution<double> n(0.0, 0.01);
   std::vector<Eigen::Vector3d> pts;
   for (double x = 0.0; x < 5.0; x += 0.06)
     for (double y = -2.5; y <= wall_y; y += 0.06) pts.emplace_back(x, y, -(scene(x, y) + n(rng)));
   map.AddPoints(pts, std::vector<double>(pts.size(), 0.01));
-  int wall_cells = 0, wall_unsafe = 0;
+  leaning.AddPoints(pts, std::vector<double>(pts.size(), 0.01));
+  int wall_cells = 0, wall_unsafe = 0, leaning_unsafe = 0;
   for (double x = 1.1; x < 4.0; x += 0.2)
     for (double y : {0.1, 0.3}) {  // the rocks' near flanks and tops, 0.28 to 0.4 m tall
       ++wall_cells;
       const Cell c = map.At(x, y);
       wall_unsafe += c.state == CellState::kUnsafe;
+      leaning_unsafe += leaning.At(x, y).state == CellState::kUnsafe;
       EXPECT_EQ(c.state, CellState::kUnsafe) << "wall at " << x << "," << y << ": step " << c.step_m << " tilt "
                                              << c.tilt_rad / kDeg;
     }
   EXPECT_EQ(wall_unsafe, wall_cells);
+  EXPECT_LT(leaning_unsafe, wall_cells) << "the leaning plane's wall: " << leaning_unsafe << " of " << wall_cells;
+  std::printf("wall cells unsafe: %d of %d from the ground plane, %d from the least-squares plane alone\n", wall_unsafe,
+              wall_cells, leaning_unsafe);
   // The foot of the wall, its wheel patch reaching the rocks' lower flanks (cells' mean
   // heights 0.15 to 0.2 m): not safe.
   for (double x = 1.1; x < 4.0; x += 0.2) EXPECT_NE(map.At(x, -0.1).state, CellState::kSafe) << "foot at " << x;
