@@ -108,10 +108,11 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.lookahead_m = options_.avoid_lookahead_m;
   o.step_m = StepLength();
   o.max_turn_rad = MaxTurn();
-  o.blind_margin_m = options_.avoid_blind_margin_m;
+  const bool strict = options_.avoid_unseen_ground_strict;
+  o.blind_margin_m = strict ? 0.0 : map_->blind_margin_m;
   o.unknown = map_->unknown;
-  // Ground that could hide a rock is not swept at all, not even by a corner (avoidance/README.md).
-  o.unknown.hidden_at_any_share = true;
+  // Strict: ground that could hide a rock is not swept at all, not even by a corner.
+  o.unknown.hidden_at_any_share = strict;
   o.suspension = map_->suspension;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
   o.previous_turn_rad = last_turn_rad_;
@@ -123,7 +124,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   // Ground known without the cameras: what the rover has driven over, and the ring round
   // where the goto began (avoid_start_ring_known).
   site_map_.MarkDrivenOn(&grid);
-  if (options_.avoid_start_ring_known && goto_start_pose_)
+  if (strict && options_.avoid_start_ring_known && goto_start_pose_)
     grid.MarkKnown(map_->footprint, *goto_start_pose_, map_->blind_margin_m);
   if (!zones_.empty()) {
     const auto cells = planner::ZoneCells(grid, HazardZones(zones_), zone_grow + grid.cell_m);

@@ -113,14 +113,16 @@ struct ExecutorOptions {
   // Keep-out zones are obstacles for arc voting and the planner, grown by this many sigma
   // of the pose's horizontal position (as the hazard monitor's hazards.sigma_multiplier).
   double avoid_zone_sigma_multiplier = 3.0;
-  // Unknown ground the vote lets a step cross in the ring round the rover the mast cameras
-  // cannot see from where it stands (m beyond the body). 0: none: a step, a turn in place's
-  // corners included, covers only ground the map has seen and rated or the rover has driven
-  // over (common/avoidance/README.md). The hazard monitor's own check keeps its ring.
-  double avoid_blind_margin_m = 0.0;
-  // Where a goto begins, the ring round the rover (the monitor's blind margin) counts as
-  // known: the drive begins where the last one ended, whose end-of-drive images saw it,
-  // or where the operators put the rover. false: not even there.
+  // Unseen ground (common/avoidance/README.md). true: a step, a turn in place's corners
+  // included, covers only ground the map has seen and rated or the rover has driven over
+  // (no blind ring excused, and ground that could hide a rock refused at any share of the
+  // step's cells). false: the vote excuses the monitor's blind ring round the rover, as the
+  // monitor's own check does. Off for now: on navbench it removed every collision but cost
+  // success (time limits in the cul-de-sac) and two Avoidance scenarios (README there).
+  bool avoid_unseen_ground_strict = false;
+  // With avoid_unseen_ground_strict: where a goto begins, the ring round the rover (the
+  // monitor's blind margin) counts as known: the drive begins where the last one ended,
+  // whose end-of-drive images saw it, or where the operators put the rover.
   bool avoid_start_ring_known = true;
   // The global planner (common/planner): a cost-to-go over the site map the executor
   // accumulates from the monitor's maps; arc voting's goal vote scores progress along it.
@@ -137,7 +139,7 @@ struct ExecutorOptions {
   // (planner_block_ahead_m down its path) is blocked, a disc of planner_block_radius_m the
   // planner treats as an obstacle, and the plan goes another way; when no way is left the
   // goal is unreachable (goal_unreachable). 0 steps: never.
-  int planner_block_after_steps = 20;
+  int planner_block_after_steps = 0;
   double planner_block_min_gain_m = 0.5;
   double planner_block_ahead_m = 1.5;
   double planner_block_radius_m = 0.4;

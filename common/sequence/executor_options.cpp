@@ -43,8 +43,6 @@ void ValidateExecutorOptions(const ExecutorOptions& o) {
   if (o.avoid_num_arcs < 1 || !(o.avoid_backup_m >= 0.0) || !(o.avoid_margin_m >= 0.0)) {
     throw std::invalid_argument("executor options avoid_num_arcs must be >= 1, avoid_backup_m and avoid_margin_m >= 0");
   }
-  if (!(o.avoid_blind_margin_m >= 0.0) || !std::isfinite(o.avoid_blind_margin_m))
-    throw std::invalid_argument("executor options avoid_blind_margin_m must be finite and >= 0");
   if (!(o.avoid_zone_sigma_multiplier >= 0.0) || !(o.planner_unknown_cost >= 1.0) || !(o.planner_caution_cost >= 1.0) ||
       !(o.planner_margin_m >= 0.0) || o.planner_unreachable_plans < 1 || !(o.goto_arrival_sigmas >= 0.0) ||
       !(o.goto_min_arrival_fraction > 0.0) || !(o.goto_min_arrival_fraction <= 1.0)) {
@@ -95,7 +93,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "blind_slip_pct", "recent_steps", "lost_min_step_m", "step_sigma_growth_pct",
                "margin_sigma_multiplier", "state_file", "map_wait_s", "avoid_lookahead_m",
                "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m",
-               "avoid_zone_sigma_multiplier", "avoid_blind_margin_m", "avoid_start_ring_known", "planner_enabled", "planner_unknown_cost", "planner_caution_cost",
+               "avoid_zone_sigma_multiplier", "avoid_unseen_ground_strict", "avoid_start_ring_known", "planner_enabled", "planner_unknown_cost", "planner_caution_cost",
                "planner_margin_m", "planner_unreachable_plans", "planner_block_after_steps", "planner_block_min_gain_m",
                "planner_block_ahead_m", "planner_block_radius_m", "planner_prior_map", "goto_arrival_sigmas",
                "goto_min_arrival_fraction"});
@@ -151,7 +149,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("avoid_backup_m", o.avoid_backup_m, 0.0, 0.75);
   n.Get("avoid_margin_m", o.avoid_margin_m, 0.0, 1.0);
   n.Get("avoid_zone_sigma_multiplier", o.avoid_zone_sigma_multiplier, 0.0, 10.0);
-  n.Get("avoid_blind_margin_m", o.avoid_blind_margin_m, 0.0, 2.0);
+  n.Get("avoid_unseen_ground_strict", o.avoid_unseen_ground_strict);
   n.Get("avoid_start_ring_known", o.avoid_start_ring_known);
   n.Get("planner_enabled", o.planner_enabled);
   n.Get("planner_unknown_cost", o.planner_unknown_cost, 1.0, 100.0);
