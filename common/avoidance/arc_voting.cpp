@@ -123,10 +123,17 @@ Safety JudgeSafety(const Grid& grid, const clearance::HeightMap& heights, const 
   return out;
 }
 
-// Judges one candidate: `step` is the motion driven, `look` the motion judged (step first).
+// Judges one candidate: `step` is the motion judged as the step (hazards), `look` the
+// motion judged (step first), `driven` what is driven now, whose ground must be known
+// (nullptr: `step`). A turn in place is judged whole for hazards, but only its first
+// max_turn_rad is driven before the next pair: the ground the rest of it sweeps is seen
+// from there before it is driven (MER's look before turning), so only the first part's
+// unknown ground counts against it; the rest is look-ahead.
 void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalDistance* field, const Pose2& pose, double gx, double gy, const VoteOptions& o,
-           const std::vector<Pose2>& step, const std::vector<Pose2>& look, Candidate* c) {
-  c->step_sweep = SweepFootprint(grid, o.footprint, step, pose, o.blind_margin_m, o.unknown.hidden_patch_m);
+           const std::vector<Pose2>& step, const std::vector<Pose2>& look, Candidate* c,
+           const std::vector<Pose2>* driven = nullptr) {
+  c->step_sweep = SweepFootprint(grid, o.footprint, driven ? *driven : step, pose, o.blind_margin_m,
+                                 o.unknown.hidden_patch_m);
   const UnknownVerdict unknown = JudgeUnknown(c->step_sweep, o.unknown);
   const Sweep& s = c->step_sweep;
   const Safety step_safety = JudgeSafety(grid, heights, o, pose, step);
@@ -253,7 +260,8 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.turn_rad = std::clamp(t, -o.max_turn_rad, o.max_turn_rad);
     const auto step = SamplePath(pose, t, 0.0, 0.0);
     const auto look = SamplePath(pose, t, o.lookahead_m, 0.0);
-    Judge(grid, heights, field, pose, gx, gy, o, step, look, &c);
+    const auto first = SamplePath(pose, c.turn_rad, 0.0, 0.0);
+    Judge(grid, heights, field, pose, gx, gy, o, step, look, &c, &first);
     choice.candidates.push_back(c);
   }
   // A turn after which not even one step is clear leads nowhere (see the header).

@@ -91,6 +91,24 @@ int Grid::DistrustEdges() {
   return static_cast<int>(edge.size());
 }
 
+int Grid::MarkKnown(const Footprint& footprint, const Pose2& pose, double grow_m) {
+  const double reach = std::hypot(0.5 * footprint.length_m + std::abs(footprint.center_forward_m),
+                                  0.5 * footprint.width_m) + grow_m + cell_m;
+  int changed = 0;
+  for (int i = std::max(0, static_cast<int>(std::floor((pose.x - reach - origin_x) / cell_m)));
+       i < rows && CellCentreX(i) <= pose.x + reach; ++i)
+    for (int j = std::max(0, static_cast<int>(std::floor((pose.y - reach - origin_y) / cell_m)));
+         j < cols && CellCentreY(j) <= pose.y + reach; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * cols + j;
+      if (state[k] != CellClass::kUnknown || !footprint.Contains(pose, CellCentreX(i), CellCentreY(j), grow_m)) continue;
+      state[k] = CellClass::kSafe;
+      goodness[k] = 1.0f;
+      step_m[k] = 0.0f;
+      ++changed;
+    }
+  return changed;
+}
+
 void Grid::Paint(double x, double y, double radius_m, CellClass s, float g, float step) {
   for (int i = 0; i < rows; ++i)
     for (int j = 0; j < cols; ++j)
@@ -200,6 +218,7 @@ class HiddenGround {
 
 UnknownVerdict JudgeUnknown(const Sweep& s, const UnknownLimits& l) {
   const double f = s.UnknownFraction();
+  if (l.hidden_at_any_share && l.hidden_patch_m > 0.0 && s.hidden > 0) return UnknownVerdict::kHidden;
   if (f <= l.max_fraction) return UnknownVerdict::kAcceptable;
   if (l.hidden_patch_m <= 0.0) return UnknownVerdict::kTooMuch;
   if (s.hidden > 0) return UnknownVerdict::kHidden;

@@ -15,6 +15,8 @@ namespace rover::avoidance {
 // Mirrors traversability::CellState and traversability_map_t.STATE_*.
 enum class CellClass : std::uint8_t { kUnknown = 0, kSafe = 1, kCaution = 2, kUnsafe = 3 };
 
+struct Footprint;
+
 struct Pose2 {
   double x = 0.0, y = 0.0, yaw = 0.0;
 };
@@ -56,6 +58,11 @@ struct Grid {
   int DistrustEdges();
   // Gives every cell a known elevation and sigma (for tests; Paint then keeps them).
   void SetHeights(float elevation_m, float sigma_m);
+  // Ground known without the cameras: the unknown cells whose centre lies under `footprint`
+  // at `pose`, grown by grow_m, read safe (goodness 1): ground the rover's body has driven
+  // over carried it, and the ground round the rover where a drive begins is the operators'
+  // (see arc_voting.hpp). Known cells keep their rating. Returns how many changed.
+  int MarkKnown(const Footprint& footprint, const Pose2& pose, double grow_m);
   // Sets the cells whose centre lies within radius_m of (x, y). With heights, a cell painted
   // unknown loses its height and any other stands step_m above the level (a rock that tall).
   void Paint(double x, double y, double radius_m, CellClass state, float goodness, float step_m);
@@ -131,6 +138,10 @@ struct UnknownLimits {
   double max_fraction = 0.2;
   double hidden_patch_m = 0.0;  // 0: the fraction alone
   double max_scattered_fraction = 0.5;
+  // With hidden_patch_m: a step that crosses ground that could hide a rock is refused
+  // however small a share of its cells that is (a body corner swept into unseen ground
+  // beside the view is a few cells of a step). false: only over max_fraction.
+  bool hidden_at_any_share = false;
 };
 enum class UnknownVerdict { kAcceptable, kHidden, kTooMuch };
 // `s` was swept with limits.hidden_patch_m.

@@ -102,6 +102,20 @@ bool SiteMap::Driven(double x, double y) const {
   return c && c->driven;
 }
 
+int SiteMap::MarkDrivenOn(avoidance::Grid* grid) const {
+  if (Empty()) return 0;
+  int changed = 0;
+  for (int i = 0; i < grid->rows; ++i)
+    for (int j = 0; j < grid->cols; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * grid->cols + j;
+      if (grid->state[k] != CellClass::kUnknown || !Driven(grid->CellCentreX(i), grid->CellCentreY(j))) continue;
+      grid->state[k] = CellClass::kSafe;
+      grid->goodness[k] = 1.0f;
+      ++changed;
+    }
+  return changed;
+}
+
 bool SiteMap::Bounds(double* x0, double* y0, double* x1, double* y1) const {
   if (Empty()) return false;
   *x0 = i0_ * cell_m_;

@@ -33,6 +33,10 @@ class SiteMap {
   int KnownCells() const;
   int DrivenCells() const;
   bool Driven(double x, double y) const;
+  // The unknown cells of `grid` (any grid in the site frame, such as the monitor's latest
+  // map) whose centre lies on driven ground read safe (goodness 1): the rover has been
+  // there. Returns how many changed.
+  int MarkDrivenOn(avoidance::Grid* grid) const;
   // The site map over the box from (x0, y0) to (x1, y1), grown to whole cells: ground never
   // seen is unknown, and driven ground the map never rated reads safe (goodness 1).
   avoidance::Grid Window(double x0, double y0, double x1, double y1) const;

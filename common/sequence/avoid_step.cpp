@@ -108,8 +108,11 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.lookahead_m = options_.avoid_lookahead_m;
   o.step_m = StepLength();
   o.max_turn_rad = MaxTurn();
-  o.blind_margin_m = map_->blind_margin_m;
+  const bool strict = options_.avoid_unseen_ground_strict;
+  o.blind_margin_m = strict ? 0.0 : map_->blind_margin_m;
   o.unknown = map_->unknown;
+  // Strict: ground that could hide a rock is not swept at all, not even by a corner.
+  o.unknown.hidden_at_any_share = strict;
   o.suspension = map_->suspension;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
   o.previous_turn_rad = last_turn_rad_;
@@ -118,6 +121,11 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   // footprint grown by half a cell), are unsafe to the vote.
   const double zone_grow = options_.avoid_zone_sigma_multiplier * hazards::HorizontalSigma(pose_->covariance);
   avoidance::Grid grid = map_->grid;
+  // Ground known without the cameras: what the rover has driven over, and the ring round
+  // where the goto began (avoid_start_ring_known).
+  site_map_.MarkDrivenOn(&grid);
+  if (strict && options_.avoid_start_ring_known && goto_start_pose_)
+    grid.MarkKnown(map_->footprint, *goto_start_pose_, map_->blind_margin_m);
   if (!zones_.empty()) {
     const auto cells = planner::ZoneCells(grid, HazardZones(zones_), zone_grow + grid.cell_m);
     for (std::size_t k = 0; k < cells.size(); ++k)
@@ -239,11 +247,23 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
   r.start_x = p.x, r.start_y = p.y;
   r.goal_x = goto_.target.x(), r.goal_y = goto_.target.y();
   r.goal_radius_m = disc.radius_m;
-  r.zones = HazardZones(zones_);
   r.zone_grow_m = zone_grow;
   r.prior = prior_ ? &*prior_ : nullptr;
-  try {
+  // Keep-out zones and the ways this goto could not follow (planner/blocked_ways.hpp).
+  auto plan_once = [&] {
+    r.zones = HazardZones(zones_);
+    r.zones.insert(r.zones.end(), blocked_ways_.zones().begin(), blocked_ways_.zones().end());
     *plan = planner::PlanOnSiteMap(site_map_, r, po);
+  };
+  try {
+    plan_once();
+    if (blocked_ways_.Update(**plan)) {
+      const hazards::KeepOutZone& z = blocked_ways_.zones().back();
+      step_note_ += "no progress along the plan in " + std::to_string(options_.planner_block_after_steps) +
+                    " steps: its way at " + Fixed(z.center.x()) + "," + Fixed(z.center.y()) +
+                    " blocked, planning round it; ";
+      plan_once();
+    }
   } catch (const std::invalid_argument& e) {
     AbortWith(abort_reason::kGoalUnreachable, std::string("the planner cannot plan: ") + e.what());
     return PlanVerdict::kAborted;
@@ -253,8 +273,13 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
     return PlanVerdict::kFollow;
   }
   if (++unreachable_plans_ >= options_.planner_unreachable_plans) {
-    AbortWith(abort_reason::kGoalUnreachable, "goal unreachable on " + std::to_string(unreachable_plans_) +
-                                                  " plans in a row: " + (*plan)->why_unreachable());
+    const std::size_t blocked = blocked_ways_.zones().size();
+    AbortWith(abort_reason::kGoalUnreachable,
+              "goal unreachable on " + std::to_string(unreachable_plans_) + " plans in a row: " +
+                  (*plan)->why_unreachable() +
+                  (blocked == 0 ? ""
+                                : " (" + std::to_string(blocked) +
+                                      " ways blocked where the rover made no progress along the plan)"));
     return PlanVerdict::kAborted;
   }
   step_note_ += "plan " + std::to_string(unreachable_plans_) + " finds no way (" + (*plan)->why_unreachable() + "); ";

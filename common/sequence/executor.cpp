@@ -16,6 +16,12 @@ using internal::kDeg;
 SequenceExecutor::SequenceExecutor(ExecutorOptions options, int64_t first_id)
     : options_(std::move(options)), next_id_(first_id) {
   ValidateExecutorOptions(options_);
+  planner::BlockOptions blocks;
+  blocks.stall_steps = options_.planner_block_after_steps;
+  blocks.min_gain_m = options_.planner_block_min_gain_m;
+  blocks.ahead_m = options_.planner_block_ahead_m;
+  blocks.radius_m = options_.planner_block_radius_m;
+  blocked_ways_ = planner::BlockedWays(blocks);
   step_m_ = options_.default_step_m;
   max_turn_rad_ = options_.default_max_turn_deg * kDeg;
   vo_wait_s_ = options_.vo_wait_s;

@@ -11,6 +11,7 @@
 #include "avoidance/grid.hpp"
 #include "avoidance/loop_breaker.hpp"
 #include "config/yaml_config.hpp"
+#include "planner/blocked_ways.hpp"
 #include "planner/global_planner.hpp"
 #include "planner/prior_map.hpp"
 #include "planner/site_map.hpp"
@@ -112,6 +113,17 @@ struct ExecutorOptions {
   // Keep-out zones are obstacles for arc voting and the planner, grown by this many sigma
   // of the pose's horizontal position (as the hazard monitor's hazards.sigma_multiplier).
   double avoid_zone_sigma_multiplier = 3.0;
+  // Unseen ground (common/avoidance/README.md). true: a step, a turn in place's corners
+  // included, covers only ground the map has seen and rated or the rover has driven over
+  // (no blind ring excused, and ground that could hide a rock refused at any share of the
+  // step's cells). false: the vote excuses the monitor's blind ring round the rover, as the
+  // monitor's own check does. Off for now: on navbench it removed every collision but cost
+  // success (time limits in the cul-de-sac) and two Avoidance scenarios (README there).
+  bool avoid_unseen_ground_strict = false;
+  // With avoid_unseen_ground_strict: where a goto begins, the ring round the rover (the
+  // monitor's blind margin) counts as known: the drive begins where the last one ended,
+  // whose end-of-drive images saw it, or where the operators put the rover.
+  bool avoid_start_ring_known = true;
   // The global planner (common/planner): a cost-to-go over the site map the executor
   // accumulates from the monitor's maps; arc voting's goal vote scores progress along it.
   // false: the vote's local field over the monitor's latest map only.
@@ -122,6 +134,15 @@ struct ExecutorOptions {
   // A goal the plan finds unreachable this many steps running aborts the goto (the map
   // changes as the rover looks again; one unlucky map is not the end).
   int planner_unreachable_plans = 3;
+  // Dead ends (planner/blocked_ways.hpp): when the plan's cost to go from the rover has not
+  // fallen by planner_block_min_gain_m in planner_block_after_steps steps, the way it leads
+  // (planner_block_ahead_m down its path) is blocked, a disc of planner_block_radius_m the
+  // planner treats as an obstacle, and the plan goes another way; when no way is left the
+  // goal is unreachable (goal_unreachable). 0 steps: never.
+  int planner_block_after_steps = 0;
+  double planner_block_min_gain_m = 0.5;
+  double planner_block_ahead_m = 1.5;
+  double planner_block_radius_m = 0.4;
   // Optional prior cost map (planner/prior_map.hpp), relative to the config file. "" = none.
   std::string planner_prior_map;
 
@@ -546,6 +567,7 @@ class SequenceExecutor {
   bool is_goto_ = false;
   Goto goto_;
   int64_t goto_start_utime_ = 0;
+  std::optional<avoidance::Pose2> goto_start_pose_;  // where the goto began (avoid_start_ring_known)
   double goto_start_distance_ = 0.0;
   double goto_distance_limit_ = 0.0;
   bool baseline_done_ = false;
@@ -586,6 +608,7 @@ class SequenceExecutor {
   // The site map merged from every map the monitor sends, and where the rover has been
   // (common/planner), in the site frame of map_site_; it starts again with a new site.
   planner::SiteMap site_map_;
+  planner::BlockedWays blocked_ways_;  // ways this goto could not follow (reset per goto)
   std::vector<avoidance::Visit> avoid_history_;  // this goto's votes, where (loop_breaker.hpp)
   int map_site_ = -1;
   std::optional<planner::PriorCostMap> prior_;

@@ -50,6 +50,16 @@ void ValidateExecutorOptions(const ExecutorOptions& o) {
         "executor options: avoid_zone_sigma_multiplier, planner_margin_m and goto_arrival_sigmas must be >= 0, "
         "planner_*_cost >= 1, planner_unreachable_plans >= 1, goto_min_arrival_fraction in (0, 1]");
   }
+  planner::BlockOptions blocks;
+  blocks.stall_steps = o.planner_block_after_steps;
+  blocks.min_gain_m = o.planner_block_min_gain_m;
+  blocks.ahead_m = o.planner_block_ahead_m;
+  blocks.radius_m = o.planner_block_radius_m;
+  try {
+    blocks.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("executor options planner_block_*: ") + e.what());
+  }
   if (o.recent_steps < 1) {
     throw std::invalid_argument("executor option recent_steps must be >= 1, got " +
                                 std::to_string(o.recent_steps));
@@ -83,8 +93,9 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "blind_slip_pct", "recent_steps", "lost_min_step_m", "step_sigma_growth_pct",
                "margin_sigma_multiplier", "state_file", "map_wait_s", "avoid_lookahead_m",
                "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m",
-               "avoid_zone_sigma_multiplier", "planner_enabled", "planner_unknown_cost", "planner_caution_cost",
-               "planner_margin_m", "planner_unreachable_plans", "planner_prior_map", "goto_arrival_sigmas",
+               "avoid_zone_sigma_multiplier", "avoid_unseen_ground_strict", "avoid_start_ring_known", "planner_enabled", "planner_unknown_cost", "planner_caution_cost",
+               "planner_margin_m", "planner_unreachable_plans", "planner_block_after_steps", "planner_block_min_gain_m",
+               "planner_block_ahead_m", "planner_block_radius_m", "planner_prior_map", "goto_arrival_sigmas",
                "goto_min_arrival_fraction"});
   auto names = [&](const char* key, std::vector<std::string>& out) {
     if (!n.Has(key)) return;
@@ -138,11 +149,17 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("avoid_backup_m", o.avoid_backup_m, 0.0, 0.75);
   n.Get("avoid_margin_m", o.avoid_margin_m, 0.0, 1.0);
   n.Get("avoid_zone_sigma_multiplier", o.avoid_zone_sigma_multiplier, 0.0, 10.0);
+  n.Get("avoid_unseen_ground_strict", o.avoid_unseen_ground_strict);
+  n.Get("avoid_start_ring_known", o.avoid_start_ring_known);
   n.Get("planner_enabled", o.planner_enabled);
   n.Get("planner_unknown_cost", o.planner_unknown_cost, 1.0, 100.0);
   n.Get("planner_caution_cost", o.planner_caution_cost, 1.0, 100.0);
   n.Get("planner_margin_m", o.planner_margin_m, 0.0, 100.0);
   n.Get("planner_unreachable_plans", o.planner_unreachable_plans, 1, 1000);
+  n.Get("planner_block_after_steps", o.planner_block_after_steps, 0, 100000);
+  n.Get("planner_block_min_gain_m", o.planner_block_min_gain_m, 0.01, 100.0);
+  n.Get("planner_block_ahead_m", o.planner_block_ahead_m, 0.1, 100.0);
+  n.Get("planner_block_radius_m", o.planner_block_radius_m, 0.05, 10.0);
   n.Get("planner_prior_map", o.planner_prior_map);
   if (!o.planner_prior_map.empty() && o.planner_prior_map.front() != '/') {
     // Relative to the config file, as the camera rig is.

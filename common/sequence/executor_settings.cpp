@@ -40,8 +40,14 @@ void SequenceExecutor::PlanMotion(const Command& c) {
     is_goto_ = true;
     goto_ = *g;
     avoid_history_.clear();
+    blocked_ways_.Reset();
     last_turn_rad_ = 0.0;
     goto_start_utime_ = now_utime_;
+    goto_start_pose_.reset();
+    if (PoseFinite()) {
+      const PlanePose s = CurrentPlanePose();
+      goto_start_pose_ = avoidance::Pose2{s.x, s.y, s.yaw};
+    }
     goto_start_distance_ = distance_m_;
     const PlanePose p = CurrentPlanePose();
     const double straight = (g->target - Eigen::Vector2d(p.x, p.y)).norm();

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 
@@ -47,6 +48,8 @@ TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(optio
     Bad("tilt_radius_m must be in [0, extent_m / 2]");
   if (!std::isfinite(o.max_face_deg) || o.max_face_deg < 0 || o.max_face_deg >= 90)
     Bad("max_face_deg must be in [0, 90)");
+  if (!(o.ground_band_fraction >= 0 && o.ground_band_fraction <= 0.5))
+    Bad("ground_band_fraction must be in [0, 0.5]");
   if (!positive(o.max_step_m) || !positive(o.max_tilt_deg) || o.max_tilt_deg >= 90 ||
       !positive(o.max_roughness_m))
     Bad("max_step_m, max_tilt_deg (< 90) and max_roughness_m must be > 0");
@@ -249,39 +252,106 @@ void TraversabilityMap::Rate() const {
   // Plane h = c0 + c1 dx + c2 dy by least squares over the known cells, then again
   // without the cells more than half a step limit ABOVE it: rocks stand up from the
   // ground, so the plane settles on the ground around them even when a big rock fills
-  // much of the patch, and the rock shows as a step rather than a tilt.
+  // much of the patch, and the rock shows as a step rather than a tilt. `c_fit` gets that
+  // plane (the roughness is the scatter about it).
+  //
+  // Then the ground plane, when ground_band_fraction > 0. Least squares through the ground
+  // and a wall of rocks seen from one side (the closed end of a pocket, its far side
+  // hidden) leans on the wall, and the rocks' lower flanks lie within half a step of the
+  // leaning plane, so they are never let go of: the wall read as a tilt with a short step
+  // (caution). The ground is the surface the rocks stand on: a plane that holds many cells
+  // within a band (ground_band_fraction of the step limit, or two of a cell's height
+  // sigmas) and has hardly any below it. A leaning plane has ground above it at one end and
+  // below it at the other, a plane on the rocks' tops has the ground below it. Candidates:
+  // the plane above and planes through 24 triples of cells (drawn with a fixed seed: the
+  // same patch gives the same plane), each scored by the cells in its band less twice those
+  // below it; the best, if it beats the plane above, is refitted to the cells not above its
+  // band. Written by hand rather than with a RANSAC library: OpenCV's estimators fit
+  // models to image correspondences, not planes to a score that tells above from below.
   Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();  // of fit's last solve: sum of row row^T
-  auto fit = [&](const std::vector<Eigen::Vector3d>& pts) {
+  // Least squares over the cells `inlier` holds; false when under 3 or singular.
+  auto solve = [&](const std::vector<Eigen::Vector3d>& pts, Eigen::Vector3d* c) {
+    Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d Atb = Eigen::Vector3d::Zero();
+    int used = 0;
+    for (std::size_t k = 0; k < pts.size(); ++k) {
+      if (!inlier[k]) continue;
+      const Eigen::Vector3d row(1.0, pts[k].x(), pts[k].y());
+      AtA += row * row.transpose();
+      Atb += row * pts[k].z();
+      ++used;
+    }
+    if (used < 3) return false;
+    const Eigen::Vector3d c_new = AtA.ldlt().solve(Atb);
+    if (!c_new.allFinite()) return false;
+    *c = c_new;
+    normal = AtA;
+    return true;
+  };
+  auto residual = [](const Eigen::Vector3d& p, const Eigen::Vector3d& c) {
+    return p.z() - (c[0] + c[1] * p.x() + c[2] * p.y());
+  };
+  const double half_step = 0.5 * o.max_step_m;
+  const double band = o.ground_band_fraction * o.max_step_m;
+  std::mt19937 triples;
+  auto fit = [&](const std::vector<Eigen::Vector3d>& pts, const std::vector<float>& sig, Eigen::Vector3d* c_fit) {
     inlier.assign(pts.size(), 1);
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
     normal.setZero();
     for (int pass = 0; pass < 4; ++pass) {
-      Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
-      Eigen::Vector3d Atb = Eigen::Vector3d::Zero();
-      int used = 0;
-      for (std::size_t k = 0; k < pts.size(); ++k) {
-        if (!inlier[k]) continue;
-        const Eigen::Vector3d row(1.0, pts[k].x(), pts[k].y());
-        AtA += row * row.transpose();
-        Atb += row * pts[k].z();
-        ++used;
-      }
-      if (used < 3) break;
-      const Eigen::Vector3d c_new = AtA.ldlt().solve(Atb);
-      if (!c_new.allFinite()) break;
-      c = c_new;
-      normal = AtA;
+      if (!solve(pts, &c)) break;
       std::size_t kept = 0, changed = 0;
       for (std::size_t k = 0; k < pts.size(); ++k) {
-        const double res = pts[k].z() - (c[0] + c[1] * pts[k].x() + c[2] * pts[k].y());
-        const char in = res <= 0.5 * o.max_step_m ? 1 : 0;
+        const char in = residual(pts[k], c) <= half_step ? 1 : 0;
         kept += in;
         changed += in != inlier[k];
         inlier[k] = in;
       }
       if (changed == 0 || kept < 3) break;
     }
-    return c;
+    *c_fit = c;
+    if (band <= 0.0 || pts.size() < 4) return c;
+    auto band_of = [&](std::size_t k) { return std::clamp(2.0 * sig[k], band, half_step); };
+    auto score = [&](const Eigen::Vector3d& q) {
+      int in = 0, below = 0;
+      for (std::size_t k = 0; k < pts.size(); ++k) {
+        const double r = residual(pts[k], q), b = band_of(k);
+        in += std::abs(r) <= b;
+        below += r < -b;
+      }
+      return in - 2 * below;
+    };
+    const int fitted_score = score(c);
+    int best_score = fitted_score;
+    Eigen::Vector3d best = c;
+    triples.seed(7);
+    std::uniform_int_distribution<std::size_t> pick(0, pts.size() - 1);
+    for (int t = 0; t < 24; ++t) {
+      const Eigen::Vector3d& p0 = pts[pick(triples)];
+      const Eigen::Vector3d& p1 = pts[pick(triples)];
+      const Eigen::Vector3d& p2 = pts[pick(triples)];
+      Eigen::Matrix3d A;
+      A << 1.0, p0.x(), p0.y(), 1.0, p1.x(), p1.y(), 1.0, p2.x(), p2.y();
+      if (std::abs(A.determinant()) < 1e-6) continue;  // repeated or collinear cells
+      const Eigen::Vector3d q = A.partialPivLu().solve(Eigen::Vector3d(p0.z(), p1.z(), p2.z()));
+      if (!q.allFinite()) continue;
+      const int sc = score(q);
+      if (sc > best_score) best_score = sc, best = q;
+    }
+    if (best_score == fitted_score) return c;
+    // Refit to the cells not above the winner's band (twice: the refit moves a little).
+    Eigen::Vector3d ground = best;
+    const std::vector<char> kept_before = inlier;
+    const Eigen::Matrix3d normal_before = normal;
+    for (int pass = 0; pass < 2; ++pass) {
+      for (std::size_t k = 0; k < pts.size(); ++k) inlier[k] = residual(pts[k], ground) <= band_of(k) ? 1 : 0;
+      if (!solve(pts, &ground)) {
+        inlier = kept_before;
+        normal = normal_before;
+        return c;
+      }
+    }
+    return ground;
   };
   // The plane rated: the fitted one with its gradient shrunk, about the centroid of the
   // cells it was fitted to, by tilt_margin_sigmas standard errors of the gradient along its
@@ -325,8 +395,8 @@ void TraversabilityMap::Rate() const {
     for (int j = 0; j < n_; ++j) {
       gather(patch, i, j, xs, &ss);
       if (xs.size() < min_known) continue;
-      Eigen::Vector3d c = fit(xs);
-      const Eigen::Vector3d c_fit = c;  // roughness: the scatter about the plane fitted
+      Eigen::Vector3d c_fit;  // roughness: the scatter about the plane fitted
+      Eigen::Vector3d c = fit(xs, ss, &c_fit);
       // The tilt: of the wheel patch's own plane, or of the plane over the rover's size
       // when that patch is known well enough (else the wheel patch's, the only one there is).
       double grad = rate_plane(xs, c, rms(ss));
@@ -338,7 +408,8 @@ void TraversabilityMap::Rate() const {
       if (own_tilt_patch) {
         gather(tilt_patch, i, j, xt, &st);
         if (xt.size() >= min_known_tilt) {
-          Eigen::Vector3d ct = fit(xt);
+          Eigen::Vector3d ct_fit;
+          Eigen::Vector3d ct = fit(xt, st, &ct_fit);
           // How much steeper the wheel patch is than the body's plane: never more than the
           // wheel patch's own tilt (a rock's flank on level ground rates as it always did,
           // although the body plane there leans a little on the rock's foot), and nothing
@@ -385,7 +456,7 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
                   "min_patch_fraction", "stereo_width_px", "num_disparities", "block_size",
                   "uniqueness_ratio", "speckle_window", "speckle_range", "disparity_sigma_px",
                   "subsample", "min_range_m", "max_disparity_jump", "min_texture", "min_texture_snr",
-                  "tilt_margin_sigmas", "drop_unseen_border", "lr_max_diff_px"});
+                  "tilt_margin_sigmas", "drop_unseen_border", "lr_max_diff_px", "ground_band_fraction"});
   node.Get("cell_size_m", o.cell_size_m, 0.01, 10.0);
   node.Get("extent_m", o.extent_m, 0.1, 200.0);
   node.Get("footprint_radius_m", o.footprint_radius_m, 0.0, 10.0);
@@ -416,6 +487,7 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
   node.Get("tilt_margin_sigmas", o.tilt_margin_sigmas, 0.0, 10.0);
   node.Get("drop_unseen_border", o.drop_unseen_border);
   node.Get("lr_max_diff_px", o.lr_max_diff_px, 0.0, 64.0);
+  node.Get("ground_band_fraction", o.ground_band_fraction, 0.0, 0.5);
   if (o.min_range_m >= o.max_range_m)
     node.Fail("min_range_m: expected less than max_range_m");
   if (o.footprint_radius_m > o.extent_m / 2)

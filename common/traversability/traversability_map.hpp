@@ -70,6 +70,13 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // stands on, the face a wheel meets (a rock's flank), which a uniform slope does not
   // steepen; 0: not rated.
   double max_face_deg = 0.0;
+  // The ground plane (each patch's, and the body-scale one) is fitted by least squares
+  // without the cells over half a step limit above it, and then, once that has settled,
+  // without those over this fraction of the step limit above it (or two of the cell's
+  // height sigmas, if more, up to half a step): a plane through the ground and a wall of
+  // rocks seen from one side leans on the wall, and the rocks' lower flanks stay within
+  // half a step of it, so the wall read as caution. 0: half a step only.
+  double ground_band_fraction = 0.25;
   // The tilt rated (and the face) is the fitted one less this many standard errors of it,
   // from the cells' height sigmas and how the known cells spread over the patch: a plane
   // through a few cells in a line (the only texture on blank sand may be a shadow's edge)

@@ -415,6 +415,105 @@ TEST(ArcVotingClearance, AGridWithoutHeightsCannotBeJudged) {
   EXPECT_THROW(VoteArcs(Open(), {0, 0, 0}, 5.0, 0.0, WithSuspension()), std::invalid_argument);
 }
 
+// Ground beside the rover the cameras never saw (the mast cameras look ahead; a rock
+// there once hid beside the view and was struck on a turn), the goal to the left. With
+// the blind ring excused (blind_margin_m 0.5) the turns left sweep that ground unjudged;
+// with none (the executor's default), every turn left is vetoed as ground that could hide
+// a rock. Ground the first part of a turn sweeps, once known (seen, or driven over:
+// Grid::MarkKnown), lets the turn start: the rest of it is seen from there before it is
+// driven, so a turn of 90 deg is judged on its first step's ground.
+TEST(ArcVoting, ATurnIntoGroundNeverSeenIsVetoedUnlessTheRingIsExcused) {
+  Grid g = Open();
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j)
+      if (g.CellCentreY(j) < -0.8 && std::abs(g.CellCentreX(i)) < 2.5) {
+        const std::size_t k = static_cast<std::size_t>(i) * g.cols + j;
+        g.state[k] = CellClass::kUnknown;
+        g.goodness[k] = 0.0f;
+      }
+  const Pose2 here{0.0, 0.0, 0.0};
+  VoteOptions excused;
+  excused.unknown = {0.2, 0.6, 0.5};  // hazard_monitor's
+  excused.blind_margin_m = 0.5;
+  VoteOptions strict = excused;
+  strict.blind_margin_m = 0.0;
+  auto left_turns = [](const Choice& c) {
+    std::vector<const Candidate*> out;
+    for (const auto& k : c.candidates)
+      if (k.kind == Candidate::Kind::kTurn && k.turn_rad < 0.0) out.push_back(&k);
+    return out;
+  };
+  const Choice loose = VoteArcs(g, here, 0.0, -4.0, excused);
+  int allowed = 0;
+  for (const Candidate* k : left_turns(loose)) allowed += !k->vetoed;
+  EXPECT_GT(allowed, 0);  // the hole: unseen ground swept by the body's corners
+
+  const Choice c = VoteArcs(g, here, 0.0, -4.0, strict);
+  ASSERT_GE(left_turns(c).size(), 5u);
+  for (const Candidate* k : left_turns(c)) {
+    EXPECT_TRUE(k->vetoed) << k->planned_turn_rad / kDeg;
+    EXPECT_NE(k->why.find("could hide a rock"), std::string::npos) << k->why;
+  }
+  EXPECT_FALSE(c.found && c.best.kind == Candidate::Kind::kTurn && c.best.turn_rad < 0.0);
+
+  // The ground the first 18 deg of a turn left sweeps becomes known (the rover drove over
+  // it, or saw it from further back): the turns left may start, the rest still unseen.
+  Grid first = g;
+  for (const Pose2& p : SamplePath(here, -strict.max_turn_rad, 0.0, 0.0))
+    first.MarkKnown(strict.footprint, p, 0.5 * first.cell_m);
+  EXPECT_EQ(first.MarkKnown(strict.footprint, here, 0.5 * first.cell_m), 0);  // already known
+  const Choice d = VoteArcs(first, here, 0.0, -4.0, strict);
+  const Candidate* quarter = nullptr;
+  for (const Candidate* k : left_turns(d))
+    if (std::abs(k->planned_turn_rad + 90.0 * kDeg) < 1e-9) quarter = k;
+  ASSERT_NE(quarter, nullptr);
+  EXPECT_FALSE(quarter->vetoed) << quarter->why;
+  EXPECT_NEAR(quarter->turn_rad, -strict.max_turn_rad, 1e-12);
+  EXPECT_EQ(quarter->step_sweep.unknown, 0);  // judged on what its first step covers
+  ASSERT_TRUE(d.found);
+  EXPECT_EQ(d.best.kind, Candidate::Kind::kTurn);
+  EXPECT_LT(d.best.turn_rad, 0.0);
+}
+
+// An arc whose body corner sweeps a few cells of unseen ground beside the view: under the
+// 20 % share of unknown cells a step may cross, but the ground there is wide enough to hide
+// a rock (a 0.30 m rock once stood beside the view and was struck so, on an arc). With
+// hidden_at_any_share the arc is refused whatever the share; without, it is allowed.
+TEST(ArcVoting, ACornerSweptIntoGroundThatCouldHideARockIsRefusedAtAnyShare) {
+  Grid g = Open();
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j)
+      if (g.CellCentreY(j) > 0.8 && g.CellCentreX(i) > 0.5 && g.CellCentreX(i) < 3.0) {
+        const std::size_t k = static_cast<std::size_t>(i) * g.cols + j;
+        g.state[k] = CellClass::kUnknown;
+        g.goodness[k] = 0.0f;
+      }
+  VoteOptions o;
+  o.blind_margin_m = 0.0;
+  o.unknown = {0.2, 0.6, 0.5};
+  const auto right_arc = [](const Choice& c) -> const Candidate* {
+    for (const auto& k : c.candidates)
+      if (k.kind == Candidate::Kind::kArc && std::abs(k.curvature_per_m - 0.3) < 1e-9) return &k;
+    return nullptr;
+  };
+  const Choice share = VoteArcs(g, {0, 0, 0}, 5.0, 2.0, o);
+  const Candidate* a = right_arc(share);
+  ASSERT_NE(a, nullptr);
+  ASSERT_GT(a->step_sweep.unknown, 0);
+  ASSERT_GT(a->step_sweep.hidden, 0);
+  EXPECT_LE(a->step_sweep.UnknownFraction(), 0.2);
+  EXPECT_FALSE(a->vetoed) << a->why;  // the share alone lets it through
+
+  o.unknown.hidden_at_any_share = true;
+  const Choice strict = VoteArcs(g, {0, 0, 0}, 5.0, 2.0, o);
+  const Candidate* b = right_arc(strict);
+  ASSERT_NE(b, nullptr);
+  EXPECT_TRUE(b->vetoed);
+  EXPECT_NE(b->why.find("could hide a rock"), std::string::npos) << b->why;
+  ASSERT_TRUE(strict.found);  // straight ahead is seen ground
+  EXPECT_EQ(strict.best.step_sweep.hidden, 0);
+}
+
 TEST(ArcVoting, BadInputThrowsOneLine) {
   Grid g = Open();
   g.goodness.pop_back();

@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <random>
 
@@ -468,6 +469,67 @@ TEST(TraversabilityMap, APlaneThroughALineOfCellsRatesNoTilt) {
   MapOptions bad = o;
   bad.tilt_margin_sigmas = -1;
   EXPECT_THROW(TraversabilityMap{bad}, std::invalid_argument);
+}
+
+// A wall of rocks seen from one side, as the closed end of a pocket is: 0.4 m rocks side by
+// side, their far halves and the ground behind them hidden. The body-scale plane through
+// the ground and the rocks leans on the wall (least squares, before any rock cell is far
+// enough above it to be rejected), and a step measured from that leaning plane is short of
+// the rocks' height: the wall read as caution with lone unsafe cells. The ground plane must
+// stay on the ground, so the wall's top and foot are unsafe, the open ground a body-length
+// away safe.
+TEST(TraversabilityMap, AWallOfRocksSeenFromOneSideIsUnsafe) {
+  MapOptions o;  // hazard_monitor's (configs/rover.yaml)
+  o.footprint_radius_m = 0.3;
+  o.max_step_m = 0.25;
+  o.max_tilt_deg = 32.0;
+  o.tilt_radius_m = 0.75;
+  o.tilt_margin_sigmas = 1.0;
+  o.max_roughness_m = 0.08;
+  const double rock_r = 0.35, rock_h = 0.4, wall_y = 0.35;
+  auto scene = [&](double x, double y) {
+    double z = 0.0;
+    for (double xc = -1.2; xc <= 6.0; xc += 0.6) {
+      const double d2 = (x - xc) * (x - xc) + (y - wall_y) * (y - wall_y);
+      if (d2 < rock_r * rock_r) z = std::max(z, rock_h * std::sqrt(1.0 - d2 / (rock_r * rock_r)));
+    }
+    return z;
+  };
+  TraversabilityMap map(o);
+  MapOptions leaning_options = o;
+  leaning_options.ground_band_fraction = 0.0;  // the least-squares plane alone
+  TraversabilityMap leaning(leaning_options);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0.0, 0.01);
+  std::vector<Eigen::Vector3d> pts;
+  for (double x = 0.0; x < 5.0; x += 0.06)
+    for (double y = -2.5; y <= wall_y; y += 0.06) pts.emplace_back(x, y, -(scene(x, y) + n(rng)));
+  map.AddPoints(pts, std::vector<double>(pts.size(), 0.01));
+  leaning.AddPoints(pts, std::vector<double>(pts.size(), 0.01));
+  int wall_cells = 0, wall_unsafe = 0, leaning_unsafe = 0;
+  for (double x = 1.1; x < 4.0; x += 0.2)
+    for (double y : {0.1, 0.3}) {  // the rocks' near flanks and tops, 0.28 to 0.4 m tall
+      ++wall_cells;
+      const Cell c = map.At(x, y);
+      wall_unsafe += c.state == CellState::kUnsafe;
+      leaning_unsafe += leaning.At(x, y).state == CellState::kUnsafe;
+      EXPECT_EQ(c.state, CellState::kUnsafe) << "wall at " << x << "," << y << ": step " << c.step_m << " tilt "
+                                             << c.tilt_rad / kDeg;
+    }
+  EXPECT_EQ(wall_unsafe, wall_cells);
+  EXPECT_LT(leaning_unsafe, wall_cells) << "the leaning plane's wall: " << leaning_unsafe << " of " << wall_cells;
+  std::printf("wall cells unsafe: %d of %d from the ground plane, %d from the least-squares plane alone\n", wall_unsafe,
+              wall_cells, leaning_unsafe);
+  // The foot of the wall, its wheel patch reaching the rocks' lower flanks (cells' mean
+  // heights 0.15 to 0.2 m): not safe.
+  for (double x = 1.1; x < 4.0; x += 0.2) EXPECT_NE(map.At(x, -0.1).state, CellState::kSafe) << "foot at " << x;
+  // Open ground over a body length from the wall: level, safe.
+  for (double x = 1.1; x < 4.0; x += 0.2)
+    for (double y = -0.9; y > -2.0; y -= 0.2) {
+      const Cell c = map.At(x, y);
+      EXPECT_EQ(c.state, CellState::kSafe) << "ground at " << x << "," << y;
+      EXPECT_LT(c.tilt_rad / kDeg, 2.0) << "ground at " << x << "," << y;
+    }
 }
 
 }  // namespace

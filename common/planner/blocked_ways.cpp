@@ -1,0 +1,59 @@
+#include "planner/blocked_ways.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace rover::planner {
+
+void BlockOptions::Validate() const {
+  auto positive = [](double v, const char* name) {
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw std::invalid_argument(std::string("blocked ways: ") + name + " " + std::to_string(v) + " must be > 0");
+  };
+  if (stall_steps < 0) throw std::invalid_argument("blocked ways: stall_steps must be >= 0");
+  if (max_blocks < 0) throw std::invalid_argument("blocked ways: max_blocks must be >= 0");
+  positive(min_gain_m, "min_gain_m");
+  positive(ahead_m, "ahead_m");
+  positive(radius_m, "radius_m");
+  positive(new_way_m, "new_way_m");
+}
+
+BlockedWays::BlockedWays(const BlockOptions& options) : options_(options) { options_.Validate(); }
+
+void BlockedWays::Reset() {
+  best_ = std::numeric_limits<double>::infinity();
+  stalled_ = 0;
+  zones_.clear();
+}
+
+bool BlockedWays::Update(const GlobalPlan& plan) {
+  if (options_.stall_steps == 0 || !plan.reachable()) return false;
+  const double cost = plan.cost_at_start();
+  if (!std::isfinite(cost)) return false;
+  if (cost < best_ - options_.min_gain_m || cost > best_ + options_.new_way_m) {
+    best_ = cost;
+    stalled_ = 0;
+    return false;
+  }
+  if (++stalled_ < options_.stall_steps || static_cast<int>(zones_.size()) >= options_.max_blocks) return false;
+  // The point ahead_m down the path (the goal itself when the path is shorter).
+  const auto& path = plan.path();
+  if (path.size() < 2) return false;
+  Eigen::Vector2d at = path.back();
+  double along = 0.0;
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    along += (path[i] - path[i - 1]).norm();
+    if (along >= options_.ahead_m) {
+      at = path[i];
+      break;
+    }
+  }
+  zones_.push_back(hazards::KeepOutZone::Circle("blocked_way_" + std::to_string(zones_.size() + 1), at.x(), at.y(),
+                                                options_.radius_m));
+  best_ = std::numeric_limits<double>::infinity();
+  stalled_ = 0;
+  return true;
+}
+
+}  // namespace rover::planner

@@ -1,0 +1,95 @@
+// Blocked ways with known answers: a wall with one gap the plan leads through and the
+// rover never gets through, and a rover that makes progress.
+#include "planner/blocked_ways.hpp"
+
+#include <gtest/gtest.h>
+
+namespace rover::planner {
+namespace {
+
+using rover::avoidance::CellClass;
+using rover::avoidance::Grid;
+
+// Open ground 30 x 30 m; a wall of rocks across x = 4, out to |y| = half_length (the whole
+// grid by default), with one 2.4 m gap at y 0.
+Grid WallWithAGap(double half_length = 100.0) {
+  Grid g = Grid::Filled(-10, -15, 0.2, 150, 150, CellClass::kSafe, 0.9f);
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j) {
+      const double x = g.CellCentreX(i), y = g.CellCentreY(j);
+      if (x >= 4.0 && x <= 4.6 && std::abs(y) > 1.2 && std::abs(y) < half_length) g.state[static_cast<std::size_t>(i) * g.cols + j] = CellClass::kUnsafe;
+    }
+  return g;
+}
+
+PlanRequest At(double x, double y) {
+  PlanRequest r;
+  r.start_x = x, r.start_y = y;
+  r.goal_x = 9.0, r.goal_y = 0.0;
+  r.goal_radius_m = 0.5;
+  return r;
+}
+
+// The rover stands before the gap step after step: after stall_steps plans without
+// progress the gap is blocked, and the next plan finds no way: the goal is reported
+// unreachable rather than circled for.
+TEST(BlockedWays, AGapTheRoverNeverCrossesIsBlockedAndTheGoalReportedUnreachable) {
+  const Grid g = WallWithAGap();
+  PlannerOptions po;
+  BlockOptions bo;
+  bo.stall_steps = 5;
+  BlockedWays blocked(bo);
+  PlanRequest r = At(3.0, 0.0);
+  const GlobalPlan first = PlanOnGrid(g, r, po);
+  ASSERT_TRUE(first.reachable()) << first.why_unreachable();
+  EXPECT_FALSE(blocked.Update(first));  // the first plan sets the mark to beat
+  for (int k = 1; k < bo.stall_steps; ++k) {
+    EXPECT_FALSE(blocked.Update(PlanOnGrid(g, r, po))) << k;
+    EXPECT_EQ(blocked.stalled_steps(), k);
+  }
+  ASSERT_TRUE(blocked.Update(PlanOnGrid(g, r, po)));
+  ASSERT_EQ(blocked.zones().size(), 1u);
+  const hazards::KeepOutZone& z = blocked.zones()[0];
+  EXPECT_EQ(z.name, "blocked_way_1");
+  EXPECT_NEAR(z.center.x(), 4.5, 0.25);  // 1.5 m down the path: in the gap
+  EXPECT_NEAR(z.center.y(), 0.0, 0.25);
+  EXPECT_DOUBLE_EQ(z.radius_m, bo.radius_m);
+  r.zones = blocked.zones();
+  const GlobalPlan after = PlanOnGrid(g, r, po);
+  EXPECT_FALSE(after.reachable());
+  EXPECT_NE(after.why_unreachable().find("no way from"), std::string::npos) << after.why_unreachable();
+  EXPECT_FALSE(blocked.Update(after));  // nothing more to block on an unreachable plan
+  blocked.Reset();
+  EXPECT_TRUE(blocked.zones().empty());
+}
+
+// A rover that gains on the goal step by step never has its way blocked; nor does one whose
+// plan grows longer as the map shows more (a new way, counted afresh).
+TEST(BlockedWays, ProgressAndANewWayAreNotStalls) {
+  const Grid g = WallWithAGap(8.0);
+  PlannerOptions po;
+  BlockOptions bo;
+  bo.stall_steps = 3;
+  BlockedWays blocked(bo);
+  for (double x = -6.0; x <= 3.0; x += 0.6) EXPECT_FALSE(blocked.Update(PlanOnGrid(g, At(x, 0.0), po))) << x;
+  EXPECT_EQ(blocked.stalled_steps(), 0);
+  EXPECT_FALSE(blocked.Update(PlanOnGrid(g, At(3.0, 0.0), po)));
+  EXPECT_EQ(blocked.stalled_steps(), 1);
+  // The same spot, the wall's gap closed by what the map saw: the way round is much longer.
+  Grid closed = g;
+  for (int i = 0; i < closed.rows; ++i)
+    for (int j = 0; j < closed.cols; ++j)
+      if (closed.CellCentreX(i) >= 4.0 && closed.CellCentreX(i) <= 4.6 && std::abs(closed.CellCentreY(j)) <= 1.2)
+        closed.state[static_cast<std::size_t>(i) * closed.cols + j] = CellClass::kUnsafe;
+  const GlobalPlan round = PlanOnGrid(closed, At(3.0, 0.0), po);
+  ASSERT_TRUE(round.reachable());
+  EXPECT_FALSE(blocked.Update(round));
+  EXPECT_EQ(blocked.stalled_steps(), 0);
+  EXPECT_TRUE(blocked.zones().empty());
+  BlockOptions bad;
+  bad.radius_m = 0.0;
+  EXPECT_THROW(BlockedWays{bad}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rover::planner
