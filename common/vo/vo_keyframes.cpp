@@ -6,6 +6,8 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
+
 namespace rover::vo {
 
 namespace {
@@ -32,7 +34,11 @@ namespace {
 bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
                        const Eigen::Isometry3d& T_ref_cur, const Matrix6d& pair_cov, double max_chi2,
                        double min_fraction, Matrix6d* out) {
-  Matrix6d cov = u.Scaled(w.covariance);
+  // The window's fit is scaled by the larger of the pair's factors and its own (the
+  // variance factor of the window's residuals under its own error model, chained tracks'
+  // steps included: the pair's s0^2 is that of a different model of the same errors).
+  const double factor = std::max({u.variance_factor, u.cluster_factor, w.variance_factor});
+  Matrix6d cov = factor * w.covariance + u.shared;
   cov = 0.5 * (cov + cov.transpose()).eval();
   const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
   const geometry::Vector6d b = geometry::XyzRpyFromPose(T_ref_cur);
@@ -40,7 +46,8 @@ bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
   for (int i = 3; i < 6; ++i) d(i) = geometry::WrapAngle(d(i));
   const geometry::Vector6d offset_response = u.disparity_sensitivity * w.disparity_offset_px;
   const Matrix6d pair_with_offset = pair_cov + offset_response * offset_response.transpose();
-  const double chi2 = NestedDifferenceChi2(d, u.Scaled(w.step_covariance), pair_with_offset, min_fraction);
+  const double chi2 =
+      NestedDifferenceChi2(d, factor * w.step_covariance + u.shared, pair_with_offset, min_fraction);
   if (cov.allFinite() && (max_chi2 <= 0 || chi2 <= max_chi2)) {
     *out = cov;
     return true;
