@@ -48,7 +48,8 @@ struct WindowOptions {
   // (ToIndependentErrors in window.cpp). false: independent errors per observation.
   // Taken as independent, a track seen in 5 keyframes counts its first match error 5
   // times: the refined step claims more than its data give (README "VO with memory").
-  bool chained_tracks = true;
+  // VisualOdometry sets it from VoOptions::window_chained_tracks (true, as VO-6 tracks).
+  bool chained_tracks = false;
   double tolerance = 1e-4;     // stop when the relative cost decrease is below this
   // One disparity offset (right x, pixels) for every observation: a disparity offset
   // scales every range. It is one drive-wide quantity: a scalar recursive filter starts
