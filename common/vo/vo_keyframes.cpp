@@ -33,11 +33,12 @@ namespace {
 // for the test. Without it KITTI 06's 0.16 px offset failed 46 of 50 windows.
 bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
                        const Eigen::Isometry3d& T_ref_cur, const Matrix6d& pair_cov, double max_chi2,
-                       double min_fraction, Matrix6d* out) {
-  // The window's fit is scaled by the larger of the pair's factors and its own (the
-  // variance factor of the window's residuals under its own error model, chained tracks'
-  // steps included: the pair's s0^2 is that of a different model of the same errors).
-  const double factor = std::max({u.variance_factor, u.cluster_factor, w.variance_factor});
+                       double min_fraction, bool chained_tracks, Matrix6d* out) {
+  // With chained tracks the window's fit is scaled by the larger of the pair's factors and
+  // its own (the variance factor of the window's residuals under the random-walk model: the
+  // pair's s0^2 is that of a different model of the same errors).
+  const double factor =
+      std::max({u.variance_factor, u.cluster_factor, chained_tracks ? w.variance_factor : 0.0});
   Matrix6d cov = factor * w.covariance + u.shared;
   cov = 0.5 * (cov + cov.transpose()).eval();
   const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
@@ -134,7 +135,7 @@ void VisualOdometry::State::RefineWindow(Step* st, const Eigen::Isometry3d& T_w_
   res->disparity_offset_px = w.disparity_offset_px;
   Matrix6d cov;
   const bool used = w.ok && RefinedCovariance(w, st->u, T_ref_cur, pair_cov, o.window_max_chi2,
-                                               o.window_consistency_min_fraction, &cov);
+                                               o.window_consistency_min_fraction, o.window_chained_tracks, &cov);
   // Published: the window's estimate of this pair against the last call's pair as it
   // was published, so that the deltas compose to the window's latest estimate and its
   // corrections of the poses before reach the user (the window's oldest pose is fixed).
