@@ -6,6 +6,8 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
+
 namespace rover::vo {
 
 namespace {
@@ -31,8 +33,13 @@ namespace {
 // for the test. Without it KITTI 06's 0.16 px offset failed 46 of 50 windows.
 bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
                        const Eigen::Isometry3d& T_ref_cur, const Matrix6d& pair_cov, double max_chi2,
-                       double min_fraction, Matrix6d* out) {
-  Matrix6d cov = u.Scaled(w.covariance);
+                       double min_fraction, bool chained_tracks, Matrix6d* out) {
+  // With chained tracks the window's fit is scaled by the larger of the pair's factors and
+  // its own (the variance factor of the window's residuals under the random-walk model: the
+  // pair's s0^2 is that of a different model of the same errors).
+  const double factor =
+      std::max({u.variance_factor, u.cluster_factor, chained_tracks ? w.variance_factor : 0.0});
+  Matrix6d cov = factor * w.covariance + u.shared;
   cov = 0.5 * (cov + cov.transpose()).eval();
   const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
   const geometry::Vector6d b = geometry::XyzRpyFromPose(T_ref_cur);
@@ -40,7 +47,8 @@ bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
   for (int i = 3; i < 6; ++i) d(i) = geometry::WrapAngle(d(i));
   const geometry::Vector6d offset_response = u.disparity_sensitivity * w.disparity_offset_px;
   const Matrix6d pair_with_offset = pair_cov + offset_response * offset_response.transpose();
-  const double chi2 = NestedDifferenceChi2(d, u.Scaled(w.step_covariance), pair_with_offset, min_fraction);
+  const double chi2 =
+      NestedDifferenceChi2(d, factor * w.step_covariance + u.shared, pair_with_offset, min_fraction);
   if (cov.allFinite() && (max_chi2 <= 0 || chi2 <= max_chi2)) {
     *out = cov;
     return true;
@@ -127,7 +135,7 @@ void VisualOdometry::State::RefineWindow(Step* st, const Eigen::Isometry3d& T_w_
   res->disparity_offset_px = w.disparity_offset_px;
   Matrix6d cov;
   const bool used = w.ok && RefinedCovariance(w, st->u, T_ref_cur, pair_cov, o.window_max_chi2,
-                                               o.window_consistency_min_fraction, &cov);
+                                               o.window_consistency_min_fraction, o.window_chained_tracks, &cov);
   // Published: the window's estimate of this pair against the last call's pair as it
   // was published, so that the deltas compose to the window's latest estimate and its
   // corrections of the poses before reach the user (the window's oldest pose is fixed).

@@ -56,6 +56,22 @@ Eigen::Matrix4d Information(const WindowObservation& z) {
   return W;
 }
 
+// A track's observations in the window (keyframe order), stacked 4 rows each (left x y,
+// right x y), taken to the errors that are independent (WindowOptions::chained_tracks):
+// the tracker cuts a track's template at its last left match (VO-6), so a left match error
+// carries into every later one, and the left errors are a random walk whose steps are the
+// matches' own errors; the right match is cut at the left one, so its error is the left's
+// plus the stereo match's own. Row block n becomes (left_n - left_n-1, right_n - left_n),
+// the first (left_0, right_0 - left_0): each with the covariance of its own match, so the
+// observations' information stays blockdiag(Sigma_left^-1, Sigma_right^-1).
+template <typename Derived>
+void ToIndependentErrors(Eigen::MatrixBase<Derived>& rows, int m) {
+  for (int n = m - 1; n >= 0; --n) {
+    rows.middleRows(4 * n + 2, 2) -= rows.middleRows(4 * n, 2);
+    if (n > 0) rows.middleRows(4 * n, 2) -= rows.middleRows(4 * (n - 1), 2);
+  }
+}
+
 // Information on the offset with which a full window holds it at the drive-wide value.
 constexpr double kHeldOffsetInfo = 1e8;
 
@@ -203,18 +219,74 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   const int redundancy = 4 * sol.observations - 3 * sol.points - dim;
   if (sol.points < 3 || redundancy <= 0) return sol;
 
+  // One point's observations that project (their keyframes), stacked residuals and, when
+  // asked, the prediction's Jacobians (poses of those keyframes, the point, the offset),
+  // taken to independent errors when the tracks are chained.
+  struct PointTerms {
+    std::vector<int> frames, obs;
+    Eigen::VectorXd r;
+    Eigen::MatrixXd Jp, Jx;
+    Eigen::VectorXd Jd;
+    int failed = 0;  // observations behind a camera
+  };
+  auto point_terms = [&](std::size_t j, const std::vector<Eigen::Isometry3d>& P, const Eigen::Vector3d& Xj, double d,
+                         bool jacobians) {
+    PointTerms t;
+    const auto& ob = used[j].obs;
+    const int m_all = static_cast<int>(ob.size());
+    t.r.resize(4 * m_all);
+    if (jacobians) {
+      t.Jp.setZero(4 * m_all, 6 * m_all);
+      t.Jx.resize(4 * m_all, 3);
+      t.Jd.setZero(4 * m_all);
+    }
+    int m = 0;
+    for (int k = 0; k < m_all; ++k) {
+      const auto& [i, z] = ob[static_cast<std::size_t>(k)];
+      Eigen::Vector4d r;
+      Eigen::Matrix<double, 4, 6> Jp;
+      Eigen::Matrix<double, 4, 3> Jx;
+      if (!Linearise(rig, P[static_cast<std::size_t>(i)], Xj, *z, &r, jacobians ? &Jp : nullptr,
+                     jacobians ? &Jx : nullptr)) {
+        ++t.failed;
+        continue;
+      }
+      r(2) -= d;
+      t.r.segment<4>(4 * m) = r;
+      if (jacobians) {
+        t.Jp.block<4, 6>(4 * m, 6 * m) = Jp;
+        t.Jx.middleRows<4>(4 * m) = Jx;
+        t.Jd(4 * m + 2) = 1.0;  // d(prediction)/d(offset) = e_2 (the right image's x)
+      }
+      t.frames.push_back(i);
+      t.obs.push_back(k);
+      ++m;
+    }
+    t.r.conservativeResize(4 * m);
+    if (jacobians) {
+      t.Jp.conservativeResize(4 * m, 6 * m);
+      t.Jx.conservativeResize(4 * m, 3);
+      t.Jd.conservativeResize(4 * m);
+    }
+    if (o_.chained_tracks) {
+      ToIndependentErrors(t.r, m);
+      if (jacobians) {
+        ToIndependentErrors(t.Jp, m);
+        ToIndependentErrors(t.Jx, m);
+        ToIndependentErrors(t.Jd, m);
+      }
+    }
+    return t;
+  };
+
   auto cost_of = [&](const std::vector<Eigen::Isometry3d>& poses, const std::vector<Eigen::Vector3d>& X, double d) {
     double cost = 0;
     for (std::size_t j = 0; j < used.size(); ++j) {
-      for (std::size_t k = 0; k < used[j].obs.size(); ++k) {
-        const auto& [i, z] = used[j].obs[k];
-        Eigen::Vector4d r;
-        if (!Linearise(rig, poses[static_cast<std::size_t>(i)], X[j], *z, &r, nullptr, nullptr)) {
-          cost += 2 * o_.huber_sigmas * 100.0;  // behind a camera: a large, finite penalty
-          continue;
-        }
-        r(2) -= d;
-        cost += HuberCost(r.dot(used[j].W[k] * r), o_.huber_sigmas, nullptr);
+      const PointTerms t = point_terms(j, poses, X[j], d, false);
+      cost += t.failed * 2 * o_.huber_sigmas * 100.0;  // behind a camera: a large, finite penalty
+      for (std::size_t n = 0; n < t.obs.size(); ++n) {
+        const Eigen::Vector4d r = t.r.segment<4>(4 * static_cast<int>(n));
+        cost += HuberCost(r.dot(used[j].W[static_cast<std::size_t>(t.obs[n])] * r), o_.huber_sigmas, nullptr);
       }
     }
     return cost;
@@ -255,36 +327,45 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
       Eigen::Matrix3d Hxx = Eigen::Matrix3d::Zero();
       Eigen::Vector3d b = Eigen::Vector3d::Zero();
       Hcx[j].setZero(nc, 3);
-      for (std::size_t n = 0; n < used[j].obs.size(); ++n) {
-        const auto& [i, z] = used[j].obs[n];
-        Eigen::Vector4d r;
-        Eigen::Matrix<double, 4, 6> Jp;
-        Eigen::Matrix<double, 4, 3> Jx;
-        if (!Linearise(rig, poses[static_cast<std::size_t>(i)], X[j], *z, &r, &Jp, &Jx)) continue;
-        r(2) -= delta;
-        Eigen::Matrix4d W = used[j].W[n];
+      const PointTerms t = point_terms(j, poses, X[j], delta, true);
+      const int m = static_cast<int>(t.obs.size());
+      for (int n = 0; n < m; ++n) {
+        const Eigen::Vector4d r = t.r.segment<4>(4 * n);
+        Eigen::Matrix4d W = used[j].W[static_cast<std::size_t>(t.obs[static_cast<std::size_t>(n)])];
         double w = 1;
         HuberCost(r.dot(W * r), o_.huber_sigmas, &w);
         W *= w;
+        // This block's rows: after the chaining they hold the poses of keyframes n-1 and n.
+        const auto Jp = t.Jp.middleRows<4>(4 * n);
+        const Eigen::Matrix<double, 4, 3> Jx = t.Jx.middleRows<4>(4 * n);
+        const Eigen::Vector4d Jd = t.Jd.segment<4>(4 * n);
         const Eigen::Matrix<double, 4, 3> WJx = W * Jx;
         const Eigen::Vector4d Wr = W * r;
+        const Eigen::Vector4d WJd = W * Jd;
         Hxx += Jx.transpose() * WJx;
         b += Jx.transpose() * Wr;
         if (offset) {
-          // d(prediction)/d(offset) = e_2 (the right image's x).
-          Hcc(id, id) += W(2, 2);
-          bc(id) += Wr(2);
-          Hcx[j].row(id) += WJx.row(2);
+          Hcc(id, id) += Jd.dot(WJd);
+          bc(id) += Jd.dot(Wr);
+          Hcx[j].row(id) += Jd.transpose() * WJx;
         }
-        if (i == 0) continue;
-        const int k = 6 * (i - 1);
-        Hcc.block<6, 6>(k, k) += Jp.transpose() * W * Jp;
-        bc.segment<6>(k) += Jp.transpose() * Wr;
-        Hcx[j].block<6, 3>(k, 0) += Jp.transpose() * WJx;
-        if (offset) {
-          const Vector6d Hpd = Jp.transpose() * W.col(2);
-          Hcc.block<6, 1>(k, id) += Hpd;
-          Hcc.block<1, 6>(id, k) += Hpd.transpose();
+        for (int a = std::max(0, n - 1); a <= n; ++a) {
+          const int ia = t.frames[static_cast<std::size_t>(a)];
+          if (ia == 0) continue;
+          const int ka = 6 * (ia - 1);
+          const Eigen::Matrix<double, 4, 6> Ja = Jp.middleCols<6>(6 * a);
+          bc.segment<6>(ka) += Ja.transpose() * Wr;
+          Hcx[j].block<6, 3>(ka, 0) += Ja.transpose() * WJx;
+          if (offset) {
+            const Vector6d Hpd = Ja.transpose() * WJd;
+            Hcc.block<6, 1>(ka, id) += Hpd;
+            Hcc.block<1, 6>(id, ka) += Hpd.transpose();
+          }
+          for (int c = std::max(0, n - 1); c <= n; ++c) {
+            const int ic = t.frames[static_cast<std::size_t>(c)];
+            if (ic == 0) continue;
+            Hcc.block<6, 6>(ka, 6 * (ic - 1)) += Ja.transpose() * W * Jp.middleCols<6>(6 * c);
+          }
         }
       }
       Hxx.diagonal() *= 1 + lambda;

@@ -41,6 +41,15 @@ struct WindowOptions {
   int max_frames = 5;          // keyframes kept (>= 2)
   int max_iterations = 8;      // Levenberg-Marquardt iterations
   double huber_sigmas = 3.0;   // Huber threshold on an observation's normalised residual
+  // How a track's errors relate from keyframe to keyframe. true: chained, as VO-6 tracks
+  // (each pair's template is cut at the track's last left match, so a match error carries
+  // into every later observation: the left errors are a random walk, the right ones the
+  // left's plus the stereo match's own), and the refinement weighs the steps of that walk
+  // (ToIndependentErrors in window.cpp). false: independent errors per observation.
+  // Taken as independent, a track seen in 5 keyframes counts its first match error 5
+  // times: the refined step claims more than its data give (README "VO with memory").
+  // VisualOdometry sets it from VoOptions::window_chained_tracks (true, as VO-6 tracks).
+  bool chained_tracks = false;
   double tolerance = 1e-4;     // stop when the relative cost decrease is below this
   // One disparity offset (right x, pixels) for every observation: a disparity offset
   // scales every range. It is one drive-wide quantity: a scalar recursive filter starts
