@@ -17,9 +17,8 @@
 //
 // The configuration space. Obstacles: map cells rated unsafe with at least
 // min_obstacle_neighbours unsafe neighbours (0, the default: every unsafe cell, as arc
-// voting refuses every one; the map rates a wall of rocks mostly caution, the body-scale
-// plane leaning on it, with lone unsafe cells and pairs along it, and a plan through the
-// caution between them leads the vote to a wall it cannot cross; more: lone cells are
+// voting refuses every one, and a plan through caution between lone unsafe cells of a
+// wall would lead the vote to a wall it cannot cross; more: lone cells are
 // taken for stereo noise and cost as caution), the cells of
 // keep-out zones grown by the position uncertainty (as the hazard monitor grows them), and
 // ground the prior map calls impassable that the cameras have not rated. A cell within

@@ -7,6 +7,7 @@
 // per update, with what the published VO_UPDATE does not carry (keyframe, whether the
 // window's refinement was published, the variance factors, track ages), so that the
 // updates beyond the 99.7 % NEES bound can be told apart by kind.
+#include "bus/channels.hpp"
 #include "bus/stereo_frame_convert.hpp"
 #include "config/yaml_config.hpp"
 #include "geometry/pose.hpp"
@@ -39,7 +40,7 @@ std::vector<rover_msgs::sim_truth_t> ReadTruth(const std::string& path) {
   if (!log.good()) throw std::runtime_error(path + ": cannot read the LCM log");
   std::vector<rover_msgs::sim_truth_t> truth;
   for (const lcm::LogEvent* ev = log.readNextEvent(); ev != nullptr; ev = log.readNextEvent()) {
-    if (ev->channel != "SIM_TRUTH") continue;
+    if (ev->channel != rover::channels::kSimTruth) continue;
     rover_msgs::sim_truth_t m;
     if (m.decode(ev->data, 0, ev->datalen) >= 0) truth.push_back(m);
   }
@@ -64,6 +65,12 @@ int main(int argc, char** argv) {
   std::string log_path, config_path = std::string(ROVER_SOURCE_DIR) + "/configs/vo.yaml", out_path;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::cout << kUsage
+                << "Replays a recorded run's STEREO_FRAMEs through the VO library, as visual_odometry runs\n"
+                   "it, and writes one CSV line per update with its error against SIM_TRUTH and its sigma.\n";
+      return 0;
+    }
     if ((a == "--config" || a == "--out") && i + 1 < argc) {
       (a == "--config" ? config_path : out_path) = argv[++i];
     } else if (!a.empty() && a[0] != '-' && log_path.empty()) {
@@ -98,7 +105,7 @@ int main(int argc, char** argv) {
     int accepted = 0, beyond = 0;
     double nees_sum = 0;
     for (const lcm::LogEvent* ev = log.readNextEvent(); ev != nullptr; ev = log.readNextEvent()) {
-      if (ev->channel != "STEREO_FRAME") continue;
+      if (ev->channel != rover::channels::kStereoFrame) continue;
       rover_msgs::stereo_frame_t frame;
       if (frame.decode(ev->data, 0, ev->datalen) < 0) continue;
       if (frame.purpose == "science") continue;
