@@ -1,8 +1,10 @@
 // Conversions between message arrays and Eigen (quaternions are stored w, x, y, z).
 #pragma once
 
+#include "geometry/camera_model.hpp"
 #include "geometry/pose.hpp"
 
+#include <rover_msgs/camera_model_t.hpp>
 #include <rover_msgs/pose_t.hpp>
 
 namespace rover::bus {
@@ -40,6 +42,17 @@ inline geometry::Pose PoseFromMsg(const rover_msgs::pose_t& msg) {
 inline void PoseToArrays(const geometry::Pose& T, double position[3], double orientation[4]) {
   for (int i = 0; i < 3; ++i) position[i] = T.translation()[i];
   QuaternionToArray(Eigen::Quaterniond(T.linear()), orientation);
+}
+
+// A camera model as STEREO_FRAME carries it (geometry::CameraModelFromParams reads it back).
+inline rover_msgs::camera_model_t CameraModelToMsg(const geometry::CameraModel& m) {
+  rover_msgs::camera_model_t out{};
+  out.type = m.type();
+  out.width = m.width();
+  out.height = m.height();
+  out.params = m.Params();
+  out.num_params = static_cast<std::int32_t>(out.params.size());
+  return out;
 }
 
 }  // namespace rover::bus

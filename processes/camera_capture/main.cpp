@@ -239,16 +239,6 @@ rover_msgs::image_t EncodeImage(const cv::Mat& img, bool png) {
   return out;
 }
 
-rover_msgs::camera_model_t EncodeModel(const geometry::CameraModel& m) {
-  rover_msgs::camera_model_t out{};
-  out.type = m.type();
-  out.width = m.width();
-  out.height = m.height();
-  out.params = m.Params();
-  out.num_params = static_cast<std::int32_t>(out.params.size());
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -324,8 +314,8 @@ int main(int argc, char** argv) {
       auto right = std::async(std::launch::async, [&pair, png] { return EncodeImage(pair.right, png); });
       frame.left = EncodeImage(pair.left, png);
       frame.right = right.get();
-      frame.left_model = EncodeModel(*pair.rig.left);
-      frame.right_model = EncodeModel(*pair.rig.right);
+      frame.left_model = rover::bus::CameraModelToMsg(*pair.rig.left);
+      frame.right_model = rover::bus::CameraModelToMsg(*pair.rig.right);
       frame.pose_at_capture = pose;
       return frame;
     };

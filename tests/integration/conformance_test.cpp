@@ -5,6 +5,7 @@
 // IMU with Z up, a driver that obeys commands not signed with the key, a camera that fails
 // in silence, a camera whose two images are taken too far apart.
 #include "bus/bus.hpp"
+#include "bus/convert.hpp"
 #include "bus/channels.hpp"
 #include "bus/signing.hpp"
 #include "config/yaml_config.hpp"
@@ -349,15 +350,6 @@ class SkewedCamera {
     return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
         .count();
   }
-  static rover_msgs::camera_model_t Model(const geometry::CameraModel& m) {
-    rover_msgs::camera_model_t out{};
-    out.type = m.type();
-    out.width = m.width();
-    out.height = m.height();
-    out.params = m.Params();
-    out.num_params = static_cast<std::int32_t>(out.params.size());
-    return out;
-  }
   static rover_msgs::image_t Gray(int w, int h) {
     rover_msgs::image_t img{};
     img.width = w;
@@ -381,8 +373,8 @@ class SkewedCamera {
       f.purpose = r.purpose;
       f.left = Gray(64, 48);
       f.right = Gray(64, 48);
-      f.left_model = Model(*rig.left);
-      f.right_model = Model(*rig.right);
+      f.left_model = bus::CameraModelToMsg(*rig.left);
+      f.right_model = bus::CameraModelToMsg(*rig.right);
       f.pose_at_capture.orientation[0] = 1;
       f.left_utime = f.utime - skew_us_ / 2;
       f.right_utime = f.left_utime + skew_us_;

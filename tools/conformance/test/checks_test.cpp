@@ -2,6 +2,7 @@
 // rate, an IMU whose accelerometer agrees with its orientation or not by a known angle, a
 // mobility driver's statuses with a known unit error, a dead-man on time or never, frames
 // whose cameras are swapped.
+#include "bus/convert.hpp"
 #include "conformance/camera_checks.hpp"
 #include "conformance/mobility_checks.hpp"
 #include "conformance/sensor_checks.hpp"
@@ -270,16 +271,6 @@ TEST(ConformanceMobility, RefusalByFaultOrCountedDrop) {
             "FAIL mobility.bad.type: expected command 9 refused, nothing moving; seen MOVING for command 9");
 }
 
-rover_msgs::camera_model_t Model(const geometry::CameraModel& m) {
-  rover_msgs::camera_model_t out{};
-  out.type = m.type();
-  out.width = m.width();
-  out.height = m.height();
-  out.params = m.Params();
-  out.num_params = static_cast<std::int32_t>(out.params.size());
-  return out;
-}
-
 rover_msgs::image_t Gray(int w, int h) {
   rover_msgs::image_t img{};
   img.width = w;
@@ -304,8 +295,8 @@ TEST(ConformanceCamera, FramesAnswersAndSwappedCameras) {
   f.purpose = "vo";
   f.left = Gray(64, 48);
   f.right = Gray(64, 48);
-  f.left_model = Model(*rig.left);
-  f.right_model = Model(*rig.right);
+  f.left_model = rover::bus::CameraModelToMsg(*rig.left);
+  f.right_model = rover::bus::CameraModelToMsg(*rig.right);
   f.pose_at_capture.orientation[0] = 1;
   f.left_utime = 999400;  // the right exposed 1.2 ms after the left
   f.right_utime = 1000600;
