@@ -147,10 +147,21 @@ std::string Bus::Hold(const std::string& channel, int queue_capacity) {
   return "";
 }
 
-void Bus::SealBatch(std::int64_t next_instant) {
-  for (auto& h : inbox_) sealed_.push_back(std::move(h));
-  inbox_.clear();
+void Bus::SealBatch(std::int64_t next_instant) { SealBatch(next_instant, simtime::Cut{}); }
+
+void Bus::SealBatch(std::int64_t next_instant, const simtime::Cut& cut) {
+  std::vector<Held> after;
+  for (auto& h : inbox_) {
+    const auto& [channel, publisher, count, arrival] = h.key;
+    if (cut.After(channel, publisher, count)) {
+      after.push_back(std::move(h));
+    } else {
+      sealed_.push_back(std::move(h));
+    }
+  }
+  inbox_ = std::move(after);
   held_count_.clear();
+  for (const auto& h : inbox_) ++held_count_[std::get<0>(h.key)];
   instant_ = next_instant;
   std::erase_if(later_, [&](auto& entry) {
     ++held_count_[std::get<0>(entry.second.key)];
@@ -158,6 +169,42 @@ void Bus::SealBatch(std::int64_t next_instant) {
     inbox_.push_back(std::move(entry.second));
     return true;
   });
+}
+
+std::int64_t Bus::ReceivedById(std::uint32_t channel_id, std::uint32_t publisher) const {
+  const auto name = subscribed_ids_.find(channel_id);
+  if (name == subscribed_ids_.end()) return -1;
+  const auto channel = received_.find(name->second);
+  if (channel == received_.end()) return 0;
+  const auto count = channel->second.find(publisher);
+  return count == channel->second.end() ? 0 : count->second;
+}
+
+void Bus::ClockMoved(std::int64_t next_instant, simtime::Cut cut) {
+  if (pending_seal_) SealWhenReady(true);  // a newer clock: the older instant is over
+  pending_seal_ = PendingSeal{next_instant, std::move(cut)};
+}
+
+bool Bus::SealWhenReady(bool force, std::string* missing) {
+  if (!pending_seal_) return false;
+  const auto received = [this](std::uint32_t channel_id, std::uint32_t publisher) {
+    return ReceivedById(channel_id, publisher);
+  };
+  if (!pending_seal_->cut.Reached(received)) {
+    if (!force) return false;
+    if (missing) {
+      for (const auto& [key, count] : pending_seal_->cut.counts()) {
+        const std::int64_t got = ReceivedById(key.first, key.second);
+        if (got < 0 || got >= count) continue;
+        if (!missing->empty()) *missing += ", ";
+        *missing += std::to_string(count - got) + " on " + subscribed_ids_.at(key.first) + " from publisher id " +
+                    std::to_string(key.second);
+      }
+    }
+  }
+  SealBatch(pending_seal_->next_instant, pending_seal_->cut);
+  pending_seal_.reset();
+  return true;
 }
 
 int Bus::DispatchBatch() {

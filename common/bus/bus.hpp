@@ -119,6 +119,18 @@ class Bus {
   // later one: on a multi-core computer it can overtake the clock message that started
   // its instant, so it is held by its stamp, not by when it came, until its instant.
   void SealBatch(std::int64_t next_instant);
+  // The same, keeping back what `cut` says was published after it (simtime/cut.hpp): a
+  // message that overtook the clock waits for the next batch.
+  void SealBatch(std::int64_t next_instant, const simtime::Cut& cut);
+  // A virtual clock message moved the clock on to `next_instant` with `cut`: the batch is
+  // sealed by SealWhenReady once every message below the cut on a channel this bus takes
+  // has come (the time source's last messages may come just after its clock message).
+  void ClockMoved(std::int64_t next_instant, simtime::Cut cut);
+  // Seals the batch ClockMoved announced when the cut is reached, or at once with `force`
+  // (what is missing was lost on the way; `missing` then says what, when given). True when
+  // sealed, false when nothing is pending or the cut is not reached yet.
+  bool SealWhenReady(bool force, std::string* missing = nullptr);
+  bool seal_pending() const { return pending_seal_.has_value(); }
   // Hands the sealed batch to the callbacks; returns how many messages it held.
   int DispatchBatch();
   // Messages held, sealed or not.
@@ -190,7 +202,15 @@ class Bus {
   std::map<std::string, std::map<std::uint32_t, std::int64_t>> received_;
   bool deferred_ = false;
   std::set<std::string> immediate_;
+  // Received so far on a subscribed channel, by the cut's channel id (-1: not subscribed).
+  std::int64_t ReceivedById(std::uint32_t channel_id, std::uint32_t publisher) const;
   std::vector<Held> inbox_, sealed_;
+  std::map<std::uint32_t, std::string> subscribed_ids_;  // cut channel id -> channel
+  struct PendingSeal {
+    std::int64_t next_instant;
+    simtime::Cut cut;
+  };
+  std::optional<PendingSeal> pending_seal_;
   std::vector<std::pair<std::int64_t, Held>> later_;  // heartbeats stamped after the instant
   std::map<std::string, int> held_count_;            // per channel, inbox_ and later_
   std::int64_t instant_ = -1;
@@ -334,6 +354,7 @@ void Bus::Subscribe(const std::string& channel, std::function<void(const Msg&)> 
   sub->setQueueCapacity(queue_capacity);
   handlers_.push_back(std::move(handler));
   subscribed_.insert(channel);
+  subscribed_ids_[simtime::ChannelIdOf(channel)] = channel;
 }
 
 }  // namespace rover::bus

@@ -121,6 +121,8 @@ class Process {
   std::unique_ptr<SyncSender> sync_;
   std::int64_t sync_seq_ = 0;
   bool clock_moved_ = false;        // a new instant: its batch is sealed, its tick not yet run
+  std::int64_t sealing_utime_ = -1;  // the newest instant a clock message announced
+  std::chrono::steady_clock::time_point clock_moved_wall_{};
   std::int64_t last_tick_utime_ = -1;
   std::int64_t next_tick_utime_ = 0, next_heartbeat_utime_ = 0;
   std::int8_t health_state_ = 0;

@@ -159,6 +159,10 @@ std::string Problem(const rover_msgs::pose_t& m) {
 std::string Problem(const rover_msgs::rover_clock_t& m) {
   if (!(m.rate >= 0) || !std::isfinite(m.rate) || m.rate > 1e4)
     return "rate is out of range (expected 0, as fast as the barrier allows, to 10000)";
+  if (m.n_cut < 0 || m.n_cut > 4096) return "n_cut is out of range (expected 0 to 4096 entries)";
+  for (int i = 0; i < m.n_cut; ++i) {
+    if (m.cut_count[static_cast<std::size_t>(i)] < 0) return "cut_count is negative (expected a message count)";
+  }
   return Enum("mode", m.mode, 0, 1);
 }
 

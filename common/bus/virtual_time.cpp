@@ -73,4 +73,25 @@ void SyncSender::Send(const simtime::SyncReport& report) {
   if (lcm_->publish(kSimSyncChannel, &msg) != 0) throw std::runtime_error("LCM publish failed on " + url_);
 }
 
+void SetCut(const simtime::Cut& cut, rover_msgs::rover_clock_t* m) {
+  m->n_cut = static_cast<std::int32_t>(cut.counts().size());
+  m->cut_channel.clear();
+  m->cut_publisher.clear();
+  m->cut_count.clear();
+  for (const auto& [key, count] : cut.counts()) {
+    m->cut_channel.push_back(static_cast<std::int32_t>(key.first));
+    m->cut_publisher.push_back(static_cast<std::int32_t>(key.second));
+    m->cut_count.push_back(count);
+  }
+}
+
+simtime::Cut CutOf(const rover_msgs::rover_clock_t& m) {
+  simtime::Cut cut;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(m.n_cut) && i < m.cut_count.size(); ++i) {
+    cut.Set(static_cast<std::uint32_t>(m.cut_channel[i]), static_cast<std::uint32_t>(m.cut_publisher[i]),
+            m.cut_count[i]);
+  }
+  return cut;
+}
+
 }  // namespace rover::bus

@@ -8,6 +8,7 @@
 #include "simtime/barrier.hpp"
 
 #include <lcm/lcm-cpp.hpp>
+#include <rover_msgs/rover_clock_t.hpp>
 #include <rover_msgs/sim_sync_t.hpp>
 
 #include <cstdint>
@@ -24,6 +25,10 @@ std::string SyncUrl(const std::string& bus_url);
 
 rover_msgs::sim_sync_t ToMsg(const simtime::SyncReport& r, std::int64_t seq);
 simtime::SyncReport FromMsg(const rover_msgs::sim_sync_t& m);
+
+// The cut a clock message carries (simtime/cut.hpp), both ways.
+void SetCut(const simtime::Cut& cut, rover_msgs::rover_clock_t* m);
+simtime::Cut CutOf(const rover_msgs::rover_clock_t& m);
 
 // Publishes sync reports (opened on the first Send).
 class SyncSender {

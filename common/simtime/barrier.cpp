@@ -140,6 +140,15 @@ bool Barrier::FarBehind(std::int64_t utime, std::int64_t by_us) const {
   return false;
 }
 
+Cut Barrier::Published() const {
+  Cut cut;
+  for (const auto& [name, m] : members_) {
+    if (!m.heard || m.lost) continue;
+    for (const auto& [channel, count] : m.last.published) cut.Set(channel, m.id, count);
+  }
+  return cut;
+}
+
 std::vector<std::string> Barrier::Lost() const {
   std::vector<std::string> out;
   for (const auto& [name, m] : members_)

@@ -18,6 +18,8 @@
 // No LCM here: the messages are converted in common/bus.
 #pragma once
 
+#include "simtime/cut.hpp"
+
 #include <cstdint>
 #include <map>
 #include <set>
@@ -67,6 +69,9 @@ class Barrier {
   // `utime`: one that was declared lost and lost clock messages meanwhile. Only a fault
   // does this (a member is otherwise at most one instant behind).
   bool FarBehind(std::int64_t utime, std::int64_t by_us) const;
+  // What the members that are not lost have published, as their last reports say: the
+  // cut the next clock message carries (simtime/cut.hpp).
+  Cut Published() const;
   // Members currently lost.
   std::vector<std::string> Lost() const;
   std::uint32_t Id(const std::string& process) const;

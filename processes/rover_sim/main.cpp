@@ -268,8 +268,9 @@ int main(int argc, char** argv) {
         next_truth += period(options.truth_hz);
       }
     };
-    auto publish_clock = [&](std::int64_t now) {
+    auto publish_clock = [&](std::int64_t now, const simtime::Cut* cut = nullptr) {
       rover_msgs::rover_clock_t m{};
+      if (cut) bus::SetCut(*cut, &m);
       m.utime = now;
       // Virtual time has no fixed ratio to the wall clock (the pacing is only a ceiling): 0,
       // so that a run at 50x and one as fast as possible publish the same bytes.
@@ -307,9 +308,21 @@ int main(int argc, char** argv) {
       const std::int64_t rover_start = t;
       const double wall_start = proc.wall_seconds();
       std::int64_t next_heartbeat = t;
+      // The clock carries the cut (simtime/cut.hpp): what the members had published when
+      // they finished the last instant, and what this process has sent for the new one.
+      auto cut_now = [&] {
+        simtime::Cut cut = barrier.Published();
+        const auto own = bus::PublisherId("rover_sim");
+        for (const auto& [channel, count] : proc.bus().SyncState("rover_sim", t, false).published) {
+          cut.Set(channel, own, count);
+        }
+        cut.Set(channels::kClock, own, 0);  // the clock is acted on at once, never batched
+        return cut;
+      };
       auto begin_instant = [&] {
         proc.ObserveTime(t);
-        publish_clock(t);
+        const simtime::Cut cut = cut_now();
+        publish_clock(t, &cut);
         if (t >= next_heartbeat) {
           proc.PublishHeartbeat();
           next_heartbeat = t + static_cast<std::int64_t>(0.25e6);
@@ -346,7 +359,8 @@ int main(int argc, char** argv) {
           // (twice a second). Never in a run without a fault, whose log it would change.
           if (proc.wall_seconds() - std::max(last_announce, tick_wall) > 0.5 &&
               barrier.FarBehind(t, static_cast<std::int64_t>(1e6))) {
-            publish_clock(t);
+            const simtime::Cut cut = cut_now();
+            publish_clock(t, &cut);
             last_announce = proc.wall_seconds();
           }
           if (proc.wall_seconds() - std::max(last_note, tick_wall) > 10.0) {

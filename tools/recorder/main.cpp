@@ -25,11 +25,13 @@
 #include "bus/channels.hpp"
 #include "bus/lcm_url_check.hpp"
 #include "bus/virtual_time.hpp"
+#include "simtime/cut.hpp"
 #include "logcheck/log_check.hpp"
 #include "recorder/event_queue.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/heartbeat_t.hpp>
+#include <rover_msgs/rover_clock_t.hpp>
 
 #include <atomic>
 #include <chrono>
@@ -96,6 +98,7 @@ class Receiver {
     held_bytes += e.data.size();
     Held h{{channel, 0u, 0, arrivals_++}, std::move(e)};
     bool due = true;
+    channel_ids_.emplace(rover::simtime::ChannelIdOf(channel), channel);
     if (const auto* type = rover::logcheck::FindChannel(channel)) {
       const auto read = rover::logcheck::ReadStamp(*type, h.event.data.data(), h.event.data.size());
       if (read.stamp) {
@@ -107,8 +110,18 @@ class Receiver {
         seen = std::max(seen, read.stamp->count + 1);
         h.key = {channel, read.stamp->publisher_id, read.stamp->count, 0};
         if (channel == rover::channels::kClock && read.stamp->publisher_id == kClockSource &&
-            read.stamp->utime > instant_) {
-          FlushInstant(read.stamp->utime);
+            read.stamp->utime > std::max(instant_, pending_ ? pending_->next : 0)) {
+          // A new instant: what came before it is written once all of it has come.
+          if (pending_) Flush(true);
+          rover_msgs::rover_clock_t clock;
+          rover::simtime::Cut cut;
+          if (clock.decode(h.event.data.data(), 0, static_cast<int>(h.event.data.size())) >= 0) {
+            cut = rover::bus::CutOf(clock);
+          }
+          if (due) changed_ = true;
+          pending_ = Pending{read.stamp->utime, std::move(cut), std::chrono::steady_clock::now(), std::move(h)};
+          Flush(false);
+          return;
         }
       }
     }
@@ -123,12 +136,16 @@ class Receiver {
       }
     }
     held_.push_back(std::move(h));
+    if (pending_) Flush(false);
   }
   // Virtual time, on the receive thread after each burst: the sync report when something
   // came, and at least every 0.25 s of wall time (alive).
   void AfterBurst() {
     if (!virtual_) return;
     const auto now = std::chrono::steady_clock::now();
+    // A message below the cut that has not come a wall second after its clock was lost on
+    // the way: the instant is written without it.
+    if (pending_ && now - pending_->since > std::chrono::seconds(1)) Flush(true);
     if (!changed_ && now - last_sync_ < std::chrono::milliseconds(250)) return;
     rover::simtime::SyncReport r;
     r.process = "rover_recorder";
@@ -144,6 +161,7 @@ class Receiver {
   // it), so what came of it may be partial: it is left out, and the log ends with the last
   // whole instant, the same in every run.
   void Finish() {
+    if (virtual_ && pending_) Flush(false);  // the instant the last clock ended, if whole
     if (virtual_) held_.clear();
   }
   bool virtual_time() const { return virtual_; }
@@ -154,19 +172,59 @@ class Receiver {
     std::tuple<std::string, std::uint32_t, std::int64_t, std::uint64_t> key;  // channel, publisher, count, arrival
     Event event;
   };
-  // Writes the held batch, sorted, stamped with its instant, and moves to `next`.
-  void FlushInstant(std::int64_t next) {
+  // A clock message moved the clock on to `next`: the instant before it is written once
+  // every message below the clock's cut has come (simtime/cut.hpp).
+  struct Pending {
+    std::int64_t next;
+    rover::simtime::Cut cut;
+    std::chrono::steady_clock::time_point since;
+    Held clock;
+  };
+  void Flush(bool force) {
+    const auto received = [this](std::uint32_t channel_id, std::uint32_t publisher) -> std::int64_t {
+      const auto name = channel_ids_.find(channel_id);
+      if (name == channel_ids_.end()) return 0;  // it takes every channel
+      const auto channel = received_.find(name->second);
+      if (channel == received_.end()) return 0;
+      const auto count = channel->second.find(publisher);
+      return count == channel->second.end() ? 0 : count->second;
+    };
+    if (!pending_->cut.Reached(received)) {
+      if (!force) return;
+      std::cerr << "rover_recorder: rover time " << instant_
+                << ": written without messages the clock says were sent (lost on the way)\n";
+    }
+    Pending p = std::move(*pending_);
+    pending_.reset();
+    FlushInstant(p.next, p.cut);
+    held_bytes_[p.clock.event.channel] += p.clock.event.data.size();
+    held_.push_back(std::move(p.clock));
+  }
+  // Writes the held batch below `cut`, sorted, stamped with its instant, and moves to
+  // `next`; what the cut says was sent after it (it overtook the clock) waits for `next`.
+  void FlushInstant(std::int64_t next, const rover::simtime::Cut& cut) {
+    std::vector<Held> after;
+    std::vector<Held> batch;
+    for (auto& h : held_) {
+      const auto& [channel, publisher, count, arrival] = h.key;
+      if (cut.After(channel, publisher, count)) {
+        after.push_back(std::move(h));
+      } else {
+        batch.push_back(std::move(h));
+      }
+    }
     // Counted by the instants written, not as they arrive: a heartbeat that overtook the
     // clock message of its own instant arrives early, and a count of arrivals in the
     // heartbeat's detail would then differ from run to run.
-    received_total_ += static_cast<std::int64_t>(held_.size());
-    std::sort(held_.begin(), held_.end(), [](const Held& a, const Held& b) { return a.key < b.key; });
-    for (auto& h : held_) {
+    received_total_ += static_cast<std::int64_t>(batch.size());
+    std::sort(batch.begin(), batch.end(), [](const Held& a, const Held& b) { return a.key < b.key; });
+    for (auto& h : batch) {
       h.event.timestamp = instant_ > 0 ? instant_ : next;
       if (!queue_.Push(std::move(h.event))) ++dropped_;
     }
-    held_.clear();
+    held_ = std::move(after);
     held_bytes_.clear();
+    for (const auto& h : held_) held_bytes_[h.event.channel] += h.event.data.size();
     instant_ = next;
     std::erase_if(later_, [&](auto& entry) {
       if (entry.first > instant_) return false;
@@ -195,6 +253,8 @@ class Receiver {
   std::vector<Held> held_;
   std::map<std::string, std::size_t> held_bytes_;
   std::vector<std::pair<std::int64_t, Held>> later_;
+  std::optional<Pending> pending_;
+  std::map<std::uint32_t, std::string> channel_ids_;  // cut channel id -> channel
   std::map<std::string, std::map<std::uint32_t, std::int64_t>> received_;
   std::int64_t instant_ = 0, next_heartbeat_ = 0, heartbeats_ = 0, received_total_ = 0;
   std::uint64_t arrivals_ = 0;
