@@ -2,7 +2,8 @@
 # ./rover private --name NAME: separate commands, each started on its own, share one
 # private bus. A recorder started by one call is heard by a console started by another
 # call with the same name, and not by one with another name; the namespace is not the
-# caller's; --stop ends it and a second --stop says there is none.
+# caller's; --stop ends it and whatever still runs on it, and a second --stop says there
+# is none.
 # usage: private_name_test.sh ROOT BUILD
 set -u
 root="$1"
@@ -45,7 +46,13 @@ wait "$rec"
 rec=""
 check "the recorder stopped cleanly" 'grep -q "rover_recorder: wrote" "$XDG_RUNTIME_DIR/recorder.txt"'
 
-check "--stop ends it" '"$rover" private --name "$name" --stop | grep -q "stopped"'
+# A process still on the bus ends with it (SIGTERM: the recorder writes its log and exits).
+"$rover" private --name "$name" "$build/bin/rover_recorder" --lcm-url "$url" "$XDG_RUNTIME_DIR/left.lcm" \
+  >"$XDG_RUNTIME_DIR/left.txt" 2>&1 &
+left=$!
+for _ in $(seq 50); do grep -q "recording" "$XDG_RUNTIME_DIR/left.txt" 2>/dev/null && break; sleep 0.1; done
+check "--stop ends it" '"$rover" private --name "$name" --stop | grep -q "stopped (1 processes on it ended)"'
+check "the process left on the bus was stopped, and cleanly" '! kill -0 "$left" 2>/dev/null && grep -q "rover_recorder: wrote" "$XDG_RUNTIME_DIR/left.txt"'
 "$rover" private --name "$name" --stop >"$XDG_RUNTIME_DIR/again.txt" 2>&1
 rc=$?
 check "a second --stop: exit 2, one line" '[ "$rc" -eq 2 ] && [ "$(wc -l <"$XDG_RUNTIME_DIR/again.txt")" -eq 1 ]'
