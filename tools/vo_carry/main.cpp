@@ -1,5 +1,5 @@
 // vo_carry --world W.yaml [--world W2.yaml ...] [--rig RIG.yaml] [--config VO.yaml]
-//          [--frames N] [--step-m X] [--turn-step-deg X] [--size PX] [--seed N]
+//          [--frames N] [--step-m X] [--turn-step-deg X] [--size PX] [--seed N] [--dump FILE.csv]
 //
 // Drives over rendered worlds (the simulator's renderer and camera models, exact truth),
 // runs the VO on them and measures how much of a track's match error carries into its
@@ -12,6 +12,7 @@
 #include "vo_eval/vo_evaluation.hpp"
 
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <stdexcept>
 #include <string>
@@ -23,14 +24,16 @@ namespace {
 
 const char* kUsage =
     "usage: vo_carry --world W.yaml [--world W2.yaml ...] [--rig RIG.yaml] [--config VO.yaml]\n"
-    "                [--frames N] [--step-m X] [--turn-step-deg X] [--size PX] [--seed N]\n";
+    "                [--frames N] [--step-m X] [--turn-step-deg X] [--size PX] [--seed N]\n"
+    "                [--dump FILE.csv]   (one line per observation: its errors against truth)\n";
 
 void Print(const std::string& name, const vo_carry::CarryEstimate& e, const vo_carry::DriveCount* c) {
   std::printf("%-28s", name.c_str());
   if (c) std::printf(" keyframes %3d obs %5d", c->keyframes, c->observations);
-  std::printf(" tracks %5d pairs %5d  track_carry %.3f +- %.3f (x %.3f y %.3f)  stereo_carry %.3f (x %.3f y %.3f)"
-              "  match sigma %.3f px\n",
+  std::printf(" tracks %5d pairs %5d  track_carry %.3f +- %.3f (x %.3f y %.3f; after the image map %.3f, %d pairs)"
+              "  stereo_carry %.3f (x %.3f y %.3f)  match sigma %.3f px\n",
               e.tracks, e.track_pairs, e.track_carry, e.track_carry_stderr, e.track_carry_xy.x(), e.track_carry_xy.y(),
+              e.track_carry_mapped, e.mapped_pairs,
               e.stereo_carry, e.stereo_carry_xy.x(), e.stereo_carry_xy.y(), e.match_sigma_px);
 }
 
@@ -51,6 +54,7 @@ int main(int argc, char** argv) {
   std::string rig = std::string(ROVER_SOURCE_DIR) + "/configs/cameras/navcam_pinhole.yaml";
   std::string config = std::string(ROVER_SOURCE_DIR) + "/configs/vo.yaml";
   vo_eval::RenderedDriveOptions drive;
+  std::string dump_path;
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -66,6 +70,7 @@ int main(int argc, char** argv) {
       if (a == "--world") worlds.push_back(v);
       else if (a == "--rig") rig = v;
       else if (a == "--config") config = v;
+      else if (a == "--dump") dump_path = v;
       else if (a == "--frames") drive.frames = static_cast<int>(Number(a, v));
       else if (a == "--step-m") drive.step_m = Number(a, v);
       else if (a == "--turn-step-deg") drive.turn_step_deg = Number(a, v);
@@ -82,13 +87,19 @@ int main(int argc, char** argv) {
     const vo::VoOptions vo = vo_eval::LoadVoConfig(config);
     drive.rig_path = rig;
     vo_carry::CarryAccumulator all;
+    std::ofstream dump;
+    if (!dump_path.empty()) {
+      dump.open(dump_path);
+      if (!dump) throw std::runtime_error(dump_path + ": cannot write the --dump file");
+      dump << vo_carry::kDumpHeader << '\n';
+    }
     std::printf("rig %s, %d frames of %.2f m, turns up to %.1f deg, seed %llu\n", rig.c_str(), drive.frames,
                 drive.step_m, drive.turn_step_deg, static_cast<unsigned long long>(drive.seed));
     for (const std::string& world : worlds) {
       drive.world_path = world;
       const vo_eval::RenderedDriveSequence seq(drive);
       vo_carry::CarryAccumulator acc;
-      const vo_carry::DriveCount count = vo_carry::MeasureDrive(seq, vo, &acc);
+      const vo_carry::DriveCount count = vo_carry::MeasureDrive(seq, vo, &acc, 3.0, dump_path.empty() ? nullptr : &dump);
       Print(seq.world_name(), acc.Estimate(), &count);
       all.Merge(acc);
     }

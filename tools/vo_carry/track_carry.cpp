@@ -8,7 +8,7 @@
 namespace rover::vo_carry {
 
 void CarryAccumulator::Add(std::int64_t track_id, const Eigen::Vector2d& left_error,
-                           const Eigen::Vector2d& right_error, bool defining) {
+                           const Eigen::Vector2d& right_error, bool defining, const Eigen::Matrix2d* image_map) {
   const auto it = last_.find(track_id);
   if (!defining && it != last_.end()) {
     if (it->second.defining) {
@@ -20,6 +20,12 @@ void CarryAccumulator::Add(std::int64_t track_id, const Eigen::Vector2d& left_er
       s_prev_prev_ += prev.cwiseProduct(prev);
       s_curr_curr_ += left_error.cwiseProduct(left_error);
       ++track_pairs_;
+      if (image_map) {
+        const Eigen::Vector2d mapped = *image_map * prev;
+        s_mapped_curr_ += mapped.dot(left_error);
+        s_mapped_mapped_ += mapped.squaredNorm();
+        ++mapped_pairs_;
+      }
     }
     s_left_right_ += left_error.cwiseProduct(right_error);
     s_left_left_ += left_error.cwiseProduct(left_error);
@@ -34,6 +40,9 @@ void CarryAccumulator::Merge(const CarryAccumulator& other) {
   tracks_ += other.tracks_;
   track_pairs_ += other.track_pairs_;
   stereo_pairs_ += other.stereo_pairs_;
+  mapped_pairs_ += other.mapped_pairs_;
+  s_mapped_curr_ += other.s_mapped_curr_;
+  s_mapped_mapped_ += other.s_mapped_mapped_;
   s_prev_curr_ += other.s_prev_curr_;
   s_prev_prev_ += other.s_prev_prev_;
   s_curr_curr_ += other.s_curr_curr_;
@@ -53,6 +62,8 @@ CarryEstimate CarryAccumulator::Estimate() const {
   }
   e.track_carry = ratio(s_prev_curr_.sum(), s_prev_prev_.sum());
   e.stereo_carry = ratio(s_left_right_.sum(), s_left_left_.sum());
+  e.track_carry_mapped = ratio(s_mapped_curr_, s_mapped_mapped_);
+  e.mapped_pairs = mapped_pairs_;
   if (track_pairs_ > 1) {
     // sum |l_n - rho l_n-1|^2 from the sums, over 2 per pair less the one fitted.
     const double rho = e.track_carry;
@@ -81,10 +92,39 @@ bool RangeAt(const cv::Mat& depth, const Eigen::Vector2d& pixel, double* range) 
   return true;
 }
 
+// A pixel of frame a carried to the true surface and into frame b (models at the working
+// resolution, depth at the rendered size).
+bool CarryPixel(const vo_eval::RenderedDriveSequence& drive, const geometry::CameraModel& left, double scale,
+                const cv::Mat& depth_a, int a, int b, const Eigen::Vector2d& u, Eigen::Vector2d* out) {
+  const Eigen::Vector2d full = ((u.array() + 0.5) / scale - 0.5).matrix();
+  double range = 0;
+  if (!RangeAt(depth_a, full, &range)) return false;
+  Eigen::Vector3d origin, direction;
+  drive.rig().left->BackProject(full, &origin, &direction);
+  const Eigen::Vector3d X = drive.SitePose(a) * (origin + range * direction);
+  return left.Project(drive.SitePose(b).inverse() * X, out);
+}
+
+// A_n: d(pixel in frame b) / d(pixel in frame a) round u, through the true surface
+// (central differences of one pixel).
+bool ImageMap(const vo_eval::RenderedDriveSequence& drive, const geometry::CameraModel& left, double scale,
+              const cv::Mat& depth_a, int a, int b, const Eigen::Vector2d& u, Eigen::Matrix2d* A) {
+  for (int c = 0; c < 2; ++c) {
+    const Eigen::Vector2d d = Eigen::Vector2d::Unit(c);
+    Eigen::Vector2d plus, minus;
+    if (!CarryPixel(drive, left, scale, depth_a, a, b, u + d, &plus) ||
+        !CarryPixel(drive, left, scale, depth_a, a, b, u - d, &minus)) {
+      return false;
+    }
+    A->col(c) = (plus - minus) / 2.0;
+  }
+  return A->allFinite();
+}
+
 }  // namespace
 
 DriveCount MeasureDrive(const vo_eval::RenderedDriveSequence& drive, const vo::VoOptions& vo, CarryAccumulator* acc,
-                        double max_error_px) {
+                        double max_error_px, std::ostream* dump) {
   // The drive as vo_eval runs a rendered world (odometry prior), keeping each frame's
   // true depth, which only this measurement reads.
   std::map<int, cv::Mat> depth;
@@ -102,6 +142,8 @@ DriveCount MeasureDrive(const vo_eval::RenderedDriveSequence& drive, const vo::V
   const auto left = drive.rig().left->Scaled(s), right = drive.rig().right->Scaled(s);
   DriveCount count;
   std::unordered_map<std::int64_t, Eigen::Vector3d> X_site;  // each track's true point
+  std::unordered_map<std::int64_t, int> age;                   // its keyframe observations since
+  std::unordered_map<std::int64_t, int> last_frame;            // the keyframe it was last seen in
   int reference = 0;  // the frame the current pair was tracked from (the last keyframe)
   for (const vo_eval::FrameRecord& f : report.frames) {
     ++count.frames;
@@ -132,6 +174,8 @@ DriveCount MeasureDrive(const vo_eval::RenderedDriveSequence& drive, const vo::V
         Eigen::Vector2d ur;
         if (!right->Project(drive.SitePose(reference).inverse() * it->second, &ur)) continue;
         acc->Add(t.track_id, Eigen::Vector2d::Zero(), t.prev_right - ur, true);
+        age[t.track_id] = 0;
+        last_frame[t.track_id] = reference;
       }
       Eigen::Vector2d ul, ur;
       const Eigen::Vector3d P = T_rover_site * it->second;
@@ -142,8 +186,20 @@ DriveCount MeasureDrive(const vo_eval::RenderedDriveSequence& drive, const vo::V
         X_site.erase(t.track_id);
         continue;
       }
-      acc->Add(t.track_id, el, er, false);
+      // The surface's image map from the track's last keyframe, round where the truth
+      // projects there.
+      Eigen::Matrix2d A;
+      Eigen::Vector2d u_last;
+      const int last = last_frame[t.track_id];
+      const bool mapped = left->Project(drive.SitePose(last).inverse() * it->second, &u_last) &&
+                          ImageMap(drive, *left, s, depth[last], last, f.frame, u_last, &A);
+      acc->Add(t.track_id, el, er, false, mapped ? &A : nullptr);
+      last_frame[t.track_id] = f.frame;
       ++count.observations;
+      if (dump) {
+        *dump << drive.world_name() << ',' << f.frame << ',' << t.track_id << ',' << ++age[t.track_id] << ','
+              << P.norm() << ',' << el.x() << ',' << el.y() << ',' << er.x() << ',' << er.y() << '\n';
+      }
     }
     reference = f.frame;
   }

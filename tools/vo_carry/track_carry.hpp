@@ -9,7 +9,12 @@
 // w_n and s_n the matches' own errors. The least-squares estimates from many tracks are
 //   rho   = sum l_n-1 . l_n / sum |l_n-1|^2   (consecutive observations of a track),
 //   rho_s = sum l_n . r_n   / sum |l_n|^2,
-// per image axis and with both axes pooled. A track's first observation defines its 3-D
+// per image axis and with both axes pooled. An error made on the surface looks larger as
+// the rover closes in (perspective), so rho is also estimated with l_n-1 first carried by
+// the true image-to-image map of the surface round the feature (the 2x2 Jacobian A_n of
+// the pixel in keyframe n with respect to the pixel in keyframe n-1):
+//   rho_mapped = sum (A_n l_n-1) . l_n / sum |A_n l_n-1|^2,
+// the fraction of the error that carries beyond what geometry alone makes of it. A track's first observation defines its 3-D
 // point (the left pixel where it was detected, carried to the true surface by the true
 // range), so l_0 = 0 by construction: it starts the chain and gives no stereo pair.
 #pragma once
@@ -20,6 +25,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <ostream>
 #include <unordered_map>
 
 namespace rover::vo_carry {
@@ -29,6 +35,8 @@ struct CarryEstimate {
   int track_pairs = 0;   // (l_n-1, l_n) pairs behind rho
   int stereo_pairs = 0;  // (l_n, r_n) pairs behind rho_s
   double track_carry = 0, stereo_carry = 0;        // both axes pooled
+  double track_carry_mapped = 0;  // rho after the surface's image-to-image map (A_n)
+  int mapped_pairs = 0;
   Eigen::Vector2d track_carry_xy = Eigen::Vector2d::Zero();   // x and y apart
   Eigen::Vector2d stereo_carry_xy = Eigen::Vector2d::Zero();
   // The left matches' own error (rms of w_n = l_n - rho l_n-1 per axis, px) and the
@@ -42,8 +50,10 @@ class CarryAccumulator {
  public:
   // One observation of a track: its left and right errors (measured minus the truth's
   // projection, pixels). `defining`: the observation that defines the track's 3-D point.
+  // `image_map` (optional): A_n, the map of image offsets from the track's last keyframe to
+  // this one.
   void Add(std::int64_t track_id, const Eigen::Vector2d& left_error, const Eigen::Vector2d& right_error,
-           bool defining);
+           bool defining, const Eigen::Matrix2d* image_map = nullptr);
   // The track's chain is broken (an observation missing or left out): it ends here.
   void Drop(std::int64_t track_id) { last_.erase(track_id); }
   // Adds another accumulator's sums (its open chains are not carried over).
@@ -56,7 +66,8 @@ class CarryAccumulator {
     bool defining = true;
   };
   std::unordered_map<std::int64_t, Last> last_;
-  int tracks_ = 0, track_pairs_ = 0, stereo_pairs_ = 0;
+  int tracks_ = 0, track_pairs_ = 0, stereo_pairs_ = 0, mapped_pairs_ = 0;
+  double s_mapped_curr_ = 0, s_mapped_mapped_ = 0;  // sum (A l_n-1) . l_n, sum |A l_n-1|^2
   // Per axis: sum l_n-1 l_n, sum l_n-1^2, sum l_n^2 (track); sum l_n r_n, sum l_n^2 (stereo).
   Eigen::Vector2d s_prev_curr_ = Eigen::Vector2d::Zero(), s_prev_prev_ = Eigen::Vector2d::Zero(),
                   s_curr_curr_ = Eigen::Vector2d::Zero();
@@ -73,7 +84,10 @@ struct DriveCount {
 // drive and feeds every inlier track observation of every accepted keyframe to `acc`.
 // Observations more than `max_error_px` from the truth end their track (mismatches, which
 // the window's robust loss handles, are not the match error the model is about).
+// `dump` (optional) gets one CSV line per observation measured (frame, track_id, age,
+// range_m, left x y, right x y errors; header by the caller, kDumpHeader).
 DriveCount MeasureDrive(const vo_eval::RenderedDriveSequence& drive, const vo::VoOptions& vo,
-                        CarryAccumulator* acc, double max_error_px = 3.0);
+                        CarryAccumulator* acc, double max_error_px = 3.0, std::ostream* dump = nullptr);
+inline constexpr const char* kDumpHeader = "world,frame,track_id,age,range_m,lx,ly,rx,ry";
 
 }  // namespace rover::vo_carry
