@@ -251,7 +251,7 @@ struct VoOptions {
   // error that carries into its next keyframe's left match (each template is cut at the
   // last match, VO-6), and into its own keyframe's right match; 0 = independent errors,
   // 1 = a random walk. Measured on rendered drives with truth by tools/vo_carry
-  // (common/vo/README.md, "Chained tracks").
+  // (common/vo/README.md, "Carried track errors").
   double window_track_carry = 0.0;
   double window_stereo_carry = 0.0;
   // The refined delta must agree with the pair's VO-8 estimate: chi-square (6 dof) of

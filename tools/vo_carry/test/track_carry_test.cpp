@@ -86,7 +86,7 @@ TEST(TrackCarry, ABrokenChainAddsNoPairAcrossTheGap) {
 // all of a match error forward, into the next keyframe's left match (after the surface's
 // image map) and into the same keyframe's right match, and the raw image carry is larger
 // (the rover closes in on the error). What tools/vo_carry measured over six worlds and two
-// camera models (common/vo/README.md, "Chained tracks"); bounds of a few standard errors.
+// camera models (common/vo/README.md, "Carried track errors"); bounds of a few standard errors.
 TEST(TrackCarry, MeasuresTheCarryOnARenderedDrive) {
   vo_eval::RenderedDriveOptions drive;
   drive.world_path = std::string(ROVER_SOURCE_DIR) + "/configs/worlds/rock_field.yaml";
