@@ -5,6 +5,8 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
+
 namespace rover::vo {
 
 struct TrackedFeature {
@@ -13,6 +15,12 @@ struct TrackedFeature {
   // tracking found it in the current one.
   Eigen::Vector2d prev_left = Eigen::Vector2d::Zero();
   Eigen::Vector2d curr_left = Eigen::Vector2d::Zero();
+  // The right-image pixels of the same two stereo matches, and (windowed mode) the track
+  // the feature belongs to (0 in frame-to-frame mode): with these a feature's errors can
+  // be followed along its track against truth (tools/vo_carry).
+  Eigen::Vector2d prev_right = Eigen::Vector2d::Zero();
+  Eigen::Vector2d curr_right = Eigen::Vector2d::Zero();
+  std::int64_t track_id = 0;
   // Used by the maximum-likelihood motion (VO-8); false for RANSAC's outliers and for the
   // ones the ML outlier test dropped, and for every feature when VO stopped before ML.
   bool inlier = false;

@@ -13,7 +13,8 @@ VisualOdometry::VisualOdometry(VoOptions options) : state_(std::make_unique<Stat
   w.max_frames = std::max(2, options.window_size);
   w.max_iterations = options.window_max_iterations;
   w.huber_sigmas = options.window_huber_sigmas;
-  w.chained_tracks = options.window_chained_tracks;
+  w.track_carry = options.window_track_carry;
+  w.stereo_carry = options.window_stereo_carry;
   w.disparity_offset_sigma_px = options.window_disparity_offset_sigma_px;
   w.disparity_offset_drift_px = options.window_disparity_offset_drift_px;
   w.disparity_offset_systematic_px = options.window_disparity_offset_systematic_px;

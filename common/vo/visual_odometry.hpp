@@ -247,11 +247,13 @@ struct VoOptions {
   // an observation's normalised stereo reprojection residual).
   int window_max_iterations = 8;
   double window_huber_sigmas = 3.0;
-  // WindowOptions::chained_tracks: the tracks' errors are a random walk from keyframe to
-  // keyframe (each template is cut at the last match, VO-6); false: independent. Off by
-  // default: it makes the closed loop on rendered rock fields honest but costs KITTI 06
-  // accuracy (common/vo/README.md, "Chained tracks").
-  bool window_chained_tracks = false;
+  // WindowOptions::track_carry and stereo_carry: the fraction of a track's left match
+  // error that carries into its next keyframe's left match (each template is cut at the
+  // last match, VO-6), and into its own keyframe's right match; 0 = independent errors,
+  // 1 = a random walk. Measured on rendered drives with truth by tools/vo_carry
+  // (common/vo/README.md, "Carried track errors").
+  double window_track_carry = 0.0;
+  double window_stereo_carry = 0.0;
   // The refined delta must agree with the pair's VO-8 estimate: chi-square (6 dof) of
   // their difference under its covariance, the pair's minus the window's (the window holds
   // the pair's data; NestedDifferenceChi2 in motion_estimation.hpp), each whitened

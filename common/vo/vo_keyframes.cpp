@@ -33,12 +33,13 @@ namespace {
 // for the test. Without it KITTI 06's 0.16 px offset failed 46 of 50 windows.
 bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
                        const Eigen::Isometry3d& T_ref_cur, const Matrix6d& pair_cov, double max_chi2,
-                       double min_fraction, bool chained_tracks, Matrix6d* out) {
-  // With chained tracks the window's fit is scaled by the larger of the pair's factors and
-  // its own (the variance factor of the window's residuals under the random-walk model: the
-  // pair's s0^2 is that of a different model of the same errors).
+                       double min_fraction, bool carried_errors, Matrix6d* out) {
+  // When the window models errors carried along a track (window_track_carry or
+  // window_stereo_carry above 0) its fit is scaled by the larger of the pair's factors and
+  // its own (the variance factor of the window's residuals under that model: the pair's
+  // s0^2 is that of a different model of the same errors).
   const double factor =
-      std::max({u.variance_factor, u.cluster_factor, chained_tracks ? w.variance_factor : 0.0});
+      std::max({u.variance_factor, u.cluster_factor, carried_errors ? w.variance_factor : 0.0});
   Matrix6d cov = factor * w.covariance + u.shared;
   cov = 0.5 * (cov + cov.transpose()).eval();
   const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
@@ -135,7 +136,8 @@ void VisualOdometry::State::RefineWindow(Step* st, const Eigen::Isometry3d& T_w_
   res->disparity_offset_px = w.disparity_offset_px;
   Matrix6d cov;
   const bool used = w.ok && RefinedCovariance(w, st->u, T_ref_cur, pair_cov, o.window_max_chi2,
-                                               o.window_consistency_min_fraction, o.window_chained_tracks, &cov);
+                                               o.window_consistency_min_fraction,
+                                               o.window_track_carry > 0 || o.window_stereo_carry > 0, &cov);
   // Published: the window's estimate of this pair against the last call's pair as it
   // was published, so that the deltas compose to the window's latest estimate and its
   // corrections of the poses before reach the user (the window's oldest pose is fixed).

@@ -58,7 +58,8 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "covariance_cluster_grid", "covariance_field_sigma_px",
                   "covariance_disparity_sigma_px", "covariance_cell_shift_sigma_px",
                   "covariance_cell_disparity_sigma_px",
-                  "window_size", "window_max_iterations", "window_huber_sigmas", "window_chained_tracks", "window_max_chi2",
+                  "window_size", "window_max_iterations", "window_huber_sigmas", "window_track_carry", "window_stereo_carry",
+                  "window_max_chi2",
                   "window_consistency_min_fraction",
                   "window_disparity_offset_sigma_px", "window_disparity_offset_drift_px",
                   "window_disparity_offset_systematic_px", "window_disparity_offset_min_sigmas",
@@ -129,7 +130,8 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   node.Get("window_size", o.window_size, 0, 10);
   node.Get("window_max_iterations", o.window_max_iterations, 1, 100);
   node.Get("window_huber_sigmas", o.window_huber_sigmas, 0.5, 100.0);
-  node.Get("window_chained_tracks", o.window_chained_tracks);
+  node.Get("window_track_carry", o.window_track_carry, 0.0, 1.0);
+  node.Get("window_stereo_carry", o.window_stereo_carry, 0.0, 1.0);
   node.Get("window_max_chi2", o.window_max_chi2, 0.0, kInf);
   node.Get("window_consistency_min_fraction", o.window_consistency_min_fraction, 1e-6, 1.0);
   node.Get("window_disparity_offset_sigma_px", o.window_disparity_offset_sigma_px, 0.0, 10.0);

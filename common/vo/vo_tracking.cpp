@@ -114,7 +114,13 @@ void VisualOdometry::State::TrackFeatures(Step* st) {
     if (!ok[i]) continue;
     st->corr.push_back(tracked[i]);
     st->corr_source.push_back(i);
-    st->res.tracks.push_back({ref.features[i].left, tracked[i].left, false});
+    TrackedFeature t;
+    t.prev_left = ref.features[i].left;
+    t.curr_left = tracked[i].left;
+    t.prev_right = ref.features[i].right;
+    t.curr_right = tracked[i].right;
+    t.track_id = ref.features[i].track_id;
+    st->res.tracks.push_back(t);
     st->fixed.push_back(fixed[i]);
   }
   st->res.num_tracked = static_cast<int>(st->corr.size());

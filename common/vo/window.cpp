@@ -56,21 +56,27 @@ Eigen::Matrix4d Information(const WindowObservation& z) {
   return W;
 }
 
+}  // namespace
+
 // A track's observations in the window (keyframe order), stacked 4 rows each (left x y,
-// right x y), taken to the errors that are independent (WindowOptions::chained_tracks):
-// the tracker cuts a track's template at its last left match (VO-6), so a left match error
-// carries into every later one, and the left errors are a random walk whose steps are the
-// matches' own errors; the right match is cut at the left one, so its error is the left's
-// plus the stereo match's own. Row block n becomes (left_n - left_n-1, right_n - left_n),
-// the first (left_0, right_0 - left_0): each with the covariance of its own match, so the
-// observations' information stays blockdiag(Sigma_left^-1, Sigma_right^-1).
-template <typename Derived>
-void ToIndependentErrors(Eigen::MatrixBase<Derived>& rows, int m) {
+// right x y), taken to the errors that are independent (WindowOptions::track_carry, rho,
+// and stereo_carry, rho_s): with l_n = rho l_n-1 + w_n and r_n = rho_s l_n + s_n, row
+// block n becomes (left_n - rho left_n-1, right_n - rho_s left_n), the first (left_0,
+// right_0 - rho_s left_0): each is a match's own error (w_n, s_n) with that match's
+// covariance, so the observations' information stays blockdiag(Sigma_left^-1,
+// Sigma_right^-1). This is the exact whitening (the inverse Cholesky factor) of the
+// track's error covariance: a lower block-bidiagonal matrix, so each row block still
+// holds the poses of at most two keyframes. rho = 0 and rho_s = 0 leave the rows as they
+// are; rho = 1 and rho_s = 1 take the random walk to its steps.
+void ToIndependentErrors(Eigen::Ref<Eigen::MatrixXd> rows, int m, double track_carry, double stereo_carry) {
+  if (track_carry == 0.0 && stereo_carry == 0.0) return;
   for (int n = m - 1; n >= 0; --n) {
-    rows.middleRows(4 * n + 2, 2) -= rows.middleRows(4 * n, 2);
-    if (n > 0) rows.middleRows(4 * n, 2) -= rows.middleRows(4 * (n - 1), 2);
+    rows.middleRows(4 * n + 2, 2) -= stereo_carry * rows.middleRows(4 * n, 2);
+    if (n > 0) rows.middleRows(4 * n, 2) -= track_carry * rows.middleRows(4 * (n - 1), 2);
   }
 }
+
+namespace {
 
 // Information on the offset with which a full window holds it at the drive-wide value.
 constexpr double kHeldOffsetInfo = 1e8;
@@ -221,7 +227,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
 
   // One point's observations that project (their keyframes), stacked residuals and, when
   // asked, the prediction's Jacobians (poses of those keyframes, the point, the offset),
-  // taken to independent errors when the tracks are chained.
+  // taken to independent errors (ToIndependentErrors).
   struct PointTerms {
     std::vector<int> frames, obs;
     Eigen::VectorXd r;
@@ -268,13 +274,11 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
       t.Jx.conservativeResize(4 * m, 3);
       t.Jd.conservativeResize(4 * m);
     }
-    if (o_.chained_tracks) {
-      ToIndependentErrors(t.r, m);
-      if (jacobians) {
-        ToIndependentErrors(t.Jp, m);
-        ToIndependentErrors(t.Jx, m);
-        ToIndependentErrors(t.Jd, m);
-      }
+    ToIndependentErrors(t.r, m, o_.track_carry, o_.stereo_carry);
+    if (jacobians) {
+      ToIndependentErrors(t.Jp, m, o_.track_carry, o_.stereo_carry);
+      ToIndependentErrors(t.Jx, m, o_.track_carry, o_.stereo_carry);
+      ToIndependentErrors(t.Jd, m, o_.track_carry, o_.stereo_carry);
     }
     return t;
   };
@@ -335,7 +339,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
         double w = 1;
         HuberCost(r.dot(W * r), o_.huber_sigmas, &w);
         W *= w;
-        // This block's rows: after the chaining they hold the poses of keyframes n-1 and n.
+        // This block's rows: after ToIndependentErrors they hold the poses of keyframes n-1 and n.
         const auto Jp = t.Jp.middleRows<4>(4 * n);
         const Eigen::Matrix<double, 4, 3> Jx = t.Jx.middleRows<4>(4 * n);
         const Eigen::Vector4d Jd = t.Jd.segment<4>(4 * n);

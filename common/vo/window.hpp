@@ -41,15 +41,20 @@ struct WindowOptions {
   int max_frames = 5;          // keyframes kept (>= 2)
   int max_iterations = 8;      // Levenberg-Marquardt iterations
   double huber_sigmas = 3.0;   // Huber threshold on an observation's normalised residual
-  // How a track's errors relate from keyframe to keyframe. true: chained, as VO-6 tracks
-  // (each pair's template is cut at the track's last left match, so a match error carries
-  // into every later observation: the left errors are a random walk, the right ones the
-  // left's plus the stereo match's own), and the refinement weighs the steps of that walk
-  // (ToIndependentErrors in window.cpp). false: independent errors per observation.
-  // Taken as independent, a track seen in 5 keyframes counts its first match error 5
-  // times: the refined step claims more than its data give (README "VO with memory").
-  // VisualOdometry sets it from VoOptions::window_chained_tracks (true, as VO-6 tracks).
-  bool chained_tracks = false;
+  // How a track's errors relate from keyframe to keyframe (ToIndependentErrors in
+  // window.cpp). VO-6 cuts each pair's template at the track's last left match, so part of
+  // a match error carries into the next observation: the left errors follow
+  //   l_n = track_carry * l_n-1 + w_n,
+  // and the right match is cut at its own keyframe's left one:
+  //   r_n = stereo_carry * l_n + s_n,
+  // w_n and s_n the matches' own errors (Sigma_left, Sigma_right). 0 and 0: independent
+  // errors per observation; 1 and 1: the left errors are a random walk. Taken as
+  // independent when they are not, a track seen in 5 keyframes counts its first match
+  // error 5 times and the refined step claims more than its data give (README "VO with
+  // memory"). VisualOdometry sets both from VoOptions (window_track_carry,
+  // window_stereo_carry), which are measured on rendered drives (tools/vo_carry).
+  double track_carry = 0.0;
+  double stereo_carry = 0.0;
   double tolerance = 1e-4;     // stop when the relative cost decrease is below this
   // One disparity offset (right x, pixels) for every observation: a disparity offset
   // scales every range. It is one drive-wide quantity: a scalar recursive filter starts
@@ -152,6 +157,12 @@ class SlidingWindow {
 // first, then rotation): the 6x12 Jacobian.
 Eigen::Matrix<double, 6, 12> RelativePoseJacobian(const Eigen::Isometry3d& Ta,
                                                   const Eigen::Isometry3d& Tb);
+
+// One track's m observations stacked 4 rows each (left x y, right x y, keyframe order),
+// residuals or Jacobians, taken in place to the rows whose errors are the matches' own and
+// independent, under the carry model of WindowOptions (track_carry, stereo_carry):
+// row block n becomes (left_n - track_carry left_n-1, right_n - stereo_carry left_n).
+void ToIndependentErrors(Eigen::Ref<Eigen::MatrixXd> rows, int m, double track_carry, double stereo_carry);
 
 // T exp(d): rotation R Exp(w), translation t + R v (d = (v, w)).
 Eigen::Isometry3d Retract(const Eigen::Isometry3d& T, const Eigen::Matrix<double, 6, 1>& d);

@@ -91,12 +91,13 @@ RenderedDriveSequence::~RenderedDriveSequence() = default;
 
 const std::string& RenderedDriveSequence::world_name() const { return world_->options().name; }
 
-void RenderedDriveSequence::Render(int k, cv::Mat* left, cv::Mat* right) const {
+void RenderedDriveSequence::Render(int k, cv::Mat* left, cv::Mat* right, cv::Mat* depth_left) const {
   const render::StereoImages images = renderer_->RenderPair(
       *world_, rig_full_, SitePose(k),
       static_cast<std::int64_t>(options_.seed * 1000003ull + static_cast<std::uint64_t>(k)));
   *left = images.left;
   *right = images.right;
+  if (depth_left) *depth_left = images.depth_left;
 }
 
 }  // namespace rover::vo_eval

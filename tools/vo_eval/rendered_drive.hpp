@@ -48,8 +48,10 @@ class RenderedDriveSequence {
   // True rover pose in the site frame at frame k.
   const Eigen::Isometry3d& SitePose(int k) const { return poses_.at(static_cast<std::size_t>(k)); }
 
-  // Renders frame k (sensor noise seeded by seed and k). Not thread-safe.
-  void Render(int k, cv::Mat* left, cv::Mat* right) const;
+  // Renders frame k (sensor noise seeded by seed and k). Not thread-safe. `depth_left`
+  // (optional): the left image's true range along each pixel's ray (m, CV_32FC1, 0 where
+  // nothing is hit), for measuring against truth; the VO never sees it.
+  void Render(int k, cv::Mat* left, cv::Mat* right, cv::Mat* depth_left = nullptr) const;
 
  private:
   RenderedDriveOptions options_;

@@ -223,6 +223,26 @@ TEST(VoOptions, LoadsTheProjectConfigAndRejectsUnknownKeys) {
   EXPECT_THROW(LoadVoOptions(even["vo"]), config::ConfigError);
 }
 
+// The window's carries are fractions in [0, 1]; the random-walk switch they replaced is
+// gone, and a config that still has it is told so by name.
+TEST(VoOptions, WindowCarriesAreFractionsAndTheOldSwitchIsNamed) {
+  const auto both = config::ConfigNode::FromString("vo:\n  window_track_carry: 0.6\n  window_stereo_carry: 1\n", "t.yaml");
+  const VoOptions o = LoadVoOptions(both["vo"]);
+  EXPECT_DOUBLE_EQ(o.window_track_carry, 0.6);
+  EXPECT_DOUBLE_EQ(o.window_stereo_carry, 1.0);
+  for (const char* text : {"vo:\n  window_track_carry: 1.5\n", "vo:\n  window_stereo_carry: -0.1\n",
+                           "vo:\n  window_chained_tracks: true\n"}) {
+    const auto bad = config::ConfigNode::FromString(text, "t.yaml");
+    try {
+      LoadVoOptions(bad["vo"]);
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const config::ConfigError& e) {
+      const std::string key = std::string(text).substr(6, std::string(text).find(':', 6) - 6);
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(VoStatus, NumbersMatchTheMessage) {
   // lcmtypes/vo_update_t.lcm STATUS_*.
   EXPECT_EQ(static_cast<int>(VoStatus::kOk), 0);

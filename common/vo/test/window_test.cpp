@@ -25,10 +25,11 @@ struct Scene {
   geometry::StereoRig rig = test::MakeRig(640, 480, 500.0, 319.5, 239.5, 0.3);
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Isometry3d> poses;  // T_w_frame
-  // Chained tracks (as VO-6 makes them: each pair's template is cut at the track's last
-  // left match): a track's left error is a random walk, each observation adding a fresh
-  // match error to the last one's, and its right error is the left's plus its own.
-  bool chained_errors = false;
+  // Errors carried along a track (as VO-6 makes them: each pair's template is cut at the
+  // track's last left match): a track's left error is this fraction of the last one's
+  // plus a fresh match error (1: a random walk), and its right error this fraction of the
+  // left's plus its own (WindowOptions::track_carry, stereo_carry).
+  double track_carry = 0.0, stereo_carry = 0.0;
   mutable std::unordered_map<std::int64_t, Eigen::Vector2d> walk;  // a track's left error so far
 
   explicit Scene(int frames, unsigned seed) {
@@ -58,9 +59,11 @@ struct Scene {
       z.track_id = static_cast<std::int64_t>(i);
       Eigen::Vector2d left_error(g(*rng), g(*rng));
       Eigen::Vector2d right_error = Eigen::Vector2d(g(*rng) + disparity_offset_px, g(*rng));
-      if (chained_errors) {
-        left_error = walk.try_emplace(z.track_id, Eigen::Vector2d::Zero()).first->second += left_error;
-        right_error += left_error;
+      if (track_carry > 0 || stereo_carry > 0) {
+        Eigen::Vector2d& carried = walk.try_emplace(z.track_id, Eigen::Vector2d::Zero()).first->second;
+        carried = track_carry * carried + left_error;
+        left_error = carried;
+        right_error += stereo_carry * left_error;
       }
       z.left = l + left_error;
       z.right = r + right_error;
@@ -204,16 +207,17 @@ TEST(SlidingWindow, PublishedDeltaCovarianceMatchesItsErrors) {
 // counts a track's early errors once per keyframe that sees them, and its published
 // covariance claims more than the data give (navbench's closed loop put 4.6 % of the
 // window's deltas beyond the 99.7 % bound). Weighing the random walk's steps
-// (WindowOptions::chained_tracks) makes it honest again, and the estimate no worse.
+// (WindowOptions::track_carry = stereo_carry = 1) makes it honest again, and the estimate
+// no worse.
 TEST(SlidingWindow, ChainedTrackErrorsAreWeighedAsARandomWalk) {
   std::vector<double> nees_independent, nees_chained;
   double end_independent = 0, end_chained = 0;
   for (unsigned seed : {91u, 92u, 93u, 94u}) {
     for (bool chained_model : {false, true}) {
       Scene scene(25, seed);
-      scene.chained_errors = true;
+      scene.track_carry = scene.stereo_carry = 1.0;
       WindowOptions wo;
-      wo.chained_tracks = chained_model;
+      wo.track_carry = wo.stereo_carry = chained_model ? 1.0 : 0.0;
       const DriveResult r = Drive(scene, 5, 0.3, 0.0, 0.0, seed, wo);
       ASSERT_EQ(r.nees.size(), 24u);
       auto& nees = chained_model ? nees_chained : nees_independent;
@@ -242,6 +246,114 @@ TEST(SlidingWindow, ChainedTrackErrorsAreWeighedAsARandomWalk) {
             << beyond_chained << " beyond 20.06 (taken as independent: " << mean_independent << ", "
             << beyond_independent << "); end error " << end_chained / 4 << " m (independent model "
             << end_independent / 4 << " m)\n";
+}
+
+// The closed form of a track's error covariance under the carry model, stacked as the
+// window stacks observations (left x y, right x y per keyframe): with
+//   l_n = rho l_n-1 + w_n (l_0 = w_0),   r_n = rho_s l_n + s_n,
+// V_n = Var(l_n) = rho^2 V_n-1 + SL_n, Cov(l_i, l_j) = rho^(j-i) V_i (i <= j),
+// Cov(l_i, r_j) = rho_s Cov(l_i, l_j), Cov(r_i, r_j) = rho_s^2 Cov(l_i, l_j) + [i=j] SR_i.
+Eigen::MatrixXd CarriedErrorCovariance(const std::vector<Eigen::Matrix2d>& SL, const std::vector<Eigen::Matrix2d>& SR,
+                                       double rho, double rho_s) {
+  const int m = static_cast<int>(SL.size());
+  std::vector<Eigen::Matrix2d> V(SL.size());
+  for (int n = 0; n < m; ++n) V[n] = (n > 0 ? rho * rho * V[n - 1] : Eigen::Matrix2d::Zero().eval()) + SL[n];
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(4 * m, 4 * m);
+  for (int i = 0; i < m; ++i) {
+    for (int j = i; j < m; ++j) {
+      const Eigen::Matrix2d ll = std::pow(rho, j - i) * V[i];
+      C.block<2, 2>(4 * i, 4 * j) = ll;                                        // l_i, l_j
+      C.block<2, 2>(4 * i, 4 * j + 2) = rho_s * ll;                            // l_i, r_j
+      C.block<2, 2>(4 * i + 2, 4 * j) = rho_s * (i == j ? ll : Eigen::Matrix2d::Zero().eval());  // r_i, l_j
+      C.block<2, 2>(4 * i + 2, 4 * j + 2) = rho_s * rho_s * ll + (i == j ? SR[i] : Eigen::Matrix2d::Zero().eval());
+    }
+  }
+  // r_i against a later l_j: l_j carries l_i, and r_i = rho_s l_i + s_i (s_i independent).
+  for (int i = 0; i < m; ++i) {
+    for (int j = i + 1; j < m; ++j) C.block<2, 2>(4 * i + 2, 4 * j) = rho_s * std::pow(rho, j - i) * V[i];
+  }
+  return C.selfadjointView<Eigen::Upper>();
+}
+
+// Known answer for the weighting: the rows ToIndependentErrors makes, weighed with the
+// matches' own information blockdiag(SL^-1, SR^-1), give exactly the inverse of the
+// closed-form covariance (the window's information is the carry model's), for several
+// carries, 0 (independent: the rows unchanged) and 1 (the random walk) included.
+TEST(SlidingWindow, CarriedTrackErrorsAreWeighedByTheClosedFormCovariance) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  const int m = 5;
+  std::vector<Eigen::Matrix2d> SL, SR;
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(4 * m, 4 * m);
+  for (int n = 0; n < m; ++n) {
+    Eigen::Matrix2d A, B;
+    A << 0.3 + u(rng), u(rng), u(rng), 0.4 + u(rng);
+    B << 0.2 + u(rng), u(rng), u(rng), 0.5 + u(rng);
+    SL.push_back(A * A.transpose() + 0.01 * Eigen::Matrix2d::Identity());
+    SR.push_back(B * B.transpose() + 0.01 * Eigen::Matrix2d::Identity());
+    W.block<2, 2>(4 * n, 4 * n) = SL.back().inverse();
+    W.block<2, 2>(4 * n + 2, 4 * n + 2) = SR.back().inverse();
+  }
+  for (const auto& [rho, rho_s] : std::vector<std::pair<double, double>>{{0.0, 0.0}, {0.5, 0.9}, {0.8, 0.3}, {1.0, 1.0}}) {
+    Eigen::MatrixXd L = Eigen::MatrixXd::Identity(4 * m, 4 * m);
+    ToIndependentErrors(L, m, rho, rho_s);
+    const Eigen::MatrixXd C = CarriedErrorCovariance(SL, SR, rho, rho_s);
+    const Eigen::MatrixXd info = L.transpose() * W * L;
+    const double err = (info * C - Eigen::MatrixXd::Identity(4 * m, 4 * m)).cwiseAbs().maxCoeff();
+    EXPECT_LT(err, 1e-9) << "rho " << rho << ", rho_s " << rho_s;
+    // Each row block holds at most two keyframes: L is lower block-bidiagonal.
+    for (int i = 0; i < m; ++i) {
+      for (int j = 0; j < m; ++j) {
+        if (j > i || j < i - 1) {
+          const double outside = L.block<4, 4>(4 * i, 4 * j).cwiseAbs().maxCoeff();
+          EXPECT_EQ(outside, 0.0) << i << "," << j;
+        }
+      }
+    }
+    if (rho == 0.0 && rho_s == 0.0) {
+      EXPECT_TRUE(L.isIdentity(0.0));
+    }
+  }
+  // A residual vector is taken the same way as the rows of a Jacobian.
+  Eigen::VectorXd r = Eigen::VectorXd::LinSpaced(4 * m, 1.0, 4.0 * m);
+  Eigen::MatrixXd L = Eigen::MatrixXd::Identity(4 * m, 4 * m);
+  ToIndependentErrors(L, m, 0.6, 0.7);
+  const Eigen::VectorXd expected = L * r;
+  ToIndependentErrors(r, m, 0.6, 0.7);
+  EXPECT_LT((r - expected).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// Errors carried in part (rho 0.6 along the track, 0.9 into the right match): weighed
+// with the same carries the window's published deltas are honest, and taken as
+// independent they claim more than the data give.
+TEST(SlidingWindow, PartlyCarriedTrackErrorsGiveAnHonestWindow) {
+  std::vector<double> nees_matched, nees_independent;
+  for (unsigned seed : {81u, 82u, 83u}) {
+    for (bool matched : {false, true}) {
+      Scene scene(25, seed);
+      scene.track_carry = 0.6;
+      scene.stereo_carry = 0.9;
+      WindowOptions wo;
+      wo.track_carry = matched ? 0.6 : 0.0;
+      wo.stereo_carry = matched ? 0.9 : 0.0;
+      const DriveResult r = Drive(scene, 5, 0.3, 0.0, 0.0, seed, wo);
+      ASSERT_EQ(r.nees.size(), 24u);
+      auto& nees = matched ? nees_matched : nees_independent;
+      nees.insert(nees.end(), r.nees.begin() + 4, r.nees.end());
+    }
+  }
+  const auto mean_of = [](const std::vector<double>& v) {
+    double m = 0;
+    for (double x : v) m += x / double(v.size());
+    return m;
+  };
+  const auto beyond = std::count_if(nees_matched.begin(), nees_matched.end(), [](double x) { return x > 20.06; });
+  EXPECT_GT(mean_of(nees_matched), 4.0);
+  EXPECT_LT(mean_of(nees_matched), 8.5);
+  EXPECT_LE(beyond, 2) << "of " << nees_matched.size();
+  EXPECT_GT(mean_of(nees_independent), 1.2 * mean_of(nees_matched));
+  std::cout << "carry 0.6/0.9, " << nees_matched.size() << " deltas: NEES mean " << mean_of(nees_matched) << ", "
+            << beyond << " beyond 20.06 (taken as independent: " << mean_of(nees_independent) << ")\n";
 }
 
 TEST(SlidingWindow, EstimatesADisparityOffsetAndRemovesItsScaleError) {
