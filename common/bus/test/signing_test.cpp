@@ -257,3 +257,32 @@ TEST(Signing, BusSignsWhatItPublishesAndRefusesForgeriesAndReplays) {
   ASSERT_EQ(received.size(), 2u);
   EXPECT_EQ(received[1].reason, "from the runner");
 }
+
+// Two subscriptions on one Bus to a signed channel both get a signed message (LCM hands
+// them the same datagram: the second must not call it a replay), and a replayed copy is
+// refused by both.
+TEST(Signing, TwoSubscriptionsToASignedChannelBothGetItAndBothRefuseAReplay) {
+  rover::bus::Bus bus("memq://");
+  bus.set_publisher("rover_seq");
+  bus.set_auth(rover::bus::MakeBusAuth(TestKey(), "rover_seq"));
+  std::vector<sequence_control_t> first, second;
+  bus.Subscribe<sequence_control_t>(rover::channels::kSequenceControl,
+                                    [&](const sequence_control_t& m) { first.push_back(m); });
+  bus.Subscribe<sequence_control_t>(rover::channels::kSequenceControl,
+                                    [&](const sequence_control_t& m) { second.push_back(m); });
+  bus.Publish(rover::channels::kSequenceControl, Abort("operator"));
+  while (bus.Handle(0)) {
+  }
+  ASSERT_EQ(first.size(), 1u);
+  ASSERT_EQ(second.size(), 1u);
+  EXPECT_EQ(bus.dropped(), 0) << bus.last_drop();
+  const auto bytes = rover::bus::EncodeMessage(first[0]);
+  for (int copy = 0; copy < 2; ++copy) {
+    bus.lcm().publish(rover::channels::kSequenceControl, bytes.data(), static_cast<unsigned>(bytes.size()));
+    while (bus.Handle(0)) {
+    }
+  }
+  EXPECT_EQ(first.size(), 1u);
+  EXPECT_EQ(second.size(), 1u);
+  EXPECT_EQ(bus.dropped(), 4) << "two copies, each refused by both subscriptions";
+}
