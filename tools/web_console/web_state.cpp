@@ -436,8 +436,10 @@ std::string WebState::StateJson(double wall_now_s, const PlaybackInfo* playback)
   for (const auto& [id, n] : step_counts_)
     if (status_ && id == status_->submission_id) step_count = n;
   j.Key("step_count").Int(step_count);
+  // The table is the sequence in the status's: an earlier sequence's steps are not this one's.
   j.Key("steps").Begin('[');
   for (const auto& s : steps_) {
+    if (status_ && s.submission_id != status_->submission_id) continue;
     j.Begin('{');
     j.Key("submission_id").Int(s.submission_id);
     j.Key("command_index").Int(s.command_index).Key("step_index").Int(s.step_index);
