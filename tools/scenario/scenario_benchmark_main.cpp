@@ -75,7 +75,8 @@ int main(int argc, char** argv) {
         }
         walls.push_back(median(wall));
         std::printf("  %-6s %10.2f %10.1f %10.1f %12.1f  %s\n", rate.c_str(), median(distance), median(rover),
-                    median(wall), median(ratio), digest.substr(0, 16).c_str());
+                    median(wall), median(ratio),
+                    (digest.size() == 64 ? digest.substr(0, 16) : digest).c_str());  // a hex digest, shortened
       }
       if (walls.size() >= 2) {
         std::printf("  wall time %s / %s: %.2f   (target <= 0.5 for max / 50)\n", rates.back().c_str(),
