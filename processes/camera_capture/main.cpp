@@ -6,6 +6,7 @@
 //   genicam, gstreamer  real cameras (common/camera_hw; README "Camera hardware")
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
+#include "bus/image_encode.hpp"
 #include "bus/process.hpp"
 #include "camera_hw/sources.hpp"
 #include "config/file_read.hpp"
@@ -218,26 +219,6 @@ class HardwareCameras : public ImageSource {
   geometry::StereoRig rig_;
 };
 
-rover_msgs::image_t EncodeImage(const cv::Mat& img, bool png) {
-  rover_msgs::image_t out{};
-  out.width = img.cols;
-  out.height = img.rows;
-  if (png) {
-    out.encoding = rover_msgs::image_t::ENCODING_PNG;
-    // Level 1 with zlib's run-length strategy: faster than the default strategy and no
-    // larger (measured on a KITTI frame: 23.6 -> 13.0 ms, 282 -> 249 kB; on a rendered
-    // 512x512 frame: 12.8 -> 11.1 ms, 151 -> 130 kB).
-    cv::imencode(".png", img, out.data,
-                 {cv::IMWRITE_PNG_COMPRESSION, 1, cv::IMWRITE_PNG_STRATEGY, cv::IMWRITE_PNG_STRATEGY_RLE});
-  } else {
-    out.encoding = img.depth() == CV_16U ? rover_msgs::image_t::ENCODING_GRAY16
-                                         : rover_msgs::image_t::ENCODING_GRAY8;
-    const cv::Mat c = img.isContinuous() ? img : img.clone();
-    out.data.assign(c.data, c.data + c.total() * c.elemSize());
-  }
-  out.size = static_cast<std::int32_t>(out.data.size());
-  return out;
-}
 
 }  // namespace
 
@@ -311,8 +292,8 @@ int main(int argc, char** argv) {
       frame.purpose = request.purpose;
       // The two images compress at once on two cores (PNG encoding is most of a
       // full-size frame's latency).
-      auto right = std::async(std::launch::async, [&pair, png] { return EncodeImage(pair.right, png); });
-      frame.left = EncodeImage(pair.left, png);
+      auto right = std::async(std::launch::async, [&pair, png] { return bus::EncodeImage(pair.right, png); });
+      frame.left = bus::EncodeImage(pair.left, png);
       frame.right = right.get();
       frame.left_model = rover::bus::CameraModelToMsg(*pair.rig.left);
       frame.right_model = rover::bus::CameraModelToMsg(*pair.rig.right);

@@ -6,6 +6,7 @@
 // in silence, a camera whose two images are taken too far apart.
 #include "bus/bus.hpp"
 #include "bus/convert.hpp"
+#include "bus/image_encode.hpp"
 #include "bus/channels.hpp"
 #include "bus/signing.hpp"
 #include "config/yaml_config.hpp"
@@ -40,6 +41,12 @@ CommandResult Kit(const std::string& url, const std::string& args) {
 }
 
 bool Has(const CommandResult& r, const std::string& text) { return r.output.find(text) != std::string::npos; }
+
+// Wall-clock microseconds: the hand-made drivers below run on a real clock.
+std::int64_t Now() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
 
 // rover_sim on a real clock at rate 1, as a rover's mobility runs.
 class SimRig {
@@ -138,10 +145,6 @@ class BrokenDriver {
   }
 
  private:
-  static std::int64_t Now() {
-    return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-        .count();
-  }
   static double Wall() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
   }
@@ -346,19 +349,6 @@ class SkewedCamera {
   }
 
  private:
-  static std::int64_t Now() {
-    return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-        .count();
-  }
-  static rover_msgs::image_t Gray(int w, int h) {
-    rover_msgs::image_t img{};
-    img.width = w;
-    img.height = h;
-    img.encoding = rover_msgs::image_t::ENCODING_GRAY8;
-    img.data.assign(static_cast<std::size_t>(w) * h, 128);
-    img.size = static_cast<std::int32_t>(img.data.size());
-    return img;
-  }
   void Loop() {
     const auto rig = geometry::LoadStereoRig(config::ConfigNode::FromString(
         "left: {type: pinhole, width: 64, height: 48, fx: 60, fy: 60, cx: 31.5, cy: 23.5, position: [0, -0.1, -1], rpy_deg: [0, 0, 0]}\n"
@@ -371,8 +361,8 @@ class SkewedCamera {
       f.utime = Now();
       f.frame_id = r.frame_id;
       f.purpose = r.purpose;
-      f.left = Gray(64, 48);
-      f.right = Gray(64, 48);
+      f.left = bus::EncodeImage(cv::Mat(48, 64, CV_8UC1, cv::Scalar(128)), false);
+      f.right = bus::EncodeImage(cv::Mat(48, 64, CV_8UC1, cv::Scalar(128)), false);
       f.left_model = bus::CameraModelToMsg(*rig.left);
       f.right_model = bus::CameraModelToMsg(*rig.right);
       f.pose_at_capture.orientation[0] = 1;

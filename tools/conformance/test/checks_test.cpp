@@ -3,6 +3,7 @@
 // mobility driver's statuses with a known unit error, a dead-man on time or never, frames
 // whose cameras are swapped.
 #include "bus/convert.hpp"
+#include "bus/image_encode.hpp"
 #include "conformance/camera_checks.hpp"
 #include "conformance/mobility_checks.hpp"
 #include "conformance/sensor_checks.hpp"
@@ -272,13 +273,7 @@ TEST(ConformanceMobility, RefusalByFaultOrCountedDrop) {
 }
 
 rover_msgs::image_t Gray(int w, int h) {
-  rover_msgs::image_t img{};
-  img.width = w;
-  img.height = h;
-  img.encoding = rover_msgs::image_t::ENCODING_GRAY8;
-  img.data.assign(static_cast<std::size_t>(w) * h, 128);
-  img.size = static_cast<std::int32_t>(img.data.size());
-  return img;
+  return rover::bus::EncodeImage(cv::Mat(h, w, CV_8UC1, cv::Scalar(128)), false);
 }
 
 TEST(ConformanceCamera, FramesAnswersAndSwappedCameras) {
