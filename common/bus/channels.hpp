@@ -13,6 +13,7 @@ inline constexpr const char* kMobilityCommand = "MOBILITY_COMMAND";  // mobility
 inline constexpr const char* kMobilityStatus = "MOBILITY_STATUS";    // mobility_status_t
 inline constexpr const char* kCaptureRequest = "CAPTURE_REQUEST";    // capture_request_t
 inline constexpr const char* kStereoFrame = "STEREO_FRAME";          // stereo_frame_t
+inline constexpr const char* kHazcamFrame = "HAZCAM_FRAME";          // stereo_frame_t (the front HAZCAM pair; the map only, never VO)
 inline constexpr const char* kVoUpdate = "VO_UPDATE";                // vo_update_t
 inline constexpr const char* kKeepOutZones = "KEEPOUT_ZONES";        // keepout_zones_t
 inline constexpr const char* kHazardStatus = "HAZARD_STATUS";        // hazard_status_t
