@@ -68,6 +68,8 @@ RoverTimeBreakdown BreakdownFromLog(const std::string& log_path) {
       rover_msgs::capture_request_t m;
       if (m.decode(e->data, 0, e->datalen) >= 0) requests[m.frame_id] = t;
     } else if (ch == channels::kStereoFrame) {
+      // (A HAZCAM_FRAME of the same request is published just before: its imaging time is
+      // inside this request-to-STEREO_FRAME interval.)
       rover_msgs::stereo_frame_t m;
       if (m.decode(e->data, 0, e->datalen) < 0) continue;
       frames[m.frame_id] = t;
