@@ -11,12 +11,12 @@
 #include "bus/image_encode.hpp"
 #include "bus/process.hpp"
 #include "camera_hw/sources.hpp"
+#include "capture/capture_options.hpp"
+#include "capture/rendered_cameras.hpp"
 #include "config/file_read.hpp"
 #include "geometry/camera_io.hpp"
 #include "geometry/kitti_calib.hpp"
 #include "imaging/image_check.hpp"
-#include "render/render_options.hpp"
-#include "render/stereo_renderer.hpp"
 #include "terrain/world.hpp"
 
 #include <rover_msgs/capture_request_t.hpp>
@@ -75,21 +75,10 @@ class ImageSource {
   virtual void Expose() {}
 };
 
-// The front HAZCAMs' rig and renderer. The rover's mast in their shadow stands under the
-// NAVCAM rig (render::MastUnderRig), not under the HAZCAMs.
-struct SimulatedHazcams {
-  geometry::StereoRig rig;
-  render::StereoRenderer renderer;
-};
-
 class SimulatedCameras : public ImageSource {
  public:
-  SimulatedCameras(const std::string& world_path, geometry::StereoRig rig,
-                   render::RenderOptions options, std::optional<SimulatedHazcams> hazcams)
-      : world_(terrain::WorldOptions::LoadFile(world_path)),
-        rig_(std::move(rig)),
-        renderer_(std::move(options)),
-        hazcams_(std::move(hazcams)) {}
+  SimulatedCameras(const std::string& world_path, capture::RenderedCameras cameras)
+      : world_(terrain::WorldOptions::LoadFile(world_path)), cameras_(std::move(cameras)) {}
   bool Ready(std::int64_t request_utime) const override {
     std::lock_guard<std::mutex> lock(mutex_);
     return truth_ && truth_->utime >= request_utime;
@@ -111,25 +100,16 @@ class SimulatedCameras : public ImageSource {
     geometry::Pose T = geometry::Pose::Identity();
     T.linear() = bus::QuaternionFromArray(truth.orientation).toRotationMatrix();
     T.translation() = Eigen::Vector3d(truth.position[0], truth.position[1], truth.position[2]);
-    auto images = renderer_.RenderPair(world_, rig_, T, frame_id);
-    CapturedPair pair{images.left, images.right, images.rig, {}, {}, truth.utime, std::nullopt};
-    // Both pairs at the same true pose: the same instant, as one exposure command on MER.
-    if (hazcams_) {
-      try {
-        auto near = hazcams_->renderer.RenderPair(world_, hazcams_->rig, T, frame_id);
-        pair.hazcam = HazcamPair{near.left, near.right, near.rig};
-      } catch (const std::exception& e) {
-        pair.hazcam_error = e.what();
-      }
-    }
+    auto exposure = cameras_.Expose(world_, T, frame_id);
+    const auto& navcam = exposure.navcam;
+    CapturedPair pair{navcam.left, navcam.right, navcam.rig, {}, exposure.hazcam_error, truth.utime, std::nullopt};
+    if (exposure.hazcam) pair.hazcam = HazcamPair{exposure.hazcam->left, exposure.hazcam->right, exposure.hazcam->rig};
     return pair;
   }
 
  private:
   terrain::World world_;
-  geometry::StereoRig rig_;
-  render::StereoRenderer renderer_;
-  std::optional<SimulatedHazcams> hazcams_;
+  capture::RenderedCameras cameras_;
   mutable std::mutex mutex_;  // truth arrives on the bus thread while a render runs
   std::optional<rover_msgs::sim_truth_t> truth_, exposed_;
 };
@@ -269,13 +249,6 @@ struct CaptureFrames {
   std::string hazcam_error;  // why a configured HAZCAM pair is missing
 };
 
-// A relative path in the config is relative to the config file, so that configs/ in the
-// repository and /etc/rover on a rover computer both work.
-std::string RelativeToConfig(const std::string& path, const std::string& config_path) {
-  if (path.empty() || path[0] == '/' || config_path.empty()) return path;
-  return (fs::path(config_path).parent_path() / path).string();
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -288,57 +261,31 @@ int main(int argc, char** argv) {
                       {{"--world", "FILE", "world YAML (sim source)"},
                        {"--dataset", "DIR", "KITTI-layout directory (dataset source)"}});
     const auto section = proc.config()["capture"];
-    section.CheckKeys({"source", "rig", "encoding", "rate_hz", "render", "hazcam", "genicam", "gstreamer"});
-    std::string source = "sim", rig_path = "configs/cameras/navcam_pinhole.yaml", encoding = "png";
-    double rate_hz = 0.0;
-    section.GetEnum("source", source, {"sim", "dataset", "genicam", "gstreamer"});
-    section.Get("rig", rig_path);
-    section.GetEnum("encoding", encoding, {"png", "raw"});
-    section.Get("rate_hz", rate_hz, 0.0, 100.0);
-    if (proc.option("--dataset")) source = "dataset";
-    rig_path = RelativeToConfig(rig_path, proc.config_path());
-    // The front HAZCAM pair: empty or absent rig, none.
-    const auto hazcam_section = section["hazcam"];
-    std::string hazcam_rig_path;
-    if (!hazcam_section.IsNull()) {
-      hazcam_section.CheckKeys({"rig", "render"});
-      hazcam_section.Get("rig", hazcam_rig_path);
-      hazcam_rig_path = RelativeToConfig(hazcam_rig_path, proc.config_path());
-    }
-    // Refused rather than ignored: a map that was configured to see the near field must
-    // not go blind there without a word. camera_hw takes one synchronised pair, and a
-    // dataset has no HAZCAM images.
-    if (!hazcam_rig_path.empty() && source != "sim") {
-      hazcam_section.Fail("expected no HAZCAM rig with source " + source +
-                          " (only the sim source takes a HAZCAM pair; remove capture.hazcam)");
-    }
+    const auto options =
+        capture::CaptureOptions::Load(section, proc.config_path(), proc.option("--dataset") ? "dataset" : "");
 
     std::unique_ptr<ImageSource> cameras;
-    if (source == "sim") {
+    if (options.source == "sim") {
       const auto world = proc.option("--world");
       if (!world) throw config::ConfigError("camera_capture: missing argument --world FILE (expected the world the simulator drives on)");
-      const render::RenderOptions navcam_render = render::LoadRenderOptions(section["render"]);
-      geometry::StereoRig navcam_rig = geometry::LoadStereoRigFile(rig_path);
-      std::optional<SimulatedHazcams> hazcams;
-      if (!hazcam_rig_path.empty()) {
-        // The NAVCAM's render options, overridden key by key by capture.hazcam.render.
-        render::RenderOptions options = render::LoadRenderOptions(hazcam_section["render"], navcam_render);
-        options.rover_shadow = render::MastUnderRig(options.rover_shadow, navcam_rig);
-        hazcams.emplace(SimulatedHazcams{geometry::LoadStereoRigFile(hazcam_rig_path),
-                                         render::StereoRenderer(std::move(options))});
-      }
-      cameras = std::make_unique<SimulatedCameras>(*world, std::move(navcam_rig), navcam_render, std::move(hazcams));
-    } else if (source == "genicam" || source == "gstreamer") {
-      auto hardware = source == "genicam"
+      auto navcam_rig = geometry::LoadStereoRigFile(options.rig_path);
+      cameras = std::make_unique<SimulatedCameras>(
+          *world, options.hazcam ? capture::RenderedCameras(std::move(navcam_rig), options.render,
+                                                            geometry::LoadStereoRigFile(options.hazcam->rig_path),
+                                                            options.hazcam->render)
+                                 : capture::RenderedCameras(std::move(navcam_rig), options.render));
+    } else if (options.source == "genicam" || options.source == "gstreamer") {
+      auto hardware = options.source == "genicam"
                           ? camera_hw::MakeGenicamSource(camera_hw::GenicamOptions::Load(section["genicam"]))
                           : camera_hw::MakeGstreamerSource(camera_hw::GstreamerOptions::Load(section["gstreamer"]));
-      cameras = std::make_unique<HardwareCameras>(std::move(hardware), geometry::LoadStereoRigFile(rig_path));
+      cameras = std::make_unique<HardwareCameras>(std::move(hardware), geometry::LoadStereoRigFile(options.rig_path));
     } else {
       const auto dir = proc.option("--dataset");
       if (!dir) throw config::ConfigError("camera_capture: missing argument --dataset DIR (expected a KITTI-layout directory)");
       cameras = std::make_unique<DatasetCameras>(*dir);
     }
-    const bool png = encoding == "png";
+    const bool png = options.encoding == "png";
+    const double rate_hz = options.rate_hz;
 
     std::optional<rover_msgs::pose_t> pose;
     std::deque<rover_msgs::capture_request_t> pending;
