@@ -344,8 +344,14 @@ int main(int argc, char** argv) {
       if (!job.valid() || proc.now() < job_due) return false;
       if (job.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return true;
       try {
-        const CaptureFrames frames = job.get();  // rethrows a capture error
-        if (frames.hazcam) proc.bus().Publish(channels::kHazcamFrame, *frames.hazcam);
+        CaptureFrames frames = job.get();  // rethrows a capture error
+        if (frames.hazcam) {
+          try {
+            proc.bus().Publish(channels::kHazcamFrame, *frames.hazcam);
+          } catch (const std::exception& e) {
+            frames.hazcam_error = e.what();  // not the NAVCAM frame's failure
+          }
+        }
         proc.bus().Publish(channels::kStereoFrame, frames.navcam);
         if (frames.hazcam_error.empty()) {
           proc.SetHealth(rover_msgs::heartbeat_t::STATE_OK, "");
