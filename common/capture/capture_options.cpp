@@ -20,6 +20,7 @@ CaptureOptions CaptureOptions::Load(const config::ConfigNode& section, const std
   section.Get("rig", o.rig_path);
   section.GetEnum("encoding", o.encoding, {"png", "raw"});
   section.Get("rate_hz", o.rate_hz, 0.0, 100.0);
+  const std::string configured_source = o.source;
   if (!source_override.empty()) o.source = source_override;
   o.rig_path = RelativeToConfig(o.rig_path, config_path);
   o.render = render::LoadRenderOptions(section["render"]);
@@ -30,6 +31,13 @@ CaptureOptions CaptureOptions::Load(const config::ConfigNode& section, const std
   std::string rig;
   hazcam.Get("rig", rig);
   if (rig.empty()) return o;
+  // --dataset on the simulator's config (the systemd unit's way to play a recording): a
+  // dataset has no HAZCAM images, so the pair is left out and the process says so.
+  if (configured_source == "sim" && o.source != "sim") {
+    o.notice = hazcam.source() + ": " + hazcam.path() + " ignored: the " + o.source +
+               " source has no HAZCAM images (only the sim source takes a HAZCAM pair)";
+    return o;
+  }
   // Refused rather than ignored: a map configured to see the near field must not go blind
   // there without a word. camera_hw takes one synchronised pair, and a dataset has no
   // HAZCAM images.

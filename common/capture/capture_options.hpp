@@ -27,12 +27,16 @@ struct CaptureOptions {
   render::RenderOptions render;  // the NAVCAM pair's (sim source)
   // Unset when `capture.hazcam` is absent or its rig empty.
   std::optional<HazcamOptions> hazcam;
+  // One line for the process to print at start when a configured HAZCAM pair was left out
+  // because `source_override` chose a source without HAZCAMs; empty otherwise.
+  std::string notice;
 
   // Reads the section. `config_path` is the config file (relative rig paths are relative
   // to its folder, so that configs/ in the repository and /etc/rover on a rover computer
   // both work; "" leaves them as they are). `source_override` replaces `source` when set
-  // (camera_capture's --dataset). Throws config::ConfigError naming the key: unknown keys,
-  // bad values, and a HAZCAM rig with a source other than sim.
+  // (camera_capture's --dataset; a HAZCAM rig is then left out, with `notice`). Throws
+  // config::ConfigError naming the key: unknown keys, bad values, and a HAZCAM rig with a
+  // configured source other than sim.
   static CaptureOptions Load(const config::ConfigNode& section, const std::string& config_path,
                              const std::string& source_override = "");
 };

@@ -263,6 +263,7 @@ int main(int argc, char** argv) {
     const auto section = proc.config()["capture"];
     const auto options =
         capture::CaptureOptions::Load(section, proc.config_path(), proc.option("--dataset") ? "dataset" : "");
+    if (!options.notice.empty()) std::cerr << "camera_capture: " << options.notice << "\n";
 
     std::unique_ptr<ImageSource> cameras;
     if (options.source == "sim") {

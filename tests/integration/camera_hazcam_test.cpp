@@ -141,13 +141,24 @@ TEST(CameraCaptureHazcam, WithoutTheHazcamSectionNoHazcamFrame) {
 
 TEST(CameraCaptureHazcam, AHazcamWithASourceOtherThanSimIsRefusedAtStartInOneLine) {
   const std::string env = "ROVER_LCM_URL='" + PrivateUrl(83) + "' ";
-  // The simulator's config with --dataset: a dataset has no HAZCAM images.
+  // The simulator's config with --dataset: a dataset has no HAZCAM images, so the pair is
+  // left out with one line, and the dataset source starts (and stops at the missing folder).
   const auto r = RunCommand(env + "timeout 10 " + Bin("camera_capture") +
                             " --config configs/rover.yaml --dataset /nonexistent");
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_EQ(r.output,
-            "configs/rover.yaml: capture.hazcam: expected no HAZCAM rig with source dataset (only the sim source "
-            "takes a HAZCAM pair; remove capture.hazcam)\n");
+  EXPECT_NE(r.output.find("camera_capture: configs/rover.yaml: capture.hazcam ignored: the dataset source has no "
+                          "HAZCAM images"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("/nonexistent/image_0: no images"), std::string::npos) << r.output;
+  // A configured dataset source with a HAZCAM rig is a contradiction in the file: refused.
+  const std::string bad = OutDir("camera_hazcam_contradiction");
+  std::ofstream(bad + "/capture.yaml") << "capture:\n  source: dataset\n  hazcam: {rig: h.yaml}\n";
+  const auto refused = RunCommand(env + "timeout 10 " + Bin("camera_capture") + " --config " + bad +
+                                  "/capture.yaml --dataset /nonexistent");
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_EQ(refused.output, bad + "/capture.yaml: capture.hazcam: expected no HAZCAM rig with source dataset (only the "
+                            "sim source takes a HAZCAM pair; remove capture.hazcam)\n");
   // An empty rig is no HAZCAM: the same source starts (and stops at the missing directory).
   const std::string dir = OutDir("camera_hazcam_refused");
   std::ofstream(dir + "/capture.yaml") << "capture:\n  source: dataset\n  hazcam: {rig: \"\"}\n";

@@ -59,10 +59,24 @@ TEST(CaptureOptions, AHazcamWithASourceOtherThanSimIsRefusedInOneLine) {
               std::string("/etc/rover/rover.yaml: capture.hazcam: expected no HAZCAM rig with source ") + source +
                   " (only the sim source takes a HAZCAM pair; remove capture.hazcam)");
   }
-  // --dataset on the simulator's config: the same.
-  EXPECT_NE(LoadError("capture:\n  source: sim\n  hazcam: {rig: h.yaml}\n", "dataset").find("with source dataset"),
-            std::string::npos);
+  // --dataset on the simulator's config (the systemd unit's way to play a recording): the
+  // HAZCAM pair is left out, and the notice names the key.
+  EXPECT_EQ(LoadError("capture:\n  source: sim\n  hazcam: {rig: h.yaml}\n", "dataset"), "");
   EXPECT_EQ(LoadError("capture:\n  source: genicam\n  hazcam: {rig: \"\"}\n"), "");
+}
+
+TEST(CaptureOptions, DatasetOverTheSimulatorsConfigLeavesTheHazcamOutAndSaysSo) {
+  const auto o = CaptureOptions::Load(Section("capture:\n  source: sim\n  hazcam: {rig: h.yaml}\n"),
+                                      "/etc/rover/rover.yaml", "dataset");
+  EXPECT_EQ(o.source, "dataset");
+  EXPECT_FALSE(o.hazcam.has_value());
+  EXPECT_NE(o.notice.find("capture.hazcam ignored: the dataset source has no HAZCAM images"), std::string::npos)
+      << o.notice;
+  // Without the override the simulator's config keeps its HAZCAMs and says nothing.
+  const auto sim = CaptureOptions::Load(Section("capture:\n  source: sim\n  hazcam: {rig: h.yaml}\n"),
+                                        "/etc/rover/rover.yaml");
+  EXPECT_TRUE(sim.hazcam.has_value());
+  EXPECT_EQ(sim.notice, "");
 }
 
 TEST(CaptureOptions, UnknownKeysAndBadValuesNameTheKey) {
