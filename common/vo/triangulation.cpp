@@ -34,10 +34,20 @@ bool IntersectRays(const Eigen::Vector3d& C1, const Eigen::Vector3d& r1,
   return true;
 }
 
+Eigen::Matrix3d StereoPointCovariance(const Eigen::Matrix<double, 3, 4>& J, const Eigen::Matrix2d& Sigma_left,
+                                      const Eigen::Matrix2d& Sigma_right, double stereo_carry) {
+  Eigen::Matrix4d S;
+  S.topLeftCorner<2, 2>() = Sigma_left;
+  S.topRightCorner<2, 2>() = stereo_carry * Sigma_left;
+  S.bottomLeftCorner<2, 2>() = stereo_carry * Sigma_left;
+  S.bottomRightCorner<2, 2>() = stereo_carry * stereo_carry * Sigma_left + Sigma_right;
+  return J * S * J.transpose();
+}
+
 bool TriangulateStereo(const geometry::StereoRig& rig, const Eigen::Vector2d& left,
                        const Eigen::Matrix2d& Sigma_left, const Eigen::Vector2d& right,
                        const Eigen::Matrix2d& Sigma_right, const TriangulationLimits& limits,
-                       StereoPoint* out, Eigen::Matrix<double, 3, 4>* J_out) {
+                       StereoPoint* out, Eigen::Matrix<double, 3, 4>* J_out, double stereo_carry) {
   Eigen::Vector3d C1, r1, C2, r2;
   Eigen::Matrix<double, 3, 2> Jd1, Jd2;
   rig.left->BackProject(left, &C1, &r1, &Jd1);
@@ -72,11 +82,8 @@ bool TriangulateStereo(const geometry::StereoRig& rig, const Eigen::Vector2d& le
   Eigen::Matrix<double, 3, 4> J;
   J.leftCols<2>() = x.dP_dr1 * Jd1;
   J.rightCols<2>() = x.dP_dr2 * Jd2;
-  Eigen::Matrix4d S = Eigen::Matrix4d::Zero();
-  S.topLeftCorner<2, 2>() = Sigma_left;
-  S.bottomRightCorner<2, 2>() = Sigma_right;
   out->P = x.P;
-  out->Sigma = J * S * J.transpose();                 // eq. (11)
+  out->Sigma = StereoPointCovariance(J, Sigma_left, Sigma_right, stereo_carry);  // eq. (11)
   out->failure = TriangulationFailure::kNone;
   if (J_out) *J_out = J;
   return true;

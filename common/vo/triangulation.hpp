@@ -42,11 +42,23 @@ struct TriangulationLimits {
 };
 
 // Triangulates a left/right pixel pair with covariances Sigma_left, Sigma_right:
-// Sigma_P = J diag(Sigma_left, Sigma_right) J^T, J = dP/d(xl, yl, xr, yr) (VO-5, eq. 11).
+// Sigma_P = J S J^T, J = dP/d(xl, yl, xr, yr) (VO-5, eq. 11), S the covariance of the two
+// matches' errors. The right match is found with a template cut at the left match, so it
+// repeats `stereo_carry` of the left match's error e_l on top of its own e_s:
+// e_r = stereo_carry e_l + e_s, and
+//   S = [Sigma_left, c Sigma_left; c Sigma_left, c^2 Sigma_left + Sigma_right] (c = stereo_carry).
+// 0 is the paper's diag(Sigma_left, Sigma_right); at 1 the left error moves the point
+// across the line of sight only (both rays alike), and the disparity carries the right
+// match's own error alone (common/vo/README.md, "Carried track errors").
 // Returns false (and out->failure) when the gap test or geometry rejects the feature.
 bool TriangulateStereo(const geometry::StereoRig& rig, const Eigen::Vector2d& left,
                        const Eigen::Matrix2d& Sigma_left, const Eigen::Vector2d& right,
                        const Eigen::Matrix2d& Sigma_right, const TriangulationLimits& limits,
-                       StereoPoint* out, Eigen::Matrix<double, 3, 4>* J = nullptr);
+                       StereoPoint* out, Eigen::Matrix<double, 3, 4>* J = nullptr,
+                       double stereo_carry = 0.0);
+
+// VO-5's covariance of a triangulated point: J S J^T with S as TriangulateStereo builds it.
+Eigen::Matrix3d StereoPointCovariance(const Eigen::Matrix<double, 3, 4>& J, const Eigen::Matrix2d& Sigma_left,
+                                      const Eigen::Matrix2d& Sigma_right, double stereo_carry);
 
 }  // namespace rover::vo

@@ -70,6 +70,12 @@ struct Feature {
   Eigen::Vector2d left;  // working-resolution pixel (integer for a fresh corner)
   Eigen::Vector3d P;
   Eigen::Matrix3d Sigma;
+  // The covariance of the part of P's error that the next pair's match of this feature does
+  // not repeat, which is what VO-8's residual P_curr - R P_prev - T sees of this pair: the
+  // next left match is found with a template cut at this one, so it carries track_carry of
+  // this left match's error, which the two points then share (Sigma with Sigma_left scaled
+  // by (1 - track_carry)^2). Sigma when nothing carries.
+  Eigen::Matrix3d Sigma_uncarried;
   Eigen::Vector3d dP_ddisparity;  // dP / d(right x): a disparity offset (VO-13)
   // Windowed mode: the stereo match behind P, and the track (id, pairs seen so far).
   Eigen::Vector2d right = Eigen::Vector2d::Zero();
@@ -79,14 +85,18 @@ struct Feature {
 };
 
 // A feature from its stereo match (VO-3) and the point triangulated from it (VO-4, VO-5;
-// J = dP / d(left x, left y, right x, right y)).
+// J = dP / d(left x, left y, right x, right y)), with the carries of the matches' errors
+// (VoOptions::window_track_carry, window_stereo_carry; 0 and 0 in frame-to-frame mode).
 inline Feature MakeFeature(const Eigen::Vector2d& left, const Eigen::Matrix2d& Sigma_left,
                            const Eigen::Vector2d& right, const Eigen::Matrix2d& Sigma_right,
-                           const StereoPoint& sp, const Eigen::Matrix<double, 3, 4>& J) {
+                           const StereoPoint& sp, const Eigen::Matrix<double, 3, 4>& J,
+                           double track_carry, double stereo_carry) {
   Feature f;
   f.left = left;
   f.P = sp.P;
   f.Sigma = sp.Sigma;
+  const double kept = (1.0 - track_carry) * (1.0 - track_carry);
+  f.Sigma_uncarried = StereoPointCovariance(J, kept * Sigma_left, Sigma_right, stereo_carry);
   f.dP_ddisparity = J.col(2);
   f.right = right;
   f.Sigma_left = Sigma_left;
@@ -195,6 +205,11 @@ struct VisualOdometry::State {
   Matrix6d last_ref_cov = Matrix6d::Zero();
   std::int64_t next_track_id = 1;
   bool Windowed() const { return o.window_size >= 2; }
+  // How much of a match's error the next left match (track) and its own right match
+  // (stereo) repeat (README "Carried track errors"): VoOptions' in windowed mode; the
+  // frame-to-frame mode stays the paper's, with independent errors.
+  double TrackCarry() const { return Windowed() ? o.window_track_carry : 0.0; }
+  double StereoCarry() const { return Windowed() ? o.window_stereo_carry : 0.0; }
 
   // ---- The stages of Process, in order. Those returning bool return false when they
   // end the call (Step::Stop). ----

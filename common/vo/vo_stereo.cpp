@@ -98,10 +98,11 @@ void VisualOdometry::State::StereoMatchFresh(Pair* pair, const std::vector<Corne
     }
     StereoPoint sp;
     Eigen::Matrix<double, 3, 4> J;
-    if (!TriangulateStereo(pair->rig, left, self.covariance, right, Sigma_right, limits, &sp, &J)) {
+    if (!TriangulateStereo(pair->rig, left, self.covariance, right, Sigma_right, limits, &sp, &J,
+                           StereoCarry())) {
       continue;
     }
-    found[i] = MakeFeature(left, self.covariance, right, Sigma_right, sp, J);
+    found[i] = MakeFeature(left, self.covariance, right, Sigma_right, sp, J, TrackCarry(), StereoCarry());
     ok[i] = 1;
   }
   for (std::size_t i = 0; i < corners.size(); ++i) {

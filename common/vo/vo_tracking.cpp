@@ -144,7 +144,8 @@ bool VisualOdometry::State::TrackFeature(const Step& st, int fi, const Predictio
   if (!MatchTrackedStereo(c, p, m.position, stereo_ms, &right, &Sigma_right)) return false;
   StereoPoint sp;
   Eigen::Matrix<double, 3, 4> J;
-  if (!TriangulateStereo(c.rig, m.position, m.covariance, right, Sigma_right, Limits(c), &sp, &J)) {
+  if (!TriangulateStereo(c.rig, m.position, m.covariance, right, Sigma_right, Limits(c), &sp, &J,
+                         StereoCarry())) {
     return false;
   }
   // Drop features whose 3-D positions disagree beyond their uncertainty (VO-6).
@@ -152,7 +153,9 @@ bool VisualOdometry::State::TrackFeature(const Step& st, int fi, const Predictio
   const Eigen::Matrix3d S = sp.Sigma + p.Sigma;
   if (o.track_max_chi2 > 0 && diff.dot(S.ldlt().solve(diff)) > o.track_max_chi2) return false;
   x->P_prev = f.P;
-  x->Sigma_prev = f.Sigma;
+  // The reference's left error is repeated by this match (VO-6 cut the template there),
+  // so the two points share it; the residual sees only what it does not repeat.
+  x->Sigma_prev = f.Sigma_uncarried;
   x->P_curr = sp.P;
   x->Sigma_curr = sp.Sigma;
   x->left = m.position;
@@ -164,7 +167,7 @@ bool VisualOdometry::State::TrackFeature(const Step& st, int fi, const Predictio
   x->dPcurr_ddisparity = J.col(2);
   x->dPprev_ddisparity = f.dP_ddisparity;
   if (seen) {
-    *seen = MakeFeature(m.position, m.covariance, right, Sigma_right, sp, J);
+    *seen = MakeFeature(m.position, m.covariance, right, Sigma_right, sp, J, TrackCarry(), StereoCarry());
     seen->track_id = f.track_id;
     seen->age = f.age + 1;
   }

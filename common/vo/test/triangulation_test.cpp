@@ -119,5 +119,46 @@ TEST(Triangulation, VO5_CovarianceAgreesWithMonteCarlo) {
   EXPECT_GT(far.Sigma(2, 2), 12 * p.Sigma(2, 2));
 }
 
+TEST(Triangulation, VO5_CarriedStereoErrorCovarianceAgreesWithMonteCarlo) {
+  // The right match repeats the left match's error (its template is cut there): e_r =
+  // c e_l + e_s. The point then moves across the line of sight with e_l and in range with
+  // e_s alone, which the covariance with the carry must say and the paper's must not.
+  const geometry::StereoRig rig = test::MakeRig(640, 480, 500, 319.5, 239.5, 0.3);
+  const Eigen::Vector3d X(-1.0, 0.5, 8.0);
+  Eigen::Vector2d l, r;
+  rig.left->Project(X, &l, nullptr);
+  rig.right->Project(X, &r, nullptr);
+  Eigen::Matrix2d Sl, Sr;
+  Sl << 0.04, 0.01, 0.01, 0.02;
+  Sr << 0.03, -0.005, -0.005, 0.05;
+  TriangulationLimits limits;
+  limits.max_gap_rad = 1.0;
+  std::mt19937 rng(12);
+  std::normal_distribution<double> n(0, 1);
+  const Eigen::Matrix2d Ll = Sl.llt().matrixL(), Lr = Sr.llt().matrixL();
+  for (const double carry : {1.0, 0.5}) {
+    StereoPoint p, independent;
+    ASSERT_TRUE(TriangulateStereo(rig, l, Sl, r, Sr, limits, &p, nullptr, carry));
+    ASSERT_TRUE(TriangulateStereo(rig, l, Sl, r, Sr, limits, &independent));
+    const int N = 20000;
+    std::vector<Eigen::Vector3d> samples;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (int k = 0; k < N; ++k) {
+      const Eigen::Vector2d el = Ll * Eigen::Vector2d(n(rng), n(rng));
+      const Eigen::Vector2d es = Lr * Eigen::Vector2d(n(rng), n(rng));
+      StereoPoint q;
+      ASSERT_TRUE(TriangulateStereo(rig, l + el, Sl, r + carry * el + es, Sr, limits, &q));
+      samples.push_back(q.P);
+      mean += q.P;
+    }
+    mean /= N;
+    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+    for (const auto& s : samples) C += (s - mean) * (s - mean).transpose();
+    C /= N - 1;
+    EXPECT_LT((C - p.Sigma).norm() / p.Sigma.norm(), 0.1) << "carry " << carry << " MC\n" << C << "\nmodel\n" << p.Sigma;
+    EXPECT_GT((C - independent.Sigma).norm() / independent.Sigma.norm(), 0.2) << "carry " << carry;
+  }
+}
+
 }  // namespace
 }  // namespace rover::vo
