@@ -48,8 +48,8 @@ DecodeAllocationCap::~DecodeAllocationCap() { t_allocation_cap = previous_; }
 std::size_t MaxPayloadBytes(const std::string& channel) {
   constexpr std::size_t kKiB = 1024, kMiB = 1024 * kKiB;
   // Two 16-bit 2048x2048 raw images and their models fit; anything larger is not a NAVCAM
-  // pair this stack can use.
-  if (channel == channels::kStereoFrame) return 48 * kMiB;
+  // (or HAZCAM) pair this stack can use.
+  if (channel == channels::kStereoFrame || channel == channels::kHazcamFrame) return 48 * kMiB;
   // A sequence file is at most 1 MiB (common/config file limits); zones and queries are
   // lists an operator writes.
   if (channel == channels::kSequenceSubmit || channel == channels::kSequenceStatus ||

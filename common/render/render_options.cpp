@@ -1,9 +1,13 @@
 #include "render/render_options.hpp"
 
+#include <algorithm>
+
 namespace rover::render {
 
-RenderOptions LoadRenderOptions(const config::ConfigNode& node) {
-  RenderOptions o;
+RenderOptions LoadRenderOptions(const config::ConfigNode& node) { return LoadRenderOptions(node, RenderOptions{}); }
+
+RenderOptions LoadRenderOptions(const config::ConfigNode& node, RenderOptions base) {
+  RenderOptions o = std::move(base);
   if (node.IsNull()) return o;
   node.CheckKeys({"image_scale", "noise_sigma_dn", "noise_seed", "exposure_dn", "auto_exposure",
                   "target_mean_dn", "ambient", "sky_dn",
@@ -61,6 +65,19 @@ RenderOptions LoadRenderOptions(const config::ConfigNode& node) {
     }
   }
   return o;
+}
+
+RoverShadowOptions MastUnderRig(RoverShadowOptions shadow, const geometry::StereoRig& mast_rig) {
+  if (!shadow.mast_from_rig) return shadow;
+  const Eigen::Vector3d cl = mast_rig.left->Center(), cr = mast_rig.right->Center();
+  const Eigen::Vector3d c = 0.5 * (cl + cr);
+  shadow.mast_from_rig = false;
+  shadow.mast_x_m = c.x();
+  shadow.mast_y_m = c.y();
+  shadow.mast_z_top_m = c.z() + 0.06;
+  shadow.boxes.push_back({c.x() - 0.07, c.x() + 0.07, std::min(cl.y(), cr.y()) - 0.07,
+                          std::max(cl.y(), cr.y()) + 0.07, c.z() - 0.06, c.z() + 0.06});
+  return shadow;
 }
 
 }  // namespace rover::render

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "config/yaml_config.hpp"
+#include "geometry/camera_model.hpp"
 
 #include <array>
 #include <cstdint>
@@ -76,5 +77,16 @@ struct RenderOptions {
 
 // Reads the `render:` section (the node itself, not its parent). Unknown keys throw.
 RenderOptions LoadRenderOptions(const config::ConfigNode& node);
+// The same over `base`: the keys present replace base's values, the rest are base's (the
+// HAZCAM pair's `render:` in camera_capture overrides the NAVCAM pair's key by key).
+// `rover_shadow.boxes`, when present, replaces the whole list.
+RenderOptions LoadRenderOptions(const config::ConfigNode& node, RenderOptions base);
+
+// `shadow` with the mast made explicit: when mast_from_rig, the mast stands under the
+// centre of `mast_rig` up to just below its cameras and a camera bar box holding both
+// cameras is added to the boxes; mast_from_rig is then false. A pair rendered from another
+// rig (the body-mounted HAZCAMs) so still sees the shadow of the mast that carries the
+// NAVCAMs, not of a mast under itself.
+RoverShadowOptions MastUnderRig(RoverShadowOptions shadow, const geometry::StereoRig& mast_rig);
 
 }  // namespace rover::render

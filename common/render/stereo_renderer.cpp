@@ -205,9 +205,10 @@ struct RoverSolids {
   }
 };
 
-RoverSolids MakeRoverSolids(const RoverShadowOptions& o, const geometry::StereoRig& rig) {
+RoverSolids MakeRoverSolids(const RoverShadowOptions& options, const geometry::StereoRig& rig) {
   RoverSolids solids;
-  if (!o.enabled) return solids;
+  if (!options.enabled) return solids;
+  const RoverShadowOptions o = MastUnderRig(options, rig);
   solids.boxes = o.boxes;
   if (o.wheels) {
     // MER-like: 0.25 m wheels, 0.16 m wide, at x = -0.6, 0, 0.6 and y = +-0.6.
@@ -217,21 +218,10 @@ RoverSolids MakeRoverSolids(const RoverShadowOptions& o, const geometry::StereoR
   }
   solids.has_mast = true;
   solids.mr = o.mast_radius_m;
-  if (o.mast_from_rig) {
-    const Eigen::Vector3d cl = rig.left->Center(), cr = rig.right->Center();
-    const Eigen::Vector3d c = 0.5 * (cl + cr);
-    solids.mx = c.x();
-    solids.my = c.y();
-    solids.mz_top = c.z() + 0.06;
-    solids.mz_bottom = o.mast_z_bottom_m;
-    solids.boxes.push_back({c.x() - 0.07, c.x() + 0.07, std::min(cl.y(), cr.y()) - 0.07,
-                            std::max(cl.y(), cr.y()) + 0.07, c.z() - 0.06, c.z() + 0.06});
-  } else {
-    solids.mx = o.mast_x_m;
-    solids.my = o.mast_y_m;
-    solids.mz_top = o.mast_z_top_m;
-    solids.mz_bottom = o.mast_z_bottom_m;
-  }
+  solids.mx = o.mast_x_m;
+  solids.my = o.mast_y_m;
+  solids.mz_top = o.mast_z_top_m;
+  solids.mz_bottom = o.mast_z_bottom_m;
   return solids;
 }
 

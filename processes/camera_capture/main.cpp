@@ -1,7 +1,9 @@
 // camera_capture: takes a stereo pair on request (or at a fixed rate) and publishes a
 // STEREO_FRAME with both images, both camera models, a frame id and the pose estimate at
 // capture. Sources:
-//   sim      render the world at the TRUE pose (SIM_TRUTH); nothing else comes from truth
+//   sim      render the world at the TRUE pose (SIM_TRUTH); nothing else comes from truth.
+//            With `capture.hazcam` it also renders the front HAZCAM pair at the same pose
+//            and instant and publishes it on HAZCAM_FRAME just before the STEREO_FRAME.
 //   dataset  a KITTI-layout directory (image_0/, image_1/, calib.txt), played in order
 //   genicam, gstreamer  real cameras (common/camera_hw; README "Camera hardware")
 #include "bus/channels.hpp"
@@ -40,9 +42,19 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The front HAZCAM pair of a capture (sim source only).
+struct HazcamPair {
+  cv::Mat left, right;
+  geometry::StereoRig rig;
+};
+
 struct CapturedPair {
   cv::Mat left, right;
   geometry::StereoRig rig;
+  // The HAZCAM pair exposed with this one; when it could not be taken, the reason (the
+  // NAVCAM pair is still delivered: VO needs it, the map can wait for the next).
+  std::optional<HazcamPair> hazcam;
+  std::string hazcam_error;
   std::int64_t utime = 0;  // 0: the request's bus time
   // Real cameras: each image's own timestamp (ns, the camera's clock), to carry their
   // difference into the frame's left_utime and right_utime. Unset: both at the capture time.
@@ -63,13 +75,21 @@ class ImageSource {
   virtual void Expose() {}
 };
 
+// The front HAZCAMs' rig and renderer. The rover's mast in their shadow stands under the
+// NAVCAM rig (render::MastUnderRig), not under the HAZCAMs.
+struct SimulatedHazcams {
+  geometry::StereoRig rig;
+  render::StereoRenderer renderer;
+};
+
 class SimulatedCameras : public ImageSource {
  public:
   SimulatedCameras(const std::string& world_path, geometry::StereoRig rig,
-                   render::RenderOptions options)
+                   render::RenderOptions options, std::optional<SimulatedHazcams> hazcams)
       : world_(terrain::WorldOptions::LoadFile(world_path)),
         rig_(std::move(rig)),
-        renderer_(std::move(options)) {}
+        renderer_(std::move(options)),
+        hazcams_(std::move(hazcams)) {}
   bool Ready(std::int64_t request_utime) const override {
     std::lock_guard<std::mutex> lock(mutex_);
     return truth_ && truth_->utime >= request_utime;
@@ -92,13 +112,24 @@ class SimulatedCameras : public ImageSource {
     T.linear() = bus::QuaternionFromArray(truth.orientation).toRotationMatrix();
     T.translation() = Eigen::Vector3d(truth.position[0], truth.position[1], truth.position[2]);
     auto images = renderer_.RenderPair(world_, rig_, T, frame_id);
-    return {images.left, images.right, images.rig, truth.utime, std::nullopt};
+    CapturedPair pair{images.left, images.right, images.rig, {}, {}, truth.utime, std::nullopt};
+    // Both pairs at the same true pose: the same instant, as one exposure command on MER.
+    if (hazcams_) {
+      try {
+        auto near = hazcams_->renderer.RenderPair(world_, hazcams_->rig, T, frame_id);
+        pair.hazcam = HazcamPair{near.left, near.right, near.rig};
+      } catch (const std::exception& e) {
+        pair.hazcam_error = e.what();
+      }
+    }
+    return pair;
   }
 
  private:
   terrain::World world_;
   geometry::StereoRig rig_;
   render::StereoRenderer renderer_;
+  std::optional<SimulatedHazcams> hazcams_;
   mutable std::mutex mutex_;  // truth arrives on the bus thread while a render runs
   std::optional<rover_msgs::sim_truth_t> truth_, exposed_;
 };
@@ -207,7 +238,7 @@ class HardwareCameras : public ImageSource {
       }
     }
     // Stamped with the bus time of the request; each image's exposure from its own timestamp.
-    CapturedPair pair{frames.left.image, frames.right.image, rig_, 0, std::nullopt};
+    CapturedPair pair{frames.left.image, frames.right.image, rig_, {}, {}, 0, std::nullopt};
     frames.left.image.release();
     frames.right.image.release();
     pair.timestamps = std::move(frames);
@@ -219,6 +250,31 @@ class HardwareCameras : public ImageSource {
   geometry::StereoRig rig_;
 };
 
+// Both images encoded and both models, as STEREO_FRAME and HAZCAM_FRAME carry them.
+void SetImages(rover_msgs::stereo_frame_t& frame, const cv::Mat& left, const cv::Mat& right,
+               const geometry::StereoRig& rig, bool png) {
+  // The two images compress at once on two cores (PNG encoding is most of a
+  // full-size frame's latency).
+  auto right_encoded = std::async(std::launch::async, [&right, png] { return bus::EncodeImage(right, png); });
+  frame.left = bus::EncodeImage(left, png);
+  frame.right = right_encoded.get();
+  frame.left_model = bus::CameraModelToMsg(*rig.left);
+  frame.right_model = bus::CameraModelToMsg(*rig.right);
+}
+
+// What one capture publishes: the NAVCAM pair, and the HAZCAM pair taken with it.
+struct CaptureFrames {
+  rover_msgs::stereo_frame_t navcam{};
+  std::optional<rover_msgs::stereo_frame_t> hazcam;
+  std::string hazcam_error;  // why a configured HAZCAM pair is missing
+};
+
+// A relative path in the config is relative to the config file, so that configs/ in the
+// repository and /etc/rover on a rover computer both work.
+std::string RelativeToConfig(const std::string& path, const std::string& config_path) {
+  if (path.empty() || path[0] == '/' || config_path.empty()) return path;
+  return (fs::path(config_path).parent_path() / path).string();
+}
 
 }  // namespace
 
@@ -226,12 +282,13 @@ int main(int argc, char** argv) {
   return bus::RunMain("camera_capture", [&]() -> int {
     bus::Process proc("camera_capture",
                       "Stereo pairs on request. Reads CAPTURE_REQUEST, POSE (and SIM_TRUTH for the\n"
-                      "sim source); writes STEREO_FRAME. Config: the `capture:` section.",
+                      "sim source); writes STEREO_FRAME, and HAZCAM_FRAME just before it when\n"
+                      "capture.hazcam is set (sim source). Config: the `capture:` section.",
                       argc, argv,
                       {{"--world", "FILE", "world YAML (sim source)"},
                        {"--dataset", "DIR", "KITTI-layout directory (dataset source)"}});
     const auto section = proc.config()["capture"];
-    section.CheckKeys({"source", "rig", "encoding", "rate_hz", "render", "genicam", "gstreamer"});
+    section.CheckKeys({"source", "rig", "encoding", "rate_hz", "render", "hazcam", "genicam", "gstreamer"});
     std::string source = "sim", rig_path = "configs/cameras/navcam_pinhole.yaml", encoding = "png";
     double rate_hz = 0.0;
     section.GetEnum("source", source, {"sim", "dataset", "genicam", "gstreamer"});
@@ -239,18 +296,38 @@ int main(int argc, char** argv) {
     section.GetEnum("encoding", encoding, {"png", "raw"});
     section.Get("rate_hz", rate_hz, 0.0, 100.0);
     if (proc.option("--dataset")) source = "dataset";
-    // A relative rig path is relative to the config file, so that configs/ in the
-    // repository and /etc/rover on a rover computer both work.
-    if (!rig_path.empty() && rig_path[0] != '/' && !proc.config_path().empty()) {
-      rig_path = (fs::path(proc.config_path()).parent_path() / rig_path).string();
+    rig_path = RelativeToConfig(rig_path, proc.config_path());
+    // The front HAZCAM pair: empty or absent rig, none.
+    const auto hazcam_section = section["hazcam"];
+    std::string hazcam_rig_path;
+    if (!hazcam_section.IsNull()) {
+      hazcam_section.CheckKeys({"rig", "render"});
+      hazcam_section.Get("rig", hazcam_rig_path);
+      hazcam_rig_path = RelativeToConfig(hazcam_rig_path, proc.config_path());
+    }
+    // Refused rather than ignored: a map that was configured to see the near field must
+    // not go blind there without a word. camera_hw takes one synchronised pair, and a
+    // dataset has no HAZCAM images.
+    if (!hazcam_rig_path.empty() && source != "sim") {
+      hazcam_section.Fail("expected no HAZCAM rig with source " + source +
+                          " (only the sim source takes a HAZCAM pair; remove capture.hazcam)");
     }
 
     std::unique_ptr<ImageSource> cameras;
     if (source == "sim") {
       const auto world = proc.option("--world");
       if (!world) throw config::ConfigError("camera_capture: missing argument --world FILE (expected the world the simulator drives on)");
-      cameras = std::make_unique<SimulatedCameras>(*world, geometry::LoadStereoRigFile(rig_path),
-                                                   render::LoadRenderOptions(section["render"]));
+      const render::RenderOptions navcam_render = render::LoadRenderOptions(section["render"]);
+      geometry::StereoRig navcam_rig = geometry::LoadStereoRigFile(rig_path);
+      std::optional<SimulatedHazcams> hazcams;
+      if (!hazcam_rig_path.empty()) {
+        // The NAVCAM's render options, overridden key by key by capture.hazcam.render.
+        render::RenderOptions options = render::LoadRenderOptions(hazcam_section["render"], navcam_render);
+        options.rover_shadow = render::MastUnderRig(options.rover_shadow, navcam_rig);
+        hazcams.emplace(SimulatedHazcams{geometry::LoadStereoRigFile(hazcam_rig_path),
+                                         render::StereoRenderer(std::move(options))});
+      }
+      cameras = std::make_unique<SimulatedCameras>(*world, std::move(navcam_rig), navcam_render, std::move(hazcams));
     } else if (source == "genicam" || source == "gstreamer") {
       auto hardware = source == "genicam"
                           ? camera_hw::MakeGenicamSource(camera_hw::GenicamOptions::Load(section["genicam"]))
@@ -276,11 +353,12 @@ int main(int argc, char** argv) {
 
     // A capture (a render takes seconds) runs on a worker thread, so that the loop keeps
     // answering and heartbeating: the executor takes a silent process for a dead one.
-    std::future<rover_msgs::stereo_frame_t> job;
+    std::future<CaptureFrames> job;
     auto capture_frame = [&cameras, png](rover_msgs::capture_request_t request, rover_msgs::pose_t pose,
                                          std::int64_t now) {
       const auto pair = cameras->Capture(request.frame_id);
-      rover_msgs::stereo_frame_t frame{};
+      CaptureFrames out;
+      rover_msgs::stereo_frame_t& frame = out.navcam;
       frame.utime = pair.utime != 0 ? pair.utime : now;
       frame.left_utime = frame.right_utime = frame.utime;  // one renderer, one dataset pair: at once
       if (pair.timestamps) {
@@ -290,18 +368,21 @@ int main(int argc, char** argv) {
       }
       frame.frame_id = request.frame_id;
       frame.purpose = request.purpose;
-      // The two images compress at once on two cores (PNG encoding is most of a
-      // full-size frame's latency).
-      auto right = std::async(std::launch::async, [&pair, png] { return bus::EncodeImage(pair.right, png); });
-      frame.left = bus::EncodeImage(pair.left, png);
-      frame.right = right.get();
-      frame.left_model = rover::bus::CameraModelToMsg(*pair.rig.left);
-      frame.right_model = rover::bus::CameraModelToMsg(*pair.rig.right);
       frame.pose_at_capture = pose;
-      return frame;
+      // The HAZCAM frame says the same of its exposure: id, purpose, instants and pose.
+      if (pair.hazcam) {
+        out.hazcam = frame;
+        SetImages(*out.hazcam, pair.hazcam->left, pair.hazcam->right, pair.hazcam->rig, png);
+      }
+      SetImages(frame, pair.left, pair.right, pair.rig, png);
+      out.hazcam_error = pair.hazcam_error;
+      return out;
     };
     // The frame is published when the render is done and, in virtual time, not before the
-    // compute profile's capture time has passed since the request (Process::DueAt).
+    // compute profile's capture time has passed since the request (Process::DueAt); the
+    // HAZCAM frame with it, just before, from the same publisher, so that every reader has it
+    // first: the hazard monitor's map holds it before the executor, woken by the
+    // STEREO_FRAME, asks about the next step.
     std::int64_t job_due = 0;
     auto start = [&](const rover_msgs::capture_request_t& request) {
       rover_msgs::pose_t at_capture{};
@@ -316,8 +397,17 @@ int main(int argc, char** argv) {
       if (!job.valid() || proc.now() < job_due) return false;
       if (job.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return true;
       try {
-        proc.bus().Publish(channels::kStereoFrame, job.get());  // rethrows a capture error
-        proc.SetHealth(rover_msgs::heartbeat_t::STATE_OK, "");
+        const CaptureFrames frames = job.get();  // rethrows a capture error
+        if (frames.hazcam) proc.bus().Publish(channels::kHazcamFrame, *frames.hazcam);
+        proc.bus().Publish(channels::kStereoFrame, frames.navcam);
+        if (frames.hazcam_error.empty()) {
+          proc.SetHealth(rover_msgs::heartbeat_t::STATE_OK, "");
+        } else {
+          // The NAVCAM frame went out (VO needs it); the map misses this near-field view.
+          std::cerr << "camera_capture: HAZCAM capture failed, no HAZCAM_FRAME " << frames.navcam.frame_id
+                    << ": " << frames.hazcam_error << "\n";
+          proc.SetHealth(rover_msgs::heartbeat_t::STATE_DEGRADED, "HAZCAM capture failed: " + frames.hazcam_error);
+        }
       } catch (const std::exception& e) {
         // No frame for this request: the executor counts a VO failure; the process goes on,
         // and its heartbeat says DEGRADED with the failure until a capture succeeds again

@@ -224,7 +224,7 @@ Bytes Sample(const std::string& channel, std::int64_t now) {
     m.purpose = "science";
     return Encode(m);
   }
-  if (channel == "STEREO_FRAME") return Encode(SampleFrame(now, kFakeId));
+  if (channel == "STEREO_FRAME" || channel == "HAZCAM_FRAME") return Encode(SampleFrame(now, kFakeId));
   if (channel == "VO_UPDATE") {
     vo_update_t m{};
     m.utime = now;
@@ -520,13 +520,14 @@ std::vector<Packet> Times(const std::string& channel, const Bytes& base, const L
   return out;
 }
 
-std::vector<Packet> Images(const PacketOptions& o) {
+// `channel`: STEREO_FRAME or HAZCAM_FRAME (one type, the same bad images).
+std::vector<Packet> Images(const std::string& channel, const PacketOptions& o) {
   using rover_msgs::image_t;
   std::vector<Packet> out;
   std::int64_t id = kFakeId + 1;
   auto add = [&](const std::string& what, rover_msgs::stereo_frame_t f, std::string expect) {
     f.frame_id = id++;
-    out.push_back({"STEREO_FRAME", "STEREO_FRAME images " + what, Encode(f), std::move(expect)});
+    out.push_back({channel, channel + " images " + what, Encode(f), std::move(expect)});
   };
   const auto base = SampleFrame(o.now_utime, 0);
   const Bytes good_png = base.left.data;
@@ -713,6 +714,7 @@ const std::vector<ChannelInfo>& AllChannels() {
       {"POSE", "pose_t"},                     {"NEW_SITE", "new_site_t"},
       {"MOBILITY_COMMAND", "mobility_command_t"}, {"MOBILITY_STATUS", "mobility_status_t"},
       {"CAPTURE_REQUEST", "capture_request_t"}, {"STEREO_FRAME", "stereo_frame_t"},
+      {"HAZCAM_FRAME", "stereo_frame_t"},
       {"VO_UPDATE", "vo_update_t"},           {"KEEPOUT_ZONES", "keepout_zones_t"},
       {"HAZARD_STATUS", "hazard_status_t"},   {"HAZARD_QUERY", "hazard_query_t"},
       {"HAZARD_REPLY", "hazard_reply_t"},     {"SEQUENCE_SUBMIT", "sequence_submit_t"},
@@ -741,7 +743,9 @@ Bytes SampleMessage(const std::string& channel, const PacketOptions& options) {
 std::vector<Packet> BuildPackets(const std::string& group, const std::string& channel,
                                  const PacketOptions& options) {
   const ChannelInfo& info = Channel(channel);
-  if (group == "images") return channel == "STEREO_FRAME" ? Images(options) : std::vector<Packet>{};
+  if (group == "images") {
+    return channel == "STEREO_FRAME" || channel == "HAZCAM_FRAME" ? Images(channel, options) : std::vector<Packet>{};
+  }
   if (group == "spoofed") return Spoofed(channel, options);
   const Bytes base = Sample(channel, options.now_utime);
   const Layout layout = Walk(Schema::Embedded(), info.type, base.data(), base.size());

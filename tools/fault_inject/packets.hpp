@@ -8,7 +8,7 @@
 //              fingerprint
 //   values     NaN, +inf or -inf in each double field; an unknown value in each enum
 //   times      each utime field at now +/- 10^12 us, and at the int64 extremes
-//   images     (STEREO_FRAME) bad and hostile images: negative or zero sides, a PNG whose
+//   images     (STEREO_FRAME, HAZCAM_FRAME) bad and hostile images: negative or zero sides, a PNG whose
 //              header claims 65535x65535, a PNG bomb, sizes that disagree with the camera
 //              model or the byte count, unknown encodings, colour, truncated PNGs, bad
 //              camera models
@@ -34,7 +34,8 @@ struct Packet {
   std::string label;  // "HEARTBEAT malformed process: string length 0"
   Bytes bytes;
   // Images only: a phrase visual_odometry's VO_UPDATE reason must hold for this frame
-  // ("" when the Bus's own field checks may drop the frame before VO sees it).
+  // ("" when the Bus's own field checks may drop the frame before VO sees it). The same
+  // on HAZCAM_FRAME, whose reader (the map) drops a bad frame with its reason.
   std::string expect_reason;
 };
 
@@ -62,8 +63,8 @@ const std::vector<std::string>& Groups();
 // The valid message a channel's packets start from, encoded.
 Bytes SampleMessage(const std::string& channel, const PacketOptions& options);
 
-// The packets of one group for one channel ("images" has packets only for STEREO_FRAME,
-// "spoofed" only for the five command channels).
+// The packets of one group for one channel ("images" has packets only for STEREO_FRAME and
+// HAZCAM_FRAME, "spoofed" only for the five command channels).
 // Throws std::invalid_argument for an unknown group or channel.
 std::vector<Packet> BuildPackets(const std::string& group, const std::string& channel,
                                  const PacketOptions& options);

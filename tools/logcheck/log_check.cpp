@@ -40,7 +40,7 @@ namespace {
 
 using namespace rover_msgs;
 
-constexpr std::array<ChannelType, 21> kChannels = {{
+constexpr std::array<ChannelType, 22> kChannels = {{
     {channels::kHeartbeat, "heartbeat_t", &heartbeat_t::getHash, Counter::kHeartbeatSeq},
     {channels::kClock, "rover_clock_t", &rover_clock_t::getHash, Counter::kPubSeq},
     {channels::kImu, "imu_t", &imu_t::getHash, Counter::kPubSeq},
@@ -51,6 +51,7 @@ constexpr std::array<ChannelType, 21> kChannels = {{
     {channels::kMobilityStatus, "mobility_status_t", &mobility_status_t::getHash, Counter::kPubSeq},
     {channels::kCaptureRequest, "capture_request_t", &capture_request_t::getHash, Counter::kPubSeq},
     {channels::kStereoFrame, "stereo_frame_t", &stereo_frame_t::getHash, Counter::kPubSeq},
+    {channels::kHazcamFrame, "stereo_frame_t", &stereo_frame_t::getHash, Counter::kPubSeq},
     {channels::kVoUpdate, "vo_update_t", &vo_update_t::getHash, Counter::kPubSeq},
     {channels::kKeepOutZones, "keepout_zones_t", &keepout_zones_t::getHash, Counter::kPubSeq},
     {channels::kHazardStatus, "hazard_status_t", &hazard_status_t::getHash, Counter::kPubSeq},
@@ -324,6 +325,10 @@ void ConsistencyCheck::Observe(const std::string& channel, const std::uint8_t* d
     std::string purpose;
     ok = ReadHeader(r, &stereo_frame_t::getHash) && r.Int64(id) && r.String(purpose);
     if (ok) frames_[id] = purpose;
+  } else if (channel == channels::kHazcamFrame) {
+    std::string purpose;
+    ok = ReadHeader(r, &stereo_frame_t::getHash) && r.Int64(id) && r.String(purpose);
+    if (ok) hazcam_frames_.insert(id);
   } else if (channel == channels::kVoUpdate) {
     std::int64_t from = 0;
     ok = ReadHeader(r, &vo_update_t::getHash) && r.Int64(from) && r.Int64(id);
@@ -366,6 +371,17 @@ std::vector<std::string> ConsistencyCheck::Warnings() const {
   }
   if (!ids.empty()) {
     out.push_back(std::to_string(ids.size()) + " STEREO_FRAME without a VO_UPDATE: frame " +
+                  IdList(ids));
+  }
+  ids.clear();
+  // A HAZCAM pair is taken with a NAVCAM pair and published with it (just before); it feeds
+  // the map only, so it needs no VO_UPDATE. A NAVCAM pair without one is fine: a HAZCAM
+  // render can fail, and a deployment may have no HAZCAMs.
+  for (const std::int64_t frame : hazcam_frames_) {
+    if (!frames_.count(frame)) ids.push_back(frame);
+  }
+  if (!ids.empty()) {
+    out.push_back(std::to_string(ids.size()) + " HAZCAM_FRAME without a STEREO_FRAME: frame " +
                   IdList(ids));
   }
   ids.clear();

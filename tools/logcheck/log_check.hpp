@@ -169,6 +169,7 @@ class ConsistencyCheck {
  private:
   std::map<std::int64_t, std::string> requests_;  // frame id -> purpose
   std::map<std::int64_t, std::string> frames_;    // frame id -> purpose
+  std::set<std::int64_t> hazcam_frames_;          // HAZCAM_FRAME frame ids
   std::set<std::int64_t> vo_frames_;              // VO_UPDATE to_frame_id
   std::set<std::int64_t> motions_;                // ARC and TURN command ids
   std::set<std::int64_t> completed_;              // command ids with a DONE status

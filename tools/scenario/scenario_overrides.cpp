@@ -97,12 +97,18 @@ RunConfigs PrepareRunConfigs(const std::string& rover_config, const std::vector<
   if (!overrides.empty()) {
     YAML::Node root = load(rover_config);
     ApplyOverrides(root, overrides, rover_config + " (scenario overrides)");
-    // The rig is named relative to the config file; the copy lives elsewhere.
-    if (root["capture"] && root["capture"]["rig"] && root["capture"]["rig"].IsScalar()) {
-      const fs::path rig = root["capture"]["rig"].as<std::string>();
-      if (rig.is_relative()) {
-        root["capture"]["rig"] = fs::absolute(fs::path(rover_config).parent_path() / rig).lexically_normal().string();
+    // The rigs (NAVCAM and HAZCAM) are named relative to the config file; the copy lives
+    // elsewhere. An empty HAZCAM rig (none) stays empty.
+    auto absolute_rig = [&rover_config](YAML::Node section) {
+      if (!section || !section.IsMap() || !section["rig"] || !section["rig"].IsScalar()) return;
+      const fs::path rig = section["rig"].as<std::string>();
+      if (!rig.empty() && rig.is_relative()) {
+        section["rig"] = fs::absolute(fs::path(rover_config).parent_path() / rig).lexically_normal().string();
       }
+    };
+    if (root["capture"]) {
+      absolute_rig(root["capture"]);
+      absolute_rig(root["capture"]["hazcam"]);
     }
     r.rover_config = (fs::path(out_dir) / "rover.yaml").string();
     WriteYaml(root, r.rover_config);

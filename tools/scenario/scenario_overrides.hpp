@@ -31,7 +31,8 @@ void ApplyOverrides(YAML::Node& root, const std::vector<ConfigOverride>& overrid
 
 // The files a run uses: the originals when nothing is overridden, otherwise copies with
 // the overrides applied, written to `out_dir` as rover.yaml and world.yaml. A relative
-// `capture.rig` (relative to the rover config) is made absolute in the copy.
+// `capture.rig` or `capture.hazcam.rig` (relative to the rover config) is made absolute in
+// the copy.
 struct RunConfigs {
   std::string rover_config;
   std::string world;

@@ -40,7 +40,7 @@ PacketOptions Options() {
   PacketOptions o;
   o.now_utime = 123456789;
   o.bomb_side = 1024;  // small: the unit tests need not deflate hundreds of MB
-  o.max_payload_bytes = [](const std::string& ch) -> std::size_t { return ch == "STEREO_FRAME" ? 4 << 20 : 65536; };
+  o.max_payload_bytes = [](const std::string& ch) -> std::size_t { return ch == "STEREO_FRAME" || ch == "HAZCAM_FRAME" ? 4 << 20 : 65536; };
   return o;
 }
 
@@ -63,6 +63,7 @@ bool Decodes(const std::string& channel, const Bytes& bytes, Bytes* again) {
       {"POSE", RoundTrip<pose_t>},                     {"NEW_SITE", RoundTrip<new_site_t>},
       {"MOBILITY_COMMAND", RoundTrip<mobility_command_t>}, {"MOBILITY_STATUS", RoundTrip<mobility_status_t>},
       {"CAPTURE_REQUEST", RoundTrip<capture_request_t>}, {"STEREO_FRAME", RoundTrip<stereo_frame_t>},
+      {"HAZCAM_FRAME", RoundTrip<stereo_frame_t>},
       {"VO_UPDATE", RoundTrip<vo_update_t>},           {"KEEPOUT_ZONES", RoundTrip<keepout_zones_t>},
       {"HAZARD_STATUS", RoundTrip<hazard_status_t>},   {"HAZARD_QUERY", RoundTrip<hazard_query_t>},
       {"HAZARD_REPLY", RoundTrip<hazard_reply_t>},     {"SEQUENCE_SUBMIT", RoundTrip<sequence_submit_t>},
@@ -88,7 +89,8 @@ TEST(FaultSchema, EveryChannelTypeIsInTheEmbeddedLcmFiles) {
   for (const auto& c : AllChannels()) EXPECT_TRUE(s.Has(c.type)) << c.type;
   EXPECT_TRUE(s.Has("image_t"));
   EXPECT_TRUE(s.Has("auth_t"));
-  EXPECT_EQ(AllChannels().size(), 21u);  // every channel of common/bus/channels.hpp
+  EXPECT_EQ(AllChannels().size(), 22u);  // every channel of common/bus/channels.hpp
+  EXPECT_EQ(Channel("HAZCAM_FRAME").type, "stereo_frame_t");
 }
 
 TEST(FaultSchema, WalkConsumesEverySampleExactly) {
@@ -240,18 +242,32 @@ TEST(FaultPackets, OversizedPacketsPassTheBoundAndStillDecodeWhenGrownThroughASt
 }
 
 TEST(FaultPackets, ImagePacketsAreWellFormedFramesWithDistinctIds) {
-  std::set<std::int64_t> ids;
-  for (const auto& p : BuildPackets("images", "STEREO_FRAME", Options())) {
-    rover_msgs::stereo_frame_t f;
-    ASSERT_EQ(f.decode(p.bytes.data(), 0, static_cast<int>(p.bytes.size())), static_cast<int>(p.bytes.size()))
-        << p.label;
-    EXPECT_TRUE(ids.insert(f.frame_id).second) << p.label;
-    if (p.label.find("65535x65535") != std::string::npos) {
-      // The PNG's own header claims the size; the bytes are a small real PNG.
-      ASSERT_GT(f.left.data.size(), 24u);
-      EXPECT_EQ(GetInt(&f.left.data[16], 4), 65535);
-      EXPECT_LT(f.left.data.size(), 20000u);
+  for (const char* channel : {"STEREO_FRAME", "HAZCAM_FRAME"}) {
+    std::set<std::int64_t> ids;
+    const auto packets = BuildPackets("images", channel, Options());
+    EXPECT_GE(packets.size(), 20u) << channel;
+    for (const auto& p : packets) {
+      EXPECT_EQ(p.channel, channel) << p.label;
+      EXPECT_EQ(p.label.rfind(std::string(channel) + " images ", 0), 0u) << p.label;
+      rover_msgs::stereo_frame_t f;
+      ASSERT_EQ(f.decode(p.bytes.data(), 0, static_cast<int>(p.bytes.size())), static_cast<int>(p.bytes.size()))
+          << p.label;
+      EXPECT_TRUE(ids.insert(f.frame_id).second) << p.label;
+      if (p.label.find("65535x65535") != std::string::npos) {
+        // The PNG's own header claims the size; the bytes are a small real PNG.
+        ASSERT_GT(f.left.data.size(), 24u);
+        EXPECT_EQ(GetInt(&f.left.data[16], 4), 65535);
+        EXPECT_LT(f.left.data.size(), 20000u);
+      }
     }
+  }
+  // The HAZCAM pair's readers get the very same bad images as the NAVCAM pair's.
+  const auto navcam = BuildPackets("images", "STEREO_FRAME", Options());
+  const auto hazcam = BuildPackets("images", "HAZCAM_FRAME", Options());
+  ASSERT_EQ(navcam.size(), hazcam.size());
+  for (std::size_t i = 0; i < navcam.size(); ++i) {
+    EXPECT_EQ(navcam[i].bytes, hazcam[i].bytes) << hazcam[i].label;
+    EXPECT_EQ(navcam[i].expect_reason, hazcam[i].expect_reason) << hazcam[i].label;
   }
   EXPECT_TRUE(BuildPackets("images", "IMU", Options()).empty());
 }

@@ -397,6 +397,15 @@ TEST(Consistency, NamesTheCaptureFrameAndStepThatDoNotAddUp) {
     m.left.size = 1000;
     log.Add("STEREO_FRAME", m);
   };
+  auto hazcam = [&](std::int64_t id, const std::string& purpose) {
+    rover_msgs::stereo_frame_t m{};
+    m.pub_seq = next("camera_capture", "HAZCAM_FRAME");
+    m.frame_id = id;
+    m.purpose = purpose;
+    m.left.data.assign(500, 9);
+    m.left.size = 500;
+    log.Add("HAZCAM_FRAME", m);
+  };
   auto vo = [&](std::int64_t from, std::int64_t to) {
     rover_msgs::vo_update_t m{};
     m.pub_seq = next("visual_odometry", "VO_UPDATE");
@@ -429,21 +438,26 @@ TEST(Consistency, NamesTheCaptureFrameAndStepThatDoNotAddUp) {
   };
   using MC = rover_msgs::mobility_command_t;
   using MS = rover_msgs::mobility_status_t;
-  capture(1, "vo_baseline"), frame(1, "vo_baseline"), vo(-1, 1);
+  capture(1, "vo_baseline"), hazcam(1, "vo_baseline"), frame(1, "vo_baseline"), vo(-1, 1);
   command(10, MC::TYPE_ARC), status(10, MS::STATE_MOVING), status(10, MS::STATE_DONE);
-  capture(2, "vo"), frame(2, "vo");  // no VO update for frame 2
+  capture(2, "vo"), hazcam(2, "vo"), frame(2, "vo");  // no VO update for frame 2
   step(10);
   command(11, MC::TYPE_TURN), status(11, MS::STATE_DONE);  // no step report for 11
-  capture(3, "vo");                                        // no frame 3
+  capture(3, "vo"), hazcam(3, "vo");                       // no frame 3, a HAZCAM pair alone
   capture(4, "science"), frame(4, "science");              // no VO for science: fine
   command(12, MC::TYPE_STOP), status(12, MS::STATE_DONE);  // a stop is not a motion
 
   const auto report = CheckLog(log.Close());
   EXPECT_TRUE(report.complete) << report.verdict_reason;  // nothing lost, yet inconsistent
-  ASSERT_EQ(report.warnings.size(), 3u) << FormatReport(report);
+  // A HAZCAM_FRAME needs no VO_UPDATE (frame 1 and 2's are not named), but one needs its
+  // STEREO_FRAME; a science pair without a HAZCAM pair (frame 4) is fine.
+  ASSERT_EQ(report.warnings.size(), 4u) << FormatReport(report);
   EXPECT_EQ(report.warnings[0], "1 CAPTURE_REQUEST without a STEREO_FRAME: frame 3");
   EXPECT_EQ(report.warnings[1], "1 STEREO_FRAME without a VO_UPDATE: frame 2");
-  EXPECT_EQ(report.warnings[2],
+  EXPECT_EQ(report.warnings[2], "1 HAZCAM_FRAME without a STEREO_FRAME: frame 3");
+  EXPECT_EQ(report.channels.at("HAZCAM_FRAME").count, 3) << FormatReport(report);
+  EXPECT_EQ(report.channels.at("HAZCAM_FRAME").type_name, "stereo_frame_t");
+  EXPECT_EQ(report.warnings[3],
             "1 STEP_REPORT for 2 completed motion commands; completed without a step report: "
             "command 11");
 }

@@ -105,6 +105,10 @@ TEST(ScenarioOverrides, ScenarioSeedsDraggedWheelAndOverridesBecomeCopies) {
   rover["capture"].Get("rig", rig);
   EXPECT_TRUE(fs::path(rig).is_absolute()) << rig;
   EXPECT_TRUE(fs::exists(rig)) << rig;
+  std::string hazcam_rig;
+  rover["capture"]["hazcam"].Get("rig", hazcam_rig);
+  EXPECT_TRUE(fs::path(hazcam_rig).is_absolute()) << hazcam_rig;
+  EXPECT_TRUE(fs::exists(hazcam_rig)) << hazcam_rig;
   const YAML::Node world = YAML::LoadFile(c.world);
   EXPECT_EQ(world["seed"].as<int>(), 5);
   EXPECT_DOUBLE_EQ(world["slopes"][0]["angle_deg"].as<double>(), 29.0);
