@@ -155,6 +155,8 @@ void CheckLeftRight(const cv::Ptr<cv::StereoSGBM>& left_matcher, const cv::Mat& 
 // The rectifications of the last few rigs this thread has seen, newest first: a rover
 // with two pairs (NAVCAM and HAZCAM) alternates between them, and building one costs as
 // much as matching a pair.
+thread_local std::size_t rectifications_built = 0;
+
 std::shared_ptr<const RectifiedRig> CachedRectification(const geometry::StereoRig& rig, double scale,
                                                         double fov_deg) {
   constexpr std::size_t kRigs = 4;
@@ -164,6 +166,7 @@ std::shared_ptr<const RectifiedRig> CachedRectification(const geometry::StereoRi
   if (it == cache.end()) {
     if (cache.size() >= kRigs) cache.pop_back();
     cache.emplace(cache.begin(), std::move(key), std::make_shared<const RectifiedRig>(Rectify(rig, scale, fov_deg)));
+    ++rectifications_built;
   } else if (it != cache.begin()) {
     std::rotate(cache.begin(), it, it + 1);
   }
@@ -171,6 +174,8 @@ std::shared_ptr<const RectifiedRig> CachedRectification(const geometry::StereoRi
 }
 
 }  // namespace
+
+std::size_t RectificationsBuilt() { return rectifications_built; }
 
 RectifiedRig Rectify(const geometry::StereoRig& rig, double scale, double fov_deg) {
   if (!rig.left || !rig.right) Bad("the rig has no left or right model");

@@ -66,4 +66,7 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
                          const geometry::StereoRig& rig, const MapOptions& options,
                          UpdateStats* stats = nullptr);
 
+// How many rectifications DenseStereo has built on this thread (its cache's misses).
+std::size_t RectificationsBuilt();
+
 }  // namespace rover::traversability

@@ -192,6 +192,38 @@ TEST(Hazcam, SeesTheRocksBesideTheFrontWheelAndAheadOfTheBody) {
   }
 }
 
+// The rectification cache holds both rigs: NAVCAM and HAZCAM pairs in turn build each once.
+TEST(Hazcam, NavcamAndHazcamPairsInTurnRectifyEachRigOnce) {
+  const ShippedOptions o = Shipped();
+  const Scene s = NearRocks("{azimuth_deg: 30, elevation_deg: 55}");
+  render::RenderOptions rh, rn;
+  rh.image_scale = 0.25;
+  rn.image_scale = 0.5;
+  render::StereoRenderer hazcam_renderer(rh), navcam_renderer(rn);
+  const render::StereoImages hazcam = hazcam_renderer.RenderPair(s.world, HazcamRig(), s.T, 1);
+  const render::StereoImages navcam = navcam_renderer.RenderPair(
+      s.world, geometry::LoadStereoRigFile(kSource + "/configs/cameras/navcam_pinhole.yaml"), s.T, 1);
+  std::size_t points = 0;
+  auto both = [&] {
+    points += DenseStereo(navcam.left, navcam.right, navcam.rig, o.map).points_rover.size();
+    points += DenseStereo(hazcam.left, hazcam.right, hazcam.rig, o.hazcam).points_rover.size();
+  };
+  const std::size_t before = RectificationsBuilt();
+  both();  // builds both (unless an earlier test on this thread did)
+  const std::size_t first = RectificationsBuilt();
+  EXPECT_LE(first - before, 2u);
+  both();
+  both();
+  EXPECT_EQ(RectificationsBuilt(), first);
+  EXPECT_GT(points, 6000u);
+  // A third rig (the HAZCAM's at another field) is built once more, and the first two stay.
+  MapOptions narrow = o.hazcam;
+  narrow.rectified_fov_deg = 0;
+  DenseStereo(hazcam.left, hazcam.right, hazcam.rig, narrow);
+  both();
+  EXPECT_EQ(RectificationsBuilt(), first + 1);
+}
+
 // A camera's own section takes only the stereo keys, and says which when it meets another.
 TEST(Hazcam, CameraOptionsTakeOnlyStereoKeys) {
   const MapOptions base;
