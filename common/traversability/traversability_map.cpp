@@ -86,6 +86,7 @@ void CheckMapOptions(const MapOptions& o) {
     Bad("min_range_m must be in [0, max_range_m)");
   if (!(o.rectified_fov_deg >= 0 && o.rectified_fov_deg < 170)) Bad("rectified_fov_deg must be in [0, 170)");
   if (!std::isfinite(o.min_x_m)) Bad("min_x_m must be finite");
+  if (!(o.min_depression_deg >= 0 && o.min_depression_deg < 90)) Bad("min_depression_deg must be in [0, 90)");
 }
 
 void TraversabilityMap::Clear() {
@@ -171,10 +172,17 @@ void TraversabilityMap::AddStereoPair(const cv::Mat& left, const cv::Mat& right,
   std::vector<double> sig;
   pts.reserve(sp.points_rover.size());
   sig.reserve(sp.points_rover.size());
+  // The horizon band: rays less than min_depression_deg below the site's horizontal (Z
+  // down), judged at the capture attitude (a rover pitched up 14 deg on a climb sees the
+  // horizon 14 deg below its own horizontal plane).
+  const double sin_min_depression = stereo.min_depression_deg > 0 ? std::sin(stereo.min_depression_deg * M_PI / 180.0) : -2.0;
+  const Eigen::Vector3d lens = rig.left->Center();
   for (std::size_t k = 0; k < sp.points_rover.size(); ++k) {
     const Eigen::Vector3d& pr = sp.points_rover[k];
     const double d2 = pr.x() * pr.x() + pr.y() * pr.y();
     if (d2 > stereo.max_range_m * stereo.max_range_m) continue;
+    const Eigen::Vector3d ray_site = T_site_rover.linear() * (pr - lens);
+    if (ray_site.z() < sin_min_depression * ray_site.norm()) continue;
     const double s2 = sp.sigma_height_m[k] * sp.sigma_height_m[k] + var_z + d2 * var_tilt;
     pts.push_back(T_site_rover * pr);
     sig.push_back(std::sqrt(s2));
@@ -491,6 +499,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("ground_band_fraction", o.ground_band_fraction, 0.0, 0.5);
   node.Get("rectified_fov_deg", o.rectified_fov_deg, 0.0, 169.0);
   node.Get("min_x_m", o.min_x_m, -100.0, 100.0);
+  node.Get("min_depression_deg", o.min_depression_deg, 0.0, 89.0);
   if (o.min_range_m >= o.max_range_m)
     node.Fail("min_range_m: expected less than max_range_m");
   if (o.footprint_radius_m > o.extent_m / 2)
@@ -510,7 +519,7 @@ const std::vector<std::string>& CameraOptionKeys() {
   static const std::vector<std::string> keys = {
       "max_range_m", "min_range_m", "stereo_width_px", "num_disparities", "block_size", "uniqueness_ratio",
       "speckle_window", "speckle_range", "disparity_sigma_px", "subsample", "max_disparity_jump", "min_texture",
-      "min_texture_snr", "drop_unseen_border", "lr_max_diff_px", "rectified_fov_deg", "min_x_m"};
+      "min_texture_snr", "drop_unseen_border", "lr_max_diff_px", "rectified_fov_deg", "min_x_m", "min_depression_deg"};
   return keys;
 }
 

@@ -141,6 +141,12 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // ground a camera on the body's front face cannot see past the body (the renderer does
   // not draw the rover's body, so a simulated HAZCAM would see under it). -100: none.
   double min_x_m = -100.0;
+  // Points whose ray from the left camera points less than this far below the site's
+  // horizontal plane (deg, at the capture attitude; or above it) are dropped. A camera low on the body sees the horizon band foreshortened
+  // to a few rows, where SGBM's matches are noise and their points hang at the camera's
+  // height (the HAZCAM's first pair on flat_rock_course: points 0.5 m over the ground at
+  // 1.7 m, 12 cells unsafe). 0: none.
+  double min_depression_deg = 0.0;
 };
 
 // The keys of MapOptions that belong to one camera's dense stereo, which a camera's own
