@@ -125,13 +125,14 @@ TimeWindow LoadTimeWindow(const config::ConfigNode& section) {
 // The `compute:` section (simtime/compute_profile.hpp): a named profile, any figure of
 // which may be set on its own.
 simtime::ComputeProfile LoadComputeProfile(const config::ConfigNode& section) {
-  section.CheckKeys({"profile", "capture_s", "vo_s", "map_s", "plan_s"});
+  section.CheckKeys({"profile", "capture_s", "vo_s", "map_s", "hazcam_map_s", "plan_s"});
   std::string name = "embedded";
   section.GetEnum("profile", name, {"instant", "embedded", "mer"});
   simtime::ComputeProfile p = simtime::NamedProfile(name);
   section.Get("capture_s", p.capture_s, 0.0, 3600.0);
   section.Get("vo_s", p.vo_s, 0.0, 3600.0);
   section.Get("map_s", p.map_s, 0.0, 3600.0);
+  section.Get("hazcam_map_s", p.hazcam_map_s, 0.0, 3600.0);
   section.Get("plan_s", p.plan_s, 0.0, 3600.0);
   return p;
 }

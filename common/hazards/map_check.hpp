@@ -1,5 +1,5 @@
 // The predictive check of a step against the traversability map (common/traversability,
-// built by the hazard monitor from the NAVCAM pairs): the rover footprint swept along the
+// built by the hazard monitor from the NAVCAM and front HAZCAM pairs): the rover footprint swept along the
 // step's path must cross no unsafe cell (a step, tilt or roughness over its limit: a rock
 // taller than the step limit is unsafe), and not too many unknown cells.
 //
@@ -9,8 +9,11 @@
 // then drive). Two kinds of cell are not counted: those under the rover where it stands
 // (it is on them), and unknown cells in a ring of blind_margin_m round it, which the mast
 // cameras cannot see from where the rover stands (the NAVCAM pair sees the ground from
-// 1.3 m ahead of the rover origin; the body ends 0.8 m ahead). That ring was in view from
-// the previous stops, and a rock taller than the step limit is wider than the ring
+// 1.3 m ahead of the rover origin; the body ends 0.8 m ahead). The front HAZCAM pair sees
+// the ring's front from the body's front face on, but nothing sees it beside or behind the
+// body, where a turn swings the corners: the ring stays excused all round (only its unknown
+// cells: a cell the HAZCAMs rate unsafe there is refused like any other). That ring was in
+// view from the previous stops, and a rock taller than the step limit is wider than the ring
 // (MER-like rocks are 2.5 times as wide as they are tall), so part of it is seen.
 //
 // hidden_patch_m > 0 judges unknown ground by its shape as well. A step over

@@ -43,8 +43,8 @@ double CentreFocal(const geometry::CameraModel& m) {
   return 1.0 / std::tan(0.25 * (ax + ay));  // 2 px span each: tan(half angle per px)
 }
 
-std::vector<double> RigKey(const geometry::StereoRig& rig, double scale) {
-  std::vector<double> key{scale, static_cast<double>(rig.left->width()),
+std::vector<double> RigKey(const geometry::StereoRig& rig, double scale, double fov_deg) {
+  std::vector<double> key{scale, fov_deg, static_cast<double>(rig.left->width()),
                           static_cast<double>(rig.left->height()),
                           static_cast<double>(rig.right->width()),
                           static_cast<double>(rig.right->height())};
@@ -152,11 +152,35 @@ void CheckLeftRight(const cv::Ptr<cv::StereoSGBM>& left_matcher, const cv::Mat& 
   }
 }
 
+// The rectifications of the last few rigs this thread has seen, newest first: a rover
+// with two pairs (NAVCAM and HAZCAM) alternates between them, and building one costs as
+// much as matching a pair.
+thread_local std::size_t rectifications_built = 0;
+
+std::shared_ptr<const RectifiedRig> CachedRectification(const geometry::StereoRig& rig, double scale,
+                                                        double fov_deg) {
+  constexpr std::size_t kRigs = 4;
+  thread_local std::vector<std::pair<std::vector<double>, std::shared_ptr<const RectifiedRig>>> cache;
+  std::vector<double> key = RigKey(rig, scale, fov_deg);
+  auto it = std::find_if(cache.begin(), cache.end(), [&](const auto& e) { return e.first == key; });
+  if (it == cache.end()) {
+    if (cache.size() >= kRigs) cache.pop_back();
+    cache.emplace(cache.begin(), std::move(key), std::make_shared<const RectifiedRig>(Rectify(rig, scale, fov_deg)));
+    ++rectifications_built;
+  } else if (it != cache.begin()) {
+    std::rotate(cache.begin(), it, it + 1);
+  }
+  return cache.front().second;
+}
+
 }  // namespace
 
-RectifiedRig Rectify(const geometry::StereoRig& rig, double scale) {
+std::size_t RectificationsBuilt() { return rectifications_built; }
+
+RectifiedRig Rectify(const geometry::StereoRig& rig, double scale, double fov_deg) {
   if (!rig.left || !rig.right) Bad("the rig has no left or right model");
   if (!(scale > 0 && scale <= 1)) Bad("the rectification scale must be in (0, 1]");
+  if (!(fov_deg >= 0 && fov_deg < 170)) Bad("the rectified field must be in [0, 170) deg");
   const geometry::CameraModel& L = *rig.left;
   const geometry::CameraModel& R = *rig.right;
   if (L.width() != R.width() || L.height() != R.height())
@@ -181,9 +205,14 @@ RectifiedRig Rectify(const geometry::StereoRig& rig, double scale) {
   r.height = std::max(8, static_cast<int>(std::lround(L.height() * scale)));
   const double s_x = static_cast<double>(r.width) / L.width();
   r.f = 0.5 * (CentreFocal(L) + CentreFocal(R)) * s_x;
+  // A wider field across: the same focal length (the centre's resolution, and so its
+  // depth precision, is kept) over more columns, up to 4 times the matching width.
+  if (fov_deg > 0)
+    r.width = std::max(r.width, std::min(4 * r.width, static_cast<int>(std::lround(2.0 * r.f * std::tan(0.5 * fov_deg * M_PI / 180.0)))));
   r.cx = (r.width - 1) / 2.0;
   r.cy = (r.height - 1) / 2.0;
   const int levels = PyramidLevels(s_x);
+  r.pyramid_levels = levels;
   FillMap(L, r, L.Center(), levels, &r.map_lx, &r.map_ly);
   FillMap(R, r, R.Center(), levels, &r.map_rx, &r.map_ry);
   // What read noise alone gives the texture measure: white noise of a known sigma through
@@ -248,18 +277,12 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
     }
   }
   auto t0 = std::chrono::steady_clock::now();
-  thread_local std::vector<double> cached_key;
-  thread_local std::shared_ptr<RectifiedRig> cached;
   const double scale = o.stereo_width_px > 0 && left.cols > o.stereo_width_px
                           ? static_cast<double>(o.stereo_width_px) / left.cols
                           : 1.0;
-  const std::vector<double> key = RigKey(rig, scale);
-  if (!cached || key != cached_key) {
-    cached = std::make_shared<RectifiedRig>(Rectify(rig, scale));
-    cached_key = key;
-  }
+  const std::shared_ptr<const RectifiedRig> cached = CachedRectification(rig, scale, o.rectified_fov_deg);
   const RectifiedRig& r = *cached;
-  const int levels = PyramidLevels(static_cast<double>(r.width) / left.cols);
+  const int levels = r.pyramid_levels;
   cv::Mat srcL = left, srcR = right, tmp;
   for (int k = 0; k < levels; ++k) {
     cv::pyrDown(srcL, tmp);
@@ -383,6 +406,7 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
       const Eigen::Vector3d p = r.left_centre + z * dir;
       const double range2 = (z * dir).squaredNorm();
       if (range2 > max_range2 || range2 < min_range2) continue;
+      if (p.x() < o.min_x_m) continue;  // hidden from this camera by the rover's own body
       const double sigma_z = z * z / fB * o.disparity_sigma_px;
       out.points_rover.push_back(p);
       out.sigma_height_m.push_back(std::abs(dir.z()) * sigma_z);

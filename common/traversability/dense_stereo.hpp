@@ -1,4 +1,4 @@
-// Dense stereo for the traversability map: rectify a NAVCAM pair through its camera
+// Dense stereo for the traversability map: rectify a stereo pair (NAVCAM, HAZCAM) through its camera
 // models, match it with OpenCV's StereoSGBM and triangulate into the rover frame.
 //
 // Rectification, as JPL's tools do for CAHVOR: both images are resampled into a pair of
@@ -31,6 +31,7 @@ struct RectifiedRig {
   int width = 0, height = 0;
   double f = 0, cx = 0, cy = 0;   // pixels
   double baseline_m = 0;
+  int pyramid_levels = 0;  // 2x reductions of the source images before remapping
   Eigen::Matrix3d R_rover_rect = Eigen::Matrix3d::Identity();  // rectified optical frame
   Eigen::Vector3d left_centre = Eigen::Vector3d::Zero();       // rover frame
   cv::Mat map_lx, map_ly, map_rx, map_ry;  // CV_32FC1: rectified pixel -> source pixel
@@ -40,9 +41,15 @@ struct RectifiedRig {
   double texture_noise_gain = 12.0;
 };
 
-// Builds the rectification for `rig` with images scaled by `scale` (in (0, 1]). Throws
-// std::invalid_argument on a degenerate rig (zero baseline, axes far from parallel).
-RectifiedRig Rectify(const geometry::StereoRig& rig, double scale);
+// Builds the rectification for `rig` with images scaled by `scale` (in (0, 1]). The
+// rectified focal length is the models' at their image centre (times the scale), so the
+// centre keeps its resolution; the rectified image is the scaled size, or, with
+// `fov_deg` > 0, as many columns more as span that field across (along the baseline; at
+// most 4 times the scaled width): a fish-eye's field is wider than a pinhole of its centre
+// focal length covers at its width (124 deg against 94 deg for the HAZCAM). Throws
+// std::invalid_argument on a degenerate rig (zero baseline, axes far from parallel) or a
+// field outside [0, 170) deg.
+RectifiedRig Rectify(const geometry::StereoRig& rig, double scale, double fov_deg = 0.0);
 
 // Matches a rectified pair (8-bit grey, the same size): the left image's disparities in
 // 1/16 px (CV_16S), <= 0 where unmatched. Uses StereoSGBM (MODE_SGBM_3WAY) on the pair
@@ -53,10 +60,13 @@ cv::Mat MatchDisparity(const cv::Mat& rectL, const cv::Mat& rectR, const MapOpti
 
 // Rectifies, matches and triangulates one pair. Throws std::invalid_argument with a
 // one-line message when an image is empty, not 8-bit grey, or not the models' size.
-// `stats` (optional) gets the rectify and match times. Caches the rectification of the
-// last rig seen (per thread).
+// `stats` (optional) gets the rectify and match times. Caches the rectifications of the
+// last 4 rigs seen (per thread: a NAVCAM and a HAZCAM pair in turn are not rebuilt).
 StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
                          const geometry::StereoRig& rig, const MapOptions& options,
                          UpdateStats* stats = nullptr);
+
+// How many rectifications DenseStereo has built on this thread (its cache's misses).
+std::size_t RectificationsBuilt();
 
 }  // namespace rover::traversability

@@ -36,7 +36,13 @@ const char* CellStateName(CellState state) {
 }
 
 TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(options) {
-  const MapOptions& o = options_;
+  CheckMapOptions(options_);
+  n_ = std::max(1, static_cast<int>(std::lround(options_.extent_m / options_.cell_size_m)));
+  acc_.assign(static_cast<std::size_t>(n_) * n_, Accumulator{});
+  Recentre(0, 0);
+}
+
+void CheckMapOptions(const MapOptions& o) {
   auto positive = [](double v) { return std::isfinite(v) && v > 0; };
   if (!positive(o.cell_size_m)) Bad("cell_size_m must be > 0");
   if (!positive(o.extent_m) || o.extent_m / o.cell_size_m > 2000)
@@ -78,9 +84,9 @@ TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(optio
     Bad("max_disparity_jump must be >= 0");
   if (!std::isfinite(o.min_range_m) || o.min_range_m < 0 || o.min_range_m >= o.max_range_m)
     Bad("min_range_m must be in [0, max_range_m)");
-  n_ = std::max(1, static_cast<int>(std::lround(o.extent_m / o.cell_size_m)));
-  acc_.assign(static_cast<std::size_t>(n_) * n_, Accumulator{});
-  Recentre(0, 0);
+  if (!(o.rectified_fov_deg >= 0 && o.rectified_fov_deg < 170)) Bad("rectified_fov_deg must be in [0, 170)");
+  if (!std::isfinite(o.min_x_m)) Bad("min_x_m must be finite");
+  if (!(o.min_depression_deg >= 0 && o.min_depression_deg < 90)) Bad("min_depression_deg must be in [0, 90)");
 }
 
 void TraversabilityMap::Clear() {
@@ -147,13 +153,15 @@ void TraversabilityMap::AddPoints(const std::vector<Eigen::Vector3d>& points_sit
 void TraversabilityMap::AddStereoPair(const cv::Mat& left, const cv::Mat& right,
                                       const geometry::StereoRig& rig,
                                       const geometry::Pose& T_site_rover,
-                                      const geometry::Matrix6d& pose_cov) {
+                                      const geometry::Matrix6d& pose_cov, const MapOptions* camera) {
   if (!T_site_rover.matrix().allFinite()) Bad("AddStereoPair: the pose is not finite");
   if (!pose_cov.allFinite()) Bad("AddStereoPair: the pose covariance is not finite");
   for (int k = 0; k < 6; ++k)
     if (pose_cov(k, k) < 0) Bad("AddStereoPair: the pose covariance has a negative variance");
   stats_ = UpdateStats{};
-  StereoPoints sp = DenseStereo(left, right, rig, options_, &stats_);
+  if (camera) CheckMapOptions(*camera);
+  const MapOptions& stereo = camera ? *camera : options_;
+  StereoPoints sp = DenseStereo(left, right, rig, stereo, &stats_);
   const auto t0 = std::chrono::steady_clock::now();
   // Height sigma: stereo (from the triangulation) plus the pose. Position: z variance.
   // Attitude: a roll or pitch error dtheta moves a point at horizontal distance d by
@@ -164,10 +172,17 @@ void TraversabilityMap::AddStereoPair(const cv::Mat& left, const cv::Mat& right,
   std::vector<double> sig;
   pts.reserve(sp.points_rover.size());
   sig.reserve(sp.points_rover.size());
+  // The horizon band: rays less than min_depression_deg below the site's horizontal (Z
+  // down), judged at the capture attitude (a rover pitched up 14 deg on a climb sees the
+  // horizon 14 deg below its own horizontal plane).
+  const double sin_min_depression = stereo.min_depression_deg > 0 ? std::sin(stereo.min_depression_deg * M_PI / 180.0) : -2.0;
+  const Eigen::Vector3d lens = rig.left->Center();
   for (std::size_t k = 0; k < sp.points_rover.size(); ++k) {
     const Eigen::Vector3d& pr = sp.points_rover[k];
     const double d2 = pr.x() * pr.x() + pr.y() * pr.y();
-    if (d2 > options_.max_range_m * options_.max_range_m) continue;
+    if (d2 > stereo.max_range_m * stereo.max_range_m) continue;
+    const Eigen::Vector3d ray_site = T_site_rover.linear() * (pr - lens);
+    if (ray_site.z() < sin_min_depression * ray_site.norm()) continue;
     const double s2 = sp.sigma_height_m[k] * sp.sigma_height_m[k] + var_z + d2 * var_tilt;
     pts.push_back(T_site_rover * pr);
     sig.push_back(std::sqrt(s2));
@@ -447,16 +462,10 @@ void TraversabilityMap::Rate() const {
   dirty_ = false;
 }
 
-MapOptions LoadMapOptions(const config::ConfigNode& node) {
-  MapOptions o;
-  if (node.IsNull()) return o;
-  if (!node.IsMap()) node.Fail("expected a map of traversability options");
-  node.CheckKeys({"cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
-                  "max_roughness_m", "max_range_m", "min_points", "caution_fraction",
-                  "min_patch_fraction", "stereo_width_px", "num_disparities", "block_size",
-                  "uniqueness_ratio", "speckle_window", "speckle_range", "disparity_sigma_px",
-                  "subsample", "min_range_m", "max_disparity_jump", "min_texture", "min_texture_snr",
-                  "tilt_margin_sigmas", "drop_unseen_border", "lr_max_diff_px", "ground_band_fraction"});
+namespace {
+
+// Sets the options `node` holds over `o` (keys already checked).
+MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("cell_size_m", o.cell_size_m, 0.01, 10.0);
   node.Get("extent_m", o.extent_m, 0.1, 200.0);
   node.Get("footprint_radius_m", o.footprint_radius_m, 0.0, 10.0);
@@ -488,12 +497,46 @@ MapOptions LoadMapOptions(const config::ConfigNode& node) {
   node.Get("drop_unseen_border", o.drop_unseen_border);
   node.Get("lr_max_diff_px", o.lr_max_diff_px, 0.0, 64.0);
   node.Get("ground_band_fraction", o.ground_band_fraction, 0.0, 0.5);
+  node.Get("rectified_fov_deg", o.rectified_fov_deg, 0.0, 169.0);
+  node.Get("min_x_m", o.min_x_m, -100.0, 100.0);
+  node.Get("min_depression_deg", o.min_depression_deg, 0.0, 89.0);
   if (o.min_range_m >= o.max_range_m)
     node.Fail("min_range_m: expected less than max_range_m");
   if (o.footprint_radius_m > o.extent_m / 2)
     node.Fail("footprint_radius_m: expected at most extent_m / 2");
   if (o.tilt_radius_m > o.extent_m / 2) node.Fail("tilt_radius_m: expected at most extent_m / 2");
   return o;
+}
+
+const std::vector<std::string> kMapOnlyKeys = {
+    "cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
+    "max_roughness_m", "min_points", "caution_fraction", "min_patch_fraction", "tilt_margin_sigmas",
+    "ground_band_fraction"};
+
+}  // namespace
+
+const std::vector<std::string>& CameraOptionKeys() {
+  static const std::vector<std::string> keys = {
+      "max_range_m", "min_range_m", "stereo_width_px", "num_disparities", "block_size", "uniqueness_ratio",
+      "speckle_window", "speckle_range", "disparity_sigma_px", "subsample", "max_disparity_jump", "min_texture",
+      "min_texture_snr", "drop_unseen_border", "lr_max_diff_px", "rectified_fov_deg", "min_x_m", "min_depression_deg"};
+  return keys;
+}
+
+MapOptions LoadMapOptions(const config::ConfigNode& node) {
+  if (node.IsNull()) return MapOptions{};
+  if (!node.IsMap()) node.Fail("expected a map of traversability options");
+  std::vector<std::string> keys = kMapOnlyKeys;
+  keys.insert(keys.end(), CameraOptionKeys().begin(), CameraOptionKeys().end());
+  node.CheckKeys(keys);
+  return ReadMapOptions(node, MapOptions{});
+}
+
+MapOptions LoadCameraOptions(const config::ConfigNode& node, const MapOptions& base) {
+  if (node.IsNull()) return base;
+  if (!node.IsMap()) node.Fail("expected a map of one camera's stereo options");
+  node.CheckKeys(CameraOptionKeys());
+  return ReadMapOptions(node, base);
 }
 
 MapOptions LoadMapOptions(const YAML::Node& node, const std::string& where) {

@@ -132,7 +132,26 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // (the ground beside a rock's left flank) or mismatched. StereoSGBM's own disp12MaxDiff
   // does nothing in MODE_SGBM_3WAY. 0 (the default) keeps every pixel.
   double lr_max_diff_px = 0.0;
+  // The rectified field across (deg): 0 rectifies onto a pinhole of the camera's centre
+  // focal length at the matching width (94 deg for the 124 deg HAZCAM fish-eye, 45 deg for
+  // the NAVCAM); wider keeps that focal length and adds columns (Rectify), so the fish-eye's
+  // sides, the ground beside the front wheels, are matched too.
+  double rectified_fov_deg = 0.0;
+  // Points whose rover-frame x (forward, at capture) is under this are dropped: the
+  // ground a camera on the body's front face cannot see past the body (the renderer does
+  // not draw the rover's body, so a simulated HAZCAM would see under it). -100: none.
+  double min_x_m = -100.0;
+  // Points whose ray from the left camera points less than this far below the site's
+  // horizontal plane (deg, at the capture attitude; or above it) are dropped. A camera low on the body sees the horizon band foreshortened
+  // to a few rows, where SGBM's matches are noise and their points hang at the camera's
+  // height (the HAZCAM's first pair on flat_rock_course: points 0.5 m over the ground at
+  // 1.7 m, 12 cells unsafe). 0: none.
+  double min_depression_deg = 0.0;
 };
+
+// The keys of MapOptions that belong to one camera's dense stereo, which a camera's own
+// section (hazard_monitor's `hazards.map.hazcam`) may set over the map's.
+const std::vector<std::string>& CameraOptionKeys();
 
 // Per update, for the log and the benchmark.
 struct UpdateStats {
@@ -150,9 +169,13 @@ class TraversabilityMap {
   // One stereo pair (8-bit grey, same size as the models), the rig's models in the rover
   // frame, and the rover pose in the site frame at capture with its 6x6 covariance
   // (x y z roll pitch yaw). Throws std::invalid_argument with a one-line message on bad input.
+  // `camera` (optional): that camera's own options (LoadCameraOptions); its stereo and
+  // range fields (CameraOptionKeys) are used for this pair, the grid and the ratings stay
+  // the map's.
   void AddStereoPair(const cv::Mat& left, const cv::Mat& right,
                      const geometry::StereoRig& rig_in_rover_frame,
-                     const geometry::Pose& T_site_rover, const geometry::Matrix6d& pose_cov);
+                     const geometry::Pose& T_site_rover, const geometry::Matrix6d& pose_cov,
+                     const MapOptions* camera = nullptr);
   // Points already in the site frame (x north, y east, z down), each with its height
   // sigma (m): for tests and for other range sensors. Sizes must agree.
   void AddPoints(const std::vector<Eigen::Vector3d>& points_site,
@@ -201,5 +224,10 @@ class TraversabilityMap {
 // Throws config::ConfigError "<where>: <key>: expected ..." on a bad value.
 MapOptions LoadMapOptions(const config::ConfigNode& node);
 MapOptions LoadMapOptions(const YAML::Node& node, const std::string& where);
+// A camera's own options: `base` with the keys of `node` (only CameraOptionKeys; others are
+// errors naming the allowed ones) set over it. Throws config::ConfigError as above.
+MapOptions LoadCameraOptions(const config::ConfigNode& node, const MapOptions& base);
+// Throws std::invalid_argument with a one-line message when an option is out of range.
+void CheckMapOptions(const MapOptions& options);
 
 }  // namespace rover::traversability

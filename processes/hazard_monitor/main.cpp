@@ -1,6 +1,7 @@
 // hazard_monitor: keep-out zones against the footprint plus the position uncertainty, and
 // tilt limits (common/hazards); with `hazards.map.enabled` or `--map on`, the traversability
-// map (common/traversability) built from every STEREO_FRAME at the pose the frame carries, which
+// map (common/traversability) built from every STEREO_FRAME (the mast's NAVCAMs) and HAZCAM_FRAME
+// (the front HAZCAMs, with `hazards.map.hazcam`'s stereo options) at the pose the frame carries, which
 // every step's swept footprint must also pass (common/hazards/map_check.hpp), published on
 // TRAVERSABILITY_MAP after each pair and once a second. Publishes HAZARD_STATUS at a steady rate and answers the
 // executor's HAZARD_QUERY ("would this step's swept footprint enter a zone?"), with the
@@ -40,7 +41,7 @@ int main(int argc, char** argv) {
   return bus::RunMain("hazard_monitor", [&]() -> int {
     bus::Process proc("hazard_monitor",
                       "Keep-out, tilt and traversability-map checks. Reads POSE, IMU, KEEPOUT_ZONES,\n"
-                      "HAZARD_QUERY, STEREO_FRAME (unless the map is off); writes HAZARD_STATUS\n"
+                      "HAZARD_QUERY, STEREO_FRAME and HAZCAM_FRAME (unless the map is off); writes HAZARD_STATUS\n"
                       "(steady rate), HAZARD_REPLY and TRAVERSABILITY_MAP.\n"
                       "Config: the `hazards:` section (see configs/rover.yaml).",
                       argc, argv,
@@ -56,7 +57,7 @@ int main(int argc, char** argv) {
     // without cameras, which never sees the ground (every step would be hazard_unknown).
     hazards::MapCheckOptions map_check;
     map_check.enabled = false;
-    if (section.Has("map")) map_check = hazards::LoadMapCheckOptions(section["map"], {"traversability"});
+    if (section.Has("map")) map_check = hazards::LoadMapCheckOptions(section["map"], {"traversability", "hazcam"});
     if (const auto arg = proc.option("--map")) {
       if (*arg != "on" && *arg != "off") {
         throw config::ConfigError("hazard_monitor: argument --map: \"" + *arg + "\": expected on or off");
@@ -74,7 +75,9 @@ int main(int argc, char** argv) {
           !note.empty()) {
         std::cerr << "hazard_monitor: warning: " << note << "\n";
       }
-      map = std::make_unique<MapWorker>(map_options);
+      // The HAZCAM pair's own stereo options (its disparities, ranges, rectified field) over the map's.
+      const auto hazcam_options = traversability::LoadCameraOptions(section["map"]["hazcam"], map_options);
+      map = std::make_unique<MapWorker>(map_options, hazcam_options);
     }
     std::cerr << "hazard_monitor: traversability map " << (map ? "on" : "off") << "\n";
     bus::MapRules rules;
@@ -110,6 +113,7 @@ int main(int argc, char** argv) {
     // this machine's speed), so a query is answered at the same rover time in every run.
     std::deque<std::pair<std::int64_t, MapWorker::Job>> waiting_jobs;  // due, pair
     std::optional<std::int64_t> in_work_due;
+    std::int64_t mapper_free_utime = 0;  // when the last pair taken is due
     std::uint64_t frames_received = 0, frames_mapped = 0;
     std::string zone_error;  // non-empty: the last zone set was invalid -> UNKNOWN
 
@@ -161,35 +165,44 @@ int main(int argc, char** argv) {
           }
           assessor.SetZones(zones);
         });
+    // Both pairs take the same path: validated, then mapped in the order they came (the
+    // HAZCAM pair of a capture comes before its NAVCAM pair), each holding back the queries
+    // asked after it.
+    auto on_frame = [&](const rover_msgs::stereo_frame_t& frame, bool hazcam) {
+      proc.ObserveTime(frame.utime);
+      const char* channel = hazcam ? channels::kHazcamFrame : channels::kStereoFrame;
+      vo::StereoImages images;
+      if (const std::string bad = bus::ToStereoImages(frame, imaging::ImageLimits{}, images); !bad.empty()) {
+        std::cerr << "hazard_monitor: " << channel << " " << frame.frame_id << ": " << bad << " (not mapped)\n";
+        return;
+      }
+      if (images.left.depth() != CV_8U) {
+        images.left.convertTo(images.left, CV_8U, 1.0 / 256.0);
+        images.right.convertTo(images.right, CV_8U, 1.0 / 256.0);
+      }
+      MapWorker::Job job;
+      job.left = images.left;
+      job.right = images.right;
+      job.rig = images.rig;
+      job.T_site_rover = bus::PoseFromMsg(frame.pose_at_capture);
+      job.covariance = bus::CovarianceFromArray(frame.pose_at_capture.covariance);
+      job.frame_id = frame.frame_id;
+      job.hazcam = hazcam;
+      if (proc.virtual_time()) {
+        ++frames_received;
+        // One mapper: a pair starts when it has come and the one before it is done.
+        const double compute_s = hazcam ? proc.compute().hazcam_map_s : proc.compute().map_s;
+        mapper_free_utime = proc.DueAt(std::max({proc.now(), frame.utime, mapper_free_utime}), compute_s);
+        waiting_jobs.emplace_back(mapper_free_utime, std::move(job));
+      } else {
+        map->Add(std::move(job));
+      }
+    };
     if (map) {
       proc.bus().Subscribe<rover_msgs::stereo_frame_t>(
-          channels::kStereoFrame, [&](const rover_msgs::stereo_frame_t& frame) {
-            proc.ObserveTime(frame.utime);
-            vo::StereoImages images;
-            if (const std::string bad = bus::ToStereoImages(frame, imaging::ImageLimits{}, images); !bad.empty()) {
-              std::cerr << "hazard_monitor: STEREO_FRAME " << frame.frame_id << ": " << bad << " (not mapped)\n";
-              return;
-            }
-            if (images.left.depth() != CV_8U) {
-              images.left.convertTo(images.left, CV_8U, 1.0 / 256.0);
-              images.right.convertTo(images.right, CV_8U, 1.0 / 256.0);
-            }
-            MapWorker::Job job;
-            job.left = images.left;
-            job.right = images.right;
-            job.rig = images.rig;
-            job.T_site_rover = bus::PoseFromMsg(frame.pose_at_capture);
-            job.covariance = bus::CovarianceFromArray(frame.pose_at_capture.covariance);
-            job.frame_id = frame.frame_id;
-            if (proc.virtual_time()) {
-              ++frames_received;
-              waiting_jobs.emplace_back(proc.DueAt(std::max(proc.now(), frame.utime), proc.compute().map_s),
-                                        std::move(job));
-            } else {
-              map->Add(std::move(job));
-            }
-          },
-          4);
+          channels::kStereoFrame, [&](const rover_msgs::stereo_frame_t& frame) { on_frame(frame, false); }, 4);
+      proc.bus().Subscribe<rover_msgs::stereo_frame_t>(
+          channels::kHazcamFrame, [&](const rover_msgs::stereo_frame_t& frame) { on_frame(frame, true); }, 4);
     }
     // A query that comes while a pair is being mapped waits for that map (answered on a
     // later tick): the step is judged on a map holding every pair taken before it. Pairs

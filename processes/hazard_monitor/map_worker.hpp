@@ -6,10 +6,12 @@
 // back a hazard query until every pair added before it is mapped (Added, Mapped), so a
 // step is always judged on a map that includes every pair taken before it was asked
 // about; pairs added later, or a flood of them, do not hold it back (at most kMaxQueued
-// wait; older ones are dropped).
+// wait; older ones are dropped). Pairs come from the mast's NAVCAMs (STEREO_FRAME) and the
+// front HAZCAMs (HAZCAM_FRAME), each matched with its camera's options, into one map.
 #pragma once
 
 #include "avoidance/grid.hpp"
+#include "bus/channels.hpp"
 #include "traversability/traversability_map.hpp"
 
 #include <condition_variable>
@@ -29,10 +31,17 @@ class MapWorker {
     geometry::Pose T_site_rover;
     geometry::Matrix6d covariance;
     int64_t frame_id = -1;
+    // The HAZCAM pair of the capture frame_id: matched with the HAZCAM's options. The
+    // camera_capture publishes it before the frame's NAVCAM pair, so the map a NAVCAM pair
+    // gives holds both: only the NAVCAM pair advances the map's last frame id, which the
+    // executor waits for before it votes on the map of a capture.
+    bool hazcam = false;
+    const char* Channel() const { return hazcam ? channels::kHazcamFrame : channels::kStereoFrame; }
   };
 
-  explicit MapWorker(const traversability::MapOptions& options)
-      : map_(options), initial_(ToGrid(map_)), grid_(initial_) {
+  MapWorker(const traversability::MapOptions& options, const traversability::MapOptions& hazcam_options)
+      : map_(options), hazcam_options_(hazcam_options), initial_(ToGrid(map_)), grid_(initial_) {
+    traversability::CheckMapOptions(hazcam_options_);
     thread_ = std::thread([this] { Loop(); });
   }
   ~MapWorker() {
@@ -55,7 +64,7 @@ class MapWorker {
       std::lock_guard<std::mutex> lock(mutex_);
       ++added_;
       if (jobs_.size() >= kMaxQueued) {
-        notes_ += "hazard_monitor: STEREO_FRAME " + std::to_string(jobs_.front().frame_id) +
+        notes_ += std::string("hazard_monitor: ") + jobs_.front().Channel() + " " + std::to_string(jobs_.front().frame_id) +
                   " dropped: pairs come faster than they are mapped\n";
         jobs_.pop_front();
         ++done_;
@@ -154,15 +163,18 @@ class MapWorker {
           mapped_generation_ = generation;
         }
         map_.Recentre(job.T_site_rover.translation().x(), job.T_site_rover.translation().y());
-        map_.AddStereoPair(job.left, job.right, job.rig, job.T_site_rover, job.covariance);
+        map_.AddStereoPair(job.left, job.right, job.rig, job.T_site_rover, job.covariance,
+                           job.hazcam ? &hazcam_options_ : nullptr);
         const auto& st = map_.last_update();
-        note = "hazard_monitor: mapped frame " + std::to_string(job.frame_id) + ": " + std::to_string(st.points) +
+        note = std::string("hazard_monitor: mapped ") + (job.hazcam ? "HAZCAM " : "") + "frame " +
+               std::to_string(job.frame_id) + ": " + std::to_string(st.points) +
                " points, " + std::to_string(static_cast<int>(1000 * (st.seconds_rectify + st.seconds_match +
                                                                       st.seconds_grid))) +
                " ms\n";
       } catch (const std::exception& e) {
         ok = false;
-        note = "hazard_monitor: STEREO_FRAME " + std::to_string(job.frame_id) + ": " + e.what() + " (not mapped)\n";
+        note = std::string("hazard_monitor: ") + job.Channel() + " " + std::to_string(job.frame_id) + ": " + e.what() +
+               " (not mapped)\n";
       }
       avoidance::Grid grid = ok ? ToGrid(map_) : avoidance::Grid{};
       std::lock_guard<std::mutex> lock(mutex_);
@@ -172,13 +184,14 @@ class MapWorker {
         notes_ += "hazard_monitor: frame " + std::to_string(job.frame_id) + " dropped: the map was cleared meanwhile\n";
       } else if (ok) {
         grid_ = std::move(grid);
-        last_frame_id_ = std::max(last_frame_id_, job.frame_id);
+        if (!job.hazcam) last_frame_id_ = std::max(last_frame_id_, job.frame_id);
         fresh_ = true;
       }
     }
   }
 
   traversability::TraversabilityMap map_;  // the worker thread's alone (after construction)
+  const traversability::MapOptions hazcam_options_;
   std::uint64_t mapped_generation_ = 0;     // the worker thread's: the generation map_ holds
   const avoidance::Grid initial_;
   mutable std::mutex mutex_;

@@ -106,6 +106,10 @@ TEST(ComputeProfile, NamedProfilesAndAnUnknownName) {
   EXPECT_EQ(NamedProfile("instant").vo_s, 0.0);
   EXPECT_GT(NamedProfile("mer").vo_s, 100.0);
   EXPECT_GT(NamedProfile("embedded").map_s, 0.0);
+  // A HAZCAM pair (256x256) costs a third of a NAVCAM pair in every profile that charges.
+  EXPECT_EQ(NamedProfile("instant").hazcam_map_s, 0.0);
+  for (const char* name : {"embedded", "mer"})
+    EXPECT_NEAR(NamedProfile(name).hazcam_map_s, NamedProfile(name).map_s / 3.0, 1e-9) << name;
   try {
     NamedProfile("cray");
     FAIL();
