@@ -117,9 +117,9 @@ struct ExecutorOptions {
   // included, covers only ground the map has seen and rated or the rover has driven over
   // (no blind ring excused, and ground that could hide a rock refused at any share of the
   // step's cells). false: the vote excuses the monitor's blind ring round the rover, as the
-  // monitor's own check does. Off in the library; configs/rover.yaml turns it on: with the
-  // front HAZCAM pair it costs no success on navbench and removes the collisions beside the
-  // rover (common/avoidance/README.md).
+  // monitor's own check does. Off: with the front HAZCAM pair (capture.hazcam) it
+  // costs no success on navbench and removes the collisions beside the rover, without it
+  // it costs success; turn both on together (common/avoidance/README.md).
   bool avoid_unseen_ground_strict = false;
   // With avoid_unseen_ground_strict: where a goto begins, the ring round the rover (the
   // monitor's blind margin) counts as known: the drive begins where the last one ended,

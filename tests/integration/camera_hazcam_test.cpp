@@ -86,9 +86,20 @@ cv::Mat Decode(const rover_msgs::image_t& image) {
                       cv::IMREAD_UNCHANGED);
 }
 
+// The shipped capture section with the HAZCAM pair turned on, as README "HAZCAM" says
+// (configs/rover.yaml ships it off): the two rigs and the NAVCAM's render options of
+// configs/rover.yaml, the HAZCAM at 256x256.
+std::string HazcamOnConfig(const std::string& name) {
+  const std::string config = OutDir(name) + "/capture.yaml";
+  std::ofstream(config) << "capture:\n  source: sim\n  rig: " << SourceDir()
+                        << "/configs/cameras/navcam_pinhole.yaml\n  render: {image_scale: 0.5}\n"
+                        << "  hazcam:\n    rig: " << SourceDir() << "/configs/cameras/hazcam_front.yaml\n"
+                        << "    render: {image_scale: 0.25}\n";
+  return config;
+}
+
 TEST(CameraCaptureHazcam, ARequestGivesAHazcamFrameThenTheStereoFrameOfTheSameExposure) {
-  // The shipped config: capture.hazcam.rig cameras/hazcam_front.yaml at image_scale 0.25.
-  const auto heard = CaptureOnce("camera_hazcam", 81, SourceDir() + "/configs/rover.yaml");
+  const auto heard = CaptureOnce("camera_hazcam", 81, HazcamOnConfig("camera_hazcam_config"));
   ASSERT_EQ(heard.size(), 2u) << "expected one HAZCAM_FRAME and one STEREO_FRAME";
   ASSERT_EQ(heard[0].channel, channels::kHazcamFrame) << "the HAZCAM_FRAME must come first";
   ASSERT_EQ(heard[1].channel, channels::kStereoFrame);
@@ -141,13 +152,13 @@ TEST(CameraCaptureHazcam, WithoutTheHazcamSectionNoHazcamFrame) {
 
 TEST(CameraCaptureHazcam, AHazcamWithASourceOtherThanSimIsRefusedAtStartInOneLine) {
   const std::string env = "ROVER_LCM_URL='" + PrivateUrl(83) + "' ";
-  // The simulator's config with --dataset: a dataset has no HAZCAM images, so the pair is
-  // left out with one line, and the dataset source starts (and stops at the missing folder).
-  const auto r = RunCommand(env + "timeout 10 " + Bin("camera_capture") +
-                            " --config configs/rover.yaml --dataset /nonexistent");
+  // A sim config with the HAZCAM on, and --dataset: a dataset has no HAZCAM images, so the
+  // pair is left out with one line, and the dataset source starts (and stops at the missing
+  // folder).
+  const std::string sim = HazcamOnConfig("camera_hazcam_dataset");
+  const auto r = RunCommand(env + "timeout 10 " + Bin("camera_capture") + " --config " + sim + " --dataset /nonexistent");
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("camera_capture: configs/rover.yaml: capture.hazcam ignored: the dataset source has no "
-                          "HAZCAM images"),
+  EXPECT_NE(r.output.find("camera_capture: " + sim + ": capture.hazcam ignored: the dataset source has no HAZCAM images"),
             std::string::npos)
       << r.output;
   EXPECT_NE(r.output.find("/nonexistent/image_0: no images"), std::string::npos) << r.output;

@@ -79,12 +79,13 @@ TEST(ScenarioOverrides, ScenarioSeedsDraggedWheelAndOverridesBecomeCopies) {
                                      "name: t\nworld: configs/worlds/steep_sand_slope.yaml\n"
                                      "sequence: configs/sequences/slope_climb.seq\ndeployment: configs/deploy/sim_vo.yaml\n"
                                      "seeds: {world: 5, mobility: 6, render: 7}\ndragged_wheel: right_front\n"
-                                     "overrides: {mobility.slip.soils.sand.noise_std: 0.05}\n"
+                                     "overrides: {mobility.slip.soils.sand.noise_std: 0.05,"
+                                     " capture.hazcam.rig: cameras/hazcam_front.yaml}\n"
                                      "world_overrides: {slopes.0.angle_deg: 29}\n"
                                      "campaign: {slope_jitter_deg: 1}\n"
                                      "expect: {outcome: aborted, abort_reason: [progress, vo_lost], min_clearance_m: 0}\n");
   const ScenarioSpec spec = LoadScenario(scenario);
-  ASSERT_EQ(spec.overrides.size(), 4u);
+  ASSERT_EQ(spec.overrides.size(), 5u);
   EXPECT_EQ(spec.overrides[0].key, "mobility.seed");
   EXPECT_EQ(spec.overrides[1].key, "capture.render.noise_seed");
   EXPECT_EQ(spec.overrides[2].key, "mobility.slip.dragged_wheel.wheel");
@@ -105,6 +106,7 @@ TEST(ScenarioOverrides, ScenarioSeedsDraggedWheelAndOverridesBecomeCopies) {
   rover["capture"].Get("rig", rig);
   EXPECT_TRUE(fs::path(rig).is_absolute()) << rig;
   EXPECT_TRUE(fs::exists(rig)) << rig;
+  // The HAZCAM turned on by an override, relative to configs/ like the shipped rig.
   std::string hazcam_rig;
   rover["capture"]["hazcam"].Get("rig", hazcam_rig);
   EXPECT_TRUE(fs::path(hazcam_rig).is_absolute()) << hazcam_rig;
