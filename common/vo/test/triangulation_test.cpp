@@ -79,17 +79,37 @@ TEST(Triangulation, VO5_JacobianMatchesNumericDerivative) {
   }
 }
 
-TEST(Triangulation, VO5_CovarianceAgreesWithMonteCarlo) {
-  const geometry::StereoRig rig = test::MakeRig(640, 480, 500, 319.5, 239.5, 0.3);
-  const Eigen::Vector3d X(-1.0, 0.5, 8.0);
+// The Monte Carlo tests' point: 8 m ahead of a 0.3 m rig, with unequal, correlated match
+// covariances on the two sides.
+struct MonteCarloPoint {
+  geometry::StereoRig rig = test::MakeRig(640, 480, 500, 319.5, 239.5, 0.3);
+  Eigen::Vector3d X{-1.0, 0.5, 8.0};
   Eigen::Vector2d l, r;
-  rig.left->Project(X, &l, nullptr);
-  rig.right->Project(X, &r, nullptr);
   Eigen::Matrix2d Sl, Sr;
-  Sl << 0.04, 0.01, 0.01, 0.02;
-  Sr << 0.03, -0.005, -0.005, 0.05;
   TriangulationLimits limits;
-  limits.max_gap_rad = 1.0;
+  MonteCarloPoint() {
+    rig.left->Project(X, &l, nullptr);
+    rig.right->Project(X, &r, nullptr);
+    Sl << 0.04, 0.01, 0.01, 0.02;
+    Sr << 0.03, -0.005, -0.005, 0.05;
+    limits.max_gap_rad = 1.0;
+  }
+};
+
+// The sample covariance of `samples` (N - 1 in the denominator).
+Eigen::Matrix3d SampleCovariance(const std::vector<Eigen::Vector3d>& samples) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& s : samples) mean += s;
+  mean /= static_cast<double>(samples.size());
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (const auto& s : samples) C += (s - mean) * (s - mean).transpose();
+  return C / static_cast<double>(samples.size() - 1);
+}
+
+TEST(Triangulation, VO5_CovarianceAgreesWithMonteCarlo) {
+  MonteCarloPoint m;
+  const auto& [rig, X, l0, r0, Sl, Sr, limits] = m;
+  Eigen::Vector2d l = l0, r = r0;
   StereoPoint p;
   ASSERT_TRUE(TriangulateStereo(rig, l, Sl, r, Sr, limits, &p));
   std::mt19937 rng(11);
@@ -97,18 +117,13 @@ TEST(Triangulation, VO5_CovarianceAgreesWithMonteCarlo) {
   const Eigen::Matrix2d Ll = Sl.llt().matrixL(), Lr = Sr.llt().matrixL();
   const int N = 20000;
   std::vector<Eigen::Vector3d> samples;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (int k = 0; k < N; ++k) {
     StereoPoint q;
     ASSERT_TRUE(TriangulateStereo(rig, l + Ll * Eigen::Vector2d(n(rng), n(rng)), Sl,
                                   r + Lr * Eigen::Vector2d(n(rng), n(rng)), Sr, limits, &q));
     samples.push_back(q.P);
-    mean += q.P;
   }
-  mean /= N;
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-  for (const auto& s : samples) C += (s - mean) * (s - mean).transpose();
-  C /= N - 1;
+  const Eigen::Matrix3d C = SampleCovariance(samples);
   // First-order propagation vs sampling: within 10 % (range noise is slightly skewed).
   EXPECT_LT((C - p.Sigma).norm() / p.Sigma.norm(), 0.1) << "MC\n" << C << "\nJ S J^T\n" << p.Sigma;
   // And the covariance reflects range: a point twice as far is ~4x less certain in depth.
@@ -123,16 +138,8 @@ TEST(Triangulation, VO5_CarriedStereoErrorCovarianceAgreesWithMonteCarlo) {
   // The right match repeats the left match's error (its template is cut there): e_r =
   // c e_l + e_s. The point then moves across the line of sight with e_l and in range with
   // e_s alone, which the covariance with the carry must say and the paper's must not.
-  const geometry::StereoRig rig = test::MakeRig(640, 480, 500, 319.5, 239.5, 0.3);
-  const Eigen::Vector3d X(-1.0, 0.5, 8.0);
-  Eigen::Vector2d l, r;
-  rig.left->Project(X, &l, nullptr);
-  rig.right->Project(X, &r, nullptr);
-  Eigen::Matrix2d Sl, Sr;
-  Sl << 0.04, 0.01, 0.01, 0.02;
-  Sr << 0.03, -0.005, -0.005, 0.05;
-  TriangulationLimits limits;
-  limits.max_gap_rad = 1.0;
+  const MonteCarloPoint m;
+  const auto& [rig, X, l, r, Sl, Sr, limits] = m;
   std::mt19937 rng(12);
   std::normal_distribution<double> n(0, 1);
   const Eigen::Matrix2d Ll = Sl.llt().matrixL(), Lr = Sr.llt().matrixL();
@@ -142,19 +149,14 @@ TEST(Triangulation, VO5_CarriedStereoErrorCovarianceAgreesWithMonteCarlo) {
     ASSERT_TRUE(TriangulateStereo(rig, l, Sl, r, Sr, limits, &independent));
     const int N = 20000;
     std::vector<Eigen::Vector3d> samples;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for (int k = 0; k < N; ++k) {
       const Eigen::Vector2d el = Ll * Eigen::Vector2d(n(rng), n(rng));
       const Eigen::Vector2d es = Lr * Eigen::Vector2d(n(rng), n(rng));
       StereoPoint q;
       ASSERT_TRUE(TriangulateStereo(rig, l + el, Sl, r + carry * el + es, Sr, limits, &q));
       samples.push_back(q.P);
-      mean += q.P;
     }
-    mean /= N;
-    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-    for (const auto& s : samples) C += (s - mean) * (s - mean).transpose();
-    C /= N - 1;
+    const Eigen::Matrix3d C = SampleCovariance(samples);
     EXPECT_LT((C - p.Sigma).norm() / p.Sigma.norm(), 0.1) << "carry " << carry << " MC\n" << C << "\nmodel\n" << p.Sigma;
     EXPECT_GT((C - independent.Sigma).norm() / independent.Sigma.norm(), 0.2) << "carry " << carry;
   }
