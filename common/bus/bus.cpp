@@ -104,23 +104,6 @@ void Bus::NoteReceived(const std::string& channel, std::uint32_t publisher, std:
   seen = std::max(seen, count + 1);
 }
 
-void Bus::set_time_source(const std::string& name) { time_source_id_ = PublisherId(name); }
-
-void Bus::NoteReportDue(const std::string& channel, std::uint32_t publisher, std::optional<std::int64_t> utime) {
-  if (!time_source_id_ || publisher != *time_source_id_ || !utime) {
-    report_due_ = true;
-    return;
-  }
-  if (channel == channels::kClock) source_clock_ = std::max(source_clock_, *utime);
-  if (*utime <= source_clock_) report_due_ = true;
-}
-
-bool Bus::TakeReportDue() {
-  const bool due = report_due_;
-  report_due_ = false;
-  return due;
-}
-
 simtime::SyncReport Bus::SyncState(const std::string& process, std::int64_t utime, bool busy) const {
   simtime::SyncReport r;
   r.process = process;

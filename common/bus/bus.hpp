@@ -100,14 +100,6 @@ class Bus {
   // Virtual time: what this bus has subscribed to, published and received (counted as each
   // message arrives, before it is judged), for the sync report a simulated process sends.
   simtime::SyncReport SyncState(const std::string& process, std::int64_t utime, bool busy) const;
-  // Whether a message received since the last call can hold the clock at the current
-  // instant, so that a new sync report is worth sending (clears the flag). The clock's own
-  // source publishes nothing while it waits for an instant: what it sends stamped after
-  // its latest clock message belongs to the next instant (its simulation steps, sent just
-  // before the clock message that starts it) and is reported with that instant's tick.
-  // Only the cost of a run depends on this; what it does does not (README, "Simulated time").
-  bool TakeReportDue();
-  void set_time_source(const std::string& name);
   // Deferred delivery (virtual time): messages are held as they arrive and handed to their
   // callbacks only by DispatchBatch, sorted by channel, publisher and count, so the order in
   // which the messages of one instant happened to arrive cannot change what a process does.
@@ -171,7 +163,6 @@ class Bus {
     std::function<void()> deliver;
   };
   void NoteReceived(const std::string& channel, std::uint32_t publisher, std::int64_t count);
-  void NoteReportDue(const std::string& channel, std::uint32_t publisher, std::optional<std::int64_t> utime);
   bool Defers(const std::string& channel) const { return deferred_ && !immediate_.count(channel); }
   // Deferred delivery is bounded per channel as LCM's queue is in real time: one instant may
   // hold at most this many messages of a channel subscribed with `queue_capacity` (far more
@@ -225,9 +216,6 @@ class Bus {
   std::map<std::string, int> held_count_;            // per channel, inbox_ and later_
   std::int64_t instant_ = -1;
   std::uint64_t arrivals_ = 0;
-  std::optional<std::uint32_t> time_source_id_;
-  std::int64_t source_clock_ = -1;  // the latest clock message from the time source
-  bool report_due_ = true;
 };
 
 template <class Msg>
@@ -296,9 +284,6 @@ std::string Bus::Admit(const std::string& channel, const lcm::ReceiveBuffer* rbu
   }
   if (const auto stamp = StampOf(*msg)) {
     NoteReceived(channel, stamp->first, stamp->second);
-    std::optional<std::int64_t> utime;
-    if constexpr (requires { msg->utime; }) utime = msg->utime;
-    NoteReportDue(channel, stamp->first, utime);
   }
   if constexpr (requires { Problem(*msg); }) {
     if (std::string p = Problem(*msg); !p.empty()) return p;

@@ -182,7 +182,6 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
     bus_.clock().set_virtual(true);
     // Every message waits for the tick it belongs to; the clock itself is acted on at once.
     bus_.set_deferred(true, {channels::kClock});
-    bus_.set_time_source(time_source_);
     sync_ = std::make_unique<SyncSender>(bus_.url());
   }
   // Commands this process publishes are signed, and those it receives checked, when it
@@ -290,8 +289,10 @@ void Process::RunVirtual(const std::function<void()>& on_tick, int tick_ms) {
     }
     const bool busy = last_tick_utime_ >= 0 && pending_work_ && pending_work_();
     const auto now = Clock::now();
+    // One report an instant, after its tick (and when busy changes, and to say "alive"):
+    // what arrives meanwhile need not be reported, as every member seals its batch by the
+    // clock's cut (simtime/barrier.hpp, "One round an instant").
     if (changed || busy != was_busy || now - last_sync > std::chrono::milliseconds(250)) {
-      bus_.TakeReportDue();  // this report holds everything received so far
       SendSync(busy);
       last_sync = now;
       was_busy = busy;
@@ -303,9 +304,6 @@ void Process::RunVirtual(const std::function<void()>& on_tick, int tick_ms) {
       const auto burst_end = Clock::now() + std::chrono::milliseconds(20);
       while (!clock_moved_ && Clock::now() < burst_end && bus_.Handle(0)) {
       }
-      // Only what can hold the current instant is worth a report (Bus::TakeReportDue): the
-      // time source's next-instant messages come just before the clock that starts it.
-      if (bus_.TakeReportDue()) changed = true;
     }
   }
 }

@@ -15,8 +15,13 @@ std::uint32_t PublisherIdOf(const std::string& name) {
   return h;
 }
 
-Barrier::Barrier(std::vector<std::string> members, double liveness_s) : liveness_s_(liveness_s) {
+Barrier::Barrier(std::vector<std::string> members, double liveness_s, std::string clock_owner)
+    : liveness_s_(liveness_s), clock_owner_(std::move(clock_owner)) {
   for (auto& name : members) members_[name].id = PublisherIdOf(name);
+}
+
+bool Barrier::CountsReceipts(const Member& m) const {
+  return clock_owner_.empty() || m.last.process == clock_owner_;
 }
 
 void Barrier::Report(SyncReport report, double wall_s) {
@@ -46,6 +51,7 @@ void Barrier::ForgiveMissing(Member& m) {
 }
 
 std::int64_t Barrier::Missing(const Member& m, const std::string& channel, const Member& pub) const {
+  if (!CountsReceipts(m)) return 0;  // it waits for them itself, by the clock's cut
   auto p = pub.last.published.find(channel);
   if (p == pub.last.published.end() || p->second <= 0) return 0;
   if (!m.last.subscribes_all && !m.last.subscribed.count(channel)) return 0;
@@ -70,6 +76,7 @@ bool Barrier::AllHeard() const {
 bool Barrier::Waiting(const Member& m, std::int64_t utime) const {
   if (m.lost) return false;
   if (!m.heard || m.last.utime < utime || m.last.busy) return true;
+  if (!CountsReceipts(m)) return false;
   for (const auto& [pub_name, pub] : members_) {
     if (!pub.heard) continue;
     for (const auto& entry : pub.last.published)

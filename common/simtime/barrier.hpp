@@ -2,7 +2,7 @@
 //
 // In simulation rover time is virtual and conservative: the clock (rover_sim) moves from
 // rover time t to the next tick only when every member of the set has finished all the
-// work due at t and no message between members is still in flight. Each member says so
+// work due at t (and, see below, no message to the clock's owner is in flight). Each member says so
 // with a sync report after it has handled everything it received: the rover time it has
 // finished, what it has published per channel, and what it has received per channel and
 // publisher (the pub_seq counts every message carries). A message is in flight while a
@@ -11,6 +11,14 @@
 // This is Chandy-Misra-style conservative simulation with one global time step, chosen
 // over a per-process lookahead scheme because the processes stay the deployed ones: they
 // only have to report counts, not predict their own output times.
+//
+// One round an instant. The clock message carries the cut (simtime/cut.hpp), and every
+// member but the clock's owner seals its batch by it: it waits, on its own side, for the
+// messages the cut names. So the barrier need not also wait for them to be counted (a
+// second sync report from every subscriber, an instant's critical path twice as long):
+// given a `clock_owner`, it waits only for that member, which makes the cut and seals its
+// own batch by what it has counted, to have received every message. Without one it waits
+// for every member (the rule before the cut; the unit tests use both).
 //
 // The one wall-clock rule left: a member that holds the clock and says nothing for
 // `liveness_s` of wall time (a hung or dead process) is declared lost and left out
@@ -42,7 +50,8 @@ struct SyncReport {
 class Barrier {
  public:
   // `members`: the processes the clock waits for (names as they report themselves).
-  Barrier(std::vector<std::string> members, double liveness_s);
+  // `clock_owner`: the member whose receipts alone are waited for (above); "" for all.
+  Barrier(std::vector<std::string> members, double liveness_s, std::string clock_owner = "");
 
   // A report from a process; reports from non-members are ignored. Wall seconds are for
   // liveness only.
@@ -52,7 +61,8 @@ class Barrier {
   bool AllHeard() const;
   // Whether the work due at `utime` is finished: every member that is not lost has
   // finished `utime` (and is not busy), and every message a member published has been
-  // counted by every member subscribed to its channel.
+  // counted by every member subscribed to its channel (by the clock's owner only, when
+  // there is one).
   bool Finished(std::int64_t utime) const;
   // One line: who holds the clock at `utime` and why (for diagnostics and the lost line).
   std::string Holding(std::int64_t utime) const;
@@ -95,8 +105,12 @@ class Barrier {
   // "" when `name` does not hold the clock at `utime`, else why it does.
   std::string Holds(const std::string& name, const Member& m, std::int64_t utime) const;
 
+  // Whether the barrier waits for `m` to have counted what it subscribes to.
+  bool CountsReceipts(const Member& m) const;
+
   std::map<std::string, Member> members_;
   double liveness_s_;
+  std::string clock_owner_;
 };
 
 // The publisher id Bus::Publish stamps in pub_seq's high 32 bits (FNV-1a of the name).

@@ -8,7 +8,7 @@
 //
 // Virtual time (README, "Simulated time"; common/simtime/barrier.hpp): the clock moves
 // by sim.tick_s only when every process of --hold-for has finished the current instant
-// and nothing between them is in flight, and at most `rate` times as fast as the wall
+// and this process has every command sent to it, and at most `rate` times as fast as the wall
 // clock (`--rate max`: as fast as the barrier allows). A process that holds the clock and
 // says nothing for sim.barrier_timeout_s of wall time is declared lost: the rover stops
 // and the clock runs on without it, so the executor finds it lost.
@@ -290,7 +290,7 @@ int main(int argc, char** argv) {
       // rover_sim is a member too: the clock must also wait for the commands sent to it.
       std::vector<std::string> with_clock = members;
       with_clock.push_back("rover_sim");
-      simtime::Barrier barrier(with_clock, options.barrier_timeout_s);
+      simtime::Barrier barrier(with_clock, options.barrier_timeout_s, "rover_sim");
       lcm::LCM sync_bus(bus::SyncUrl(proc.bus().url()));
       if (!sync_bus.good()) throw std::runtime_error("cannot open the sync bus " + bus::SyncUrl(proc.bus().url()));
       SyncListener listener{&barrier, &proc};
@@ -331,7 +331,7 @@ int main(int argc, char** argv) {
       begin_instant();
       double tick_wall = proc.wall_seconds(), last_note = tick_wall, last_announce = tick_wall;
       while (!proc.stopping()) {
-        // 1. Everyone has finished instant t, and nothing is in flight.
+        // 1. Everyone has finished instant t, and what was sent to rover_sim has come.
         double last_pass = proc.wall_seconds();
         while (!proc.stopping()) {
           // A pass long after the last (this process was stopped or starved): the others'

@@ -97,15 +97,10 @@ class Receiver {
     }
     held_bytes += e.data.size();
     Held h{{channel, 0u, 0, arrivals_++}, std::move(e)};
-    bool due = true;
     channel_ids_.emplace(rover::simtime::ChannelIdOf(channel), channel);
     if (const auto* type = rover::logcheck::FindChannel(channel)) {
       const auto read = rover::logcheck::ReadStamp(*type, h.event.data.data(), h.event.data.size());
       if (read.stamp) {
-        // Worth a sync report unless it is rover_sim's next instant, sent just before the
-        // clock message that starts it (Bus::TakeReportDue says why).
-        due = read.stamp->publisher_id != kClockSource || read.stamp->utime <= instant_ ||
-              channel == rover::channels::kClock;
         auto& seen = received_[channel][read.stamp->publisher_id];
         seen = std::max(seen, read.stamp->count + 1);
         h.key = {channel, read.stamp->publisher_id, read.stamp->count, 0};
@@ -118,14 +113,12 @@ class Receiver {
           if (clock.decode(h.event.data.data(), 0, static_cast<int>(h.event.data.size())) >= 0) {
             cut = rover::bus::CutOf(clock);
           }
-          if (due) changed_ = true;
           pending_ = Pending{read.stamp->utime, std::move(cut), std::chrono::steady_clock::now(), std::move(h)};
           Flush(false);
           return;
         }
       }
     }
-    if (due) changed_ = true;
     // A heartbeat stamped after this instant overtook the clock message of its own (it
     // can on a multi-core computer): it waits for its instant (Bus::SealBatch says why).
     if (channel == rover::channels::kHeartbeat && instant_ > 0) {
@@ -138,8 +131,10 @@ class Receiver {
     held_.push_back(std::move(h));
     if (pending_) Flush(false);
   }
-  // Virtual time, on the receive thread after each burst: the sync report when something
-  // came, and at least every 0.25 s of wall time (alive).
+  // Virtual time, on the receive thread after each burst: the sync report when an instant
+  // has been written, and at least every 0.25 s of wall time (alive). What arrives
+  // meanwhile is not reported: the barrier does not wait for it to be counted, as the
+  // recorder writes each instant by its clock's cut (simtime/barrier.hpp).
   void AfterBurst() {
     if (!virtual_) return;
     const auto now = std::chrono::steady_clock::now();
@@ -165,6 +160,8 @@ class Receiver {
     if (virtual_) held_.clear();
   }
   bool virtual_time() const { return virtual_; }
+  // Virtual time: a clock message has come whose cut names messages not yet here.
+  bool awaiting_cut() const { return pending_.has_value(); }
   std::int64_t dropped() const { return dropped_; }
 
  private:
@@ -226,6 +223,7 @@ class Receiver {
     held_bytes_.clear();
     for (const auto& h : held_) held_bytes_[h.event.channel] += h.event.data.size();
     instant_ = next;
+    changed_ = true;  // an instant written: worth a sync report
     std::erase_if(later_, [&](auto& entry) {
       if (entry.first > instant_) return false;
       held_bytes_[entry.second.event.channel] += entry.second.event.data.size();
@@ -490,9 +488,12 @@ int main(int argc, char** argv) {
         }
         receiver.AfterBurst();
       }
-      // Stopping: dispatch what LCM already holds (bounded, as a live bus never goes quiet).
+      // Stopping: dispatch what LCM already holds (bounded, as a live bus never goes quiet),
+      // and in virtual time what the last clock's cut says was sent before it: the barrier
+      // did not wait for this recorder to count it (simtime/barrier.hpp).
       const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
-      while (lcm.handleTimeout(0) > 0 && std::chrono::steady_clock::now() < until) {
+      while (std::chrono::steady_clock::now() < until) {
+        if (lcm.handleTimeout(receiver.awaiting_cut() ? 20 : 0) <= 0 && !receiver.awaiting_cut()) break;
       }
       receiver.Finish();
     });

@@ -270,14 +270,20 @@ int main(int argc, char** argv) {
     const bool virtual_time = deployment.time == "virtual";
     if (virtual_time) {
       bus.clock().set_virtual(true);
-      bus.set_time_source("rover_sim");  // what is worth a sync report (Bus::TakeReportDue)
+      // As every member: what comes in an instant is handed over when the clock's cut says
+      // all of it has come (simtime/barrier.hpp, "One round an instant").
+      bus.set_deferred(true, {rover::channels::kClock});
     }
     const std::vector<std::string> env = {"ROVER_LCM_URL=" + url, "ROVER_TIME=" + deployment.time};
     rover::bus::SyncSender sync(url);
     std::int64_t instant = -1;  // the rover time the runner has finished (-1: before the clock)
     std::int64_t clock_seen = -1;
+    double clock_seen_wall = 0;
     bus.Subscribe<rover_msgs::rover_clock_t>(rover::channels::kClock, [&](const rover_msgs::rover_clock_t& c) {
-      if (rover::bus::StampOf(c)->first == rover::bus::PublisherId("rover_sim")) clock_seen = std::max(clock_seen, c.utime);
+      if (rover::bus::StampOf(c)->first != rover::bus::PublisherId("rover_sim") || c.utime <= clock_seen) return;
+      clock_seen = c.utime;
+      clock_seen_wall = wall();
+      if (virtual_time) bus.ClockMoved(c.utime, rover::bus::CutOf(c));
     }, 10000);
     auto send_sync = [&] { sync.Send(bus.SyncState("scenario_runner", instant, false)); };
     // The recorder first, and heard on the bus before any process starts, so that the log
@@ -389,10 +395,19 @@ int main(int argc, char** argv) {
           while (wall() < burst_end && bus.Handle(0)) {
           }
         }
-        if (final_status && !final_utime) final_utime = final_status->utime;  // the executor's instant
         if (final_utime && clock_seen >= *final_utime + 2000000) break;
-        if (bus.TakeReportDue() || clock_seen != instant || wall() - last_sync > 0.25) {
+        // The new instant's batch once all of it has come (a message lost on the way is
+        // given up a wall second after its clock, as in every process).
+        std::string missing;
+        bool sealed = false;
+        if (bus.seal_pending() && bus.SealWhenReady(wall() - clock_seen_wall > 1.0, &missing)) {
+          if (!missing.empty()) std::cerr << "scenario_runner: a batch went without " << missing << "\n";
+          bus.DispatchBatch();
           instant = clock_seen;
+          sealed = true;
+        }
+        if (final_status && !final_utime) final_utime = final_status->utime;  // the executor's instant
+        if (sealed || wall() - last_sync > 0.25) {
           send_sync();
           last_sync = wall();
         }

@@ -190,3 +190,39 @@ TEST(Barrier, MessagesThatNeverCameAreForgivenOnceTheLimitHasPassed) {
 
 }  // namespace
 }  // namespace rover::simtime
+
+namespace rover::simtime {
+namespace {
+
+// With a clock owner, the other members seal their batches by the clock's cut themselves:
+// a message on its way to them does not hold the clock, one on its way to the owner does.
+TEST(Barrier, WithAClockOwnerOnlyTheOwnersReceiptsHoldTheClock) {
+  Barrier b({"sim", "estimator", "executor"}, 3.0, "sim");
+  auto est = Report("estimator", 100);
+  est.published["POSE"] = 3;
+  est.published["MOBILITY_COMMAND"] = 0;
+  auto exe = Report("executor", 100, {"POSE"});
+  exe.received["POSE"][PublisherIdOf("estimator")] = 2;  // one POSE still on its way
+  exe.published["MOBILITY_COMMAND"] = 4;
+  auto sim = Report("sim", 100, {"MOBILITY_COMMAND"});
+  sim.received["MOBILITY_COMMAND"][PublisherIdOf("executor")] = 3;  // one command on its way
+  b.Report(est, 0.0);
+  b.Report(exe, 0.0);
+  b.Report(sim, 0.0);
+  EXPECT_FALSE(b.Finished(100));
+  EXPECT_NE(b.Holding(100).find("sim has received 3 of 4 MOBILITY_COMMAND from executor"), std::string::npos);
+  EXPECT_EQ(b.Holding(100).find("executor has received"), std::string::npos);
+  sim.received["MOBILITY_COMMAND"][PublisherIdOf("executor")] = 4;
+  b.Report(sim, 0.0);
+  EXPECT_TRUE(b.Finished(100));
+  // What the members published is still the cut the next clock message carries.
+  EXPECT_FALSE(b.Published().After("POSE", PublisherIdOf("estimator"), 2));
+  EXPECT_TRUE(b.Published().After("POSE", PublisherIdOf("estimator"), 3));
+  // A member that has not finished the instant still holds it.
+  exe.utime = 200;
+  b.Report(exe, 0.0);
+  EXPECT_FALSE(b.Finished(200));
+}
+
+}  // namespace
+}  // namespace rover::simtime
