@@ -385,6 +385,7 @@ int main(int argc, char** argv) {
       }
       return clock_seen - submitted_at < rover_limit_us && wall() - clock_moved_wall < kClockStallS;
     };
+    bool report_due = false;
     while (!g_stop && within_limit()) {
       if (virtual_time) {
         // One instant at a time: what came in it is counted, then the runner reports it
@@ -407,10 +408,7 @@ int main(int argc, char** argv) {
           sealed = true;
         }
         if (final_status && !final_utime) final_utime = final_status->utime;  // the executor's instant
-        if (sealed || wall() - last_sync > 0.25) {
-          send_sync();
-          last_sync = wall();
-        }
+        report_due = report_due || sealed;
       } else {
         bus.Handle(20);
       }
@@ -424,6 +422,13 @@ int main(int argc, char** argv) {
              std::to_string(steps_seen) + " steps");
         set.Signal(spec.kill_process, SIGKILL);
         killed = true;
+      }
+      // The instant is reported finished only now, after an injected kill: the clock cannot
+      // move on before it, so the process dies at the same instant in every run.
+      if (virtual_time && (report_due || wall() - last_sync > 0.25)) {
+        send_sync();
+        last_sync = wall();
+        report_due = false;
       }
       if (final_status && !done_at) done_at = wall();
       // Let the last messages (stop, final pose, truth) reach the log.
