@@ -25,6 +25,7 @@
 #include <rover_msgs/rover_clock_t.hpp>
 #include <rover_msgs/sequence_status_t.hpp>
 #include <rover_msgs/sequence_submit_t.hpp>
+#include <rover_msgs/sim_sync_t.hpp>
 #include <rover_msgs/step_report_t.hpp>
 
 #include <sys/wait.h>
@@ -42,6 +43,7 @@
 #include <optional>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <set>
 #include <vector>
 #include <sstream>
@@ -150,6 +152,41 @@ void RunPlot(const std::string& out_dir) {
               << "); the scenario's result stands\n";
   }
 }
+
+// Virtual time: the set's sync reports, heard on the sync bus as rover_sim hears them, so
+// that an injected kill lands when its process has finished an instant and waits for the
+// next (the runner holds the clock meanwhile): the same instant in every run.
+class SyncWatch {
+ public:
+  explicit SyncWatch(const std::string& url) : lcm_(rover::bus::SyncUrl(url)) {
+    if (!lcm_.good()) throw std::runtime_error("cannot open the sync bus " + rover::bus::SyncUrl(url));
+    lcm_.subscribe(rover::bus::kSimSyncChannel, &SyncWatch::OnMessage, this)->setQueueCapacity(10000);
+  }
+  // Waits up to `limit_s` of wall time for `process` to report `utime` finished, with no
+  // work still owed; whether it did.
+  bool WaitFinished(const std::string& process, std::int64_t utime, double limit_s) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(limit_s);
+    while (!Finished(process, utime) && std::chrono::steady_clock::now() < until) lcm_.handleTimeout(20);
+    return Finished(process, utime);
+  }
+
+ private:
+  bool Finished(const std::string& process, std::int64_t utime) const {
+    const auto it = last_.find(process);
+    return it != last_.end() && it->second.first >= utime && !it->second.second;
+  }
+  void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    rover_msgs::sim_sync_t m;
+    try {
+      if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) return;
+    } catch (const std::exception&) {
+      return;
+    }
+    last_[m.process] = {m.utime, m.busy != 0};
+  }
+  lcm::LCM lcm_;
+  std::map<std::string, std::pair<std::int64_t, bool>> last_;  // process -> (utime, busy)
+};
 
 }  // namespace
 
@@ -386,6 +423,8 @@ int main(int argc, char** argv) {
       return clock_seen - submitted_at < rover_limit_us && wall() - clock_moved_wall < kClockStallS;
     };
     bool report_due = false;
+    std::optional<SyncWatch> sync_watch;
+    if (virtual_time && !spec.kill_process.empty()) sync_watch.emplace(url);
     while (!g_stop && within_limit()) {
       if (virtual_time) {
         // One instant at a time: what came in it is counted, then the runner reports it
@@ -420,6 +459,10 @@ int main(int argc, char** argv) {
           steps_seen > 0) {
         note("injected fault: killing " + spec.kill_process + " after " +
              std::to_string(steps_seen) + " steps");
+        if (sync_watch && !sync_watch->WaitFinished(spec.kill_process, instant, 5.0)) {
+          note(spec.kill_process + " had not finished rover time " + std::to_string(instant) +
+               " within 5 s of wall time: killed anyway");
+        }
         set.Signal(spec.kill_process, SIGKILL);
         killed = true;
       }
