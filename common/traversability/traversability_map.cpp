@@ -176,7 +176,7 @@ void PlaceStereoPoints(const StereoPoints& sp, const Eigen::Vector3d& lens, cons
   // (its own x-y plane): on a hillside that plane is the ground's, and rays that graze it
   // meet the ground far beyond the camera's range, over foreshortened rows where SGBM
   // mismatches. Rolled 20 deg across sol188_191's hillside, rays 3.8 deg below the rover's
-  // plane (and 20 deg below the site's horizontal) to the downhill side put points 0.46 m
+  // plane (and 19 deg below the site's horizontal) to the downhill side put points 0.46 m
   // over the ground 1.7 m away, and the drive stopped on them.
   const double sin_min_depression = stereo.min_depression_deg > 0 ? std::sin(stereo.min_depression_deg * M_PI / 180.0) : -2.0;
   for (std::size_t k = 0; k < sp.points_rover.size(); ++k) {

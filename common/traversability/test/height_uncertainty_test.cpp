@@ -77,7 +77,7 @@ TEST(HeightUncertainty, RaysGrazingTheGroundTheRoverStandsOnAreDropped) {
 // The map holds site heights, so a point's stereo error (along its ray) counts by its
 // vertical component in the site frame at the capture attitude: a ray level in the rover's
 // frame, rolled 20 deg, has sin(20 deg) of its range error vertical (the rover frame's
-// vertical alone gave it none, and such points outweighed every other pair's in a cell).
+// vertical alone gave it none: such a point counted as the sharpest of its cell).
 // The pose adds its z variance and roll/pitch variance times the horizontal range^2.
 TEST(HeightUncertainty, StereoErrorCountsByItsVerticalInTheSiteFrame) {
   MapOptions o;
