@@ -175,6 +175,16 @@ std::shared_ptr<const RectifiedRig> CachedRectification(const geometry::StereoRi
 
 }  // namespace
 
+double SourceStretch(const RectifiedRig& r, int u, int v) {
+  const int u0 = std::max(0, u - 1), u1 = std::min(r.width - 1, u + 1);
+  if (u1 <= u0) return 1.0;
+  const float* mx = r.map_lx.ptr<float>(v);
+  const float* my = r.map_ly.ptr<float>(v);
+  if (mx[u0] < -0.5f || mx[u1] < -0.5f) return 1.0;
+  const double per_column = std::hypot(mx[u1] - mx[u0], my[u1] - my[u0]) / (u1 - u0);
+  return per_column > 0 ? std::max(1.0, 1.0 / per_column) : 1.0;
+}
+
 std::size_t RectificationsBuilt() { return rectifications_built; }
 
 RectifiedRig Rectify(const geometry::StereoRig& rig, double scale, double fov_deg) {
@@ -384,7 +394,7 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
   const double max_range2 = o.max_range_m * o.max_range_m;
   const double min_range2 = o.min_range_m * o.min_range_m;
   out.points_rover.reserve(static_cast<std::size_t>(r.width / step) * (r.height / step));
-  out.sigma_height_m.reserve(out.points_rover.capacity());
+  out.error_rover.reserve(out.points_rover.capacity());
   for (int v = 0; v < r.height; v += step) {
     const std::int16_t* dp = disp16.ptr<std::int16_t>(v);
     const float* mlx = r.map_lx.ptr<float>(v);
@@ -407,9 +417,9 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
       const double range2 = (z * dir).squaredNorm();
       if (range2 > max_range2 || range2 < min_range2) continue;
       if (p.x() < o.min_x_m) continue;  // hidden from this camera by the rover's own body
-      const double sigma_z = z * z / fB * o.disparity_sigma_px;
+      const double sigma_z = z * z / fB * o.disparity_sigma_px * SourceStretch(r, u, v);
       out.points_rover.push_back(p);
-      out.sigma_height_m.push_back(std::abs(dir.z()) * sigma_z);
+      out.error_rover.push_back(sigma_z * dir);
     }
   }
   return out;

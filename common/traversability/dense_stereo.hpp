@@ -23,7 +23,10 @@ namespace rover::traversability {
 
 struct StereoPoints {
   std::vector<Eigen::Vector3d> points_rover;  // rover frame (X forward, Y right, Z down)
-  std::vector<double> sigma_height_m;         // stereo-only height (Z) sigma per point
+  // One standard deviation of each point's stereo error, along its ray (rover frame): the
+  // range error of a disparity_sigma_px matching error (on the source image), which the
+  // map turns into a height sigma in the site frame at the capture attitude.
+  std::vector<Eigen::Vector3d> error_rover;
 };
 
 // The rectified pair's geometry at the matching scale.
@@ -51,6 +54,13 @@ struct RectifiedRig {
 // field outside [0, 170) deg.
 RectifiedRig Rectify(const geometry::StereoRig& rig, double scale, double fov_deg = 0.0);
 
+// How many rectified pixels along the row one source pixel spans at rectified pixel (u, v)
+// (at least 1): the factor by which disparity_sigma_px (a matching error on the source
+// image) grows there. A rectified pinhole oversamples a fish-eye's periphery: the pinhole's
+// f / cos^2(theta) against the equidistant lens's f, 4 rectified pixels per source pixel at
+// 60 deg off the axis.
+double SourceStretch(const RectifiedRig& r, int u, int v);
+
 // Matches a rectified pair (8-bit grey, the same size): the left image's disparities in
 // 1/16 px (CV_16S), <= 0 where unmatched. Uses StereoSGBM (MODE_SGBM_3WAY) on the pair
 // padded on the left so that the whole left image is matched; with options.lr_max_diff_px
@@ -65,6 +75,16 @@ cv::Mat MatchDisparity(const cv::Mat& rectL, const cv::Mat& rectR, const MapOpti
 StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
                          const geometry::StereoRig& rig, const MapOptions& options,
                          UpdateStats* stats = nullptr);
+
+// One pair's points as the map takes them (AddStereoPair): in the site frame at the capture
+// pose `T_site_rover`, each with its height sigma (the stereo error along its ray, turned
+// into the site's vertical, plus the pose's z and roll/pitch variances from `pose_cov`).
+// Dropped: points beyond `stereo.max_range_m` (horizontal, rover frame) and, with
+// `stereo.min_depression_deg`, those whose ray from `lens` (the left camera's centre, rover
+// frame) runs less than that far below the site's horizontal or the rover's own plane.
+void PlaceStereoPoints(const StereoPoints& sp, const Eigen::Vector3d& lens, const geometry::Pose& T_site_rover,
+                       const geometry::Matrix6d& pose_cov, const MapOptions& stereo,
+                       std::vector<Eigen::Vector3d>* points_site, std::vector<double>* sigma_m);
 
 // How many rectifications DenseStereo has built on this thread (its cache's misses).
 std::size_t RectificationsBuilt();

@@ -75,6 +75,8 @@ void CheckMapOptions(const MapOptions& o) {
   if (!std::isfinite(o.min_texture) || o.min_texture < 0) Bad("min_texture must be >= 0");
   if (!std::isfinite(o.tilt_margin_sigmas) || o.tilt_margin_sigmas < 0 || o.tilt_margin_sigmas > 10)
     Bad("tilt_margin_sigmas must be in [0, 10]");
+  if (!std::isfinite(o.dip_margin_sigmas) || o.dip_margin_sigmas < 0 || o.dip_margin_sigmas > 10)
+    Bad("dip_margin_sigmas must be in [0, 10]");
   if (!std::isfinite(o.min_texture_snr) || o.min_texture_snr < 0 || o.min_texture_snr > 100)
     Bad("min_texture_snr must be in [0, 100]");
   if (o.subsample < 1 || o.subsample > 16) Bad("subsample must be in [1, 16]");
@@ -150,6 +152,48 @@ void TraversabilityMap::AddPoints(const std::vector<Eigen::Vector3d>& points_sit
   dirty_ = true;
 }
 
+void PlaceStereoPoints(const StereoPoints& sp, const Eigen::Vector3d& lens, const geometry::Pose& T_site_rover,
+                       const geometry::Matrix6d& pose_cov, const MapOptions& stereo,
+                       std::vector<Eigen::Vector3d>* points_site, std::vector<double>* sigma_m) {
+  // Height sigma: stereo plus the pose. Stereo: the point's error along its ray, turned into
+  // the site frame at the capture attitude (the map holds site heights: a ray that grazes
+  // the hillside the rover stands on, level in the rover frame, has its range error partly
+  // vertical in the site frame). Position: z variance. Attitude: a roll or pitch error
+  // dtheta moves a point at horizontal distance d by ~d * dtheta vertically; take the larger
+  // of the two tilt variances for every direction.
+  const Eigen::Matrix3d R_site_rover = T_site_rover.linear();
+  const double var_z = pose_cov(2, 2);
+  const double var_tilt = std::max(pose_cov(3, 3), pose_cov(4, 4));
+  std::vector<Eigen::Vector3d>& pts = *points_site;
+  std::vector<double>& sig = *sigma_m;
+  pts.clear();
+  sig.clear();
+  pts.reserve(sp.points_rover.size());
+  sig.reserve(sp.points_rover.size());
+  // The horizon band: rays less than min_depression_deg below the site's horizontal (Z
+  // down), judged at the capture attitude (a rover pitched up 14 deg on a climb sees the
+  // horizon 14 deg below its own horizontal plane), or below the plane the rover stands on
+  // (its own x-y plane): on a hillside that plane is the ground's, and rays that graze it
+  // meet the ground far beyond the camera's range, over foreshortened rows where SGBM
+  // mismatches. Rolled 20 deg across sol188_191's hillside, rays 3.8 deg below the rover's
+  // plane (and 19 deg below the site's horizontal) to the downhill side put points 0.46 m
+  // over the ground 1.7 m away, and the drive stopped on them.
+  const double sin_min_depression = stereo.min_depression_deg > 0 ? std::sin(stereo.min_depression_deg * M_PI / 180.0) : -2.0;
+  for (std::size_t k = 0; k < sp.points_rover.size(); ++k) {
+    const Eigen::Vector3d& pr = sp.points_rover[k];
+    const double d2 = pr.x() * pr.x() + pr.y() * pr.y();
+    if (d2 > stereo.max_range_m * stereo.max_range_m) continue;
+    const Eigen::Vector3d ray_rover = pr - lens;
+    const Eigen::Vector3d ray_site = R_site_rover * ray_rover;
+    const double min_down = sin_min_depression * ray_rover.norm();
+    if (ray_site.z() < min_down || ray_rover.z() < min_down) continue;
+    const double stereo_z = (R_site_rover * sp.error_rover[k]).z();
+    const double s2 = stereo_z * stereo_z + var_z + d2 * var_tilt;
+    pts.push_back(T_site_rover * pr);
+    sig.push_back(std::sqrt(s2));
+  }
+}
+
 void TraversabilityMap::AddStereoPair(const cv::Mat& left, const cv::Mat& right,
                                       const geometry::StereoRig& rig,
                                       const geometry::Pose& T_site_rover,
@@ -163,30 +207,9 @@ void TraversabilityMap::AddStereoPair(const cv::Mat& left, const cv::Mat& right,
   const MapOptions& stereo = camera ? *camera : options_;
   StereoPoints sp = DenseStereo(left, right, rig, stereo, &stats_);
   const auto t0 = std::chrono::steady_clock::now();
-  // Height sigma: stereo (from the triangulation) plus the pose. Position: z variance.
-  // Attitude: a roll or pitch error dtheta moves a point at horizontal distance d by
-  // ~d * dtheta vertically; take the larger of the two tilt variances for every direction.
-  const double var_z = pose_cov(2, 2);
-  const double var_tilt = std::max(pose_cov(3, 3), pose_cov(4, 4));
   std::vector<Eigen::Vector3d> pts;
   std::vector<double> sig;
-  pts.reserve(sp.points_rover.size());
-  sig.reserve(sp.points_rover.size());
-  // The horizon band: rays less than min_depression_deg below the site's horizontal (Z
-  // down), judged at the capture attitude (a rover pitched up 14 deg on a climb sees the
-  // horizon 14 deg below its own horizontal plane).
-  const double sin_min_depression = stereo.min_depression_deg > 0 ? std::sin(stereo.min_depression_deg * M_PI / 180.0) : -2.0;
-  const Eigen::Vector3d lens = rig.left->Center();
-  for (std::size_t k = 0; k < sp.points_rover.size(); ++k) {
-    const Eigen::Vector3d& pr = sp.points_rover[k];
-    const double d2 = pr.x() * pr.x() + pr.y() * pr.y();
-    if (d2 > stereo.max_range_m * stereo.max_range_m) continue;
-    const Eigen::Vector3d ray_site = T_site_rover.linear() * (pr - lens);
-    if (ray_site.z() < sin_min_depression * ray_site.norm()) continue;
-    const double s2 = sp.sigma_height_m[k] * sp.sigma_height_m[k] + var_z + d2 * var_tilt;
-    pts.push_back(T_site_rover * pr);
-    sig.push_back(std::sqrt(s2));
-  }
+  PlaceStereoPoints(sp, rig.left->Center(), T_site_rover, pose_cov, stereo, &pts, &sig);
   AddPoints(pts, sig);
   stats_.points = static_cast<int>(pts.size());
   Rate();
@@ -211,7 +234,7 @@ void TraversabilityMap::Rate() const {
   const std::size_t count = static_cast<std::size_t>(n_) * n_;
   cells_.assign(count, Cell{});
   // Cell heights (weighted means) and sigmas.
-  std::vector<float> h(count, 0.0f), s(count, 0.0f), mx(count, 0.0f), my(count, 0.0f);
+  std::vector<float> h(count, 0.0f), s(count, 0.0f), e(count, 0.0f), mx(count, 0.0f), my(count, 0.0f);
   std::vector<char> known(count, 0);
   for (std::size_t k = 0; k < count; ++k) {
     const Accumulator& a = acc_[k];
@@ -222,6 +245,11 @@ void TraversabilityMap::Rate() const {
     my[k] = a.sy / a.sw;
     s[k] = std::sqrt(a.n / a.sw);
     const double spread2 = std::max(0.0, static_cast<double>(a.shh) / a.sw - static_cast<double>(h[k]) * h[k]);
+    // The uncertainty of the cell's height (its weighted mean): its points' sigma, which
+    // averaging does not shrink (the pose's share is common to a pair's points), and the
+    // standard error the points' own scatter gives. A few points of a mismatched streak
+    // among good ones (or pairs that disagree) scatter far more than their sigma says.
+    e[k] = static_cast<float>(std::sqrt(static_cast<double>(s[k]) * s[k] + spread2 / a.n));
     cells_[k].elevation_m = static_cast<float>(h[k] + std::sqrt(spread2));
     cells_[k].height_sigma_m = s[k];
   }
@@ -247,14 +275,15 @@ void TraversabilityMap::Rate() const {
   const double tan_max_tilt = std::tan(o.max_tilt_deg * M_PI / 180.0);
   const double max_face_rad = o.max_face_deg > 0 ? o.max_face_deg * M_PI / 180.0 : HUGE_VAL;
   std::vector<Eigen::Vector3d> xs, xt;  // (dx, dy, h)
-  std::vector<float> ss;
+  std::vector<float> ss, se;
   std::vector<char> inlier;
   xs.reserve(patch.size());
   // The known cells of a patch round (i, j), as (dx, dy, h) from the cell centre.
   auto gather = [&](const std::vector<std::pair<int, int>>& offs, int i, int j, std::vector<Eigen::Vector3d>& out,
-                    std::vector<float>* sigmas) {
+                    std::vector<float>* sigmas, std::vector<float>* errors = nullptr) {
     out.clear();
     if (sigmas) sigmas->clear();
+    if (errors) errors->clear();
     for (const auto& [di, dj] : offs) {
       const int a = i + di, b = j + dj;
       if (a < 0 || b < 0 || a >= n_ || b >= n_) continue;
@@ -262,6 +291,7 @@ void TraversabilityMap::Rate() const {
       if (!known[k]) continue;
       out.emplace_back(di * cell + mx[k], dj * cell + my[k], h[k]);
       if (sigmas) sigmas->push_back(s[k]);
+      if (errors) errors->push_back(e[k]);
     }
   };
   // Plane h = c0 + c1 dx + c2 dy by least squares over the known cells, then again
@@ -408,7 +438,7 @@ void TraversabilityMap::Rate() const {
   std::vector<float> st;
   for (int i = 0; i < n_; ++i) {
     for (int j = 0; j < n_; ++j) {
-      gather(patch, i, j, xs, &ss);
+      gather(patch, i, j, xs, &ss, &se);
       if (xs.size() < min_known) continue;
       Eigen::Vector3d c_fit;  // roughness: the scatter about the plane fitted
       Eigen::Vector3d c = fit(xs, ss, &c_fit);
@@ -435,11 +465,18 @@ void TraversabilityMap::Rate() const {
           ground = ct;
         }
       }
+      // The step: the highest cell above the ground plane less the lowest below it. A rock
+      // stands above the ground, and the highest cell counts in full. The ground plane is
+      // the surface the rocks stand on, so a cell below it is a hole or the ground's own
+      // error, and it counts only by as much as `dip_margin_sigmas` of its height uncertainty
+      // cannot explain: the lowest of a patch's cells lies under the ground by its error
+      // alone (a cell of 7 HAZCAM points, 3 of them a mismatched streak 0.25 m low, took
+      // a 0.19 m cobble's step to 0.25 m). A hole deeper than its error still counts.
       double lo = 0, hi = 0, sum2 = 0, sig2 = 0;
       for (std::size_t k = 0; k < xs.size(); ++k) {
         const double res = xs[k].z() - (c_fit[0] + c_fit[1] * xs[k].x() + c_fit[2] * xs[k].y());
         const double above = xs[k].z() - (ground[0] + ground[1] * xs[k].x() + ground[2] * xs[k].y());
-        lo = std::min(lo, above);
+        lo = std::min(lo, above + o.dip_margin_sigmas * se[k]);
         hi = std::max(hi, above);
         sum2 += res * res;
         sig2 += static_cast<double>(ss[k]) * ss[k];
@@ -494,6 +531,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("min_texture", o.min_texture, 0.0, 255.0);
   node.Get("min_texture_snr", o.min_texture_snr, 0.0, 100.0);
   node.Get("tilt_margin_sigmas", o.tilt_margin_sigmas, 0.0, 10.0);
+  node.Get("dip_margin_sigmas", o.dip_margin_sigmas, 0.0, 10.0);
   node.Get("drop_unseen_border", o.drop_unseen_border);
   node.Get("lr_max_diff_px", o.lr_max_diff_px, 0.0, 64.0);
   node.Get("ground_band_fraction", o.ground_band_fraction, 0.0, 0.5);
@@ -510,7 +548,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
 
 const std::vector<std::string> kMapOnlyKeys = {
     "cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
-    "max_roughness_m", "min_points", "caution_fraction", "min_patch_fraction", "tilt_margin_sigmas",
+    "max_roughness_m", "min_points", "caution_fraction", "min_patch_fraction", "tilt_margin_sigmas", "dip_margin_sigmas",
     "ground_band_fraction"};
 
 }  // namespace

@@ -83,6 +83,12 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // can have any slope across the line, and a sparse far patch's slope is mostly stereo
   // error. Dense, well-spread patches lose a fraction of a degree. 0: the fitted tilt.
   double tilt_margin_sigmas = 0.0;
+  // The step counts a cell below the ground plane only by how far it lies under it beyond
+  // this many standard errors of its height (its points' sigma and the standard error of
+  // their scatter): the lowest of a patch's noisy cells lies under the ground by its error
+  // alone, and a sparse cell holding a mismatched streak scatters widely. The highest cell
+  // (a rock) always counts in full. 0: every cell at its height.
+  double dip_margin_sigmas = 0.0;
   double max_roughness_m = 0.05;
   double max_range_m = 6.0;   // stereo points beyond are ignored
   int min_points = 3;         // per cell; fewer -> unknown
@@ -99,7 +105,7 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   int uniqueness_ratio = 10;
   int speckle_window = 100;     // 0 disables the speckle filter
   int speckle_range = 2;
-  double disparity_sigma_px = 0.3;  // matching error at the matching scale
+  double disparity_sigma_px = 0.3;  // matching error, in source pixels at the matching scale
   int subsample = 1;            // triangulate every n-th pixel (row and column) of the match
   double min_range_m = 0.5;     // points nearer than this are ignored
   // Mixed pixels: a pixel whose 5x5 neighbourhood spans a disparity range over this

@@ -58,7 +58,8 @@ class MapWorker {
   // Queues a pair. When more than kMaxQueued wait (pairs come faster than they are
   // mapped: a flood, or a starved machine), the oldest waiting one is dropped, so the
   // queue, and the wait of a query held for it, stay bounded.
-  static constexpr std::size_t kMaxQueued = 2;
+  // 4: two captures' worth, each a HAZCAM pair and its NAVCAM pair.
+  static constexpr std::size_t kMaxQueued = 4;
   void Add(Job job) {
     {
       std::lock_guard<std::mutex> lock(mutex_);

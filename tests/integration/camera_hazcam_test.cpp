@@ -87,7 +87,7 @@ cv::Mat Decode(const rover_msgs::image_t& image) {
 }
 
 // The shipped capture section with the HAZCAM pair turned on, as README "HAZCAM" says
-// (configs/rover.yaml ships it off): the two rigs and the NAVCAM's render options of
+// (whether or not configs/rover.yaml ships it on): the two rigs and the NAVCAM's render options of
 // configs/rover.yaml, the HAZCAM at 256x256.
 std::string HazcamOnConfig(const std::string& name) {
   const std::string config = OutDir(name) + "/capture.yaml";
