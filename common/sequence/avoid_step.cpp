@@ -99,6 +99,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     step_note_ += "map without frame " + std::to_string(pair_here_id_) + "; ";
   }
   // 3. Vote.
+  avoid_note_.clear();
   avoidance::VoteOptions o;
   o.footprint = map_->footprint;
   const double margin = options_.avoid_margin_m * (avoid_refused_ ? 3.0 : 1.0);
@@ -165,7 +166,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
       *step = direct.step;
       step_choice_ = StepChoice::kSteerAtGoal;
       detail_ = "avoid: the goal is in reach and the way to it clear: steering straight at it (" +
-                Fixed(remaining) + " m to go)";
+                Fixed(remaining) + " m to go" +
+                (avoid_note_.empty() ? "" : "; " + avoid_note_.substr(0, avoid_note_.size() - 2)) + ")";
       return AvoidOutcome::kStep;
     }
   }
@@ -232,6 +234,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   d += " m to go";
   if (plan) d += ", plan " + Fixed(plan->path_length_m()) + " m";
   if (loop_broken) d += "; the vote's first choice was made here before: the next best instead";
+  if (!avoid_note_.empty()) d += "; " + avoid_note_.substr(0, avoid_note_.size() - 2);  // less its "; "
   d += ")";
   detail_ = std::move(d);
   step_choice_ = StepChoice::kArcVote;
@@ -276,7 +279,7 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
     }
     if (blocked_ways_.Update(**plan)) {
       const hazards::KeepOutZone& z = blocked_ways_.zones().back();
-      step_note_ += "no progress along the plan in " + std::to_string(options_.planner_block_after_steps) +
+      avoid_note_ += "no progress along the plan in " + std::to_string(options_.planner_block_after_steps) +
                     " steps: its way at " + Fixed(z.center.x()) + "," + Fixed(z.center.y()) +
                     " blocked, planning round it; ";
       plan_once();
@@ -299,16 +302,16 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
                                       " ways blocked where the rover made no progress along the plan)"));
     return PlanVerdict::kAborted;
   }
-  step_note_ += "plan " + std::to_string(unreachable_plans_) + " finds no way (" + (*plan)->why_unreachable() + "); ";
+  avoid_note_ += "plan " + std::to_string(unreachable_plans_) + " finds no way (" + (*plan)->why_unreachable() + "); ";
   return PlanVerdict::kFollow;
 }
 
 void SequenceExecutor::RefuseWay(const planner::GlobalPlan& plan, const std::string& why) {
   const auto disc = refused_ways_.Refuse(plan);
   if (!disc) return;
-  step_note_ += why + ": the ground at " + Fixed(disc->center.x()) + "," + Fixed(disc->center.y()) +
-                " costs the planner more (" + std::to_string(refused_ways_.discs().size()) +
-                " refusals in this goto); ";
+  avoid_note_ += why + ": the ground at " + Fixed(disc->center.x()) + "," + Fixed(disc->center.y()) +
+                " costs the planner more (refusal " + std::to_string(refused_ways_.discs().size()) +
+                " of this goto); ";
 }
 
 bool SequenceExecutor::AvoidRefused(const HazardReply& reply) {

@@ -624,6 +624,7 @@ class SequenceExecutor {
   // (common/planner), in the site frame of map_site_; it starts again with a new site.
   planner::SiteMap site_map_;
   planner::RefusedWays refused_ways_;  // ways the local check refused (reset per goto and site)
+  std::string avoid_note_;  // what planning this avoid step did besides the plan (in its detail)
   planner::BlockedWays blocked_ways_;  // ways this goto could not follow (reset per goto)
   std::vector<avoidance::Visit> avoid_history_;  // this goto's votes, where (loop_breaker.hpp)
   int map_site_ = -1;

@@ -92,6 +92,10 @@ TEST(LoopBreaker, APositionCycleIsFoundWhateverTheMovesAndHeadings) {
   // Forward to A (2 cm off, 6 deg round): a cycle.
   const Pose2 a_again{a.x + 0.02, a.y, yaw - 0.1};
   EXPECT_TRUE(BackWhereItWas(history, a_again));
+  // Backing from C to B, where it stood before: retreating along its tracks is no cycle.
+  std::vector<Visit> retreat = history;
+  retreat.back().chosen = Arc(-0.3, 0.0, 0.5);
+  EXPECT_FALSE(BackWhereItWas(retreat, b));
   // Forward past A instead: no cycle.
   EXPECT_FALSE(BackWhereItWas(history, {a.x + 0.6 * cx, a.y + 0.6 * cy, yaw}));
   // A cycle older than the window is no longer one.
