@@ -29,7 +29,8 @@ struct LoopOptions {
 // move at a different heading every time, and goes round A-B-A for ever. Whatever the
 // moves, a rover that stands again (within radius_m) where it stood at one of the last
 // window_steps steps, having been more than leave_m away from there since, is going round.
-// Unless it got there by backing up: a rover backing out along its own tracks comes back
+// Once, by the step that arrives there (turning in place there afterwards closes nothing);
+// and unless it got there by backing up: a rover backing out along its own tracks comes back
 // where it stood on purpose (the vote backs up only when the way on is refused, or lies
 // behind).
 struct CycleOptions {

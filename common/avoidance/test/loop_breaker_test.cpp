@@ -96,6 +96,10 @@ TEST(LoopBreaker, APositionCycleIsFoundWhateverTheMovesAndHeadings) {
   std::vector<Visit> retreat = history;
   retreat.back().chosen = Arc(-0.3, 0.0, 0.5);
   EXPECT_FALSE(BackWhereItWas(retreat, b));
+  // Turning in place at A once back: the cycle was closed by the step that arrived.
+  std::vector<Visit> turned = history;
+  turned.push_back({a_again, Turn(0.3, 0.5, 3.0)});
+  EXPECT_FALSE(BackWhereItWas(turned, {a_again.x, a_again.y, a_again.yaw + 0.3}));
   // Forward past A instead: no cycle.
   EXPECT_FALSE(BackWhereItWas(history, {a.x + 0.6 * cx, a.y + 0.6 * cy, yaw}));
   // A cycle older than the window is no longer one.
