@@ -21,6 +21,23 @@ std::vector<Candidate> ChosenHereBefore(const std::vector<Visit>& history, const
   return out;
 }
 
+bool BackWhereItWas(const std::vector<Visit>& history, const Pose2& here, const CycleOptions& options) {
+  const std::size_t n = history.size();
+  if (n == 0 || history.back().chosen.kind == Candidate::Kind::kBackup) return false;
+  auto from_here = [&](const Visit& v) { return std::hypot(v.pose.x - here.x, v.pose.y - here.y); };
+  // Only the step that arrives closes the cycle: turning in place there afterwards does not
+  // close it again.
+  if (from_here(history.back()) <= options.radius_m) return false;
+  const std::size_t first = n > static_cast<std::size_t>(options.window_steps) ? n - options.window_steps : 0;
+  // Back to the end: has the rover been beyond leave_m since visit i, and was visit i here?
+  bool left = false;
+  for (std::size_t i = n; i-- > first;) {
+    if (left && from_here(history[i]) <= options.radius_m) return true;
+    left = left || from_here(history[i]) > options.leave_m;
+  }
+  return false;
+}
+
 const Candidate* BestNotRepeating(const Choice& choice, const std::vector<Candidate>& before, double one_step_m) {
   auto repeats = [&](const Candidate& c) {
     for (const Candidate& b : before)

@@ -24,6 +24,24 @@ struct LoopOptions {
   double heading_rad = 10.0 * 3.14159265358979323846 / 180.0;  // ... and this well aligned
 };
 
+// A cycle of positions. The tabu rule above compares moves at one pose; a rover that backs
+// up, turns a few degrees and drives forward to the spot it backed from makes a different
+// move at a different heading every time, and goes round A-B-A for ever. Whatever the
+// moves, a rover that stands again (within radius_m) where it stood at one of the last
+// window_steps steps, having been more than leave_m away from there since, is going round.
+// Once, by the step that arrives there (turning in place there afterwards closes nothing);
+// and unless it got there by backing up: a rover backing out along its own tracks comes back
+// where it stood on purpose (the vote backs up only when the way on is refused, or lies
+// behind).
+struct CycleOptions {
+  double radius_m = 0.2;
+  double leave_m = 0.25;
+  int window_steps = 12;
+};
+
+// Whether `here` closes such a cycle of the poses in `history` (the last one is the latest).
+bool BackWhereItWas(const std::vector<Visit>& history, const Pose2& here, const CycleOptions& options = {});
+
 // Whether `a` and `b` are the same move (kind, curvature and signed distance, or turn).
 bool SameMove(const Candidate& a, const Candidate& b);
 

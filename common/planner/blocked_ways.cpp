@@ -40,15 +40,7 @@ bool BlockedWays::Update(const GlobalPlan& plan) {
   // The point ahead_m down the path (the goal itself when the path is shorter).
   const auto& path = plan.path();
   if (path.size() < 2) return false;
-  Eigen::Vector2d at = path.back();
-  double along = 0.0;
-  for (std::size_t i = 1; i < path.size(); ++i) {
-    along += (path[i] - path[i - 1]).norm();
-    if (along >= options_.ahead_m) {
-      at = path[i];
-      break;
-    }
-  }
+  const Eigen::Vector2d at = PointAlongPath(path, options_.ahead_m);
   zones_.push_back(hazards::KeepOutZone::Circle("blocked_way_" + std::to_string(zones_.size() + 1), at.x(), at.y(),
                                                 options_.radius_m));
   best_ = std::numeric_limits<double>::infinity();

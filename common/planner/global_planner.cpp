@@ -29,6 +29,7 @@ std::string Num(double v) {
 struct CostGrid {
   std::vector<unsigned char> obstacle, squeeze;
   std::vector<double> factor;
+  std::vector<double> extra;  // costly discs' cost per metre, added to the factor (squeeze too)
   int obstacles = 0;
 };
 
@@ -65,12 +66,27 @@ std::vector<unsigned char> ZoneCells(const avoidance::Grid& g, const std::vector
 
 namespace {
 
+void AddCostlyDiscs(const avoidance::Grid& g, const std::vector<CostlyDisc>& discs, std::vector<double>* extra) {
+  for (const CostlyDisc& d : discs) {
+    const int i0 = std::max(0, static_cast<int>(std::floor((d.center.x() - d.radius_m - g.origin_x) / g.cell_m)));
+    const int i1 = std::min(g.rows - 1, static_cast<int>(std::floor((d.center.x() + d.radius_m - g.origin_x) / g.cell_m)));
+    const int j0 = std::max(0, static_cast<int>(std::floor((d.center.y() - d.radius_m - g.origin_y) / g.cell_m)));
+    const int j1 = std::min(g.cols - 1, static_cast<int>(std::floor((d.center.y() + d.radius_m - g.origin_y) / g.cell_m)));
+    for (int i = i0; i <= i1; ++i)
+      for (int j = j0; j <= j1; ++j)
+        if (std::hypot(g.CellCentreX(i) - d.center.x(), g.CellCentreY(j) - d.center.y()) <= d.radius_m)
+          (*extra)[static_cast<std::size_t>(i) * g.cols + j] += d.cost_per_m;
+  }
+}
+
 CostGrid BuildCosts(const avoidance::Grid& g, const PlanRequest& r, const PlannerOptions& o) {
   const std::size_t n = static_cast<std::size_t>(g.rows) * g.cols;
   CostGrid c;
   c.obstacle.assign(n, 0);
   c.squeeze.assign(n, 0);
   c.factor.assign(n, 1.0);
+  c.extra.assign(n, 0.0);
+  AddCostlyDiscs(g, r.costly, &c.extra);
   auto unsafe = [&](int i, int j) {
     return i >= 0 && j >= 0 && i < g.rows && j < g.cols &&
            g.state[static_cast<std::size_t>(i) * g.cols + j] == CellClass::kUnsafe;
@@ -140,7 +156,7 @@ void Spread(const avoidance::Grid& g, const CostGrid& c, const PlannerOptions& o
     const std::size_t k = static_cast<std::size_t>(i) * g.cols + j;
     return !c.obstacle[k] && (allow_squeeze || !c.squeeze[k]);
   };
-  auto factor = [&](std::size_t k) { return c.squeeze[k] ? o.squeeze_cost : c.factor[k]; };
+  auto factor = [&](std::size_t k) { return (c.squeeze[k] ? o.squeeze_cost : c.factor[k]) + c.extra[k]; };
   const double diagonal = g.cell_m * std::sqrt(2.0);
   while (!open.empty()) {
     const auto [d, k] = open.top();
@@ -196,6 +212,10 @@ GlobalPlan PlanOnGrid(const avoidance::Grid& grid, const PlanRequest& r, const P
   for (double v : {r.start_x, r.start_y, r.goal_x, r.goal_y, r.goal_radius_m, r.zone_grow_m})
     if (!std::isfinite(v)) throw std::invalid_argument("planner: start, goal, goal radius and zone growth must be finite");
   if (r.goal_radius_m < 0.0 || r.zone_grow_m < 0.0) throw std::invalid_argument("planner: goal radius and zone growth must be >= 0");
+  for (const CostlyDisc& d : r.costly)
+    if (!d.center.allFinite() || !(d.radius_m > 0.0) || !std::isfinite(d.radius_m) || !(d.cost_per_m >= 0.0) ||
+        !std::isfinite(d.cost_per_m))
+      throw std::invalid_argument("planner: a costly disc needs a finite centre, radius > 0 and cost_per_m >= 0");
   GlobalPlan plan;
   plan.grid_ = grid;
   plan.start_ = {r.start_x, r.start_y};
@@ -328,18 +348,19 @@ double GlobalPlan::DistanceAt(double x, double y) const {
   return field_[static_cast<std::size_t>(grid_.IndexAt(cx, cy))] + std::hypot(x - cx, y - cy);
 }
 
+Eigen::Vector2d PointAlongPath(const std::vector<Eigen::Vector2d>& path, double along_m) {
+  if (path.empty()) return Eigen::Vector2d::Zero();
+  double along = 0.0;
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    along += (path[i] - path[i - 1]).norm();
+    if (along >= along_m) return path[i];
+  }
+  return path.back();
+}
+
 double GlobalPlan::WayHeading(double ahead_m) const {
   if (path_.size() < 2) return std::numeric_limits<double>::quiet_NaN();
-  double along = 0.0;
-  Eigen::Vector2d target = path_.back();
-  for (std::size_t i = 1; i < path_.size(); ++i) {
-    along += (path_[i] - path_[i - 1]).norm();
-    if (along >= ahead_m) {
-      target = path_[i];
-      break;
-    }
-  }
-  const Eigen::Vector2d d = target - start_;
+  const Eigen::Vector2d d = PointAlongPath(path_, ahead_m) - start_;
   if (d.norm() < 1e-9) return std::numeric_limits<double>::quiet_NaN();
   return std::atan2(d.y(), d.x());
 }

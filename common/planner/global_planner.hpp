@@ -68,6 +68,15 @@ struct PlannerOptions {
   void SetRadiiFrom(const avoidance::Footprint& footprint, double margin_m);
 };
 
+// Ground the plan should rather not cross: every metre through a cell whose centre lies in
+// the disc costs cost_per_m more (refused_ways.hpp: where the local check refused the way).
+// A cost, never an obstacle: no way is shut by it, so it cannot make a goal unreachable.
+struct CostlyDisc {
+  Eigen::Vector2d center = Eigen::Vector2d::Zero();
+  double radius_m = 0.5;
+  double cost_per_m = 10.0;
+};
+
 struct PlanRequest {
   double start_x = 0.0, start_y = 0.0;
   double goal_x = 0.0, goal_y = 0.0;
@@ -75,7 +84,12 @@ struct PlanRequest {
   std::vector<hazards::KeepOutZone> zones;   // obstacles, grown by zone_grow_m
   double zone_grow_m = 0.0;                  // e.g. 3 sigma of the position
   const PriorCostMap* prior = nullptr;
+  std::vector<CostlyDisc> costly;            // extra cost, added up where discs overlap
 };
+
+// The point `along_m` down a path (its last point when the path is shorter; the origin when
+// it is empty).
+Eigen::Vector2d PointAlongPath(const std::vector<Eigen::Vector2d>& path, double along_m);
 
 // The plan: the cost-to-go field (the goal vote's GoalDistance) and the path down it.
 class GlobalPlan final : public avoidance::GoalDistance {

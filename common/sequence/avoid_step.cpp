@@ -43,6 +43,7 @@ void SequenceExecutor::OnTraversabilityMap(const TraversabilityMap& map) {
   const int site = pose_ ? pose_->site_index : 0;
   if (site != map_site_) {
     site_map_.Clear();
+    refused_ways_.Reset();
     map_site_ = site;
   }
   try {
@@ -98,6 +99,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     step_note_ += "map without frame " + std::to_string(pair_here_id_) + "; ";
   }
   // 3. Vote.
+  avoid_note_.clear();
   avoidance::VoteOptions o;
   o.footprint = map_->footprint;
   const double margin = options_.avoid_margin_m * (avoid_refused_ ? 3.0 : 1.0);
@@ -131,10 +133,12 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     for (std::size_t k = 0; k < cells.size(); ++k)
       if (cells[k]) grid.state[k] = avoidance::CellClass::kUnsafe, grid.goodness[k] = 0.0f;
   }
-  // The global plan from here, over everything seen so far.
+  // The global plan from here, over everything seen so far, and round the ways refused.
+  const avoidance::Pose2 here{p.x, p.y, p.yaw};
+  const bool going_round = avoidance::BackWhereItWas(avoid_history_, here);
   std::optional<planner::GlobalPlan> plan;
   if (options_.planner_enabled) {
-    switch (PlanAhead(p, disc, o.footprint, zone_grow, &plan)) {
+    switch (PlanAhead(p, disc, o.footprint, zone_grow, going_round, &plan)) {
       case PlanVerdict::kFollow: break;
       case PlanVerdict::kAborted: return AvoidOutcome::kAborted;
     }
@@ -149,7 +153,6 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   if (remaining < o.lookahead_m) {
     const GotoDecision direct = SteerToward(p, goto_.target, disc.radius_m, StepLength(), MaxTurn(),
                                             options_.goto_turn_threshold_deg * M_PI / 180.0);
-    const avoidance::Pose2 here{p.x, p.y, p.yaw};
     const bool turn = direct.step.kind == PlannedStep::Kind::kTurn;
     const auto step_path = avoidance::SamplePath(here, turn ? direct.step.turn_rad : 0.0,
                                                  turn ? 0.0 : direct.step.distance_m, 0.0);
@@ -163,7 +166,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
       *step = direct.step;
       step_choice_ = StepChoice::kSteerAtGoal;
       detail_ = "avoid: the goal is in reach and the way to it clear: steering straight at it (" +
-                Fixed(remaining) + " m to go)";
+                Fixed(remaining) + " m to go" +
+                (avoid_note_.empty() ? "" : "; " + avoid_note_.substr(0, avoid_note_.size() - 2)) + ")";
       return AvoidOutcome::kStep;
     }
   }
@@ -182,7 +186,6 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   }
   // Round in a loop (avoidance/loop_breaker.hpp): a choice made at this pose before in this
   // goto gives way to the next best one.
-  const avoidance::Pose2 here{p.x, p.y, p.yaw};
   const auto before = avoidance::ChosenHereBefore(avoid_history_, here);
   const avoidance::Candidate* chosen = &choice.best;
   bool loop_broken = false;
@@ -197,6 +200,11 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   }
   avoid_history_.push_back({here, *chosen});
   const avoidance::Candidate& b = *chosen;
+  // Backing up while the plan's way lies ahead: the vote refused every step along it (a
+  // backup is then only the last resort, arc_voting.hpp). The planner remembers it.
+  if (plan && b.kind == avoidance::Candidate::Kind::kBackup && std::isfinite(o.way_heading_rad) &&
+      std::abs(geometry::WrapAngle(o.way_heading_rad - p.yaw)) <= 0.5 * M_PI)
+    RefuseWay(*plan, "backing up, the plan's way ahead refused");
   if (b.kind == avoidance::Candidate::Kind::kTurn) {
     step->kind = PlannedStep::Kind::kTurn;
     step->turn_rad = b.turn_rad;
@@ -226,6 +234,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   d += " m to go";
   if (plan) d += ", plan " + Fixed(plan->path_length_m()) + " m";
   if (loop_broken) d += "; the vote's first choice was made here before: the next best instead";
+  if (!avoid_note_.empty()) d += "; " + avoid_note_.substr(0, avoid_note_.size() - 2);  // less its "; "
   d += ")";
   detail_ = std::move(d);
   step_choice_ = StepChoice::kArcVote;
@@ -237,7 +246,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
 // round obstacles even when the way is shut (global_planner.hpp).
 SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, const ArrivalDisc& disc,
                                                           const avoidance::Footprint& footprint, double zone_grow,
-                                                          std::optional<planner::GlobalPlan>* plan) {
+                                                          bool going_round, std::optional<planner::GlobalPlan>* plan) {
   planner::PlannerOptions po;
   po.SetRadiiFrom(footprint, 0.0);
   po.unknown_cost = options_.planner_unknown_cost;
@@ -255,11 +264,22 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
     r.zones.insert(r.zones.end(), blocked_ways_.zones().begin(), blocked_ways_.zones().end());
     *plan = planner::PlanOnSiteMap(site_map_, r, po);
   };
+  r.costly = refused_ways_.discs();
   try {
     plan_once();
+    // Back where it stood a few steps ago (avoidance::BackWhereItWas): the way the plan
+    // leads from here has been refused; plan round it now.
+    if (going_round && (*plan)->reachable()) {
+      const std::size_t n = refused_ways_.discs().size();
+      RefuseWay(**plan, "back where it stood a few steps ago");
+      if (refused_ways_.discs().size() > n) {
+        r.costly = refused_ways_.discs();
+        plan_once();
+      }
+    }
     if (blocked_ways_.Update(**plan)) {
       const hazards::KeepOutZone& z = blocked_ways_.zones().back();
-      step_note_ += "no progress along the plan in " + std::to_string(options_.planner_block_after_steps) +
+      avoid_note_ += "no progress along the plan in " + std::to_string(options_.planner_block_after_steps) +
                     " steps: its way at " + Fixed(z.center.x()) + "," + Fixed(z.center.y()) +
                     " blocked, planning round it; ";
       plan_once();
@@ -282,8 +302,16 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
                                       " ways blocked where the rover made no progress along the plan)"));
     return PlanVerdict::kAborted;
   }
-  step_note_ += "plan " + std::to_string(unreachable_plans_) + " finds no way (" + (*plan)->why_unreachable() + "); ";
+  avoid_note_ += "plan " + std::to_string(unreachable_plans_) + " finds no way (" + (*plan)->why_unreachable() + "); ";
   return PlanVerdict::kFollow;
+}
+
+void SequenceExecutor::RefuseWay(const planner::GlobalPlan& plan, const std::string& why) {
+  const auto disc = refused_ways_.Refuse(plan);
+  if (!disc) return;
+  avoid_note_ += why + ": the ground at " + Fixed(disc->center.x()) + "," + Fixed(disc->center.y()) +
+                " costs the planner more (refusal " + std::to_string(refused_ways_.discs().size()) +
+                " of this goto); ";
 }
 
 bool SequenceExecutor::AvoidRefused(const HazardReply& reply) {

@@ -22,6 +22,7 @@ SequenceExecutor::SequenceExecutor(ExecutorOptions options, int64_t first_id)
   blocks.ahead_m = options_.planner_block_ahead_m;
   blocks.radius_m = options_.planner_block_radius_m;
   blocked_ways_ = planner::BlockedWays(blocks);
+  refused_ways_ = planner::RefusedWays(RefusalOptionsOf(options_));
   step_m_ = options_.default_step_m;
   max_turn_rad_ = options_.default_max_turn_deg * kDeg;
   vo_wait_s_ = options_.vo_wait_s;

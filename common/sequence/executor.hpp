@@ -14,6 +14,7 @@
 #include "planner/blocked_ways.hpp"
 #include "planner/global_planner.hpp"
 #include "planner/prior_map.hpp"
+#include "planner/refused_ways.hpp"
 #include "planner/site_map.hpp"
 #include "geometry/pose.hpp"
 #include "sequence/parser.hpp"
@@ -144,6 +145,15 @@ struct ExecutorOptions {
   double planner_block_min_gain_m = 0.5;
   double planner_block_ahead_m = 1.5;
   double planner_block_radius_m = 0.4;
+  // Refused ways (planner/refused_ways.hpp): where the local check refused the plan's way
+  // (the vote backed up though the way lay ahead, or the rover came back where it stood a
+  // few steps before: avoidance::BackWhereItWas), the point planner_refusal_ahead_m down
+  // the plan's path costs planner_refusal_cost more per metre within
+  // planner_refusal_radius_m, for the rest of the goto: a cost, never an obstacle.
+  // 0 cost: refusals are not remembered.
+  double planner_refusal_cost = 10.0;
+  double planner_refusal_ahead_m = 1.0;
+  double planner_refusal_radius_m = 0.6;
   // Optional prior cost map (planner/prior_map.hpp), relative to the config file. "" = none.
   std::string planner_prior_map;
 
@@ -163,6 +173,8 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root);  // reads r
 ExecutorOptions LoadExecutorOptionsFile(const std::string& path);
 // Throws std::invalid_argument naming the bad value.
 void ValidateExecutorOptions(const ExecutorOptions& options);
+// The planner_refusal_* options as the refused ways take them.
+planner::RefusalOptions RefusalOptionsOf(const ExecutorOptions& options);
 
 // ---------------------------------------------------------------------------------------
 // Inputs (mirror lcmtypes).
@@ -482,7 +494,9 @@ class SequenceExecutor {
   // The global plan for the avoid goto's next step (kAborted: no way, plans running).
   enum class PlanVerdict { kFollow, kAborted };
   PlanVerdict PlanAhead(const PlanePose& pose, const ArrivalDisc& disc, const avoidance::Footprint& footprint,
-                        double zone_grow_m, std::optional<planner::GlobalPlan>* plan);
+                        double zone_grow_m, bool going_round, std::optional<planner::GlobalPlan>* plan);
+  // The local check refused the way `plan` leads (refused_ways_): remembered, and said.
+  void RefuseWay(const planner::GlobalPlan& plan, const std::string& why);
   void MarkDriven();  // the ground under the rover now carried it (site map)
   // An UNKNOWN map verdict on a step with no pair taken where the rover stands: take one
   // (MER: image, map, then drive) and ask again. False: the reply stands.
@@ -609,6 +623,8 @@ class SequenceExecutor {
   // The site map merged from every map the monitor sends, and where the rover has been
   // (common/planner), in the site frame of map_site_; it starts again with a new site.
   planner::SiteMap site_map_;
+  planner::RefusedWays refused_ways_;  // ways the local check refused (reset per goto and site)
+  std::string avoid_note_;  // what planning this avoid step did besides the plan (in its detail)
   planner::BlockedWays blocked_ways_;  // ways this goto could not follow (reset per goto)
   std::vector<avoidance::Visit> avoid_history_;  // this goto's votes, where (loop_breaker.hpp)
   int map_site_ = -1;

@@ -8,6 +8,14 @@
 
 namespace rover::sequence {
 
+planner::RefusalOptions RefusalOptionsOf(const ExecutorOptions& o) {
+  planner::RefusalOptions r;
+  r.cost_per_m = o.planner_refusal_cost;
+  r.ahead_m = o.planner_refusal_ahead_m;
+  r.radius_m = o.planner_refusal_radius_m;
+  return r;
+}
+
 void ValidateExecutorOptions(const ExecutorOptions& o) {
   auto positive = [](double v, const char* name) {
     if (!(v > 0.0) || !std::isfinite(v)) {
@@ -60,6 +68,11 @@ void ValidateExecutorOptions(const ExecutorOptions& o) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("executor options planner_block_*: ") + e.what());
   }
+  try {
+    RefusalOptionsOf(o).Validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("executor options planner_refusal_*: ") + e.what());
+  }
   if (o.recent_steps < 1) {
     throw std::invalid_argument("executor option recent_steps must be >= 1, got " +
                                 std::to_string(o.recent_steps));
@@ -95,7 +108,8 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m",
                "avoid_zone_sigma_multiplier", "avoid_unseen_ground_strict", "avoid_start_ring_known", "planner_enabled", "planner_unknown_cost", "planner_caution_cost",
                "planner_margin_m", "planner_unreachable_plans", "planner_block_after_steps", "planner_block_min_gain_m",
-               "planner_block_ahead_m", "planner_block_radius_m", "planner_prior_map", "goto_arrival_sigmas",
+               "planner_block_ahead_m", "planner_block_radius_m", "planner_refusal_cost", "planner_refusal_ahead_m",
+               "planner_refusal_radius_m", "planner_prior_map", "goto_arrival_sigmas",
                "goto_min_arrival_fraction"});
   auto names = [&](const char* key, std::vector<std::string>& out) {
     if (!n.Has(key)) return;
@@ -160,6 +174,9 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("planner_block_min_gain_m", o.planner_block_min_gain_m, 0.01, 100.0);
   n.Get("planner_block_ahead_m", o.planner_block_ahead_m, 0.1, 100.0);
   n.Get("planner_block_radius_m", o.planner_block_radius_m, 0.05, 10.0);
+  n.Get("planner_refusal_cost", o.planner_refusal_cost, 0.0, 1000.0);
+  n.Get("planner_refusal_ahead_m", o.planner_refusal_ahead_m, 0.1, 10.0);
+  n.Get("planner_refusal_radius_m", o.planner_refusal_radius_m, 0.05, 5.0);
   n.Get("planner_prior_map", o.planner_prior_map);
   if (!o.planner_prior_map.empty() && o.planner_prior_map.front() != '/') {
     // Relative to the config file, as the camera rig is.

@@ -72,5 +72,51 @@ TEST(LoopBreaker, TheNextBestAllowedMoveReplacesARepeatedOne) {
             nullptr);
 }
 
+// The dither of navbench k = 0.20: at A the rover backs up 0.3 m to B, again to C, turns a
+// few degrees and drives 0.6 m forward to A. Back at A it has closed a cycle of positions,
+// though no move and no heading repeats; standing at A turning in place, or driving on,
+// closes none.
+TEST(LoopBreaker, APositionCycleIsFoundWhateverTheMovesAndHeadings) {
+  const double yaw = -123.0 * M_PI / 180.0;
+  const double cx = std::cos(yaw), cy = std::sin(yaw);
+  const Pose2 a{-9.8, -7.9, yaw};
+  const Pose2 b{a.x - 0.3 * cx, a.y - 0.3 * cy, yaw};
+  const Pose2 c{a.x - 0.6 * cx, a.y - 0.6 * cy, yaw + 0.05};
+  std::vector<Visit> history = {{a, Turn(0.05, 0.5, 0.2)}, {a, Arc(-0.3, 0.0, 0.5)}};
+  // Turning at A, then backing up: nothing closed yet.
+  EXPECT_FALSE(BackWhereItWas({history[0]}, a));
+  EXPECT_FALSE(BackWhereItWas(history, b));
+  history.push_back({b, Arc(-0.3, 0.0, 0.5)});
+  EXPECT_FALSE(BackWhereItWas(history, c));
+  history.push_back({c, Arc(0.6, -0.1, 0.5)});
+  // Forward to A (2 cm off, 6 deg round): a cycle.
+  const Pose2 a_again{a.x + 0.02, a.y, yaw - 0.1};
+  EXPECT_TRUE(BackWhereItWas(history, a_again));
+  // Backing from C to B, where it stood before: retreating along its tracks is no cycle.
+  std::vector<Visit> retreat = history;
+  retreat.back().chosen = Arc(-0.3, 0.0, 0.5);
+  EXPECT_FALSE(BackWhereItWas(retreat, b));
+  // Turning in place at A once back: the cycle was closed by the step that arrived.
+  std::vector<Visit> turned = history;
+  turned.push_back({a_again, Turn(0.3, 0.5, 3.0)});
+  EXPECT_FALSE(BackWhereItWas(turned, {a_again.x, a_again.y, a_again.yaw + 0.3}));
+  // Forward past A instead: no cycle.
+  EXPECT_FALSE(BackWhereItWas(history, {a.x + 0.6 * cx, a.y + 0.6 * cy, yaw}));
+  // A cycle older than the window is no longer one.
+  CycleOptions narrow;
+  narrow.window_steps = 1;
+  EXPECT_FALSE(BackWhereItWas(history, a_again, narrow));
+  narrow.window_steps = 4;
+  EXPECT_TRUE(BackWhereItWas(history, a_again, narrow));
+}
+
+// A rover turning round in place in a pocket (many steps at one position) has left nowhere.
+TEST(LoopBreaker, TurningInPlaceIsNoPositionCycle) {
+  std::vector<Visit> history;
+  for (int k = 0; k < 8; ++k) history.push_back({{1.0, 2.0, 0.3 * k}, Turn(0.3, 0.5, 3.0)});
+  EXPECT_FALSE(BackWhereItWas(history, {1.01, 2.0, 2.4}));
+  EXPECT_FALSE(BackWhereItWas({}, {1.0, 2.0, 0.0}));
+}
+
 }  // namespace
 }  // namespace rover::avoidance

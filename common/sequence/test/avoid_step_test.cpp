@@ -274,4 +274,64 @@ TEST(AvoidStep, GoalInsideARingOfRocksIsReportedUnreachable) {
   EXPECT_LE(w.motions.size(), 2u);
 }
 
+// A corridor of rocks whose far end the map never sees (unknown ground, as beside a rock no
+// camera looks past), the goal beyond it. The plan leads through the unknown end (unknown
+// ground is a way, at 1.25 per metre); the strict vote refuses to drive onto it. Without
+// memory of the refusal the plan keeps leading the rover at the end, and it backs, turns
+// and is led on again until something stops it (here the map: wedged by the corridor's
+// wall, no safe step). With it (planner_refusal_cost), the plan's way through the end grows
+// costly where the vote refused it (two backups and one return to where it stood), and
+// the rover turns, drives out and goes round.
+namespace {
+void Corridor(Grid* g) {
+  for (int i = 0; i < g->rows; ++i)
+    for (int j = 0; j < g->cols; ++j) {
+      const double x = g->CellCentreX(i), y = g->CellCentreY(j);
+      const std::size_t k = static_cast<std::size_t>(i) * g->cols + j;
+      if (x >= -1.0 && x <= 4.2 && std::abs(y) >= 1.5 && std::abs(y) <= 1.9) {
+        g->state[k] = CellClass::kUnsafe, g->goodness[k] = 0.0f, g->step_m[k] = 0.5f;
+      } else if (x >= 2.6 && x <= 4.2 && std::abs(y) < 1.5) {
+        g->state[k] = CellClass::kUnknown, g->goodness[k] = 0.0f;
+      }
+    }
+}
+
+struct CorridorRun {
+  SequenceStatus final;
+  std::vector<PlanePose> trail;
+  std::vector<std::string> details;
+};
+
+CorridorRun DriveTheCorridor(double refusal_cost) {
+  ExecutorOptions o = Fast();
+  o.avoid_unseen_ground_strict = true;
+  o.planner_refusal_cost = refusal_cost;
+  SequenceExecutor ex(o);
+  MapWorld w(ex);
+  Corridor(&w.grid);
+  ex.SubmitText("goto 6 m 0 m within 0.4 m distance 40 m avoid on\n", 1, "t.seq");
+  w.Run(60000);
+  CorridorRun r{w.Final(), w.trail, {}};
+  for (const SequenceStatus& s : w.statuses) r.details.push_back(s.detail);
+  return r;
+}
+}  // namespace
+
+TEST(AvoidStep, AWayTheVoteRefusesCostsThePlannerAndTheRoverGoesRound) {
+  const CorridorRun with = DriveTheCorridor(10.0);
+  ASSERT_EQ(with.final.state, SequenceState::kCompleted) << with.final.abort_reason << ": " << with.final.detail;
+  bool said = false;
+  for (const std::string& d : with.details) said = said || d.find("costs the planner more") != std::string::npos;
+  EXPECT_TRUE(said);
+  // Round the corridor's wall, never through its unknown end.
+  double widest = 0.0;
+  for (const PlanePose& p : with.trail) {
+    widest = std::max(widest, std::abs(p.y));
+    EXPECT_FALSE(p.x > 2.6 && p.x < 4.2 && std::abs(p.y) < 1.5) << p.x << "," << p.y;
+  }
+  EXPECT_GT(widest, 1.9);
+  const CorridorRun without = DriveTheCorridor(0.0);
+  EXPECT_NE(without.final.state, SequenceState::kCompleted) << without.final.detail;
+}
+
 }  // namespace
