@@ -1,6 +1,7 @@
 // Blocked ways with known answers: a wall with one gap the plan leads through and the
 // rover never gets through, and a rover that makes progress.
 #include "planner/blocked_ways.hpp"
+#include "wall_world.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,25 +11,9 @@ namespace {
 using rover::avoidance::CellClass;
 using rover::avoidance::Grid;
 
-// Open ground 30 x 30 m; a wall of rocks across x = 4, out to |y| = half_length (the whole
-// grid by default), with one 2.4 m gap at y 0.
-Grid WallWithAGap(double half_length = 100.0) {
-  Grid g = Grid::Filled(-10, -15, 0.2, 150, 150, CellClass::kSafe, 0.9f);
-  for (int i = 0; i < g.rows; ++i)
-    for (int j = 0; j < g.cols; ++j) {
-      const double x = g.CellCentreX(i), y = g.CellCentreY(j);
-      if (x >= 4.0 && x <= 4.6 && std::abs(y) > 1.2 && std::abs(y) < half_length) g.state[static_cast<std::size_t>(i) * g.cols + j] = CellClass::kUnsafe;
-    }
-  return g;
-}
-
-PlanRequest At(double x, double y) {
-  PlanRequest r;
-  r.start_x = x, r.start_y = y;
-  r.goal_x = 9.0, r.goal_y = 0.0;
-  r.goal_radius_m = 0.5;
-  return r;
-}
+// A wall with one 2.4 m gap at y 0, out to |y| = half_length (the whole grid by default).
+avoidance::Grid WallWithAGap(double half_length = 100.0) { return test::WallWithGaps({0.0}, half_length); }
+const auto At = test::ToTheGoalFrom;
 
 // The rover stands before the gap step after step: after stall_steps plans without
 // progress the gap is blocked, and the next plan finds no way: the goal is reported

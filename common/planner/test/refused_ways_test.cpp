@@ -2,6 +2,7 @@
 // check refuses twice goes through the far gap; a refusal of the only way costs but never
 // shuts it; a costly disc never makes ground cheaper.
 #include "planner/refused_ways.hpp"
+#include "wall_world.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,26 +14,8 @@ namespace {
 using rover::avoidance::CellClass;
 using rover::avoidance::Grid;
 
-// Open ground 30 x 30 m; a wall of rocks across x = 4..4.6 with 2.4 m gaps at the listed y.
-Grid WallWithGaps(const std::vector<double>& gaps_y) {
-  Grid g = Grid::Filled(-10, -15, 0.2, 150, 150, CellClass::kSafe, 0.9f);
-  for (int i = 0; i < g.rows; ++i)
-    for (int j = 0; j < g.cols; ++j) {
-      const double x = g.CellCentreX(i), y = g.CellCentreY(j);
-      bool in_gap = false;
-      for (double gy : gaps_y) in_gap = in_gap || std::abs(y - gy) < 1.2;
-      if (x >= 4.0 && x <= 4.6 && !in_gap) g.state[static_cast<std::size_t>(i) * g.cols + j] = CellClass::kUnsafe;
-    }
-  return g;
-}
-
-PlanRequest From(double x, double y) {
-  PlanRequest r;
-  r.start_x = x, r.start_y = y;
-  r.goal_x = 9.0, r.goal_y = 0.0;
-  r.goal_radius_m = 0.5;
-  return r;
-}
+using test::WallWithGaps;
+const auto From = test::ToTheGoalFrom;
 
 // Where the path crosses the wall's middle (x = 4.3): its y.
 double CrossingY(const GlobalPlan& plan) {
