@@ -77,6 +77,8 @@ void CheckMapOptions(const MapOptions& o) {
     Bad("tilt_margin_sigmas must be in [0, 10]");
   if (!std::isfinite(o.dip_margin_sigmas) || o.dip_margin_sigmas < 0 || o.dip_margin_sigmas > 10)
     Bad("dip_margin_sigmas must be in [0, 10]");
+  if (!std::isfinite(o.roughness_margin_sigmas) || o.roughness_margin_sigmas < 0 || o.roughness_margin_sigmas > 10)
+    Bad("roughness_margin_sigmas must be in [0, 10]");
   if (!std::isfinite(o.min_texture_snr) || o.min_texture_snr < 0 || o.min_texture_snr > 100)
     Bad("min_texture_snr must be in [0, 100]");
   if (o.subsample < 1 || o.subsample > 16) Bad("subsample must be in [1, 16]");
@@ -478,7 +480,10 @@ void TraversabilityMap::Rate() const {
         const double above = xs[k].z() - (ground[0] + ground[1] * xs[k].x() + ground[2] * xs[k].y());
         lo = std::min(lo, above + o.dip_margin_sigmas * se[k]);
         hi = std::max(hi, above);
-        sum2 += res * res;
+        // The roughness: how far each cell lies off the plane beyond what its own height
+        // error explains (roughness_margin_sigmas of it).
+        const double off = std::max(0.0, std::abs(res) - o.roughness_margin_sigmas * se[k]);
+        sum2 += off * off;
         sig2 += static_cast<double>(ss[k]) * ss[k];
       }
       Cell& out = cells_[static_cast<std::size_t>(i) * n_ + j];
@@ -532,6 +537,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("min_texture_snr", o.min_texture_snr, 0.0, 100.0);
   node.Get("tilt_margin_sigmas", o.tilt_margin_sigmas, 0.0, 10.0);
   node.Get("dip_margin_sigmas", o.dip_margin_sigmas, 0.0, 10.0);
+  node.Get("roughness_margin_sigmas", o.roughness_margin_sigmas, 0.0, 10.0);
   node.Get("drop_unseen_border", o.drop_unseen_border);
   node.Get("lr_max_diff_px", o.lr_max_diff_px, 0.0, 64.0);
   node.Get("ground_band_fraction", o.ground_band_fraction, 0.0, 0.5);
@@ -549,7 +555,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
 const std::vector<std::string> kMapOnlyKeys = {
     "cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
     "max_roughness_m", "min_points", "caution_fraction", "min_patch_fraction", "tilt_margin_sigmas", "dip_margin_sigmas",
-    "ground_band_fraction"};
+    "roughness_margin_sigmas", "ground_band_fraction"};
 
 }  // namespace
 

@@ -12,7 +12,8 @@
 //             rover's own size (tilt_radius_m), the tilt it would stand at there (rad),
 //   face      how much steeper the wheel patch's plane is than that one (rad): a rock's
 //             flank under one wheel, where the body stays level (with tilt_radius_m),
-//   roughness the RMS residual of the cells about the plane (m),
+//   roughness the RMS residual of the cells about the plane (m), each less
+//             roughness_margin_sigmas of its height error,
 // each against its limit. A cell is unknown when it, or its patch, has too little data.
 // sigma_m is the height uncertainty of the cell's points: stereo range error (grows with
 // range squared) and the pose's position and attitude uncertainty (grows with range).
@@ -90,6 +91,13 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // (a rock) always counts in full. 0: every cell at its height.
   double dip_margin_sigmas = 0.0;
   double max_roughness_m = 0.05;
+  // The roughness counts each cell's residual about the fitted plane only beyond this many
+  // standard errors of its height (as dip_margin_sigmas does below the ground for the step):
+  // a patch of sparse or mixed cells (a cobble's face and the ground behind it in one cell,
+  // a mismatched streak) scatters about its plane by their errors alone, and the HAZCAM's
+  // near field rated cobbles under the step limit unsafe by roughness. 0: every residual in
+  // full.
+  double roughness_margin_sigmas = 0.0;
   double max_range_m = 6.0;   // stereo points beyond are ignored
   int min_points = 3;         // per cell; fewer -> unknown
   // A cell is kCaution when step, tilt or roughness exceeds this fraction of its limit.

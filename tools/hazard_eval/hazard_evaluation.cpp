@@ -60,6 +60,14 @@ bool InView(const geometry::StereoRig& rig, const Eigen::Isometry3d& T_rover_sit
   return true;
 }
 
+// In both HAZCAM images, within its stereo range and in front of the body (min_x_m).
+bool InHazcamView(const geometry::StereoRig& rig, const tv::MapOptions& stereo, const Eigen::Isometry3d& T_rover_site,
+                  const Eigen::Vector3d& p_site) {
+  const Eigen::Vector3d p = T_rover_site * p_site;
+  if (p.x() < stereo.min_x_m || std::hypot(p.x(), p.y()) > stereo.max_range_m) return false;
+  return InView(rig, T_rover_site, p_site);
+}
+
 // The true terrain on the map's grid: each cell holds the highest of 5x5 samples of the
 // exact surface in it (a rock reaching into a cell counts at its top there, as a wheel
 // would meet it; the map's own cells hold the mean of the points the cameras see, which
@@ -93,6 +101,15 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
   render::RenderOptions ro = options.render;
   ro.image_scale = static_cast<double>(options.image_size) / rig_full.left->width();
   render::StereoRenderer renderer(ro);
+  // The HAZCAM pair as camera_capture renders it (capture::RenderedCameras): its own scale,
+  // and the shadow of the mast that carries the main rig.
+  const bool hazcam = static_cast<bool>(options.hazcam_rig.left);
+  render::RenderOptions rh = options.render;
+  if (hazcam) {
+    rh.image_scale = static_cast<double>(options.hazcam_image_size) / options.hazcam_rig.left->width();
+    rh.rover_shadow = render::MastUnderRig(rh.rover_shadow, rig_full);
+  }
+  render::StereoRenderer hazcam_renderer(rh);
   tv::TraversabilityMap map(options.map);
   tv::TraversabilityMap truth(options.map);
   geometry::Matrix6d cov = geometry::Matrix6d::Zero();
@@ -109,10 +126,20 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
     }
     const Eigen::Isometry3d T = PoseOnGround(world, ep.x, ep.y, ep.yaw_deg * M_PI / 180.0);
     const render::StereoImages images =
-        renderer.RenderPair(world, rig_full, T, static_cast<std::int64_t>(k + 1));
+        renderer.RenderPair(world, rig_full, T, options.first_frame_seed + static_cast<std::int64_t>(k));
     map.Recentre(ep.x, ep.y);
+    std::array<double, 6> pe = options.pose_error;
+    for (int e = 0; e < 6; ++e) pe[e] += ep.error[e];
+    const double deg = M_PI / 180.0;
+    const Eigen::Isometry3d T_map =
+        geometry::PoseFromXyzRpy(pe[0], pe[1], pe[2], 0, 0, 0) * T * geometry::PoseFromXyzRpy(0, 0, 0, pe[3] * deg, pe[4] * deg, pe[5] * deg);
+    render::StereoImages hazcam_images;
+    if (hazcam) {
+      hazcam_images = hazcam_renderer.RenderPair(world, options.hazcam_rig, T, options.first_frame_seed + static_cast<std::int64_t>(k));
+      map.AddStereoPair(hazcam_images.left, hazcam_images.right, hazcam_images.rig, T_map, cov, &options.hazcam_map);
+    }
     const auto t0 = std::chrono::steady_clock::now();
-    map.AddStereoPair(images.left, images.right, images.rig, T, cov);
+    map.AddStereoPair(images.left, images.right, images.rig, T_map, cov);
     map.cells();  // the rating is part of the update
     result.update_seconds.push_back(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
@@ -128,9 +155,15 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
         const double y = map.origin_y() + (j + 0.5) * map.cell_size();
         const int band = Band(std::hypot(x - ep.x, y - ep.y));
         if (band < 0) continue;
-        if (!InView(images.rig, T_rover_site, Eigen::Vector3d(x, y, -world.Elevation(x, y)))) continue;
+        const Eigen::Vector3d ground(x, y, -world.Elevation(x, y));
+        if (!InView(images.rig, T_rover_site, ground) &&
+            !(hazcam && InHazcamView(hazcam_images.rig, options.hazcam_map, T_rover_site, ground)))
+          continue;
         BandCounts& b = result.bands[band];
         const std::size_t idx = static_cast<std::size_t>(i) * map.cols() + j;
+        const double range = std::hypot(x - ep.x, y - ep.y);
+        if (range < options.dump_range_m && mc[idx].state != tv::CellState::kUnknown)
+          result.dumped.push_back({static_cast<int>(k) + 1, x, y, range, mc[idx], tc[idx]});
         ++b.in_view_cells;
         if (mc[idx].state == tv::CellState::kUnknown) ++b.unknown_cells;
         if (tc[idx].state == tv::CellState::kUnsafe) {
@@ -154,7 +187,9 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
       if (band < 0) continue;
       const Eigen::Vector3d top(rock.position.x(), rock.position.y(),
                                 -world.Elevation(rock.position.x(), rock.position.y()));
-      if (!InView(images.rig, T_rover_site, top)) continue;
+      if (!InView(images.rig, T_rover_site, top) &&
+          !(hazcam && InHazcamView(hazcam_images.rig, options.hazcam_map, T_rover_site, top)))
+        continue;
       const tv::Cell c = map.At(rock.position.x(), rock.position.y());
       RockSighting s;
       s.name = rock.name;

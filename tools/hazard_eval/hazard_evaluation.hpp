@@ -22,6 +22,7 @@
 #include "traversability/traversability_map.hpp"
 
 #include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -29,16 +30,32 @@ namespace rover::hazard_eval {
 
 struct EvalPose {
   double x = 0, y = 0, yaw_deg = 0;
+  // This pair's pose error at capture (x, y, z m; roll, pitch, yaw deg), over
+  // EvalOptions::pose_error.
+  std::array<double, 6> error = {0, 0, 0, 0, 0, 0};
 };
 
 struct EvalOptions {
   traversability::MapOptions map;
   render::RenderOptions render;
+  // The front HAZCAM pair (hazard_monitor's HAZCAM_FRAME), when hazcam_rig.left is set:
+  // rendered at each pose as camera_capture renders it (the mast's shadow under the main
+  // rig) at hazcam_image_size and added to the map with its own stereo options before the
+  // main pair, as the monitor gets it. Its view counts in "in view" out to its
+  // hazcam_map.max_range_m, in front of its hazcam_map.min_x_m.
+  geometry::StereoRig hazcam_rig;
+  traversability::MapOptions hazcam_map;
+  int hazcam_image_size = 256;
   double rock_limit_m = 0.3;       // rocks taller than this must be found
   double pose_sigma_m = 0.02;      // the pose covariance handed to the map
   double pose_sigma_deg = 0.5;
   std::vector<EvalPose> poses;
   int image_size = 512;            // rendered width in pixels
+  // The pose handed to the map is the true one moved by these (metres, degrees): an
+  // estimate's error at capture (x, y, z, roll, pitch, yaw), the same for every pose.
+  std::array<double, 6> pose_error = {0, 0, 0, 0, 0, 0};
+  std::int64_t first_frame_seed = 1;  // the render noise seed of the first pose's pairs
+  double dump_range_m = 0;         // > 0: EvalResult::dumped gets the rated cells this near
 };
 
 struct BandCounts {
@@ -70,6 +87,8 @@ struct EvalResult {
   std::array<BandCounts, kBands> bands;
   std::vector<RockSighting> sightings;
   std::vector<FalseUnsafe> false_unsafe;
+  // Every rated cell within EvalOptions::dump_range_m of the rover, after each pose.
+  std::vector<FalseUnsafe> dumped;
   std::vector<double> update_seconds;  // AddStereoPair per pose
   double median_update_seconds = 0;
   // Bands 0-2 and 2-4 together.

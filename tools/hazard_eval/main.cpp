@@ -4,6 +4,14 @@
 //               [--rover-config configs/rover.yaml] [--map-options FILE.yaml]
 //               [--poses "x,y,yaw_deg;x,y,yaw_deg;..."] [--steps 5] [--step-m 0.5]
 //               [--min-detection 0.95] [--max-false-unsafe 0.05] [--verbose]
+//               [--hazcam configs/cameras/hazcam_front.yaml] [--dump-cells R]
+// --hazcam: the front HAZCAM pair as well, rendered at 256 px at each pose and mapped with the
+// rover config's hazards.map.hazcam options before the main pair (as hazard_monitor gets it).
+// --dump-cells R: every rated in-view cell within R m, the map's and the truth's ratings.
+// --poses items may add that pair's own pose error: x,y,yaw,ex,ey,ez,eroll,epitch,eyaw.
+// --pose-error x,y,z,roll,pitch,yaw: the map gets each pair at the true pose moved by these
+// (metres, degrees), as an estimate's error at capture.
+// --frame-seed S: the first pose's pair is rendered with noise seed S (then S + 1, ...; 1).
 // --map-options: a YAML of traversability::MapOptions keys, bare, under `traversability:`,
 // or a rover config's hazards.map.traversability (configs/rover.yaml: hazard_monitor's map).
 // Default poses: the world's start and --steps - 1 more, --step-m apart along its heading.
@@ -17,6 +25,8 @@
 
 #include <opencv2/core/utility.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -36,16 +46,20 @@ int Usage(const std::string& message) {
 int main(int argc, char** argv) {
   using namespace rover;
   std::string world_path, rig_path = "configs/cameras/navcam_pinhole.yaml";
-  std::string rover_path = "configs/rover.yaml", map_path, poses_text;
-  double size = 512, steps = 5, step_m = 0.5, min_detection = -1, max_false_unsafe = -1;
+  std::string rover_path = "configs/rover.yaml", map_path, poses_text, hazcam_path;
+  double size = 512, steps = 5, step_m = 0.5, min_detection = -1, max_false_unsafe = -1, dump_m = 0,
+         frame_seed = 1;
   bool verbose = false;
+  std::array<double, 6> pose_error = {0, 0, 0, 0, 0, 0};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has = i + 1 < argc;
     if (a == "--help" || a == "-h") {
       std::cout << "usage: hazard-eval WORLD.yaml [--rig RIG.yaml] [--size N] [--rover-config FILE]\n"
                    "       [--map-options FILE] [--poses \"x,y,yaw;...\"] [--steps N] [--step-m M]\n"
-                   "       [--min-detection F] [--max-false-unsafe F] [--verbose]\n";
+                   "       [--min-detection F] [--max-false-unsafe F] [--verbose]\n"
+                   "       [--hazcam HAZCAM_RIG.yaml] [--dump-cells R] [--frame-seed S]\n"
+                   "       [--pose-error x,y,z,roll,pitch,yaw]\n";
       return 0;
     } else if (a == "--rig") {
       if (!has) return Usage("--rig: expected a stereo rig YAML file");
@@ -74,6 +88,20 @@ int main(int argc, char** argv) {
     } else if (a == "--max-false-unsafe") {
       if (!has || !config::ParseNumberInRange(argv[++i], 0, 1, &max_false_unsafe))
         return Usage("--max-false-unsafe: expected a fraction in [0, 1]");
+    } else if (a == "--hazcam") {
+      if (!has) return Usage("--hazcam: expected the HAZCAM rig YAML file (configs/cameras/hazcam_front.yaml)");
+      hazcam_path = argv[++i];
+    } else if (a == "--pose-error") {
+      std::vector<double> v;
+      if (!has || !config::ParseNumberList(argv[++i], &v) || v.size() != 6)
+        return Usage("--pose-error: expected \"x,y,z,roll,pitch,yaw\" (metres, degrees)");
+      std::copy(v.begin(), v.end(), pose_error.begin());
+    } else if (a == "--frame-seed") {
+      if (!has || !config::ParseNumberInRange(argv[++i], 1, 1e9, &frame_seed) || frame_seed != std::floor(frame_seed))
+        return Usage("--frame-seed: expected the first pair's noise seed, an integer in [1, 1e9]");
+    } else if (a == "--dump-cells") {
+      if (!has || !config::ParseNumberInRange(argv[++i], 0.1, 10, &dump_m))
+        return Usage("--dump-cells: expected a range in metres, in [0.1, 10]");
     } else if (a == "--verbose") {
       verbose = true;
     } else if (!a.empty() && a[0] == '-') {
@@ -123,9 +151,12 @@ int main(int argc, char** argv) {
       std::string item;
       while (std::getline(ss, item, ';')) {
         std::vector<double> v;
-        if (!config::ParseNumberList(item, &v) || v.size() != 3)
-          return Usage("--poses: '" + item + "': expected x,y,yaw_deg (metres, degrees)");
-        options.poses.push_back({v[0], v[1], v[2]});
+        if (!config::ParseNumberList(item, &v) || (v.size() != 3 && v.size() != 9))
+          return Usage("--poses: '" + item + "': expected x,y,yaw_deg (metres, degrees), then optionally that pair's "
+                       "pose error x,y,z,roll,pitch,yaw");
+        hazard_eval::EvalPose ep{v[0], v[1], v[2]};
+        if (v.size() == 9) std::copy(v.begin() + 3, v.end(), ep.error.begin());
+        options.poses.push_back(ep);
       }
     } else {
       const auto& s = world_options.start;
@@ -133,6 +164,15 @@ int main(int argc, char** argv) {
       for (int k = 0; k < static_cast<int>(steps); ++k)
         options.poses.push_back({s.x + k * step_m * std::cos(yaw), s.y + k * step_m * std::sin(yaw), s.yaw_deg});
     }
+    if (!hazcam_path.empty()) {
+      const config::ConfigNode m = rover["hazards"]["map"];
+      if (m.IsNull() || !m.Has("hazcam")) m.Fail("expected hazards.map.hazcam (the HAZCAM pair's stereo options)");
+      options.hazcam_map = traversability::LoadCameraOptions(m["hazcam"], options.map);
+      options.hazcam_rig = geometry::LoadStereoRigFile(hazcam_path);
+    }
+    options.dump_range_m = dump_m;
+    options.first_frame_seed = static_cast<std::int64_t>(frame_seed);
+    options.pose_error = pose_error;
     const geometry::StereoRig rig = geometry::LoadStereoRigFile(rig_path);
     const terrain::World world(world_options);
     cv::setNumThreads(1);  // one core, as on the rover computer
@@ -160,6 +200,13 @@ int main(int argc, char** argv) {
                     f.map.roughness_m, f.truth.step_m, f.truth.tilt_rad * 180 / M_PI,
                     f.truth.roughness_m, traversability::CellStateName(f.truth.state));
     }
+    for (const auto& d : r.dumped)
+      std::printf("  cell from pose %d at %.1f m (%.1f, %.1f): map %s step %.2f tilt %.1f rough %.3f sigma %.3f; "
+                  "truth %s step %.2f tilt %.1f rough %.3f\n",
+                  d.pose, d.range_m, d.x, d.y, traversability::CellStateName(d.map.state), d.map.step_m,
+                  d.map.tilt_rad * 180 / M_PI, d.map.roughness_m, d.map.sigma_m,
+                  traversability::CellStateName(d.truth.state), d.truth.step_m, d.truth.tilt_rad * 180 / M_PI,
+                  d.truth.roughness_m);
     const hazard_eval::BandCounts near = r.Within4m();
     int status = 0;
     if (min_detection >= 0) {

@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <string>
@@ -154,6 +155,7 @@ MapOptions HazardMonitorRating() {
   o.max_roughness_m = 0.08;
   o.tilt_margin_sigmas = 1.0;
   o.dip_margin_sigmas = 2.0;
+  o.roughness_margin_sigmas = 2.0;
   return o;
 }
 
@@ -168,8 +170,7 @@ double WorstStep(const TraversabilityMap& map, double x, double y, int reach = 2
 // A 0.19 m cobble is under the 0.25 m step limit; the sparse cell's streak 0.25 m low pulls
 // its mean 0.11 m under the ground, and counted at that height it took the step to 0.30 m.
 // Its height's uncertainty, from its points' scatter (0.12 m over 7 points: 0.05 m), tells
-// the step it is no evidence of a hole. (The box-shaped cobble and the streak together still
-// roughen the patch: the roughness limit is not this test's.)
+// the step it is no evidence of a hole. (The roughness: next test.)
 TEST(HeightUncertainty, ASparseCellsOutlierDoesNotRaiseACobblesStepOverTheLimit) {
   const MapOptions o = HazardMonitorRating();
   const TraversabilityMap map = RockBesideASparseCell(0.19, o);
@@ -181,6 +182,52 @@ TEST(HeightUncertainty, ASparseCellsOutlierDoesNotRaiseACobblesStepOverTheLimit)
   MapOptions plain = o;
   plain.dip_margin_sigmas = 0.0;
   EXPECT_GT(WorstStep(RockBesideASparseCell(0.19, plain), 2.1, 0.1), 0.27);
+}
+
+// The same cobble and sparse cell roughen their patches: the cobble 0.19 m over the plane
+// and the streaked cell 0.11 m under it give residuals over the 0.08 m roughness limit
+// (flat_rock_course: "hazard_map: step 0.18 m, tilt 2.6 deg" refused a straight drive
+// beside a 0.15-0.19 m cobble, unsafe by roughness alone). Each cell counts only beyond two
+// of its height errors: the streaked cell's 0.05 m explain its dip, the cobble's own 0.01 m
+// leave it nearly whole, and no cell of the patch is unsafe; with the margin off the same
+// cloud makes unsafe cells whose step is under the limit.
+TEST(HeightUncertainty, ACobbleBesideASparseCellIsNotUnsafeByRoughness) {
+  const MapOptions o = HazardMonitorRating();
+  MapOptions plain = o;
+  plain.roughness_margin_sigmas = 0.0;
+  const TraversabilityMap map = RockBesideASparseCell(0.19, o);
+  const TraversabilityMap before = RockBesideASparseCell(0.19, plain);
+  int rough_before = 0;
+  double worst_roughness = 0;
+  for (double x = 1.5; x < 2.8; x += 0.2)
+    for (double y = -0.7; y < 0.8; y += 0.2) {
+      const Cell c = map.At(x, y), b = before.At(x, y);
+      ASSERT_NE(c.state, CellState::kUnknown) << x << " " << y;
+      EXPECT_NE(c.state, CellState::kUnsafe) << x << " " << y << ": step " << c.step_m << " roughness " << c.roughness_m;
+      worst_roughness = std::max<double>(worst_roughness, c.roughness_m);
+      if (b.state == CellState::kUnsafe && b.step_m < o.max_step_m && b.roughness_m >= o.max_roughness_m) ++rough_before;
+    }
+  EXPECT_LT(worst_roughness, o.max_roughness_m);
+  EXPECT_GT(worst_roughness, 0.03);  // the cobble still roughens its patch
+  EXPECT_GE(rough_before, 1);
+}
+
+// A patch roughened by rocks its points agree on is still rough: dense cells (0.01 m errors)
+// alternating 0.12 m over and under the plane, as on a field of cobbles and holes, read a
+// roughness of 0.12 m less 2 of their errors, over the limit.
+TEST(HeightUncertainty, RoughnessItsCellsAgreeOnStillCounts) {
+  const MapOptions o = HazardMonitorRating();
+  TraversabilityMap map(o);
+  std::vector<Eigen::Vector3d> pts;
+  for (double x = 0.51; x < 3.5; x += 0.06)
+    for (double y = -1.49; y < 1.5; y += 0.06) {
+      const int i = static_cast<int>(std::floor(x / 0.2)), j = static_cast<int>(std::floor(y / 0.2));
+      pts.emplace_back(x, y, ((i + j) % 2 == 0) ? -0.12 : 0.12);
+    }
+  map.AddPoints(pts, std::vector<double>(pts.size(), 0.01));
+  const Cell c = map.At(2.1, 0.1);
+  EXPECT_NEAR(c.roughness_m, 0.12 - 2 * 0.01, 0.02);
+  EXPECT_EQ(c.state, CellState::kUnsafe);
 }
 
 // A real 0.30 m rock beside the same sparse cell is still a step over the limit: the
@@ -240,6 +287,17 @@ TEST(HeightUncertainty, TwoPairsThatDisagreeByAPlausiblePoseErrorMakeNoFalseStep
     }
   EXPECT_GT(rated, 100);
   EXPECT_GT(WorstStep(map, 2.1, 0.1), 0.15);  // the cobble is seen
+}
+
+TEST(HeightUncertainty, RoughnessMarginIsReadAndChecked) {
+  const MapOptions o = LoadMapOptions(YAML::Load("roughness_margin_sigmas: 2"), "test");
+  EXPECT_DOUBLE_EQ(o.roughness_margin_sigmas, 2.0);
+  EXPECT_THROW(LoadMapOptions(YAML::Load("roughness_margin_sigmas: -1"), "test"), config::ConfigError);
+  MapOptions bad;
+  bad.roughness_margin_sigmas = 11;
+  EXPECT_THROW(TraversabilityMap{bad}, std::invalid_argument);
+  EXPECT_THROW(LoadCameraOptions(config::ConfigNode(YAML::Load("roughness_margin_sigmas: 2"), "test", ""), MapOptions{}),
+               config::ConfigError);
 }
 
 TEST(HeightUncertainty, DipMarginIsReadAndChecked) {
