@@ -257,12 +257,11 @@ struct VoOptions {
   // The carries under which the window's published covariance is computed, apart from the
   // weights (WindowOptions::covariance_track_carry, covariance_stereo_carry): the estimate
   // stays the one weighed with window_track_carry and window_stereo_carry, its covariance
-  // is the sandwich S^-1 M S^-1 under these. -1 = the weights' own (S^-1, as before).
-  // 1 and 0.5: the track carry as measured, the stereo carry half of it (the whole, 1,
-  // over-covers tilt_slope, whose shared errors VO-13 learned under the independent
-  // model); common/vo/README.md, "Sandwich covariance".
-  double window_covariance_track_carry = 1.0;
-  double window_covariance_stereo_carry = 0.5;
+  // is the sandwich S^-1 M S^-1 under these. -1 = the weights' own (S^-1, as before): no
+  // pair measured was both honest on navbench's rock fields and above tilt_slope's NEES
+  // limit (common/vo/README.md, "Sandwich covariance").
+  double window_covariance_track_carry = -1.0;
+  double window_covariance_stereo_carry = -1.0;
   // The refined delta must agree with the pair's VO-8 estimate: chi-square (6 dof) of
   // their difference under its covariance, the pair's minus the window's (the window holds
   // the pair's data; NestedDifferenceChi2 in motion_estimation.hpp), each whitened

@@ -388,7 +388,7 @@ TEST(SlidingWindow, SandwichUnderTheWeightsOwnModelIsTheInverseNormalMatrix) {
   for (const auto& [rho, rho_s] : std::vector<std::pair<double, double>>{{0.0, 0.0}, {0.6, 0.9}, {1.0, 1.0}}) {
     for (const double huber : {1e6, 1.0}) {
       for (const double offset_sigma : {0.0, 0.5}) {
-        Scene scene(5, 31);
+        Scene scene(4, 31);
         scene.track_carry = 0.8;
         scene.stereo_carry = 1.0;
         WindowOptions wo;
@@ -396,10 +396,10 @@ TEST(SlidingWindow, SandwichUnderTheWeightsOwnModelIsTheInverseNormalMatrix) {
         wo.stereo_carry = rho_s;
         wo.huber_sigmas = huber;
         wo.disparity_offset_sigma_px = offset_sigma;
-        const WindowSolution fit = RefineOnce(&scene, 5, 0.3, 5, wo);
+        const WindowSolution fit = RefineOnce(&scene, 4, 0.3, 5, wo);
         wo.covariance_track_carry = rho;
         wo.covariance_stereo_carry = rho_s;
-        const WindowSolution sandwich = RefineOnce(&scene, 5, 0.3, 5, wo);
+        const WindowSolution sandwich = RefineOnce(&scene, 4, 0.3, 5, wo);
         ASSERT_TRUE(fit.ok && sandwich.ok);
         EXPECT_FALSE(fit.sandwich);
         EXPECT_TRUE(sandwich.sandwich);
