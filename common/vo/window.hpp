@@ -98,7 +98,8 @@ struct WindowSolution {
   double window_offset_px = 0, window_offset_sigma_px = 0;
   // The last keyframe's pose in the one before it, and the covariance of that delta
   // (x y z roll pitch yaw of the delta, as VoResult::covariance) from the inverse of the
-  // reduced (Schur) normal matrix, in the units of the match covariances (not scaled by
+  // reduced (Schur) normal matrix, or the sandwich under the covariance's carry model
+  // (WindowOptions::covariance_track_carry, `sandwich` below), in the units of the match covariances (not scaled by
   // the variance factor). The delta VO publishes starts from the previous keyframe's pose
   // as it was published (before this refinement moved it by c), so the covariance also
   // holds that correction's: Cov(c) = Sigma_then - Sigma_now of that pose's marginal
