@@ -15,6 +15,8 @@ VisualOdometry::VisualOdometry(VoOptions options) : state_(std::make_unique<Stat
   w.huber_sigmas = options.window_huber_sigmas;
   w.track_carry = options.window_track_carry;
   w.stereo_carry = options.window_stereo_carry;
+  w.covariance_track_carry = options.window_covariance_track_carry;
+  w.covariance_stereo_carry = options.window_covariance_stereo_carry;
   w.disparity_offset_sigma_px = options.window_disparity_offset_sigma_px;
   w.disparity_offset_drift_px = options.window_disparity_offset_drift_px;
   w.disparity_offset_systematic_px = options.window_disparity_offset_systematic_px;

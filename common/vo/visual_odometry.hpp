@@ -254,6 +254,14 @@ struct VoOptions {
   // (common/vo/README.md, "Carried track errors").
   double window_track_carry = 0.0;
   double window_stereo_carry = 0.0;
+  // The carries under which the window's published covariance is computed, apart from the
+  // weights (WindowOptions::covariance_track_carry, covariance_stereo_carry): the estimate
+  // stays the one weighed with window_track_carry and window_stereo_carry, its covariance
+  // is the sandwich S^-1 M S^-1 under these. -1 = the weights' own (S^-1, as before): no
+  // pair measured was both honest on navbench's rock fields and above tilt_slope's NEES
+  // limit (common/vo/README.md, "Sandwich covariance").
+  double window_covariance_track_carry = -1.0;
+  double window_covariance_stereo_carry = -1.0;
   // The refined delta must agree with the pair's VO-8 estimate: chi-square (6 dof) of
   // their difference under its covariance, the pair's minus the window's (the window holds
   // the pair's data; NestedDifferenceChi2 in motion_estimation.hpp), each whitened
@@ -289,6 +297,10 @@ struct VoOptions {
 // config::ConfigError naming the key.
 VoOptions LoadVoOptions(const config::ConfigNode& node);
 // Throws std::invalid_argument naming the first inconsistent value.
+// The carries of the window's covariance model: window_covariance_*_carry, or the
+// weights' (window_track_carry, window_stereo_carry) when that is negative.
+double CovarianceTrackCarry(const VoOptions& o);
+double CovarianceStereoCarry(const VoOptions& o);
 void ValidateVoOptions(const VoOptions& options);
 
 struct StereoImages {

@@ -33,7 +33,7 @@ namespace {
 // for the test. Without it KITTI 06's 0.16 px offset failed 46 of 50 windows.
 bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
                        const Eigen::Isometry3d& T_ref_cur, const Matrix6d& pair_cov, double max_chi2,
-                       double min_fraction, bool carried_errors, Matrix6d* out) {
+                       double min_fraction, bool carried_errors, bool covariance_carried, Matrix6d* out) {
   // When the window models errors carried along a track (window_track_carry or
   // window_stereo_carry above 0) its fit is scaled by the larger of the pair's factors and
   // its own (the variance factor of the window's residuals under that model: the pair's
@@ -41,9 +41,17 @@ bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
   // the same carries (MakeFeature, TriangulateStereo); replayed over 8 navbench runs with
   // carries 0 and 1, 1.8 % of the updates lay beyond the 99.7 % bound without the window's
   // factor, 0.7 % with it.
+  // The published covariance may be under a carry model of its own (a sandwich,
+  // window_covariance_track_carry, window_covariance_stereo_carry): it is scaled the same
+  // way, by the window's variance factor under that model (the cost over its expectation
+  // when the errors follow it), since the sandwich is linear in the matches' covariances
+  // and that factor is what scales them. The consistency test below stays under the
+  // weights' model, as the pair's VO-8 covariance is.
   const double factor =
       std::max({u.variance_factor, u.cluster_factor, carried_errors ? w.variance_factor : 0.0});
-  Matrix6d cov = factor * w.covariance + u.shared;
+  const double published_factor =
+      std::max({u.variance_factor, u.cluster_factor, covariance_carried ? w.covariance_variance_factor : 0.0});
+  Matrix6d cov = published_factor * w.covariance + u.shared;
   cov = 0.5 * (cov + cov.transpose()).eval();
   const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
   const geometry::Vector6d b = geometry::XyzRpyFromPose(T_ref_cur);
@@ -52,7 +60,7 @@ bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
   const geometry::Vector6d offset_response = u.disparity_sensitivity * w.disparity_offset_px;
   const Matrix6d pair_with_offset = pair_cov + offset_response * offset_response.transpose();
   const double chi2 =
-      NestedDifferenceChi2(d, factor * w.step_covariance + u.shared, pair_with_offset, min_fraction);
+      NestedDifferenceChi2(d, factor * w.fit_step_covariance + u.shared, pair_with_offset, min_fraction);
   if (cov.allFinite() && (max_chi2 <= 0 || chi2 <= max_chi2)) {
     *out = cov;
     return true;
@@ -140,7 +148,8 @@ void VisualOdometry::State::RefineWindow(Step* st, const Eigen::Isometry3d& T_w_
   Matrix6d cov;
   const bool used = w.ok && RefinedCovariance(w, st->u, T_ref_cur, pair_cov, o.window_max_chi2,
                                                o.window_consistency_min_fraction,
-                                               o.window_track_carry > 0 || o.window_stereo_carry > 0, &cov);
+                                               o.window_track_carry > 0 || o.window_stereo_carry > 0,
+                                               CovarianceTrackCarry(o) > 0 || CovarianceStereoCarry(o) > 0, &cov);
   // Published: the window's estimate of this pair against the last call's pair as it
   // was published, so that the deltas compose to the window's latest estimate and its
   // corrections of the poses before reach the user (the window's oldest pose is fixed).

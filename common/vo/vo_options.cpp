@@ -59,6 +59,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "covariance_disparity_sigma_px", "covariance_cell_shift_sigma_px",
                   "covariance_cell_disparity_sigma_px",
                   "window_size", "window_max_iterations", "window_huber_sigmas", "window_track_carry", "window_stereo_carry",
+                  "window_covariance_track_carry", "window_covariance_stereo_carry",
                   "window_max_chi2",
                   "window_consistency_min_fraction",
                   "window_disparity_offset_sigma_px", "window_disparity_offset_drift_px",
@@ -132,6 +133,8 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   node.Get("window_huber_sigmas", o.window_huber_sigmas, 0.5, 100.0);
   node.Get("window_track_carry", o.window_track_carry, 0.0, 1.0);
   node.Get("window_stereo_carry", o.window_stereo_carry, 0.0, 1.0);
+  node.Get("window_covariance_track_carry", o.window_covariance_track_carry, -1.0, 1.0);
+  node.Get("window_covariance_stereo_carry", o.window_covariance_stereo_carry, -1.0, 1.0);
   node.Get("window_max_chi2", o.window_max_chi2, 0.0, kInf);
   node.Get("window_consistency_min_fraction", o.window_consistency_min_fraction, 1e-6, 1.0);
   node.Get("window_disparity_offset_sigma_px", o.window_disparity_offset_sigma_px, 0.0, 10.0);
@@ -149,8 +152,24 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   return o;
 }
 
+double CovarianceTrackCarry(const VoOptions& o) {
+  return o.window_covariance_track_carry < 0 ? o.window_track_carry : o.window_covariance_track_carry;
+}
+double CovarianceStereoCarry(const VoOptions& o) {
+  return o.window_covariance_stereo_carry < 0 ? o.window_stereo_carry : o.window_covariance_stereo_carry;
+}
+
 void ValidateVoOptions(const VoOptions& o) {
   auto fail = [](const std::string& m) { throw std::invalid_argument("VoOptions: " + m); };
+  // -1 (the weights' own model) or a carry in [0, 1]; one set and the other -1 would mix
+  // the two models in one covariance.
+  const auto carry_ok = [](double c) { return c == -1.0 || (c >= 0.0 && c <= 1.0); };
+  if (!carry_ok(o.window_covariance_track_carry) || !carry_ok(o.window_covariance_stereo_carry) ||
+      (o.window_covariance_track_carry < 0) != (o.window_covariance_stereo_carry < 0)) {
+    fail("window_covariance_track_carry " + std::to_string(o.window_covariance_track_carry) +
+         ", window_covariance_stereo_carry " + std::to_string(o.window_covariance_stereo_carry) +
+         " (expected both -1, the weights' carries, or both in [0, 1])");
+  }
   if (!(o.working_scale > 0 && o.working_scale <= 1)) {
     fail("working_scale " + std::to_string(o.working_scale) + " (expected in (0, 1])");
   }

@@ -105,6 +105,74 @@ double HuberCost(double e2, double k, double* weight) {
   return 2 * k * e - k * k;
 }
 
+// The joint covariance of poses a and b (a = 0: the fixed pose, zero) from the reduced
+// covariance of the free poses 1..M-1.
+Eigen::Matrix<double, 12, 12> LastTwoPoses(const Eigen::MatrixXd& cov, int a, int b) {
+  Eigen::Matrix<double, 12, 12> joint = Eigen::Matrix<double, 12, 12>::Zero();
+  joint.bottomRightCorner<6, 6>() = cov.block<6, 6>(6 * (b - 1), 6 * (b - 1));
+  if (a > 0) {
+    joint.topLeftCorner<6, 6>() = cov.block<6, 6>(6 * (a - 1), 6 * (a - 1));
+    joint.topRightCorner<6, 6>() = cov.block<6, 6>(6 * (a - 1), 6 * (b - 1));
+    joint.bottomLeftCorner<6, 6>() = joint.topRightCorner<6, 6>().transpose();
+  }
+  return joint;
+}
+
+// One point's rows' Jacobian with respect to the reduced variables (the free poses 1..M-1,
+// then the offset when held): the per-observation pose columns of Jp (keyframes `frames`)
+// moved to their keyframe's place, keyframe 0 (fixed) left out.
+Eigen::MatrixXd ReducedJacobian(const Eigen::MatrixXd& Jp, const Eigen::VectorXd& Jd, const std::vector<int>& frames,
+                                int nc, bool offset) {
+  Eigen::MatrixXd Jc = Eigen::MatrixXd::Zero(Jp.rows(), nc);
+  for (std::size_t a = 0; a < frames.size(); ++a) {
+    if (frames[a] == 0) continue;
+    Jc.middleCols<6>(6 * (frames[a] - 1)) += Jp.middleCols<6>(6 * static_cast<int>(a));
+  }
+  if (offset) Jc.col(nc - 1) = Jd;
+  return Jc;
+}
+
+// The covariance of a track's rows as the estimator weighed them, when its errors follow
+// the covariance's carry model (c, d) and the rows were taken to independent errors under
+// the weights' (a, b): the raw errors are A_cd^-1 e (e the matches' own, blockdiag
+// Sigma_obs), so the rows' are B Sigma_obs B^T with B = A_ab A_cd^-1 (B = I when the two
+// models are the same).
+Eigen::MatrixXd RowCovariance(const std::vector<Eigen::Matrix4d>& Sigma_obs, const WindowOptions& o) {
+  const int m = static_cast<int>(Sigma_obs.size());
+  const int rows = 4 * m;
+  Eigen::MatrixXd A_ab = Eigen::MatrixXd::Identity(rows, rows), A_cd = A_ab;
+  ToIndependentErrors(A_ab, m, o.track_carry, o.stereo_carry);
+  ToIndependentErrors(A_cd, m, o.covariance_track_carry, o.covariance_stereo_carry);
+  // A_cd is unit lower triangular: B^T = A_cd^-T A_ab^T.
+  const Eigen::MatrixXd Bt = A_cd.transpose().triangularView<Eigen::UnitUpper>().solve(A_ab.transpose());
+  Eigen::MatrixXd Sigma = Eigen::MatrixXd::Zero(rows, rows);
+  for (int n = 0; n < m; ++n) Sigma.block<4, 4>(4 * n, 4 * n) = Sigma_obs[static_cast<std::size_t>(n)];
+  return Bt.transpose() * Sigma * Bt;
+}
+
+// One point's share of the sandwich: its rows r move the reduced solution by G r, with
+// G = (Jc^T - Hcx Hxx^-1 Jx^T) W (the point eliminated), so M_j = G Cov(r) G^T; and its
+// share of the cost's expectation, E[r^T W r] - tr(Hxx^-1 Jx^T W Cov(r) W Jx) (the point's
+// own fit takes that part; the reduced variables' part, tr(S^-1 M), is taken once for all).
+struct PointInfluence {
+  Eigen::MatrixXd M;
+  double expected_cost = 0;
+};
+PointInfluence Influence(const Eigen::MatrixXd& Jc, const Eigen::MatrixXd& Jx, const std::vector<Eigen::Matrix4d>& W_used,
+                         const std::vector<Eigen::Matrix4d>& Sigma_obs, const Eigen::MatrixXd& Hcx,
+                         const Eigen::Matrix3d& Hxx_inv, const WindowOptions& o) {
+  const int rows = static_cast<int>(Jc.rows());
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(rows, rows);
+  for (std::size_t n = 0; n < W_used.size(); ++n) W.block<4, 4>(4 * static_cast<int>(n), 4 * static_cast<int>(n)) = W_used[n];
+  const Eigen::MatrixXd C = RowCovariance(Sigma_obs, o);
+  const Eigen::MatrixXd G = (Jc.transpose() - Hcx * Hxx_inv * Jx.transpose()) * W;
+  PointInfluence out;
+  out.M = G * C * G.transpose();
+  const Eigen::MatrixXd WJx = W * Jx;
+  out.expected_cost = (W * C).trace() - (Hxx_inv * WJx.transpose() * C * WJx).trace();
+  return out;
+}
+
 }  // namespace
 
 Eigen::Isometry3d Retract(const Eigen::Isometry3d& T, const Vector6d& d) {
@@ -429,24 +497,62 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
     }
   }
 
-  // The covariance of the poses: the inverse of the undamped reduced normal matrix.
+  // The covariance of the poses: the inverse of the undamped reduced normal matrix, under
+  // the weights' own model; with a covariance model of its own (covariance_track_carry,
+  // covariance_stereo_carry) the sandwich S^-1 M S^-1 (Sandwich above).
   build(0.0);
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
   if (ldlt.info() != Eigen::Success) return sol;
-  const Eigen::MatrixXd cov = ldlt.solve(Eigen::MatrixXd::Identity(nc, nc));
-  if (!cov.allFinite() || cov.diagonal().minCoeff() <= 0) return sol;
+  const Eigen::MatrixXd fit_cov = ldlt.solve(Eigen::MatrixXd::Identity(nc, nc));
+  if (!fit_cov.allFinite() || fit_cov.diagonal().minCoeff() <= 0) return sol;
+  sol.sandwich = o_.covariance_track_carry >= 0 && o_.covariance_stereo_carry >= 0;
+  double expected_cost = redundancy;
+  Eigen::MatrixXd cov = fit_cov;
+  if (sol.sandwich) {
+    // M: each point's residual rows, as the estimator weighed them (Huber included), move
+    // the reduced solution by G_j r_j once the point is eliminated; the points' errors are
+    // independent, so M is the sum of G_j Cov(r_j) G_j^T.
+    Eigen::MatrixXd Mg = Eigen::MatrixXd::Zero(nc, nc);
+    double point_part = 0;  // sum over points of E[r^T W r] minus the point's own share
+    for (std::size_t j = 0; j < used.size(); ++j) {
+      const PointTerms t = point_terms(j, poses, X[j], delta, true);
+      const int m = static_cast<int>(t.obs.size());
+      if (m == 0) continue;
+      std::vector<Eigen::Matrix4d> W_used, Sigma_obs;
+      for (int n = 0; n < m; ++n) {
+        const Eigen::Vector4d r = t.r.segment<4>(4 * n);
+        const Eigen::Matrix4d W = used[j].W[static_cast<std::size_t>(t.obs[static_cast<std::size_t>(n)])];
+        double w = 1;
+        HuberCost(r.dot(W * r), o_.huber_sigmas, &w);
+        // A row Huber down-weights lies beyond huber_sigmas: its error is taken as the IRLS
+        // weight takes it, the match's covariance over w (taken at the match's own, the
+        // outliers would make the sandwich smaller than S^-1).
+        W_used.push_back(w * W);
+        Sigma_obs.push_back(W.inverse() / w);
+      }
+      const Eigen::MatrixXd Jc = ReducedJacobian(t.Jp, t.Jd, t.frames, nc, offset);
+      const PointInfluence f = Influence(Jc, t.Jx, W_used, Sigma_obs, Hcx[j], Hxx_inv[j], o_);
+      Mg += f.M;
+      point_part += f.expected_cost;
+    }
+    if (offset) {
+      Mg(id, id) += hold_info;  // the hold: a prior whose own error has variance 1 / hold_info
+      point_part += 1.0;
+    }
+    cov = fit_cov * Mg * fit_cov;
+    cov = 0.5 * (cov + cov.transpose()).eval();
+    if (!cov.allFinite() || cov.diagonal().minCoeff() <= 0) return sol;
+    expected_cost = point_part - (fit_cov * Mg).trace();
+  }
 
   const int a = M - 2, b = M - 1;
-  Eigen::Matrix<double, 12, 12> joint = Eigen::Matrix<double, 12, 12>::Zero();
-  joint.bottomRightCorner<6, 6>() = cov.block<6, 6>(6 * (b - 1), 6 * (b - 1));
-  if (a > 0) {
-    joint.topLeftCorner<6, 6>() = cov.block<6, 6>(6 * (a - 1), 6 * (a - 1));
-    joint.topRightCorner<6, 6>() = cov.block<6, 6>(6 * (a - 1), 6 * (b - 1));
-    joint.bottomLeftCorner<6, 6>() = joint.topRightCorner<6, 6>().transpose();
-  }
   const Eigen::Matrix<double, 6, 12> J = RelativePoseJacobian(poses[static_cast<std::size_t>(a)], poses[static_cast<std::size_t>(b)]);
+  const Eigen::Matrix<double, 12, 12> joint = LastTwoPoses(cov, a, b);
   sol.covariance = J * joint * J.transpose();
   sol.step_covariance = 0.5 * (sol.covariance + sol.covariance.transpose());
+  const Eigen::Matrix<double, 12, 12> fit_joint = LastTwoPoses(fit_cov, a, b);
+  sol.fit_step_covariance = J * fit_joint * J.transpose();
+  sol.fit_step_covariance = 0.5 * (sol.fit_step_covariance + sol.fit_step_covariance.transpose()).eval();
   // Cov(c) = Sigma_then - Sigma_now holds only when this refinement used all the data of
   // the one that published pose a, in the same gauge. Once a keyframe has left the window
   // (it was dropped, not marginalised, and the next pose was fixed in its place) neither
@@ -468,6 +574,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   sol.T_prev_last = poses[static_cast<std::size_t>(a)].inverse() * poses[static_cast<std::size_t>(b)];
   sol.final_cost = cost;
   sol.variance_factor = cost / redundancy;
+  sol.covariance_variance_factor = expected_cost > 0 ? cost / expected_cost : sol.variance_factor;
   if (offset) {
     // This window's offset from its data alone: one Gauss-Newton step from the solution
     // with the hold taken out of the reduced system (the poses' uncertainty included).

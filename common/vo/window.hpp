@@ -55,6 +55,14 @@ struct WindowOptions {
   // window_stereo_carry), which are measured on rendered drives (tools/vo_carry).
   double track_carry = 0.0;
   double stereo_carry = 0.0;
+  // The carry model (as above) of the errors under which the published covariance is
+  // computed, apart from the weights: the estimate stays the one weighed with track_carry
+  // and stereo_carry, and its covariance is the sandwich S^-1 M S^-1 (S the reduced normal
+  // matrix, M the covariance of the reduced gradient when the errors follow this model;
+  // README "VO with memory", "Sandwich covariance"). Negative (the default): the weights'
+  // own model, and the covariance is S^-1.
+  double covariance_track_carry = -1.0;
+  double covariance_stereo_carry = -1.0;
   double tolerance = 1e-4;     // stop when the relative cost decrease is below this
   // One disparity offset (right x, pixels) for every observation: a disparity offset
   // scales every range. It is one drive-wide quantity: a scalar recursive filter starts
@@ -81,13 +89,17 @@ struct WindowSolution {
   double initial_cost = 0, final_cost = 0;
   // A-posteriori variance factor: final cost / (4 observations - 3 points - 6 poses).
   double variance_factor = 0;
+  // The variance factor under the covariance's model: the final cost over its expectation
+  // when the errors follow that model (the redundancy above when it is the weights' own).
+  double covariance_variance_factor = 0;
   double disparity_offset_px = 0;  // the offset used from now on (AppliedOffset of the filter)
   // This window's offset from its data alone (flat prior) and its sigma; 0 when the
   // window did not estimate one.
   double window_offset_px = 0, window_offset_sigma_px = 0;
   // The last keyframe's pose in the one before it, and the covariance of that delta
   // (x y z roll pitch yaw of the delta, as VoResult::covariance) from the inverse of the
-  // reduced (Schur) normal matrix, in the units of the match covariances (not scaled by
+  // reduced (Schur) normal matrix, or the sandwich under the covariance's carry model
+  // (WindowOptions::covariance_track_carry, `sandwich` below), in the units of the match covariances (not scaled by
   // the variance factor). The delta VO publishes starts from the previous keyframe's pose
   // as it was published (before this refinement moved it by c), so the covariance also
   // holds that correction's: Cov(c) = Sigma_then - Sigma_now of that pose's marginal
@@ -102,6 +114,12 @@ struct WindowSolution {
   bool carries_correction = false;
   // The covariance of T_prev_last alone (without Cov(c)), in the same units.
   Eigen::Matrix<double, 6, 6> step_covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  // The same under the weights' own model (S^-1 alone), whatever the covariance's model:
+  // the pair's VO-8 covariance is under that model too, so the window's consistency test
+  // against the pair (the covariance of the difference of two nested estimates, the pair's
+  // minus the window's) uses this one. Equal to step_covariance without a sandwich.
+  Eigen::Matrix<double, 6, 6> fit_step_covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  bool sandwich = false;  // covariance is S^-1 M S^-1 (WindowOptions::covariance_*_carry set)
 };
 
 class SlidingWindow {

@@ -221,6 +221,18 @@ TEST(VoOptions, LoadsTheProjectConfigAndRejectsUnknownKeys) {
   }
   const auto even = config::ConfigNode::FromString("vo:\n  match_template_px: 10\n", "test.yaml");
   EXPECT_THROW(LoadVoOptions(even["vo"]), config::ConfigError);
+  // The covariance's carries: both -1 (the weights') or both in [0, 1].
+  for (const char* text : {"vo:\n  window_covariance_track_carry: 1.5\n",
+                           "vo:\n  window_covariance_track_carry: -0.5\n  window_covariance_stereo_carry: -0.5\n",
+                           "vo:\n  window_covariance_track_carry: -1\n  window_covariance_stereo_carry: 0.5\n"}) {
+    EXPECT_THROW(LoadVoOptions(config::ConfigNode::FromString(text, "test.yaml")["vo"]), config::ConfigError) << text;
+  }
+  const auto weights = config::ConfigNode::FromString(
+      "vo:\n  window_stereo_carry: 1\n  window_covariance_track_carry: -1\n  window_covariance_stereo_carry: -1\n",
+      "test.yaml");
+  const VoOptions w = LoadVoOptions(weights["vo"]);
+  EXPECT_EQ(CovarianceTrackCarry(w), 0.0);
+  EXPECT_EQ(CovarianceStereoCarry(w), 1.0);
 }
 
 // The window's carries are fractions in [0, 1]; the random-walk switch they replaced is

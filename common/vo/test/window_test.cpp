@@ -356,6 +356,104 @@ TEST(SlidingWindow, PartlyCarriedTrackErrorsGiveAnHonestWindow) {
             << beyond << " beyond 20.06 (taken as independent: " << mean_of(nees_independent) << ")\n";
 }
 
+// Refines one window of `frames` keyframes of `scene` (poses started at the truth) with
+// options `wo`, the noise drawn from `seed`; the scene's carried errors start afresh.
+WindowSolution RefineOnce(Scene* scene, int frames, double sigma_px, unsigned seed, const WindowOptions& wo,
+                          geometry::Vector6d* error = nullptr) {
+  scene->walk.clear();
+  std::mt19937 rng(seed);
+  WindowOptions o = wo;
+  o.max_frames = frames;
+  o.max_iterations = 15;
+  SlidingWindow window(o);
+  for (int k = 0; k < frames; ++k) {
+    window.AddFrame(k, scene->poses[0].inverse() * scene->poses[static_cast<std::size_t>(k)],
+                    scene->Observe(k, sigma_px, 0.0, &rng));
+  }
+  const WindowSolution w = window.Refine(scene->rig);
+  if (error) {
+    const Eigen::Isometry3d truth = scene->poses[static_cast<std::size_t>(frames - 2)].inverse() *
+                                    scene->poses[static_cast<std::size_t>(frames - 1)];
+    *error = geometry::XyzRpyFromPose(w.T_prev_last) - geometry::XyzRpyFromPose(truth);
+    for (int i = 3; i < 6; ++i) (*error)(i) = geometry::WrapAngle((*error)(i));
+  }
+  return w;
+}
+
+// Known answer: with the covariance's carries equal to the weights' the sandwich
+// S^-1 M S^-1 is S^-1 (M = S), without Huber and with it (a down-weighted row's error is
+// taken as IRLS takes it), with the disparity offset held or not; so is its variance
+// factor the window's own.
+TEST(SlidingWindow, SandwichUnderTheWeightsOwnModelIsTheInverseNormalMatrix) {
+  for (const auto& [rho, rho_s] : std::vector<std::pair<double, double>>{{0.0, 0.0}, {0.6, 0.9}, {1.0, 1.0}}) {
+    for (const double huber : {1e6, 1.0}) {
+      for (const double offset_sigma : {0.0, 0.5}) {
+        Scene scene(4, 31);
+        scene.track_carry = 0.8;
+        scene.stereo_carry = 1.0;
+        WindowOptions wo;
+        wo.track_carry = rho;
+        wo.stereo_carry = rho_s;
+        wo.huber_sigmas = huber;
+        wo.disparity_offset_sigma_px = offset_sigma;
+        const WindowSolution fit = RefineOnce(&scene, 4, 0.3, 5, wo);
+        wo.covariance_track_carry = rho;
+        wo.covariance_stereo_carry = rho_s;
+        const WindowSolution sandwich = RefineOnce(&scene, 4, 0.3, 5, wo);
+        ASSERT_TRUE(fit.ok && sandwich.ok);
+        EXPECT_FALSE(fit.sandwich);
+        EXPECT_TRUE(sandwich.sandwich);
+        const std::string what = "carries " + std::to_string(rho) + "/" + std::to_string(rho_s) + ", huber " +
+                                 std::to_string(huber) + ", offset sigma " + std::to_string(offset_sigma);
+        // The same estimate: the weights are the same.
+        EXPECT_TRUE(sandwich.T_prev_last.isApprox(fit.T_prev_last, 1e-12)) << what;
+        const double scale = fit.step_covariance.diagonal().maxCoeff();
+        EXPECT_LT((sandwich.step_covariance - fit.step_covariance).cwiseAbs().maxCoeff(), 1e-6 * scale) << what;
+        EXPECT_LT((sandwich.fit_step_covariance - fit.step_covariance).cwiseAbs().maxCoeff(), 1e-9 * scale) << what;
+        EXPECT_NEAR(sandwich.covariance_variance_factor, fit.variance_factor, 1e-6 * fit.variance_factor) << what;
+        EXPECT_EQ(fit.covariance_variance_factor, fit.variance_factor) << what;
+      }
+    }
+  }
+}
+
+// Errors truly carried (a random walk along the track, l_n = l_n-1 + w_n, repeated in
+// the right match), weighed as independent (the default 0 and 0): over noise draws on
+// one scene the estimate's scatter matches the sandwich under carries 1 and 1 (NEES mean
+// near 6, the chi-square's), while the weights' own covariance S^-1 claims far less.
+TEST(SlidingWindow, SandwichUnderTheTrueCarriesMatchesTheEstimatesScatter) {
+  Scene scene(4, 41);
+  scene.track_carry = 1.0;
+  scene.stereo_carry = 1.0;
+  WindowOptions wo;  // weights: independent errors
+  wo.covariance_track_carry = 1.0;
+  wo.covariance_stereo_carry = 1.0;
+  const int draws = 80;
+  std::vector<geometry::Vector6d> errors;
+  Matrix6d sandwich = Matrix6d::Zero(), fit = Matrix6d::Zero();
+  for (int d = 0; d < draws; ++d) {
+    geometry::Vector6d e;
+    const WindowSolution w = RefineOnce(&scene, 4, 0.3, 1000u + static_cast<unsigned>(d), wo, &e);
+    ASSERT_TRUE(w.ok);
+    errors.push_back(e);
+    sandwich += w.step_covariance / draws;
+    fit += w.fit_step_covariance / draws;
+  }
+  double nees_sandwich = 0, nees_fit = 0;
+  for (const geometry::Vector6d& e : errors) {
+    nees_sandwich += e.dot(sandwich.ldlt().solve(e)) / draws;
+    nees_fit += e.dot(fit.ldlt().solve(e)) / draws;
+  }
+  // The mean of 80 chi-square(6) draws: 6 +- 0.4 (one sigma); the sandwich also holds the
+  // linearisation and the points' start, so a wider band.
+  EXPECT_GT(nees_sandwich, 4.5);
+  EXPECT_LT(nees_sandwich, 7.5);
+  EXPECT_GT(nees_fit, 8.5);
+  EXPECT_GT(nees_fit, 1.3 * nees_sandwich);
+  std::cout << draws << " draws of random-walk errors: NEES mean " << nees_sandwich << " under the sandwich (1/1), "
+            << nees_fit << " under S^-1 (0/0)\n";
+}
+
 TEST(SlidingWindow, EstimatesADisparityOffsetAndRemovesItsScaleError) {
   const Scene scene(20, 21);
   const DriveResult off = Drive(scene, 5, 0.1, 0.3, 0.0, 21);    // offset not estimated
