@@ -16,6 +16,7 @@
 #include <cmath>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rover::traversability {
@@ -289,27 +290,21 @@ TEST(HeightUncertainty, TwoPairsThatDisagreeByAPlausiblePoseErrorMakeNoFalseStep
   EXPECT_GT(WorstStep(map, 2.1, 0.1), 0.15);  // the cobble is seen
 }
 
-TEST(HeightUncertainty, RoughnessMarginIsReadAndChecked) {
-  const MapOptions o = LoadMapOptions(YAML::Load("roughness_margin_sigmas: 2"), "test");
-  EXPECT_DOUBLE_EQ(o.roughness_margin_sigmas, 2.0);
-  EXPECT_THROW(LoadMapOptions(YAML::Load("roughness_margin_sigmas: -1"), "test"), config::ConfigError);
-  MapOptions bad;
-  bad.roughness_margin_sigmas = 11;
-  EXPECT_THROW(TraversabilityMap{bad}, std::invalid_argument);
-  EXPECT_THROW(LoadCameraOptions(config::ConfigNode(YAML::Load("roughness_margin_sigmas: 2"), "test", ""), MapOptions{}),
-               config::ConfigError);
-}
-
-TEST(HeightUncertainty, DipMarginIsReadAndChecked) {
-  const MapOptions o = LoadMapOptions(YAML::Load("dip_margin_sigmas: 2"), "test");
-  EXPECT_DOUBLE_EQ(o.dip_margin_sigmas, 2.0);
-  EXPECT_THROW(LoadMapOptions(YAML::Load("dip_margin_sigmas: -1"), "test"), config::ConfigError);
-  MapOptions bad;
-  bad.dip_margin_sigmas = 11;
-  EXPECT_THROW(TraversabilityMap{bad}, std::invalid_argument);
-  // A camera's own section may not set it: it rates the map, not one camera's stereo.
-  EXPECT_THROW(LoadCameraOptions(config::ConfigNode(YAML::Load("dip_margin_sigmas: 2"), "test", ""), MapOptions{}),
-               config::ConfigError);
+// The two margins of a cell's height error, each read, range-checked, and refused in a
+// camera's own section: they rate the map, not one camera's stereo.
+TEST(HeightUncertainty, MarginsAreReadAndChecked) {
+  for (const auto& [key, member] : {std::pair{"dip_margin_sigmas", &MapOptions::dip_margin_sigmas},
+                                    std::pair{"roughness_margin_sigmas", &MapOptions::roughness_margin_sigmas}}) {
+    SCOPED_TRACE(key);
+    const std::string k(key);
+    EXPECT_DOUBLE_EQ(LoadMapOptions(YAML::Load(k + ": 2"), "test").*member, 2.0);
+    EXPECT_THROW(LoadMapOptions(YAML::Load(k + ": -1"), "test"), config::ConfigError);
+    MapOptions bad;
+    bad.*member = 11;
+    EXPECT_THROW(TraversabilityMap{bad}, std::invalid_argument);
+    EXPECT_THROW(LoadCameraOptions(config::ConfigNode(YAML::Load(k + ": 2"), "test", ""), MapOptions{}),
+                 config::ConfigError);
+  }
 }
 
 }  // namespace
