@@ -89,12 +89,26 @@ Safety ClearanceSafety(const clearance::HeightMap& heights, const VoteOptions& o
   return out;
 }
 
+// What the clear part of a path is worth on the cells: the worst known cell, drawn toward
+// unknown_goodness by the share of its cells that are unknown. Not the worst of the two:
+// a look-ahead is seen before it is driven (the step itself is held to the unknown-ground
+// limits), and as the worst of the two a single unseen cell at the far end of a 3 m
+// look-ahead made an arc that turns toward the plan's way worth no more than one running
+// wholly into unseen ground, so that the straight arc on the ground the cameras had just
+// seen (ahead, inside their wedge) won step after step, and the rover drove on past the
+// plan's turn: out wide round a wall and past a goal beside its way.
+double LookAheadGoodness(const Sweep& s, double unknown_goodness) {
+  if (s.clear_unknown <= 0) return s.clear_min_goodness;
+  const double share = s.clear_cells > 0 ? std::min(1.0, static_cast<double>(s.clear_unknown) / s.clear_cells) : 1.0;
+  const double known = s.clear_min_goodness;
+  return (1.0 - share) * known + share * std::min(known, unknown_goodness);
+}
+
 Safety CellSafety(const Grid& grid, const VoteOptions& o, const Pose2& pose, const std::vector<Pose2>& path) {
   Safety out;
   const Sweep s = SweepFootprint(grid, o.footprint, path, pose, o.blind_margin_m);
   out.clear_end = s.first_unsafe_pose < 0 ? path.size() : static_cast<std::size_t>(s.first_unsafe_pose);
-  out.good = s.clear_min_goodness;
-  if (s.clear_unknown > 0) out.good = std::min(out.good, o.unknown_goodness);
+  out.good = LookAheadGoodness(s, o.unknown_goodness);
   if (s.unsafe > 0) {
     out.hazard = "step " + Fixed(s.worst_step_m) + " m at " + Fixed(s.worst_x) + "," + Fixed(s.worst_y);
     out.severity = s.worst_step_m;

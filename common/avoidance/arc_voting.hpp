@@ -49,7 +49,9 @@ struct VoteOptions {
   double max_point_turn_rad = 90.0 * 3.14159265358979323846 / 180.0;
   double blind_margin_m = 0.5;
   UnknownLimits unknown;               // the step's new cells beyond the blind ring (grid.hpp)
-  double unknown_goodness = 0.5;       // what an unknown cell in the look-ahead is worth
+  // What an unknown cell in the look-ahead is worth: the look-ahead's goodness (its worst
+  // known cell) is drawn toward this by the share of its cells that are unknown.
+  double unknown_goodness = 0.5;
   double goodness_weight = 1.0;
   double goal_weight = 1.0;
   double turn_penalty = 0.05;          // a turn in place makes no progress by itself

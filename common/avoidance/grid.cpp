@@ -301,6 +301,7 @@ Sweep SweepFootprint(const Grid& grid, const Footprint& fp, const std::vector<Po
         }
         if (fp.Contains(standing, x, y, grow)) continue;  // the rover stands on it
         ++sw.cells;
+        if (sw.first_unsafe_pose < 0) ++sw.clear_cells;
         const bool blind = fp.Contains(standing, x, y, blind_margin_m);
         if (!inside) {
           ++sw.outside;

@@ -113,6 +113,7 @@ struct Sweep {
   int first_unsafe_pose = -1;
   double clear_min_goodness = 1.0;
   int clear_unknown = 0;
+  int clear_cells = 0;  // counted cells met before it (known and unknown)
   // Counted unknown cells beyond the ring that lie in unknown ground at least
   // `hidden_patch_m` across (see SweepFootprint), and the first such cell's centre.
   int hidden = 0;

@@ -208,6 +208,43 @@ TEST(ArcVoting, BoxedInBacksUpOrStopsWithTheHazard) {
   EXPECT_TRUE(judged);
 }
 
+// The cameras have seen the ground ahead (a band 1.2 m either side of the rover's line) but
+// not beyond it to the right, where the goal lies (53 deg right). An arc turning toward the
+// goal meets a few unseen cells at the far end of its look-ahead: it is worth nearly what
+// seen ground is (the share of its cells unknown draws it toward unknown_goodness), not
+// as little as a look-ahead wholly unseen, and the rover turns toward the goal. As the worst
+// of the two, every arc to the right was worth 0.5 and the straight arc on the seen band won.
+TEST(ArcVoting, AFewUnseenCellsAtTheLookAheadsEndCostByTheirShare) {
+  Grid g = Open();
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j)
+      if (g.CellCentreY(j) > 1.2 && g.CellCentreX(i) > -1.0) {
+        g.state[static_cast<std::size_t>(i * g.cols + j)] = CellClass::kUnknown;
+        g.goodness[static_cast<std::size_t>(i * g.cols + j)] = 0.0f;
+      }
+  VoteOptions o;
+  o.blind_margin_m = 0.0;
+  const Choice c = VoteArcs(g, {0, 0, 0}, 3.0, 4.0, o);
+  ASSERT_TRUE(c.found);
+  const Candidate* gentle = nullptr;  // the gentlest arc to the right
+  for (const Candidate& k : c.candidates)
+    if (k.kind == Candidate::Kind::kArc && k.curvature_per_m > 0.0 && (!gentle || k.curvature_per_m < gentle->curvature_per_m))
+      gentle = &k;
+  ASSERT_NE(gentle, nullptr);
+  ASSERT_FALSE(gentle->vetoed) << gentle->why;
+  EXPECT_GT(gentle->goodness, 0.8) << "a few unseen cells at its end, the rest seen at 0.9";
+  EXPECT_LT(gentle->goodness, 0.9);
+  // A turn toward the goal, then 3 m straight into the unseen ground: nearer 0.5.
+  for (const Candidate& k : c.candidates) {
+    if (k.kind == Candidate::Kind::kTurn && std::abs(k.planned_turn_rad - std::atan2(4.0, 3.0)) < 1e-6) {
+      EXPECT_LT(k.goodness, gentle->goodness);
+    }
+  }
+  const double heading_change = c.best.kind == Candidate::Kind::kTurn ? c.best.turn_rad
+                                                                      : c.best.curvature_per_m * c.best.distance_m;
+  EXPECT_GT(heading_change, 2 * kDeg) << ToString(c.best.kind) << " k " << c.best.curvature_per_m;
+}
+
 TEST(ArcVoting, UnknownAheadAllowsOnlyTheBlindRing) {
   // Unknown everywhere: a full step straight ahead is vetoed; whatever is allowed stays
   // inside the ring the mast cameras cannot see from where the rover stands.
