@@ -1,4 +1,4 @@
-// ./rover navbench [--runs N] [--jobs J] [--densities K,...] [--worlds NAME,...|none]
+// ./rover navbench [--runs N] [--jobs J] [--densities K,...|none] [--worlds NAME,...|none]
 //                  [--seed S] [--out DIR] [--quick] [--min-goal M] [--max-goal M] [--no-plot]
 //                  [--prepare | --report] [--resume]
 //
@@ -32,7 +32,7 @@ namespace nb = rover::navbench;
 namespace {
 
 constexpr const char* kUsage =
-    "usage: navbench [--runs N] [--jobs J] [--densities K,...] [--worlds NAME,...|none] [--seed S]\n"
+    "usage: navbench [--runs N] [--jobs J] [--densities K,...|none] [--worlds NAME,...|none] [--seed S]\n"
     "                [--out DIR] [--quick] [--min-goal M] [--max-goal M] [--no-plot] [--prepare | --report]\n"
     "                [--resume]\n\n"
     "The navigation benchmark: N runs (default 20) per Golombek rock field k (default\n"
@@ -124,11 +124,11 @@ Args ParseArgs(int argc, char** argv) {
     } else if (arg == "--densities") {
       options.densities.clear();
       const std::string text = value(i, arg);
-      for (const auto& part : SplitCommas(text)) {
+      for (const auto& part : text == "none" ? std::vector<std::string>{} : SplitCommas(text)) {
         char* end = nullptr;
         const double k = std::strtod(part.c_str(), &end);
         if (*end != '\0' || !(k > 0 && k <= 0.5)) {
-          throw ConfigError("navbench: --densities \"" + text + "\": expected Golombek k values in (0, 0.5] separated by commas");
+          throw ConfigError("navbench: --densities \"" + text + "\": expected Golombek k values in (0, 0.5] separated by commas, or none");
         }
         options.densities.push_back(k);
       }
