@@ -50,13 +50,7 @@ bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
   // weights' model, as the pair's VO-8 covariance is.
   const double factor =
       std::max({u.variance_factor, u.cluster_factor, carried_errors ? w.variance_factor : 0.0});
-  // The published factor is floored (VoOptions::window_covariance_min_variance_factor):
-  // on navbench's rock fields every factor sat near 0.4 (the pair's s0^2 and cluster
-  // factor, the window's own under either model), yet the refined deltas' errors followed
-  // the unscaled covariance: what the residuals do not show, the features share.
-  const double published_factor = std::max({u.variance_factor, u.cluster_factor,
-                                            covariance_carried ? w.covariance_variance_factor : 0.0,
-                                            min_published_factor});
+  const double published_factor = PublishedWindowFactor(u, w, covariance_carried, min_published_factor);
   Matrix6d cov = published_factor * w.covariance + u.shared;
   cov = 0.5 * (cov + cov.transpose()).eval();
   const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
@@ -75,6 +69,12 @@ bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
 }
 
 }  // namespace
+
+double PublishedWindowFactor(const MotionUncertainty& pair, const WindowSolution& window,
+                             bool covariance_carried, double min_factor) {
+  return std::max({pair.variance_factor, pair.cluster_factor,
+                   covariance_carried ? window.covariance_variance_factor : 0.0, min_factor});
+}
 
 std::vector<WindowObservation> Observations(const Pair& pair) {
   std::vector<WindowObservation> obs;
