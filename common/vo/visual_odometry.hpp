@@ -262,6 +262,15 @@ struct VoOptions {
   // limit (common/vo/README.md, "Sandwich covariance").
   double window_covariance_track_carry = -1.0;
   double window_covariance_stereo_carry = -1.0;
+  // The least factor that scales the window's published covariance (its fit part: S^-1 or
+  // the sandwich; the shared errors are not scaled). The variance factors (the pair's s0^2
+  // and cluster factor, the window's own) compare the residuals' scatter with VO-3's match
+  // covariances; on navbench's rock fields they sat near 0.4 while the refined deltas'
+  // errors followed the unscaled covariance, but on tilt_slope the errors are as small as
+  // its factors (0.11) say, and no floor suits both (tools/vo_replay/learn_factor_floor.py,
+  // README "Variance factor floor"). 0 = none (the default: a factor may shrink the
+  // covariance as far as it says).
+  double window_covariance_min_variance_factor = 0.0;
   // The refined delta must agree with the pair's VO-8 estimate: chi-square (6 dof) of
   // their difference under its covariance, the pair's minus the window's (the window holds
   // the pair's data; NestedDifferenceChi2 in motion_estimation.hpp), each whitened
@@ -347,6 +356,9 @@ struct VoResult {
   int window_frames = 0, window_points = 0, window_iterations = 0;
   bool window_used = false;
   double disparity_offset_px = 0;  // the window's estimate of the rig's disparity offset
+  // The window's variance factors (WindowSolution): under its weights' model, and under
+  // the published covariance's model; 0 when no window was refined.
+  double window_variance_factor = 0, window_covariance_variance_factor = 0;
   // The features tracked from the previous pair (VO-6), in the order of the
   // correspondences, with the ones the ML motion used marked (tracked_feature.hpp).
   std::vector<TrackedFeature> tracks;

@@ -33,7 +33,8 @@ namespace {
 // for the test. Without it KITTI 06's 0.16 px offset failed 46 of 50 windows.
 bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
                        const Eigen::Isometry3d& T_ref_cur, const Matrix6d& pair_cov, double max_chi2,
-                       double min_fraction, bool carried_errors, bool covariance_carried, Matrix6d* out) {
+                       double min_fraction, bool carried_errors, bool covariance_carried,
+                       double min_published_factor, Matrix6d* out) {
   // When the window models errors carried along a track (window_track_carry or
   // window_stereo_carry above 0) its fit is scaled by the larger of the pair's factors and
   // its own (the variance factor of the window's residuals under that model: the pair's
@@ -49,8 +50,7 @@ bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
   // weights' model, as the pair's VO-8 covariance is.
   const double factor =
       std::max({u.variance_factor, u.cluster_factor, carried_errors ? w.variance_factor : 0.0});
-  const double published_factor =
-      std::max({u.variance_factor, u.cluster_factor, covariance_carried ? w.covariance_variance_factor : 0.0});
+  const double published_factor = PublishedWindowFactor(u, w, covariance_carried, min_published_factor);
   Matrix6d cov = published_factor * w.covariance + u.shared;
   cov = 0.5 * (cov + cov.transpose()).eval();
   const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
@@ -69,6 +69,12 @@ bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
 }
 
 }  // namespace
+
+double PublishedWindowFactor(const MotionUncertainty& pair, const WindowSolution& window,
+                             bool covariance_carried, double min_factor) {
+  return std::max({pair.variance_factor, pair.cluster_factor,
+                   covariance_carried ? window.covariance_variance_factor : 0.0, min_factor});
+}
 
 std::vector<WindowObservation> Observations(const Pair& pair) {
   std::vector<WindowObservation> obs;
@@ -145,11 +151,14 @@ void VisualOdometry::State::RefineWindow(Step* st, const Eigen::Isometry3d& T_w_
   res->window_points = w.points;
   res->window_iterations = w.iterations;
   res->disparity_offset_px = w.disparity_offset_px;
+  res->window_variance_factor = w.variance_factor;
+  res->window_covariance_variance_factor = w.covariance_variance_factor;
   Matrix6d cov;
   const bool used = w.ok && RefinedCovariance(w, st->u, T_ref_cur, pair_cov, o.window_max_chi2,
                                                o.window_consistency_min_fraction,
                                                o.window_track_carry > 0 || o.window_stereo_carry > 0,
-                                               CovarianceTrackCarry(o) > 0 || CovarianceStereoCarry(o) > 0, &cov);
+                                               CovarianceTrackCarry(o) > 0 || CovarianceStereoCarry(o) > 0,
+                                               o.window_covariance_min_variance_factor, &cov);
   // Published: the window's estimate of this pair against the last call's pair as it
   // was published, so that the deltas compose to the window's latest estimate and its
   // corrections of the poses before reach the user (the window's oldest pose is fixed).

@@ -188,6 +188,18 @@ struct Step {
 // The features of a pair as the sliding window observes them.
 std::vector<WindowObservation> Observations(const Pair& pair);
 
+// The factor that scales the window's published covariance (its fit part: S^-1, or the
+// sandwich under the covariance's carries; the shared errors are added unscaled): the
+// larger of the pair's s0^2 and cluster factor, the window's own factor under the
+// covariance's model when that model carries errors (covariance_carried), and
+// `min_factor` (VoOptions::window_covariance_min_variance_factor). The variance factors
+// compare the residuals' scatter with VO-3's match covariances; on navbench's rock fields
+// every factor sat near 0.4 while the refined deltas' errors followed the unscaled
+// covariance, so there a factor below 1 did not mean smaller errors (README, "Variance
+// factor floor").
+double PublishedWindowFactor(const MotionUncertainty& pair, const WindowSolution& window,
+                             bool covariance_carried, double min_factor);
+
 struct VisualOdometry::State {
   VoOptions o;
   std::unique_ptr<Pair> prev;

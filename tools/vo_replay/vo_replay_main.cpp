@@ -5,8 +5,8 @@
 // frame starting the chain again) and judges every accepted update against the
 // simulator's truth at the two capture times, as the scenario summary does. One CSV line
 // per update, with what the published VO_UPDATE does not carry (keyframe, whether the
-// window's refinement was published, the variance factors, track ages), so that the
-// updates beyond the 99.7 % NEES bound can be told apart by kind.
+// window's refinement was published, the variance factors, track ages, the whole
+// covariance), so that the updates beyond the 99.7 % NEES bound can be told apart by kind.
 #include "bus/channels.hpp"
 #include "bus/stereo_frame_convert.hpp"
 #include "config/yaml_config.hpp"
@@ -96,7 +96,14 @@ int main(int argc, char** argv) {
     }
     std::ostream& out = out_path.empty() ? std::cout : file;
     out << "from,to,status,keyframe,window_used,window_frames,disparity_offset_px,inliers,tracked,s0sq,cluster,track_age,"
-           "moved_m,turned_deg,speed_mps,pitch_rate_dps,nees,ex,ey,ez,eroll,epitch,eyaw,sx,sy,sz,sroll,spitch,syaw\n";
+           "moved_m,turned_deg,speed_mps,pitch_rate_dps,nees,ex,ey,ez,eroll,epitch,eyaw,sx,sy,sz,sroll,spitch,syaw,"
+           "window_vf,window_cvf";
+    // The whole covariance (upper triangle, row by row), so that the NEES can be taken
+    // apart by direction (the weak lateral-yaw and along-sight directions) offline.
+    for (int a = 0; a < 6; ++a) {
+      for (int b = a; b < 6; ++b) out << ",c" << a << b;
+    }
+    out << '\n';
     out << std::setprecision(6);
 
     lcm::LogFile log(log_path, "r");
@@ -152,6 +159,10 @@ int main(int argc, char** argv) {
               << ',' << SpeedAt(truth, frame.utime) << ',' << PitchRateAt(truth, frame.utime) << ',' << *c.nees;
           for (int i = 0; i < 6; ++i) out << ',' << (i >= 3 ? geometry::WrapAngle(e(i)) : e(i));
           for (int i = 0; i < 6; ++i) out << ',' << std::sqrt(c.covariance(i, i));
+          out << ',' << r.window_variance_factor << ',' << r.window_covariance_variance_factor;
+          for (int a = 0; a < 6; ++a) {
+            for (int b = a; b < 6; ++b) out << ',' << c.covariance(a, b);
+          }
           out << '\n';
         }
       }

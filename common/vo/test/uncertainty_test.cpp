@@ -454,5 +454,24 @@ TEST(MotionUncertainty, VO8_CarriedMatchErrorsAreWeighedByWhatTheResidualSees) {
   EXPECT_GT(mc.nees_independent, mc.nees_carried + 0.8);
 }
 
+// The window's published covariance is scaled by the larger of the pair's two factors,
+// the window's own under a carried covariance model, and the floor
+// (window_covariance_min_variance_factor): a factor below the floor no longer shrinks it.
+TEST(MotionUncertainty, VO13_PublishedWindowFactorIsFlooredAtTheMinimum) {
+  MotionUncertainty pair;
+  pair.variance_factor = 0.36;
+  pair.cluster_factor = 0.48;
+  WindowSolution window;
+  window.covariance_variance_factor = 0.44;
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, false, 0.0), 0.48);  // no floor: as before
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.0), 0.48);
+  window.covariance_variance_factor = 0.7;
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.0), 0.7);   // the sandwich's own
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, false, 0.0), 0.48);  // ignored under S^-1
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.9), 0.9);    // the floor
+  pair.variance_factor = 1.3;
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.9), 1.3);    // a larger factor stands
+}
+
 }  // namespace
 }  // namespace rover::vo

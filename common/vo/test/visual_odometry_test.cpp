@@ -233,6 +233,13 @@ TEST(VoOptions, LoadsTheProjectConfigAndRejectsUnknownKeys) {
   const VoOptions w = LoadVoOptions(weights["vo"]);
   EXPECT_EQ(CovarianceTrackCarry(w), 0.0);
   EXPECT_EQ(CovarianceStereoCarry(w), 1.0);
+  // The published factor's floor: read, 0 (none) in the project config, and not negative.
+  EXPECT_EQ(o.window_covariance_min_variance_factor, 0.0);
+  const auto floor = config::ConfigNode::FromString("vo:\n  window_covariance_min_variance_factor: 0.9\n", "t.yaml");
+  EXPECT_DOUBLE_EQ(LoadVoOptions(floor["vo"]).window_covariance_min_variance_factor, 0.9);
+  EXPECT_THROW(LoadVoOptions(config::ConfigNode::FromString("vo:\n  window_covariance_min_variance_factor: -0.1\n",
+                                                             "t.yaml")["vo"]),
+               config::ConfigError);
 }
 
 // The window's carries are fractions in [0, 1]; the random-walk switch they replaced is
