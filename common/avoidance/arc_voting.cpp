@@ -142,6 +142,15 @@ void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalDist
     c->hazard = true;
     c->severity = step_safety.severity;
     c->why = step_safety.hazard;
+  } else if (o.max_driven_step_m > 0.0 && s.max_step_m >= o.max_driven_step_m) {
+    // Ground the map rates caution, but too near its step limit to drive over now: the
+    // map under-reads rocks (VoteOptions::max_driven_step_m). Judged on what is driven
+    // now (a turn's first part), as the hazard monitor judges the step it is asked about.
+    c->vetoed = true;
+    c->hazard = true;
+    c->severity = s.max_step_m;
+    c->why = "step " + Fixed(s.max_step_m) + " m at " + Fixed(s.max_step_x) + "," + Fixed(s.max_step_y) +
+             " is over the " + Fixed(o.max_driven_step_m) + " m a step drives over";
   } else if (unknown == UnknownVerdict::kHidden) {
     c->vetoed = true;
     c->why = "unknown ground " + Fixed(o.unknown.hidden_patch_m) + " m across at " + Fixed(s.hidden_x) + "," +
@@ -190,6 +199,9 @@ void VoteOptions::Validate() const {
     if (const std::string p = suspension->Problem(); !p.empty()) throw std::invalid_argument("avoidance: suspension: " + p);
   }
   if (max_point_turn_rad > M_PI) throw std::invalid_argument("avoidance: max_point_turn_rad must be <= pi");
+  if (!(max_driven_step_m >= 0.0) || !std::isfinite(max_driven_step_m))
+    throw std::invalid_argument("avoidance: max_driven_step_m " + std::to_string(max_driven_step_m) +
+                                " must be finite and >= 0 (0: off)");
   if (!std::isfinite(previous_turn_rad)) throw std::invalid_argument("avoidance: previous_turn_rad must be finite");
   if (num_arcs < 1 || num_arcs > 101) throw std::invalid_argument("avoidance: num_arcs must be 1 to 101");
   const auto fraction = [](double f) { return f >= 0.0 && f <= 1.0; };

@@ -10,7 +10,8 @@
 // the blind ring behind the rover counts, since the mast cameras face ahead).
 //
 // A candidate is vetoed when the step itself (not the look-ahead) crosses an unsafe cell
-// (with a suspension: reaches a pose whose clearance bounds break its limits),
+// (with a suspension: reaches a pose whose clearance bounds break its limits) or a cell
+// whose step reads max_driven_step_m or more (the ground the step drives over now),
 // or when the unknown cells it crosses (outside the blind ring round the rover) are too
 // many by `unknown` (JudgeUnknown in grid.hpp: their share, and whether they could hide a
 // rock). A look-ahead that meets an unsafe cell (or pose)
@@ -48,6 +49,14 @@ struct VoteOptions {
   // driven is its first max_turn_rad. A rover whose way on lies 40 deg off sees it.
   double max_point_turn_rad = 90.0 * 3.14159265358979323846 / 180.0;
   double blind_margin_m = 0.5;
+  // The ground the step itself sweeps (not the look-ahead) may hold no cell whose step reads
+  // this high or higher, even one the map rates caution: the map reads a rock lower than it
+  // is (a cell's points average its flank; a rock at the edge of the view shows only its
+  // near side: navbench drove a 0.32 m rock read 0.20 to 0.23 m under a 0.25 m limit into
+  // the body). Such ground may still lie in the look-ahead and be planned past. 0: only
+  // unsafe cells are refused. The hazard monitor's map check holds steps to the same limit
+  // (hazards.map.driven_step_fraction; the executor takes it from the map's message).
+  double max_driven_step_m = 0.0;
   UnknownLimits unknown;               // the step's new cells beyond the blind ring (grid.hpp)
   double unknown_goodness = 0.5;       // what an unknown cell in the look-ahead is worth
   double goodness_weight = 1.0;
