@@ -142,15 +142,6 @@ void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalDist
     c->hazard = true;
     c->severity = step_safety.severity;
     c->why = step_safety.hazard;
-  } else if (o.max_driven_step_m > 0.0 && s.max_step_m >= o.max_driven_step_m) {
-    // Ground the map rates caution, but too near its step limit to drive over now: the
-    // map under-reads rocks (VoteOptions::max_driven_step_m). Judged on what is driven
-    // now (a turn's first part), as the hazard monitor judges the step it is asked about.
-    c->vetoed = true;
-    c->hazard = true;
-    c->severity = s.max_step_m;
-    c->why = "step " + Fixed(s.max_step_m) + " m at " + Fixed(s.max_step_x) + "," + Fixed(s.max_step_y) +
-             " is over the " + Fixed(o.max_driven_step_m) + " m a step drives over";
   } else if (unknown == UnknownVerdict::kHidden) {
     c->vetoed = true;
     c->why = "unknown ground " + Fixed(o.unknown.hidden_patch_m) + " m across at " + Fixed(s.hidden_x) + "," +
@@ -161,6 +152,14 @@ void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalDist
   } else if (c->kind == Candidate::Kind::kTurn && c->turn_rad * o.previous_turn_rad < 0.0) {
     c->vetoed = true;
     c->why = "it would undo the last turn";
+  }
+  // Ground the map rates caution but near its step limit, which it may under-read
+  // (VoteOptions::max_driven_step_m): judged on what is driven now (a turn's first part),
+  // as the hazard monitor judges the step it is asked about.
+  if (o.max_driven_step_m > 0.0 && s.max_step_m >= o.max_driven_step_m) {
+    c->near_limit = true;
+    c->near_limit_why = "step " + Fixed(s.max_step_m) + " m at " + Fixed(s.max_step_x) + "," +
+                        Fixed(s.max_step_y) + " is over the " + Fixed(o.max_driven_step_m) + " m a step drives over";
   }
   // The look-ahead: how far it runs safe (a fraction of its length), and the worst met
   // before that.
@@ -279,10 +278,14 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   // A turn after which not even one step is clear leads nowhere (see the header).
   const double one_step = std::min(o.step_m, std::max(remaining, 0.05)) - 1e-6;
   auto leads_nowhere = [&](const Candidate& c) { return c.kind == Candidate::Kind::kTurn && c.clear_m < one_step; };
-  auto pick = [&](bool dead_ends) {
+  // near_ok: whether a step over ground near the step limit may be picked (only when no
+  // other is allowed: VoteOptions::max_driven_step_m).
+  auto pick = [&](bool dead_ends, bool near_ok) {
     const Candidate* best = nullptr;
     for (const Candidate& c : choice.candidates) {
-      if (c.vetoed || (c.kind == Candidate::Kind::kBackup && !way_behind) || leads_nowhere(c) != dead_ends) continue;
+      if (c.vetoed || (c.kind == Candidate::Kind::kBackup && !way_behind) || leads_nowhere(c) != dead_ends ||
+          (c.near_limit && !near_ok))
+        continue;
       if (!best || c.vote > best->vote + 1e-9 ||
           (std::abs(c.vote - best->vote) <= 1e-9 && std::abs(c.curvature_per_m) < std::abs(best->curvature_per_m)))
         best = &c;
@@ -304,12 +307,19 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     choice.candidates.push_back(c);
   };
   if (way_behind && o.backup_m > 0.0) backup();
-  const Candidate* best = pick(false);
+  const Candidate* best = pick(false, false);
+  bool backed = false;  // a last-resort backup was judged (the last candidate)
   if (!best && o.backup_m > 0.0 && !way_behind) {
     backup();
-    if (!choice.candidates.back().vetoed) best = &choice.candidates.back();
+    backed = true;
+    const Candidate& b = choice.candidates.back();
+    if (!b.vetoed && !b.near_limit) best = &b;
   }
-  if (!best) best = pick(true);
+  if (!best) best = pick(true, false);
+  // Only steps over ground near the step limit are left: taken in the same order.
+  if (!best) best = pick(false, true);
+  if (!best && backed && !choice.candidates.back().vetoed) best = &choice.candidates.back();
+  if (!best) best = pick(true, true);
   if (best) {
     choice.found = true;
     choice.best = *best;

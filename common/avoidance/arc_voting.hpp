@@ -10,8 +10,7 @@
 // the blind ring behind the rover counts, since the mast cameras face ahead).
 //
 // A candidate is vetoed when the step itself (not the look-ahead) crosses an unsafe cell
-// (with a suspension: reaches a pose whose clearance bounds break its limits) or a cell
-// whose step reads max_driven_step_m or more (the ground the step drives over now),
+// (with a suspension: reaches a pose whose clearance bounds break its limits),
 // or when the unknown cells it crosses (outside the blind ring round the rover) are too
 // many by `unknown` (JudgeUnknown in grid.hpp: their share, and whether they could hide a
 // rock). A look-ahead that meets an unsafe cell (or pose)
@@ -49,13 +48,15 @@ struct VoteOptions {
   // driven is its first max_turn_rad. A rover whose way on lies 40 deg off sees it.
   double max_point_turn_rad = 90.0 * 3.14159265358979323846 / 180.0;
   double blind_margin_m = 0.5;
-  // The ground the step itself sweeps (not the look-ahead) may hold no cell whose step reads
-  // this high or higher, even one the map rates caution: the map reads a rock lower than it
-  // is (a cell's points average its flank; a rock at the edge of the view shows only its
-  // near side: navbench drove a 0.32 m rock read 0.20 to 0.23 m under a 0.25 m limit into
-  // the body). Such ground may still lie in the look-ahead and be planned past. 0: only
-  // unsafe cells are refused. The hazard monitor's map check holds steps to the same limit
-  // (hazards.map.driven_step_fraction; the executor takes it from the map's message).
+  // A candidate whose step itself (not the look-ahead) crosses a cell whose step reads this
+  // high or higher, even one the map rates caution, is chosen only when no other is allowed
+  // (Candidate::near_limit): the map reads a rock lower than it is (a cell's points average
+  // its flank; a rock at the edge of the view shows only its near side), and navbench drove
+  // a body corner into a 0.32 m rock read 0.20 to 0.23 m under a 0.25 m limit when a step
+  // clear of it was allowed. Not a veto: refusing such steps outright boxed the rover in
+  // among the 0.2 to 0.25 m rocks of a k = 0.20 field (common/avoidance/README.md). Such
+  // ground may lie in the look-ahead and be planned past. 0: off. The executor takes it
+  // from the map's message (hazards.map.driven_step_fraction of the map's step limit).
   double max_driven_step_m = 0.0;
   UnknownLimits unknown;               // the step's new cells beyond the blind ring (grid.hpp)
   double unknown_goodness = 0.5;       // what an unknown cell in the look-ahead is worth
@@ -117,6 +118,10 @@ struct Candidate {
   // (m of belly clearance, or rad of angle; 1 when undecided).
   bool hazard = false;
   double severity = 0.0;
+  // Allowed, but its step crosses a cell whose step reads VoteOptions::max_driven_step_m or
+  // more: chosen only when no other candidate is allowed. `near_limit_why` names the cell.
+  bool near_limit = false;
+  std::string near_limit_why;
 };
 
 struct Choice {

@@ -39,7 +39,8 @@ void MapCheckOptions::Validate() const {
 MapCheckOptions LoadMapCheckOptions(const config::ConfigNode& node, const std::vector<std::string>& extra_keys) {
   MapCheckOptions o;
   std::vector<std::string> keys = {"enabled", "blind_margin_m", "max_unknown_fraction", "hidden_patch_m",
-                                   "max_scattered_unknown_fraction", "driven_step_fraction"};
+                                   "max_scattered_unknown_fraction", "driven_step_fraction",
+                                   "driven_step_refused"};
   keys.insert(keys.end(), extra_keys.begin(), extra_keys.end());
   node.CheckKeys(keys);
   node.Get("enabled", o.enabled);
@@ -48,6 +49,7 @@ MapCheckOptions LoadMapCheckOptions(const config::ConfigNode& node, const std::v
   node.Get("hidden_patch_m", o.hidden_patch_m, 0.0, 5.0);
   node.Get("max_scattered_unknown_fraction", o.max_scattered_unknown_fraction, 0.0, 1.0);
   node.Get("driven_step_fraction", o.driven_step_fraction, 0.01, 1.0);
+  node.Get("driven_step_refused", o.driven_step_refused);
   return o;
 }
 
@@ -146,8 +148,8 @@ SweptCheck CheckPathOnMap(const avoidance::Grid& grid, const avoidance::Footprin
                Fixed(s.worst_y);
     return c;
   }
-  if (options.max_driven_step_m > 0.0 && s.max_step_m >= options.max_driven_step_m) {
-    // Caution, but too near the step limit to drive over (MapCheckOptions::driven_step_fraction).
+  if (options.driven_step_refused && options.max_driven_step_m > 0.0 && s.max_step_m >= options.max_driven_step_m) {
+    // Caution, but too near the step limit to drive over (MapCheckOptions::driven_step_refused).
     c.verdict = Verdict::kUnsafe;
     c.min_clearance_m = 0.0;
     c.worst_pose_index = 0;

@@ -42,14 +42,18 @@ struct MapCheckOptions {
   double max_unknown_fraction = 0.2;
   double hidden_patch_m = 0.0;  // 0: the fraction alone
   double max_scattered_unknown_fraction = 0.5;  // with hidden_patch_m: specks and thin bands
-  // A step may not drive over a cell whose step reads at or over this fraction of the map's
-  // step limit (traversability.max_step_m), even one rated caution: the map under-reads
-  // rocks (a cell's points average a rock's flank; a rock at the edge of the view shows
-  // its near side only), and navbench drove into a 0.32 m rock read 0.20 to 0.23 m under
-  // a 0.25 m limit. 1: only unsafe cells are refused.
+  // Ground near the step limit: cells, even caution ones, whose step reads at or over this
+  // fraction of the map's step limit (traversability.max_step_m). The map under-reads rocks
+  // (a cell's points average a rock's flank; a rock at the edge of the view shows its near
+  // side only), and navbench drove into a 0.32 m rock read 0.20 to 0.23 m under a 0.25 m
+  // limit. The limit goes to the executor in the map's message, whose arc vote drives a
+  // step over such ground only when no other step is allowed. 1: off.
   double driven_step_fraction = 0.8;
-  // That limit in metres, which CheckPathOnMap applies (0: none): the caller sets it from
-  // the map's own options (DrivenStepLimit), as hazard_monitor does.
+  // Whether this check refuses such steps outright (UNSAFE). Off: measured on navbench
+  // (seed 7, k = 0.20) it boxed the rover in among 0.2 to 0.25 m rocks in 5 runs of 6.
+  bool driven_step_refused = false;
+  // The limit in metres (0: none): the caller sets it from the map's own options
+  // (DrivenStepLimit), as hazard_monitor does.
   double max_driven_step_m = 0.0;
   double DrivenStepLimit(double map_max_step_m) const {
     return driven_step_fraction < 1.0 ? driven_step_fraction * map_max_step_m : 0.0;
@@ -62,7 +66,8 @@ struct MapCheckOptions {
 };
 
 // Reads `enabled`, `blind_margin_m`, `max_unknown_fraction`, `hidden_patch_m`,
-// `max_scattered_unknown_fraction`, `driven_step_fraction` of a `hazards.map` section;
+// `max_scattered_unknown_fraction`, `driven_step_fraction`, `driven_step_refused` of a
+// `hazards.map` section;
 // `extra_keys` are keys the caller reads itself (the grid's own options).
 MapCheckOptions LoadMapCheckOptions(const config::ConfigNode& node, const std::vector<std::string>& extra_keys = {});
 
@@ -71,8 +76,8 @@ inline constexpr const char* kMapZoneName = "hazard_map";
 
 // Judges the swept path (first pose: where the rover stands) on `grid`: UNSAFE with detail
 // "hazard_map: step 0.35 m at 4.10,0.30" (the worst unsafe cell), or with
-// options.max_driven_step_m "hazard_map: step 0.22 m at 4.10,0.30 is over the 0.20 m a step
-// drives over" (the highest caution cell the step crosses), UNKNOWN with detail
+// options.driven_step_refused "hazard_map: step 0.22 m at 4.10,0.30 is over the 0.20 m a
+// step drives over" (the highest caution cell the step crosses), UNKNOWN with detail
 // "hazard_map: unknown: 45 % of the cells the step crosses are unknown (limit 20 %)" or
 // "hazard_map: unknown ground 0.60 m across at 4.10,0.30 could hide a rock (...)", otherwise
 // SAFE. An empty or non-finite path, or a bad grid, is UNKNOWN.

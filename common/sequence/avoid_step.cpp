@@ -236,6 +236,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   d += " m to go";
   if (plan) d += ", plan " + Fixed(plan->path_length_m()) + " m";
   if (loop_broken) d += "; the vote's first choice was made here before: the next best instead";
+  if (b.near_limit) d += "; no other step allowed: " + b.near_limit_why;
   if (!avoid_note_.empty()) d += "; " + avoid_note_.substr(0, avoid_note_.size() - 2);  // less its "; "
   d += ")";
   detail_ = std::move(d);

@@ -120,12 +120,15 @@ TEST(MapCheck, UnknownGroundWideEnoughToHideARockCannotDecide) {
 }
 
 // A small rock read at 85 % of a 0.25 m step limit (0.2125 m: caution, goodness 0.15) beside
-// the path, under the body's left half along a 0.6 m step: refused with the monitor's 0.8
-// fraction (0.20 m), allowed with the fraction at 1 (only unsafe cells, the old rule). A
-// rock read at 50 % (0.125 m), and the 85 % rock beyond the step, are driven over / past.
-TEST(MapCheck, ACellNearTheStepLimitIsNotDrivenOver) {
+// the path, under the body's left half along a 0.6 m step: with driven_step_refused and the
+// 0.8 fraction (0.20 m) refused, with the fraction at 1 or the refusal off (the default: the
+// arc vote only avoids such steps) allowed. A rock read at 50 % (0.125 m), and the 85 % rock
+// beyond the step, are driven over / past.
+TEST(MapCheck, ACellNearTheStepLimitIsNotDrivenOverWhenRefused) {
   MapCheckOptions o;
-  ASSERT_DOUBLE_EQ(o.driven_step_fraction, 0.8);  // on by default
+  ASSERT_DOUBLE_EQ(o.driven_step_fraction, 0.8);
+  ASSERT_FALSE(o.driven_step_refused);
+  o.driven_step_refused = true;
   o.max_driven_step_m = o.DrivenStepLimit(0.25);
   ASSERT_NEAR(o.max_driven_step_m, 0.20, 1e-12);
   auto rock = [](double x, double y, float step) {
@@ -143,6 +146,9 @@ TEST(MapCheck, ACellNearTheStepLimitIsNotDrivenOver) {
   off.max_driven_step_m = off.DrivenStepLimit(0.25);
   EXPECT_EQ(off.max_driven_step_m, 0.0);
   EXPECT_EQ(CheckPathOnMap(near_limit, avoidance::Footprint{}, Straight(0.6), off).verdict, Verdict::kSafe);
+  MapCheckOptions not_refused = o;
+  not_refused.driven_step_refused = false;
+  EXPECT_EQ(CheckPathOnMap(near_limit, avoidance::Footprint{}, Straight(0.6), not_refused).verdict, Verdict::kSafe);
   const auto half = CheckPathOnMap(rock(1.1, -0.5, 0.125f), avoidance::Footprint{}, Straight(0.6), o);
   EXPECT_EQ(half.verdict, Verdict::kSafe) << half.detail;
   // Beyond the step (the look-ahead): planned past, not refused.
@@ -156,6 +162,8 @@ TEST(MapCheck, DrivenStepFractionIsReadAndChecked) {
   };
   EXPECT_DOUBLE_EQ(load("{driven_step_fraction: 0.7}").driven_step_fraction, 0.7);
   EXPECT_DOUBLE_EQ(load("{enabled: true}").driven_step_fraction, 0.8);
+  EXPECT_TRUE(load("{driven_step_refused: true}").driven_step_refused);
+  EXPECT_THROW(load("{driven_step_refused: 3}"), config::ConfigError);
   EXPECT_THROW(load("{driven_step_fraction: 0}"), config::ConfigError);
   EXPECT_THROW(load("{driven_step_fraction: 1.2}"), config::ConfigError);
   MapCheckOptions bad;
