@@ -126,8 +126,10 @@ TEST(MapCheck, UnknownGroundWideEnoughToHideARockCannotDecide) {
 // beyond the step, are driven over / past.
 TEST(MapCheck, ACellNearTheStepLimitIsNotDrivenOverWhenRefused) {
   MapCheckOptions o;
-  ASSERT_DOUBLE_EQ(o.driven_step_fraction, 0.8);
+  ASSERT_DOUBLE_EQ(o.driven_step_fraction, 1.0);  // off by default (README)
+  ASSERT_EQ(o.DrivenStepLimit(0.25), 0.0);
   ASSERT_FALSE(o.driven_step_refused);
+  o.driven_step_fraction = 0.8;
   o.driven_step_refused = true;
   o.max_driven_step_m = o.DrivenStepLimit(0.25);
   ASSERT_NEAR(o.max_driven_step_m, 0.20, 1e-12);
@@ -161,7 +163,7 @@ TEST(MapCheck, DrivenStepFractionIsReadAndChecked) {
     return LoadMapCheckOptions(config::ConfigNode(YAML::Load(text), "test", "hazards.map"));
   };
   EXPECT_DOUBLE_EQ(load("{driven_step_fraction: 0.7}").driven_step_fraction, 0.7);
-  EXPECT_DOUBLE_EQ(load("{enabled: true}").driven_step_fraction, 0.8);
+  EXPECT_DOUBLE_EQ(load("{enabled: true}").driven_step_fraction, 1.0);
   EXPECT_TRUE(load("{driven_step_refused: true}").driven_step_refused);
   EXPECT_THROW(load("{driven_step_refused: 3}"), config::ConfigError);
   EXPECT_THROW(load("{driven_step_fraction: 0}"), config::ConfigError);
