@@ -167,6 +167,14 @@ void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalDist
     c->vetoed = true;
     c->why = "it would undo the last turn";
   }
+  // Ground the map rates caution but near its step limit, which it may under-read
+  // (VoteOptions::max_driven_step_m): judged on what is driven now (a turn's first part),
+  // as the hazard monitor judges the step it is asked about.
+  if (o.max_driven_step_m > 0.0 && s.max_step_m >= o.max_driven_step_m) {
+    c->near_limit = true;
+    c->near_limit_why = "step " + Fixed(s.max_step_m) + " m at " + Fixed(s.max_step_x) + "," +
+                        Fixed(s.max_step_y) + " is over the " + Fixed(o.max_driven_step_m) + " m a step drives over";
+  }
   // The look-ahead: how far it runs safe (a fraction of its length), and the worst met
   // before that.
   const Safety la = JudgeSafety(grid, heights, o, pose, look);
@@ -204,6 +212,9 @@ void VoteOptions::Validate() const {
     if (const std::string p = suspension->Problem(); !p.empty()) throw std::invalid_argument("avoidance: suspension: " + p);
   }
   if (max_point_turn_rad > M_PI) throw std::invalid_argument("avoidance: max_point_turn_rad must be <= pi");
+  if (!(max_driven_step_m >= 0.0) || !std::isfinite(max_driven_step_m))
+    throw std::invalid_argument("avoidance: max_driven_step_m " + std::to_string(max_driven_step_m) +
+                                " must be finite and >= 0 (0: off)");
   if (!std::isfinite(previous_turn_rad)) throw std::invalid_argument("avoidance: previous_turn_rad must be finite");
   if (num_arcs < 1 || num_arcs > 101) throw std::invalid_argument("avoidance: num_arcs must be 1 to 101");
   const auto fraction = [](double f) { return f >= 0.0 && f <= 1.0; };
@@ -281,10 +292,14 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   // A turn after which not even one step is clear leads nowhere (see the header).
   const double one_step = std::min(o.step_m, std::max(remaining, 0.05)) - 1e-6;
   auto leads_nowhere = [&](const Candidate& c) { return c.kind == Candidate::Kind::kTurn && c.clear_m < one_step; };
-  auto pick = [&](bool dead_ends) {
+  // near_ok: whether a step over ground near the step limit may be picked (only when no
+  // other is allowed: VoteOptions::max_driven_step_m).
+  auto pick = [&](bool dead_ends, bool near_ok) {
     const Candidate* best = nullptr;
     for (const Candidate& c : choice.candidates) {
-      if (c.vetoed || (c.kind == Candidate::Kind::kBackup && !way_behind) || leads_nowhere(c) != dead_ends) continue;
+      if (c.vetoed || (c.kind == Candidate::Kind::kBackup && !way_behind) || leads_nowhere(c) != dead_ends ||
+          (c.near_limit && !near_ok))
+        continue;
       if (!best || c.vote > best->vote + 1e-9 ||
           (std::abs(c.vote - best->vote) <= 1e-9 && std::abs(c.curvature_per_m) < std::abs(best->curvature_per_m)))
         best = &c;
@@ -306,12 +321,19 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     choice.candidates.push_back(c);
   };
   if (way_behind && o.backup_m > 0.0) backup();
-  const Candidate* best = pick(false);
+  const Candidate* best = pick(false, false);
+  bool backed = false;  // a last-resort backup was judged (the last candidate)
   if (!best && o.backup_m > 0.0 && !way_behind) {
     backup();
-    if (!choice.candidates.back().vetoed) best = &choice.candidates.back();
+    backed = true;
+    const Candidate& b = choice.candidates.back();
+    if (!b.vetoed && !b.near_limit) best = &b;
   }
-  if (!best) best = pick(true);
+  if (!best) best = pick(true, false);
+  // Only steps over ground near the step limit are left: taken in the same order.
+  if (!best) best = pick(false, true);
+  if (!best && backed && !choice.candidates.back().vetoed) best = &choice.candidates.back();
+  if (!best) best = pick(true, true);
   if (best) {
     choice.found = true;
     choice.best = *best;

@@ -48,6 +48,16 @@ struct VoteOptions {
   // driven is its first max_turn_rad. A rover whose way on lies 40 deg off sees it.
   double max_point_turn_rad = 90.0 * 3.14159265358979323846 / 180.0;
   double blind_margin_m = 0.5;
+  // A candidate whose step itself (not the look-ahead) crosses a cell whose step reads this
+  // high or higher, even one the map rates caution, is chosen only when no other is allowed
+  // (Candidate::near_limit): the map reads a rock lower than it is (a cell's points average
+  // its flank; a rock at the edge of the view shows only its near side), and navbench drove
+  // a body corner into a 0.32 m rock read 0.20 to 0.23 m under a 0.25 m limit when a step
+  // clear of it was allowed. Not a veto: refusing such steps outright boxed the rover in
+  // among the 0.2 to 0.25 m rocks of a k = 0.20 field (common/avoidance/README.md). Such
+  // ground may lie in the look-ahead and be planned past. 0: off. The executor takes it
+  // from the map's message (hazards.map.driven_step_fraction of the map's step limit).
+  double max_driven_step_m = 0.0;
   UnknownLimits unknown;               // the step's new cells beyond the blind ring (grid.hpp)
   // What an unknown cell in the look-ahead is worth: the look-ahead's goodness (its worst
   // known cell) is drawn toward this by the share of its cells that are unknown.
@@ -110,6 +120,10 @@ struct Candidate {
   // (m of belly clearance, or rad of angle; 1 when undecided).
   bool hazard = false;
   double severity = 0.0;
+  // Allowed, but its step crosses a cell whose step reads VoteOptions::max_driven_step_m or
+  // more: chosen only when no other candidate is allowed. `near_limit_why` names the cell.
+  bool near_limit = false;
+  std::string near_limit_why;
 };
 
 struct Choice {

@@ -330,6 +330,11 @@ Sweep SweepFootprint(const Grid& grid, const Footprint& fp, const std::vector<Po
             break;
           default:
             sw.min_goodness = std::min(sw.min_goodness, static_cast<double>(grid.goodness[k]));
+            if (grid.step_m[k] > sw.max_step_m) {
+              sw.max_step_m = grid.step_m[k];
+              sw.max_step_x = x;
+              sw.max_step_y = y;
+            }
             if (sw.first_unsafe_pose < 0)
               sw.clear_min_goodness = std::min(sw.clear_min_goodness, static_cast<double>(grid.goodness[k]));
         }

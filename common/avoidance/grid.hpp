@@ -104,6 +104,11 @@ struct Sweep {
   int unsafe = 0;
   int outside = 0;        // swept points outside the grid (counted as unknown)
   double min_goodness = 1.0;  // over known counted cells (unsafe = 0)
+  // The highest step among the counted cells that are not unsafe (safe and caution), and
+  // that cell's centre: what a step limit tighter than the map's own judges
+  // (VoteOptions::max_driven_step_m, hazards' MapCheckOptions::max_driven_step_m).
+  double max_step_m = 0.0;
+  double max_step_x = 0.0, max_step_y = 0.0;
   // The worst unsafe cell: the highest step (or the first met if steps are equal).
   double worst_step_m = 0.0;
   double worst_tilt_deg = -1.0;  // its tilt (< 0: the grid holds no tilts)

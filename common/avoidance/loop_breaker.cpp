@@ -45,13 +45,16 @@ const Candidate* BestNotRepeating(const Choice& choice, const std::vector<Candid
     return false;
   };
   auto leads_nowhere = [&](const Candidate& c) { return c.kind == Candidate::Kind::kTurn && c.clear_m < one_step_m; };
-  for (const bool dead_ends : {false, true}) {
-    const Candidate* best = nullptr;
-    for (const Candidate& c : choice.candidates) {
-      if (c.vetoed || repeats(c) || leads_nowhere(c) != dead_ends) continue;
-      if (!best || c.vote > best->vote + 1e-9) best = &c;
+  // As VoteArcs picks: ground near the step limit only when nothing else is left.
+  for (const bool near_ok : {false, true}) {
+    for (const bool dead_ends : {false, true}) {
+      const Candidate* best = nullptr;
+      for (const Candidate& c : choice.candidates) {
+        if (c.vetoed || repeats(c) || leads_nowhere(c) != dead_ends || (c.near_limit && !near_ok)) continue;
+        if (!best || c.vote > best->vote + 1e-9) best = &c;
+      }
+      if (best) return best;
     }
-    if (best) return best;
   }
   return nullptr;
 }

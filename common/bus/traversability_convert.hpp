@@ -14,6 +14,7 @@ struct MapRules {
   avoidance::Footprint footprint;
   double blind_margin_m = 0.5;
   avoidance::UnknownLimits unknown;
+  double max_driven_step_m = 0.0;  // hazards.map.driven_step_fraction x the map's step limit (0: off)
 };
 
 inline rover_msgs::traversability_map_t MapToMsg(const avoidance::Grid& g, const MapRules& rules,
@@ -45,6 +46,7 @@ inline rover_msgs::traversability_map_t MapToMsg(const avoidance::Grid& g, const
   m.max_unknown_fraction = rules.unknown.max_fraction;
   m.hidden_patch_m = rules.unknown.hidden_patch_m;
   m.max_scattered_unknown_fraction = rules.unknown.max_scattered_fraction;
+  m.max_driven_step_m = rules.max_driven_step_m;
   return m;
 }
 
@@ -68,6 +70,7 @@ inline avoidance::Grid GridFromMsg(const rover_msgs::traversability_map_t& m, Ma
     rules->footprint.center_forward_m = m.footprint_center_forward_m;
     rules->blind_margin_m = m.blind_margin_m;
     rules->unknown = {m.max_unknown_fraction, m.hidden_patch_m, m.max_scattered_unknown_fraction};
+    rules->max_driven_step_m = m.max_driven_step_m;
   }
   return g;
 }

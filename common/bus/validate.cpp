@@ -104,7 +104,9 @@ std::string Problem(const rover_msgs::traversability_map_t& m) {
                 NonNegative("max_unknown_fraction", m.max_unknown_fraction),
                 Finite("hidden_patch_m", m.hidden_patch_m), NonNegative("hidden_patch_m", m.hidden_patch_m),
                 Finite("max_scattered_unknown_fraction", m.max_scattered_unknown_fraction),
-                NonNegative("max_scattered_unknown_fraction", m.max_scattered_unknown_fraction)});
+                NonNegative("max_scattered_unknown_fraction", m.max_scattered_unknown_fraction),
+                Finite("max_driven_step_m", m.max_driven_step_m),
+                NonNegative("max_driven_step_m", m.max_driven_step_m)});
 }
 
 std::string Problem(const rover_msgs::hazard_status_t& m) {

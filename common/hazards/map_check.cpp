@@ -25,6 +25,12 @@ void MapCheckOptions::Validate() const {
   if (!(max_scattered_unknown_fraction >= 0.0) || !(max_scattered_unknown_fraction <= 1.0))
     throw std::invalid_argument("hazards.map.max_scattered_unknown_fraction " +
                                 std::to_string(max_scattered_unknown_fraction) + " must be 0 to 1");
+  if (!(driven_step_fraction > 0.0) || !(driven_step_fraction <= 1.0))
+    throw std::invalid_argument("hazards.map.driven_step_fraction " + std::to_string(driven_step_fraction) +
+                                " must be over 0 and at most 1 (1: off)");
+  if (!(max_driven_step_m >= 0.0) || !std::isfinite(max_driven_step_m))
+    throw std::invalid_argument("hazards.map: max_driven_step_m " + std::to_string(max_driven_step_m) +
+                                " must be finite and >= 0 (0: off)");
   if (!(hidden_patch_m >= 0.0) || !(hidden_patch_m <= 5.0))
     throw std::invalid_argument("hazards.map.hidden_patch_m " + std::to_string(hidden_patch_m) +
                                 " must be 0 to 5 m");
@@ -33,7 +39,8 @@ void MapCheckOptions::Validate() const {
 MapCheckOptions LoadMapCheckOptions(const config::ConfigNode& node, const std::vector<std::string>& extra_keys) {
   MapCheckOptions o;
   std::vector<std::string> keys = {"enabled", "blind_margin_m", "max_unknown_fraction", "hidden_patch_m",
-                                   "max_scattered_unknown_fraction"};
+                                   "max_scattered_unknown_fraction", "driven_step_fraction",
+                                   "driven_step_refused"};
   keys.insert(keys.end(), extra_keys.begin(), extra_keys.end());
   node.CheckKeys(keys);
   node.Get("enabled", o.enabled);
@@ -41,6 +48,8 @@ MapCheckOptions LoadMapCheckOptions(const config::ConfigNode& node, const std::v
   node.Get("max_unknown_fraction", o.max_unknown_fraction, 0.0, 1.0);
   node.Get("hidden_patch_m", o.hidden_patch_m, 0.0, 5.0);
   node.Get("max_scattered_unknown_fraction", o.max_scattered_unknown_fraction, 0.0, 1.0);
+  node.Get("driven_step_fraction", o.driven_step_fraction, 0.01, 1.0);
+  node.Get("driven_step_refused", o.driven_step_refused);
   return o;
 }
 
@@ -137,6 +146,16 @@ SweptCheck CheckPathOnMap(const avoidance::Grid& grid, const avoidance::Footprin
                (s.worst_tilt_deg >= 0.0 ? ", tilt " + Fixed(s.worst_tilt_deg, 1) + " deg" : std::string()) + " at " +
                Fixed(s.worst_x) + "," +
                Fixed(s.worst_y);
+    return c;
+  }
+  if (options.driven_step_refused && options.max_driven_step_m > 0.0 && s.max_step_m >= options.max_driven_step_m) {
+    // Caution, but too near the step limit to drive over (MapCheckOptions::driven_step_refused).
+    c.verdict = Verdict::kUnsafe;
+    c.min_clearance_m = 0.0;
+    c.worst_pose_index = 0;
+    c.worst_pose = path.front();
+    c.detail = std::string(kMapZoneName) + ": step " + Fixed(s.max_step_m) + " m at " + Fixed(s.max_step_x) + "," +
+               Fixed(s.max_step_y) + " is over the " + Fixed(options.max_driven_step_m) + " m a step drives over";
     return c;
   }
   const std::string share = Fixed(100.0 * s.UnknownFraction(), 0) + " % of the cells the step crosses are unknown";

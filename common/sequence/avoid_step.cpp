@@ -113,6 +113,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   const bool strict = options_.avoid_unseen_ground_strict;
   o.blind_margin_m = strict ? 0.0 : map_->blind_margin_m;
   o.unknown = map_->unknown;
+  o.max_driven_step_m = map_->max_driven_step_m;
   // Strict: ground that could hide a rock is not swept at all, not even by a corner.
   o.unknown.hidden_at_any_share = strict;
   o.suspension = map_->suspension;
@@ -161,7 +162,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     const auto s =
         avoidance::SweepFootprint(grid, o.footprint, step_path, here, o.blind_margin_m, o.unknown.hidden_patch_m);
     const auto l = avoidance::SweepFootprint(grid, o.footprint, line, here, o.blind_margin_m);
-    if (s.unsafe == 0 && avoidance::JudgeUnknown(s, o.unknown) == avoidance::UnknownVerdict::kAcceptable &&
+    const bool drivable = o.max_driven_step_m <= 0.0 || s.max_step_m < o.max_driven_step_m;
+    if (s.unsafe == 0 && drivable && avoidance::JudgeUnknown(s, o.unknown) == avoidance::UnknownVerdict::kAcceptable &&
         l.unsafe == 0) {
       *step = direct.step;
       step_choice_ = StepChoice::kSteerAtGoal;
@@ -234,6 +236,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   d += " m to go";
   if (plan) d += ", plan " + Fixed(plan->path_length_m()) + " m";
   if (loop_broken) d += "; the vote's first choice was made here before: the next best instead";
+  if (b.near_limit) d += "; no other step allowed: " + b.near_limit_why;
   if (!avoid_note_.empty()) d += "; " + avoid_note_.substr(0, avoid_note_.size() - 2);  // less its "; "
   d += ")";
   detail_ = std::move(d);

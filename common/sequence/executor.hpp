@@ -229,6 +229,9 @@ struct TraversabilityMap {  // traversability_map_t (hazard_monitor)
   avoidance::Footprint footprint;  // what the monitor sweeps along a step
   double blind_margin_m = 0.5;
   avoidance::UnknownLimits unknown;  // how much unknown ground a step may cross
+  // A step drives over no cell whose step reads this high, caution or not (0: off; the
+  // monitor's hazards.map.driven_step_fraction x its map's step limit).
+  double max_driven_step_m = 0.0;
   // The rover's suspension (configs/rover.yaml `clearance:`): arc voting judges paths by
   // its clearance bounds from the map's heights; unset: by the cells' ratings.
   std::optional<clearance::Suspension> suspension;

@@ -77,6 +77,8 @@ void CheckMapOptions(const MapOptions& o) {
     Bad("tilt_margin_sigmas must be in [0, 10]");
   if (!std::isfinite(o.dip_margin_sigmas) || o.dip_margin_sigmas < 0 || o.dip_margin_sigmas > 10)
     Bad("dip_margin_sigmas must be in [0, 10]");
+  if (!std::isfinite(o.relief_sigmas) || o.relief_sigmas < 0 || o.relief_sigmas > 10)
+    Bad("relief_sigmas must be in [0, 10]");
   if (!std::isfinite(o.roughness_margin_sigmas) || o.roughness_margin_sigmas < 0 || o.roughness_margin_sigmas > 10)
     Bad("roughness_margin_sigmas must be in [0, 10]");
   if (!std::isfinite(o.min_texture_snr) || o.min_texture_snr < 0 || o.min_texture_snr > 100)
@@ -236,7 +238,8 @@ void TraversabilityMap::Rate() const {
   const std::size_t count = static_cast<std::size_t>(n_) * n_;
   cells_.assign(count, Cell{});
   // Cell heights (weighted means) and sigmas.
-  std::vector<float> h(count, 0.0f), s(count, 0.0f), e(count, 0.0f), mx(count, 0.0f), my(count, 0.0f);
+  std::vector<float> h(count, 0.0f), s(count, 0.0f), e(count, 0.0f), mx(count, 0.0f), my(count, 0.0f),
+      relief(count, 0.0f);
   std::vector<char> known(count, 0);
   for (std::size_t k = 0; k < count; ++k) {
     const Accumulator& a = acc_[k];
@@ -252,6 +255,8 @@ void TraversabilityMap::Rate() const {
     // standard error the points' own scatter gives. A few points of a mismatched streak
     // among good ones (or pairs that disagree) scatter far more than their sigma says.
     e[k] = static_cast<float>(std::sqrt(static_cast<double>(s[k]) * s[k] + spread2 / a.n));
+    // The relief within the cell: the points' scatter beyond their own noise (relief_sigmas).
+    relief[k] = static_cast<float>(std::sqrt(std::max(0.0, spread2 - static_cast<double>(s[k]) * s[k])));
     cells_[k].elevation_m = static_cast<float>(h[k] + std::sqrt(spread2));
     cells_[k].height_sigma_m = s[k];
   }
@@ -277,15 +282,17 @@ void TraversabilityMap::Rate() const {
   const double tan_max_tilt = std::tan(o.max_tilt_deg * M_PI / 180.0);
   const double max_face_rad = o.max_face_deg > 0 ? o.max_face_deg * M_PI / 180.0 : HUGE_VAL;
   std::vector<Eigen::Vector3d> xs, xt;  // (dx, dy, h)
-  std::vector<float> ss, se;
+  std::vector<float> ss, se, sr;
   std::vector<char> inlier;
   xs.reserve(patch.size());
   // The known cells of a patch round (i, j), as (dx, dy, h) from the cell centre.
   auto gather = [&](const std::vector<std::pair<int, int>>& offs, int i, int j, std::vector<Eigen::Vector3d>& out,
-                    std::vector<float>* sigmas, std::vector<float>* errors = nullptr) {
+                    std::vector<float>* sigmas, std::vector<float>* errors = nullptr,
+                    std::vector<float>* reliefs = nullptr) {
     out.clear();
     if (sigmas) sigmas->clear();
     if (errors) errors->clear();
+    if (reliefs) reliefs->clear();
     for (const auto& [di, dj] : offs) {
       const int a = i + di, b = j + dj;
       if (a < 0 || b < 0 || a >= n_ || b >= n_) continue;
@@ -294,6 +301,7 @@ void TraversabilityMap::Rate() const {
       out.emplace_back(di * cell + mx[k], dj * cell + my[k], h[k]);
       if (sigmas) sigmas->push_back(s[k]);
       if (errors) errors->push_back(e[k]);
+      if (reliefs) reliefs->push_back(relief[k]);
     }
   };
   // Plane h = c0 + c1 dx + c2 dy by least squares over the known cells, then again
@@ -440,7 +448,7 @@ void TraversabilityMap::Rate() const {
   std::vector<float> st;
   for (int i = 0; i < n_; ++i) {
     for (int j = 0; j < n_; ++j) {
-      gather(patch, i, j, xs, &ss, &se);
+      gather(patch, i, j, xs, &ss, &se, &sr);
       if (xs.size() < min_known) continue;
       Eigen::Vector3d c_fit;  // roughness: the scatter about the plane fitted
       Eigen::Vector3d c = fit(xs, ss, &c_fit);
@@ -479,7 +487,7 @@ void TraversabilityMap::Rate() const {
         const double res = xs[k].z() - (c_fit[0] + c_fit[1] * xs[k].x() + c_fit[2] * xs[k].y());
         const double above = xs[k].z() - (ground[0] + ground[1] * xs[k].x() + ground[2] * xs[k].y());
         lo = std::min(lo, above + o.dip_margin_sigmas * se[k]);
-        hi = std::max(hi, above);
+        hi = std::max(hi, above + o.relief_sigmas * sr[k]);
         // The roughness: how far each cell lies off the plane beyond what its own height
         // error explains (roughness_margin_sigmas of it).
         const double off = std::max(0.0, std::abs(res) - o.roughness_margin_sigmas * se[k]);
@@ -538,6 +546,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("tilt_margin_sigmas", o.tilt_margin_sigmas, 0.0, 10.0);
   node.Get("dip_margin_sigmas", o.dip_margin_sigmas, 0.0, 10.0);
   node.Get("roughness_margin_sigmas", o.roughness_margin_sigmas, 0.0, 10.0);
+  node.Get("relief_sigmas", o.relief_sigmas, 0.0, 10.0);
   node.Get("drop_unseen_border", o.drop_unseen_border);
   node.Get("lr_max_diff_px", o.lr_max_diff_px, 0.0, 64.0);
   node.Get("ground_band_fraction", o.ground_band_fraction, 0.0, 0.5);
@@ -555,7 +564,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
 const std::vector<std::string> kMapOnlyKeys = {
     "cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
     "max_roughness_m", "min_points", "caution_fraction", "min_patch_fraction", "tilt_margin_sigmas", "dip_margin_sigmas",
-    "roughness_margin_sigmas", "ground_band_fraction"};
+    "roughness_margin_sigmas", "relief_sigmas", "ground_band_fraction"};
 
 }  // namespace
 

@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<MapWorker> map;
     if (map_check.enabled) {
       const auto map_options = traversability::LoadMapOptions(section["map"]["traversability"]);
+      map_check.max_driven_step_m = map_check.DrivenStepLimit(map_options.max_step_m);
       if (const std::string note = hazards::MapTiltLimitProblem(map_options.max_tilt_deg, options.tilt);
           !note.empty()) {
         std::cerr << "hazard_monitor: warning: " << note << "\n";
@@ -85,6 +86,7 @@ int main(int argc, char** argv) {
     rules.footprint = hazards::GridFootprint(options.footprint);
     rules.blind_margin_m = map_check.blind_margin_m;
     rules.unknown = map_check.Unknown();
+    rules.max_driven_step_m = map_check.max_driven_step_m;
     avoidance::Grid grid;  // the map as the checks see it: the worker's newest
     int64_t last_frame_id = -1;
     if (map) grid = map->Initial();

@@ -363,6 +363,7 @@ int main(int argc, char** argv) {
           t.footprint = rules.footprint;
           t.blind_margin_m = rules.blind_margin_m;
           t.unknown = rules.unknown;
+          t.max_driven_step_m = rules.max_driven_step_m;
           t.suspension = suspension;
           executor.OnTraversabilityMap(t);
           flush();

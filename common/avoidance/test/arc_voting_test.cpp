@@ -143,6 +143,71 @@ TEST(ArcVoting, RockInTheStepVetoesStraightAndNamesIt) {
   EXPECT_EQ(c.best.step_sweep.unsafe, 0);
 }
 
+// A small rock the map reads at 85 % of a 0.25 m step limit (0.2125 m: caution, goodness
+// 0.15) under the left half of the straight step: with max_driven_step_m 0.20 (80 %) the
+// straight arc, and every step that sweeps it, is allowed but marked near the limit and
+// named, and the vote takes one that sweeps no cell that high; with 0 (the old rule) the
+// straight arc is not marked. A rock read at 50 % (0.125 m) marks nothing, and the 85 % rock
+// further on, in the look-ahead only, leaves straight unmarked (planned past, not driven
+// over this step).
+TEST(ArcVoting, ACellNearTheStepLimitInTheStepIsNotDrivenOver) {
+  auto rock = [](double x, double y, float step) {
+    Grid g = Open();
+    g.Paint(x, y, 0.15, CellClass::kCaution, 1.0f - step / 0.25f, step);
+    return g;
+  };
+  auto straight_of = [](const Choice& c) {
+    for (const auto& k : c.candidates)
+      if (k.kind == Candidate::Kind::kArc && k.curvature_per_m == 0.0) return k;
+    ADD_FAILURE() << "no straight arc";
+    return Candidate{};
+  };
+  VoteOptions o;
+  o.max_driven_step_m = 0.20;
+  const Grid near_limit = rock(1.1, -0.5, 0.2125f);
+  const Choice c = VoteArcs(near_limit, {0, 0, 0}, 5.0, 0.0, o);
+  const Candidate straight = straight_of(c);
+  EXPECT_FALSE(straight.vetoed);
+  EXPECT_TRUE(straight.near_limit);
+  EXPECT_NE(straight.near_limit_why.find("step 0.21 m at 1."), std::string::npos) << straight.near_limit_why;
+  EXPECT_NE(straight.near_limit_why.find("over the 0.20 m a step drives over"), std::string::npos)
+      << straight.near_limit_why;
+  ASSERT_TRUE(c.found);
+  EXPECT_FALSE(c.best.near_limit);
+  EXPECT_FALSE(c.best.kind == Candidate::Kind::kArc && c.best.curvature_per_m == 0.0);
+  EXPECT_LT(c.best.step_sweep.max_step_m, 0.20);
+  // The old rule: nothing marked, and the best step may cross the rock.
+  VoteOptions off = o;
+  off.max_driven_step_m = 0.0;
+  EXPECT_FALSE(straight_of(VoteArcs(near_limit, {0, 0, 0}, 5.0, 0.0, off)).near_limit);
+  // 50 % of the limit: driven over.
+  const Choice half = VoteArcs(rock(1.1, -0.5, 0.125f), {0, 0, 0}, 5.0, 0.0, o);
+  EXPECT_FALSE(straight_of(half).near_limit) << straight_of(half).near_limit_why;
+  // In the look-ahead only: unmarked now, and its goodness counts the rock.
+  const Choice later = VoteArcs(rock(2.4, -0.5, 0.2125f), {0, 0, 0}, 5.0, 0.0, o);
+  EXPECT_FALSE(straight_of(later).near_limit) << straight_of(later).near_limit_why;
+  EXPECT_LT(straight_of(later).goodness, 0.2);
+  // Bad values throw.
+  VoteOptions bad;
+  bad.max_driven_step_m = -0.1;
+  EXPECT_THROW(VoteArcs(Open(), {0, 0, 0}, 1, 0, bad), std::invalid_argument);
+}
+
+// Ground near the step limit all round (every cell 0.2125 m, caution): no step avoids it,
+// and the rover is not boxed in: the vote still takes the best of them, marked (refusing
+// such steps outright stopped 5 navbench runs of 6 at k = 0.20 among 0.2 to 0.25 m rocks).
+TEST(ArcVoting, GroundNearTheStepLimitAllRoundIsStillDriven) {
+  const Grid g = Grid::Filled(-6.0, -6.0, 0.2, 60, 60, CellClass::kCaution, 0.15f);
+  Grid near = g;
+  near.step_m.assign(near.step_m.size(), 0.2125f);
+  VoteOptions o;
+  o.max_driven_step_m = 0.20;
+  const Choice c = VoteArcs(near, {0, 0, 0}, 5.0, 0.0, o);
+  ASSERT_TRUE(c.found) << c.detail;
+  EXPECT_TRUE(c.best.near_limit);
+  EXPECT_FALSE(c.best.vetoed);
+}
+
 TEST(ArcVoting, WallWithAGapToTheLeftSteersLeft) {
   Grid g = Open();
   // Wall across x = 2.5 from y = -0.2 to +5; the gap is west of it (the look-ahead of an

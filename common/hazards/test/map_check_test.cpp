@@ -119,6 +119,63 @@ TEST(MapCheck, UnknownGroundWideEnoughToHideARockCannotDecide) {
   EXPECT_EQ(CheckPathOnMap(ring, avoidance::Footprint{}, Straight(0.6), o).verdict, Verdict::kUnknown);
 }
 
+// A small rock read at 85 % of a 0.25 m step limit (0.2125 m: caution, goodness 0.15) beside
+// the path, under the body's left half along a 0.6 m step: with driven_step_refused and the
+// 0.8 fraction (0.20 m) refused, with the fraction at 1 or the refusal off (the default: the
+// arc vote only avoids such steps) allowed. A rock read at 50 % (0.125 m), and the 85 % rock
+// beyond the step, are driven over / past.
+TEST(MapCheck, ACellNearTheStepLimitIsNotDrivenOverWhenRefused) {
+  MapCheckOptions o;
+  ASSERT_DOUBLE_EQ(o.driven_step_fraction, 1.0);  // off by default (README)
+  ASSERT_EQ(o.DrivenStepLimit(0.25), 0.0);
+  ASSERT_FALSE(o.driven_step_refused);
+  o.driven_step_fraction = 0.8;
+  o.driven_step_refused = true;
+  o.max_driven_step_m = o.DrivenStepLimit(0.25);
+  ASSERT_NEAR(o.max_driven_step_m, 0.20, 1e-12);
+  auto rock = [](double x, double y, float step) {
+    Grid g = Grid::Filled(-5, -5, 0.2, 50, 50, CellClass::kSafe, 0.9f);
+    g.Paint(x, y, 0.15, CellClass::kCaution, 1.0f - step / 0.25f, step);
+    return g;
+  };
+  const Grid near_limit = rock(1.1, -0.5, 0.2125f);
+  const auto c = CheckPathOnMap(near_limit, avoidance::Footprint{}, Straight(0.6), o);
+  EXPECT_EQ(c.verdict, Verdict::kUnsafe) << c.detail;
+  EXPECT_EQ(c.detail.rfind("hazard_map: step 0.21 m at 1.", 0), 0u) << c.detail;
+  EXPECT_NE(c.detail.find("is over the 0.20 m a step drives over"), std::string::npos) << c.detail;
+  MapCheckOptions off = o;
+  off.driven_step_fraction = 1.0;
+  off.max_driven_step_m = off.DrivenStepLimit(0.25);
+  EXPECT_EQ(off.max_driven_step_m, 0.0);
+  EXPECT_EQ(CheckPathOnMap(near_limit, avoidance::Footprint{}, Straight(0.6), off).verdict, Verdict::kSafe);
+  MapCheckOptions not_refused = o;
+  not_refused.driven_step_refused = false;
+  EXPECT_EQ(CheckPathOnMap(near_limit, avoidance::Footprint{}, Straight(0.6), not_refused).verdict, Verdict::kSafe);
+  const auto half = CheckPathOnMap(rock(1.1, -0.5, 0.125f), avoidance::Footprint{}, Straight(0.6), o);
+  EXPECT_EQ(half.verdict, Verdict::kSafe) << half.detail;
+  // Beyond the step (the look-ahead): planned past, not refused.
+  const auto beyond = CheckPathOnMap(rock(2.4, -0.5, 0.2125f), avoidance::Footprint{}, Straight(0.6), o);
+  EXPECT_EQ(beyond.verdict, Verdict::kSafe) << beyond.detail;
+}
+
+TEST(MapCheck, DrivenStepFractionIsReadAndChecked) {
+  const auto load = [](const std::string& text) {
+    return LoadMapCheckOptions(config::ConfigNode(YAML::Load(text), "test", "hazards.map"));
+  };
+  EXPECT_DOUBLE_EQ(load("{driven_step_fraction: 0.7}").driven_step_fraction, 0.7);
+  EXPECT_DOUBLE_EQ(load("{enabled: true}").driven_step_fraction, 1.0);
+  EXPECT_TRUE(load("{driven_step_refused: true}").driven_step_refused);
+  EXPECT_THROW(load("{driven_step_refused: 3}"), config::ConfigError);
+  EXPECT_THROW(load("{driven_step_fraction: 0}"), config::ConfigError);
+  EXPECT_THROW(load("{driven_step_fraction: 1.2}"), config::ConfigError);
+  MapCheckOptions bad;
+  bad.driven_step_fraction = 0.0;
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
+  MapCheckOptions negative;
+  negative.max_driven_step_m = -0.1;
+  EXPECT_THROW(negative.Validate(), std::invalid_argument);
+}
+
 TEST(MapCheck, BadInputIsUnknown) {
   Grid g = Grid::Filled(-5, -5, 0.2, 50, 50, CellClass::kSafe, 0.8f);
   EXPECT_EQ(CheckPathOnMap(g, avoidance::Footprint{}, {}, MapCheckOptions{}).verdict, Verdict::kUnknown);

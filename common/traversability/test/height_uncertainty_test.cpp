@@ -157,6 +157,7 @@ MapOptions HazardMonitorRating() {
   o.tilt_margin_sigmas = 1.0;
   o.dip_margin_sigmas = 2.0;
   o.roughness_margin_sigmas = 2.0;
+  o.relief_sigmas = 1.0;
   return o;
 }
 
@@ -290,11 +291,52 @@ TEST(HeightUncertainty, TwoPairsThatDisagreeByAPlausiblePoseErrorMakeNoFalseStep
   EXPECT_GT(WorstStep(map, 2.1, 0.1), 0.15);  // the cobble is seen
 }
 
+// A rock's near flank, seen without its crest (a rock at the edge of the HAZCAM's view):
+// one cell whose points rise evenly from 0.10 to 0.30 m across it, on flat ground. Its mean
+// is 0.20 m, under the 0.25 m limit (caution); its points scatter 0.2 / sqrt(12) = 0.058 m
+// against their 0.01 m sigma, a relief of sqrt(0.058^2 - 0.01^2) = 0.057 m, and counted
+// with one relief the step reads 0.257 m: unsafe. Ground whose points scatter by their own
+// sigma alone (+-0.02 m, sigma 0.02 m) has no relief and reads as before.
+TEST(HeightUncertainty, ACellOnARocksFlankCountsItsRelief) {
+  auto flank = [](double relief_sigmas) {
+    MapOptions o = HazardMonitorRating();
+    o.relief_sigmas = relief_sigmas;
+    TraversabilityMap map(o);
+    std::vector<Eigen::Vector3d> pts;
+    std::vector<double> sig;
+    int n = 0;
+    for (double x = 0.51; x < 3.5; x += 0.06)
+      for (double y = -1.49; y < 1.5; y += 0.06) {
+        if (x >= 2.0 && x < 2.2 && y >= 0.0 && y < 0.2) continue;
+        pts.emplace_back(x, y, (n++ % 2 == 0) ? 0.02 : -0.02);
+        sig.push_back(0.02);
+      }
+    for (double x = 2.005; x < 2.2; x += 0.01)
+      for (double y = 0.01; y < 0.2; y += 0.03) {
+        pts.emplace_back(x, y, -(0.10 + (x - 2.0)));  // 0.10 m at the near edge, 0.30 m at the far
+        sig.push_back(0.01);
+      }
+    map.AddPoints(pts, sig);
+    return map;
+  };
+  const TraversabilityMap mean = flank(0.0), relief = flank(1.0);
+  EXPECT_NEAR(WorstStep(mean, 2.1, 0.1, 1), 0.20, 0.015);
+  EXPECT_NE(mean.At(2.1, 0.1).state, CellState::kUnsafe);
+  EXPECT_NEAR(WorstStep(relief, 2.1, 0.1, 1), 0.257, 0.015);
+  EXPECT_EQ(relief.At(2.1, 0.1).state, CellState::kUnsafe);
+  // Level ground two patches away: noise is no relief.
+  for (double x : {0.9, 3.1}) {
+    EXPECT_LT(relief.At(x, -1.0).step_m, 0.02) << x;
+    EXPECT_NEAR(relief.At(x, -1.0).step_m, mean.At(x, -1.0).step_m, 1e-3) << x;
+  }
+}
+
 // The two margins of a cell's height error, each read, range-checked, and refused in a
 // camera's own section: they rate the map, not one camera's stereo.
 TEST(HeightUncertainty, MarginsAreReadAndChecked) {
   for (const auto& [key, member] : {std::pair{"dip_margin_sigmas", &MapOptions::dip_margin_sigmas},
-                                    std::pair{"roughness_margin_sigmas", &MapOptions::roughness_margin_sigmas}}) {
+                                    std::pair{"roughness_margin_sigmas", &MapOptions::roughness_margin_sigmas},
+                                    std::pair{"relief_sigmas", &MapOptions::relief_sigmas}}) {
     SCOPED_TRACE(key);
     const std::string k(key);
     EXPECT_DOUBLE_EQ(LoadMapOptions(YAML::Load(k + ": 2"), "test").*member, 2.0);
