@@ -311,4 +311,24 @@ MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c
   return out;
 }
 
+double ChiSquareLowerQuantile(int dof, double alpha) {
+  if (dof < 1 || !(alpha > 0.0 && alpha < 1.0)) return 0.0;
+  // The standard normal's alpha-quantile, by bisection on its CDF.
+  double lo = -40.0, hi = 40.0;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    if (0.5 * std::erfc(-mid / std::sqrt(2.0)) < alpha) lo = mid; else hi = mid;
+  }
+  const double z = 0.5 * (lo + hi);
+  const double k = dof;
+  const double c = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
+  return c > 0.0 ? k * c * c * c : 0.0;
+}
+
+double VarianceFactorUpperBound(double factor, int dof, double alpha) {
+  if (alpha <= 0.0 || dof < 1) return factor;
+  const double q = ChiSquareLowerQuantile(dof, alpha);
+  return q > 0.0 ? factor * dof / q : factor;
+}
+
 }  // namespace rover::vo

@@ -161,6 +161,19 @@ MotionUncertainty EstimateMotionUncertainty(const std::vector<Correspondence>& c
                                             const std::vector<int>& cluster, int num_clusters,
                                             const SharedErrors& shared);
 
+// The lower alpha-quantile of the chi-square distribution with `dof` degrees of freedom
+// (Wilson-Hilferty's cube-root normal approximation: within 1.5 % of the exact value for
+// dof >= 30 and alpha >= 1e-4; below that it errs low, so the bound below errs large, e.g.
+// 7 % at 10 dof and alpha 0.001). dof < 1 or alpha outside (0, 1): 0.
+double ChiSquareLowerQuantile(int dof, double alpha);
+
+// An upper confidence bound on a variance factor estimated as cost / dof: with chi-square
+// errors cost ~ sigma^2 chi^2(dof), so sigma^2 <= factor * dof / chi^2_alpha(dof) at
+// confidence 1 - alpha. A factor from few residuals is uncertain (and RANSAC's inlier
+// selection truncates them), so the bound inflates it much at 20 inliers and barely at 170.
+// alpha <= 0 or dof < 1: the factor as it is.
+double VarianceFactorUpperBound(double factor, int dof, double alpha);
+
 // VO-13: the chi-square (6 dof) of the difference d = a - b between two estimates of one
 // motion where `a` (covariance Sigma_a) uses all the data of `b` (Sigma_b) and more, as
 // the sliding window's delta uses its newest pair's. If both covariances are honest,

@@ -271,6 +271,12 @@ struct VoOptions {
   // README "Variance factor floor"). 0 = none (the default: a factor may shrink the
   // covariance as far as it says).
   double window_covariance_min_variance_factor = 0.0;
+  // Above 0: the pair's s0^2 scales the window's published covariance as its upper
+  // confidence bound, s0^2 * r / chi^2_alpha(r) with r = 3n - 6 its redundancy, rather than
+  // as its point estimate (a factor from few inliers is uncertain, and RANSAC's selection
+  // truncates their residuals). 0 = the point estimate; configs/vo.yaml sets 1e-4 (README
+  // "Variance factor floor" has the replays that decided it).
+  double window_covariance_factor_alpha = 0.0;
   // The refined delta must agree with the pair's VO-8 estimate: chi-square (6 dof) of
   // their difference under its covariance, the pair's minus the window's (the window holds
   // the pair's data; NestedDifferenceChi2 in motion_estimation.hpp), each whitened

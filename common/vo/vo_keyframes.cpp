@@ -34,7 +34,7 @@ namespace {
 bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
                        const Eigen::Isometry3d& T_ref_cur, const Matrix6d& pair_cov, double max_chi2,
                        double min_fraction, bool carried_errors, bool covariance_carried,
-                       double min_published_factor, Matrix6d* out) {
+                       double min_published_factor, double factor_alpha, Matrix6d* out) {
   // When the window models errors carried along a track (window_track_carry or
   // window_stereo_carry above 0) its fit is scaled by the larger of the pair's factors and
   // its own (the variance factor of the window's residuals under that model: the pair's
@@ -50,7 +50,7 @@ bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
   // weights' model, as the pair's VO-8 covariance is.
   const double factor =
       std::max({u.variance_factor, u.cluster_factor, carried_errors ? w.variance_factor : 0.0});
-  const double published_factor = PublishedWindowFactor(u, w, covariance_carried, min_published_factor);
+  const double published_factor = PublishedWindowFactor(u, w, covariance_carried, min_published_factor, factor_alpha);
   Matrix6d cov = published_factor * w.covariance + u.shared;
   cov = 0.5 * (cov + cov.transpose()).eval();
   const geometry::Vector6d a = geometry::XyzRpyFromPose(w.T_prev_last);
@@ -71,8 +71,8 @@ bool RefinedCovariance(const WindowSolution& w, const MotionUncertainty& u,
 }  // namespace
 
 double PublishedWindowFactor(const MotionUncertainty& pair, const WindowSolution& window,
-                             bool covariance_carried, double min_factor) {
-  return std::max({pair.variance_factor, pair.cluster_factor,
+                             bool covariance_carried, double min_factor, double factor_alpha) {
+  return std::max({VarianceFactorUpperBound(pair.variance_factor, pair.redundancy, factor_alpha), pair.cluster_factor,
                    covariance_carried ? window.covariance_variance_factor : 0.0, min_factor});
 }
 
@@ -158,7 +158,8 @@ void VisualOdometry::State::RefineWindow(Step* st, const Eigen::Isometry3d& T_w_
                                                o.window_consistency_min_fraction,
                                                o.window_track_carry > 0 || o.window_stereo_carry > 0,
                                                CovarianceTrackCarry(o) > 0 || CovarianceStereoCarry(o) > 0,
-                                               o.window_covariance_min_variance_factor, &cov);
+                                               o.window_covariance_min_variance_factor,
+                                               o.window_covariance_factor_alpha, &cov);
   // Published: the window's estimate of this pair against the last call's pair as it
   // was published, so that the deltas compose to the window's latest estimate and its
   // corrections of the poses before reach the user (the window's oldest pose is fixed).

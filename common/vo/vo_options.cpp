@@ -60,7 +60,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
                   "covariance_cell_disparity_sigma_px",
                   "window_size", "window_max_iterations", "window_huber_sigmas", "window_track_carry", "window_stereo_carry",
                   "window_covariance_track_carry", "window_covariance_stereo_carry",
-                  "window_covariance_min_variance_factor",
+                  "window_covariance_min_variance_factor", "window_covariance_factor_alpha",
                   "window_max_chi2",
                   "window_consistency_min_fraction",
                   "window_disparity_offset_sigma_px", "window_disparity_offset_drift_px",
@@ -137,6 +137,7 @@ VoOptions LoadVoOptions(const config::ConfigNode& node) {
   node.Get("window_covariance_track_carry", o.window_covariance_track_carry, -1.0, 1.0);
   node.Get("window_covariance_stereo_carry", o.window_covariance_stereo_carry, -1.0, 1.0);
   node.Get("window_covariance_min_variance_factor", o.window_covariance_min_variance_factor, 0.0, 10.0);
+  node.Get("window_covariance_factor_alpha", o.window_covariance_factor_alpha, 0.0, 0.5);
   node.Get("window_max_chi2", o.window_max_chi2, 0.0, kInf);
   node.Get("window_consistency_min_fraction", o.window_consistency_min_fraction, 1e-6, 1.0);
   node.Get("window_disparity_offset_sigma_px", o.window_disparity_offset_sigma_px, 0.0, 10.0);

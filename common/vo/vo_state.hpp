@@ -196,9 +196,11 @@ std::vector<WindowObservation> Observations(const Pair& pair);
 // compare the residuals' scatter with VO-3's match covariances; on navbench's rock fields
 // every factor sat near 0.4 while the refined deltas' errors followed the unscaled
 // covariance, so there a factor below 1 did not mean smaller errors (README, "Variance
-// factor floor").
+// factor floor"). With `factor_alpha` above 0 (VoOptions::window_covariance_factor_alpha)
+// the pair's s0^2 enters as its upper confidence bound at 1 - factor_alpha over its
+// redundancy (VarianceFactorUpperBound), not as its point estimate.
 double PublishedWindowFactor(const MotionUncertainty& pair, const WindowSolution& window,
-                             bool covariance_carried, double min_factor);
+                             bool covariance_carried, double min_factor, double factor_alpha);
 
 struct VisualOdometry::State {
   VoOptions o;

@@ -463,14 +463,38 @@ TEST(MotionUncertainty, VO13_PublishedWindowFactorIsFlooredAtTheMinimum) {
   pair.cluster_factor = 0.48;
   WindowSolution window;
   window.covariance_variance_factor = 0.44;
-  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, false, 0.0), 0.48);  // no floor: as before
-  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.0), 0.48);
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, false, 0.0, 0.0), 0.48);  // no floor: as before
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.0, 0.0), 0.48);
   window.covariance_variance_factor = 0.7;
-  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.0), 0.7);   // the sandwich's own
-  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, false, 0.0), 0.48);  // ignored under S^-1
-  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.9), 0.9);    // the floor
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.0, 0.0), 0.7);   // the sandwich's own
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, false, 0.0, 0.0), 0.48);  // ignored under S^-1
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.9, 0.0), 0.9);    // the floor
   pair.variance_factor = 1.3;
-  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.9), 1.3);    // a larger factor stands
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, true, 0.9, 0.0), 1.3);    // a larger factor stands
+}
+
+// The chi-square quantiles against the tables' (lower 5 % at 10, 30 and 100 dof, lower 1 %
+// at 100), and the factor's upper bound s0^2 r / chi^2_alpha(r): with the pair's s0^2 from
+// 12 inliers (r = 30) at alpha 0.05 the window is scaled by 0.36 * 30 / 18.493, not by the
+// cluster factor 0.48; alpha 0 leaves the point estimate.
+TEST(MotionUncertainty, VO13_PublishedWindowFactorIsTheUpperBoundOfS0Squared) {
+  EXPECT_NEAR(ChiSquareLowerQuantile(10, 0.05), 3.940, 0.02);
+  EXPECT_NEAR(ChiSquareLowerQuantile(30, 0.05), 18.493, 0.03);
+  EXPECT_NEAR(ChiSquareLowerQuantile(100, 0.05), 77.929, 0.05);
+  EXPECT_NEAR(ChiSquareLowerQuantile(100, 0.01), 70.065, 0.05);
+  EXPECT_EQ(ChiSquareLowerQuantile(0, 0.05), 0.0);
+  EXPECT_DOUBLE_EQ(VarianceFactorUpperBound(0.4, 30, 0.0), 0.4);
+  EXPECT_NEAR(VarianceFactorUpperBound(0.4, 30, 0.05), 0.4 * 30 / 18.493, 1e-3);
+  // Many residuals: the bound is barely above the estimate (r = 504, 170 inliers).
+  EXPECT_LT(VarianceFactorUpperBound(0.11, 504, 0.05), 0.11 * 1.12);
+  MotionUncertainty pair;
+  pair.variance_factor = 0.36;
+  pair.cluster_factor = 0.48;
+  pair.redundancy = 30;
+  WindowSolution window;
+  window.covariance_variance_factor = 0.44;
+  EXPECT_DOUBLE_EQ(PublishedWindowFactor(pair, window, false, 0.0, 0.0), 0.48);
+  EXPECT_NEAR(PublishedWindowFactor(pair, window, false, 0.0, 0.05), 0.36 * 30 / 18.493, 1e-3);
 }
 
 }  // namespace

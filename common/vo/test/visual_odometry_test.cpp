@@ -240,6 +240,15 @@ TEST(VoOptions, LoadsTheProjectConfigAndRejectsUnknownKeys) {
   EXPECT_THROW(LoadVoOptions(config::ConfigNode::FromString("vo:\n  window_covariance_min_variance_factor: -0.1\n",
                                                              "t.yaml")["vo"]),
                config::ConfigError);
+  // The s0^2 bound's alpha: read, 1e-4 in the project config, in [0, 0.5].
+  EXPECT_DOUBLE_EQ(o.window_covariance_factor_alpha, 1e-4);
+  EXPECT_DOUBLE_EQ(LoadVoOptions(config::ConfigNode::FromString("vo:\n  window_covariance_factor_alpha: 0.05\n",
+                                                                "t.yaml")["vo"])
+                       .window_covariance_factor_alpha,
+                   0.05);
+  EXPECT_THROW(LoadVoOptions(config::ConfigNode::FromString("vo:\n  window_covariance_factor_alpha: 0.6\n",
+                                                             "t.yaml")["vo"]),
+               config::ConfigError);
 }
 
 // The window's carries are fractions in [0, 1]; the random-walk switch they replaced is
