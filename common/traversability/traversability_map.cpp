@@ -97,6 +97,11 @@ void CheckMapOptions(const MapOptions& o) {
 
 void TraversabilityMap::Clear() {
   std::fill(acc_.begin(), acc_.end(), Accumulator{});
+  MarkAllStale();
+}
+
+void TraversabilityMap::MarkAllStale() const {
+  all_stale_ = true;
   dirty_ = true;
 }
 
@@ -109,7 +114,14 @@ void TraversabilityMap::Recentre(double x, double y) {
   const long old_x = std::lround(origin_x_ / cell);
   const long old_y = std::lround(origin_y_ / cell);
   if (!acc_.empty() && ox == old_x && oy == old_y) return;
+  // The ratings move with the moments: a cell's rating depends only on the cells of its
+  // patch, at their offsets. Cells entering the grid count as changed; the edge cells,
+  // whose patches lost the cells that left, are rated again too (Rate). A second move
+  // before a rating would leave edges the first one's ring no longer names: rate all.
+  const bool keep_ratings = !all_stale_ && !shifted_ && cells_.size() == acc_.size() && changed_.size() == acc_.size();
   std::vector<Accumulator> moved(acc_.size());
+  std::vector<Cell> moved_cells(keep_ratings ? acc_.size() : 0);
+  std::vector<char> moved_changed(keep_ratings ? acc_.size() : 0, 1);
   const long di = ox - old_x, dj = oy - old_y;
   for (int i = 0; i < n_; ++i) {
     const long si = i + di;
@@ -117,13 +129,25 @@ void TraversabilityMap::Recentre(double x, double y) {
     for (int j = 0; j < n_; ++j) {
       const long sj = j + dj;
       if (sj < 0 || sj >= n_) continue;
-      moved[static_cast<std::size_t>(i) * n_ + j] = acc_[static_cast<std::size_t>(si) * n_ + sj];
+      const std::size_t to = static_cast<std::size_t>(i) * n_ + j, from = static_cast<std::size_t>(si) * n_ + sj;
+      moved[to] = acc_[from];
+      if (keep_ratings) {
+        moved_cells[to] = cells_[from];
+        moved_changed[to] = changed_[from];
+      }
     }
   }
   acc_ = std::move(moved);
   origin_x_ = ox * cell;
   origin_y_ = oy * cell;
-  dirty_ = true;
+  if (keep_ratings) {
+    cells_ = std::move(moved_cells);
+    changed_ = std::move(moved_changed);
+    shifted_ = true;
+    dirty_ = true;
+  } else {
+    MarkAllStale();
+  }
 }
 
 void TraversabilityMap::AddPoints(const std::vector<Eigen::Vector3d>& points_site,
@@ -144,6 +168,7 @@ void TraversabilityMap::AddPoints(const std::vector<Eigen::Vector3d>& points_sit
     const long i = static_cast<long>(fi), j = static_cast<long>(fj);
     if (i < 0 || j < 0 || i >= n_ || j >= n_) continue;
     Accumulator& a = acc_[static_cast<std::size_t>(i) * n_ + j];
+    if (!changed_.empty()) changed_[static_cast<std::size_t>(i) * n_ + j] = 1;
     const double w = 1.0 / (s * s);
     const double h = -p.z();
     a.n += 1;
@@ -236,10 +261,9 @@ const std::vector<Cell>& TraversabilityMap::cells() const {
 void TraversabilityMap::Rate() const {
   const MapOptions& o = options_;
   const std::size_t count = static_cast<std::size_t>(n_) * n_;
-  cells_.assign(count, Cell{});
   // Cell heights (weighted means) and sigmas.
   std::vector<float> h(count, 0.0f), s(count, 0.0f), e(count, 0.0f), mx(count, 0.0f), my(count, 0.0f),
-      relief(count, 0.0f);
+      relief(count, 0.0f), top(count, 0.0f);
   std::vector<char> known(count, 0);
   for (std::size_t k = 0; k < count; ++k) {
     const Accumulator& a = acc_[k];
@@ -257,8 +281,7 @@ void TraversabilityMap::Rate() const {
     e[k] = static_cast<float>(std::sqrt(static_cast<double>(s[k]) * s[k] + spread2 / a.n));
     // The relief within the cell: the points' scatter beyond their own noise (relief_sigmas).
     relief[k] = static_cast<float>(std::sqrt(std::max(0.0, spread2 - static_cast<double>(s[k]) * s[k])));
-    cells_[k].elevation_m = static_cast<float>(h[k] + std::sqrt(spread2));
-    cells_[k].height_sigma_m = s[k];
+    top[k] = static_cast<float>(h[k] + std::sqrt(spread2));
   }
   // The patch: cell offsets within the footprint radius.
   const double cell = o.cell_size_m;
@@ -277,6 +300,39 @@ void TraversabilityMap::Rate() const {
   auto min_known_of = [&o](std::size_t size) {
     return std::max<std::size_t>(3, static_cast<std::size_t>(std::ceil(o.min_patch_fraction * size)));
   };
+  // Which cells to rate: those within a patch of a changed cell (a square of the patches'
+  // reach holds both), and after a move the edge ring, whose patches lost cells. A cell's
+  // rating is a function of its patch's moments alone, so the others keep theirs: the
+  // same cells, bit for bit, as rating every cell (traversability_map_test).
+  int reach = 0;
+  for (const auto* offs : {&patch, &tilt_patch})
+    for (const auto& [di, dj] : *offs) reach = std::max({reach, std::abs(di), std::abs(dj)});
+  std::vector<char> rate(count, 0);
+  if (all_stale_ || cells_.size() != count || changed_.size() != count) {
+    rate.assign(count, 1);
+    cells_.assign(count, Cell{});
+  } else {
+    for (int i = 0; i < n_; ++i) {
+      for (int j = 0; j < n_; ++j) {
+        const bool edge = i < reach || j < reach || i >= n_ - reach || j >= n_ - reach;
+        if (shifted_ && edge) rate[static_cast<std::size_t>(i) * n_ + j] = 1;
+        if (!changed_[static_cast<std::size_t>(i) * n_ + j]) continue;
+        for (int a = std::max(0, i - reach); a <= std::min(n_ - 1, i + reach); ++a)
+          std::fill_n(rate.begin() + static_cast<std::ptrdiff_t>(a) * n_ + std::max(0, j - reach),
+                      std::min(n_ - 1, j + reach) - std::max(0, j - reach) + 1, 1);
+      }
+    }
+  }
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!rate[k]) continue;
+    cells_[k] = Cell{};
+    if (!known[k]) continue;
+    cells_[k].elevation_m = top[k];
+    cells_[k].height_sigma_m = s[k];
+  }
+  changed_.assign(count, 0);
+  shifted_ = false;
+  all_stale_ = false;
   const std::size_t min_known = min_known_of(patch.size());
   const std::size_t min_known_tilt = min_known_of(tilt_patch.size());
   const double tan_max_tilt = std::tan(o.max_tilt_deg * M_PI / 180.0);
@@ -448,6 +504,7 @@ void TraversabilityMap::Rate() const {
   std::vector<float> st;
   for (int i = 0; i < n_; ++i) {
     for (int j = 0; j < n_; ++j) {
+      if (!rate[static_cast<std::size_t>(i) * n_ + j]) continue;
       gather(patch, i, j, xs, &ss, &se, &sr);
       if (xs.size() < min_known) continue;
       Eigen::Vector3d c_fit;  // roughness: the scatter about the plane fitted

@@ -230,7 +230,11 @@ class TraversabilityMap {
   };
 
  private:
-  void Rate() const;  // recomputes cells_ from acc_ when dirty
+  // Recomputes cells_ from acc_ when dirty: only the cells whose patches hold a cell whose
+  // moments changed since the last rating (changed_), and those at the grid's edge after a
+  // shift; the rest keep their ratings, which depend on nothing else.
+  void Rate() const;
+  void MarkAllStale() const;
 
   MapOptions options_;
   int n_ = 0;  // cells per side
@@ -238,6 +242,11 @@ class TraversabilityMap {
   std::vector<Accumulator> acc_;
   mutable std::vector<Cell> cells_;
   mutable bool dirty_ = true;
+  // Since the last Rate: the cells whose moments changed (or entered the grid), whether the
+  // grid moved once (its edge cells lost neighbours), or whether every cell must be rated.
+  mutable std::vector<char> changed_;
+  mutable bool shifted_ = false;
+  mutable bool all_stale_ = true;
   UpdateStats stats_;
 };
 

@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <functional>
 #include <random>
+#include <tuple>
 
 namespace rover::traversability {
 namespace {
@@ -530,6 +531,60 @@ TEST(TraversabilityMap, AWallOfRocksSeenFromOneSideIsUnsafe) {
       EXPECT_EQ(c.state, CellState::kSafe) << "ground at " << x << "," << y;
       EXPECT_LT(c.tilt_rad / kDeg, 2.0) << "ground at " << x << "," << y;
     }
+}
+
+// Rating only the cells near the ones that changed (and the edge ring after a move) must
+// give the same cells, bit for bit, as rating every cell: map A is read after every step
+// (each rating incremental), map B only at the end (two moves in between: every cell
+// rated). Ground to the grid's edges, rocks, noise, moves of a few cells either way and a
+// pair that adds points without a move (a HAZCAM pair after its NAVCAM pair's recentre).
+TEST(TraversabilityMap, IncrementalRatingEqualsRatingEveryCell) {
+  MapOptions o;
+  o.extent_m = 12.0;
+  o.footprint_radius_m = 0.3;
+  o.tilt_radius_m = 0.75;
+  o.max_face_deg = 25.0;
+  o.max_step_m = 0.25;
+  o.tilt_margin_sigmas = 1;
+  o.dip_margin_sigmas = 2;
+  o.roughness_margin_sigmas = 2;
+  const auto ground = [](double x, double y) {
+    double z = 0.05 * std::sin(1.3 * x) + 0.04 * std::cos(0.9 * y) + 0.08 * x / 6.0;
+    for (const auto& [rx, ry, rh] : {std::tuple{2.0, 1.0, 0.3}, {-3.0, 2.5, 0.2}, {4.5, -4.0, 0.4}, {0.5, 5.2, 0.35}})
+      if (std::hypot(x - rx, y - ry) < 0.35) z += rh;
+    return z;
+  };
+  TraversabilityMap a(o), b(o);
+  int step = 0;
+  auto both = [&](const std::function<void(TraversabilityMap&)>& op) {
+    op(a);
+    op(b);
+    a.cells();  // A rates now; B waits for the end
+    ++step;
+  };
+  both([&](TraversabilityMap& m) { AddSurface(&m, ground, 0.0, 0.0, 5.9, 0.01, 1); });
+  both([&](TraversabilityMap& m) { m.Recentre(0.6, 0.2); });
+  both([&](TraversabilityMap& m) { AddSurface(&m, ground, 2.5, 0.5, 2.0, 0.02, 2); });
+  both([&](TraversabilityMap& m) { AddSurface(&m, ground, 1.0, -0.5, 0.8, 0.02, 3); });
+  both([&](TraversabilityMap& m) { m.Recentre(-0.7, 1.3); });
+  both([&](TraversabilityMap& m) { AddSurface(&m, ground, -2.0, 3.0, 2.5, 0.015, 4); });
+  both([&](TraversabilityMap& m) { m.Recentre(-0.7, 0.1); });
+  const std::vector<Cell>& ca = a.cells();
+  const std::vector<Cell>& cb = b.cells();
+  ASSERT_EQ(ca.size(), cb.size());
+  ASSERT_EQ(a.origin_x(), b.origin_x());
+  ASSERT_EQ(a.origin_y(), b.origin_y());
+  int rated = 0, differ = 0;
+  for (std::size_t k = 0; k < ca.size(); ++k) {
+    rated += ca[k].state != CellState::kUnknown;
+    const bool same = ca[k].state == cb[k].state && ca[k].step_m == cb[k].step_m && ca[k].tilt_rad == cb[k].tilt_rad &&
+                      ca[k].face_rad == cb[k].face_rad && ca[k].roughness_m == cb[k].roughness_m &&
+                      ca[k].goodness == cb[k].goodness && ca[k].sigma_m == cb[k].sigma_m &&
+                      ca[k].elevation_m == cb[k].elevation_m && ca[k].height_sigma_m == cb[k].height_sigma_m;
+    differ += !same;
+  }
+  EXPECT_EQ(differ, 0) << "of " << ca.size() << " cells";
+  EXPECT_GT(rated, static_cast<int>(ca.size()) / 2);  // the comparison covers most of the grid
 }
 
 }  // namespace
