@@ -52,6 +52,10 @@ struct Cell {
   // height_sigma_m < 0: the cell has too few points.
   float elevation_m = 0;
   float height_sigma_m = -1;
+  // With crest_view_range_m: the cell would have been rated safe or caution, but its patch
+  // holds ground rising toward a side no pair has framed (crest_view_range_m), so its step
+  // is a lower bound only, and the cell is unknown instead.
+  bool crest_unseen = false;
 };
 
 struct MapOptions {           // read from YAML by LoadMapOptions (key names = field names)
@@ -97,6 +101,22 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // 1.7 m straight on, and 0.16 to 0.20 m from the HAZCAM's edge, which saw only its near
   // flank); noise alone adds no relief, so level ground reads as before. 0: the mean.
   double relief_sigmas = 0.0;
+  // Crests out of frame. A rock at the edge of a camera's view shows its near flank and not
+  // its top: a vertical edge leans outward toward the image's sides (the cameras look
+  // down), so the top leaves the frame first, and the flank's cells read well under the
+  // rock (a 0.32 m rock 59 to 67 deg off the HAZCAM's axis read 0.16 to 0.20 m, caution, and
+  // was driven into). A pair *frames* a cell when the top of a column crest_view_height_m
+  // over the rover's ground plane at the cell's centre lies in both of its rectified
+  // images (and their source images), inside its stereo range, disparity search and
+  // filters, within crest_view_range_m of the rover; cells keep that, across pairs. A cell
+  // rising crest_rise_fraction of the step limit or more above the ground plane, that is
+  // itself unframed or has an unframed 8-neighbour, may hide a higher crest there: every
+  // cell whose patch holds one, rated safe or caution, is rated unknown instead (never
+  // better: unsafe stays unsafe). Ground hidden behind a rock (framed, no points) does not
+  // count: only a view's frame and range. 0: off.
+  double crest_view_range_m = 0.0;
+  double crest_view_height_m = 0.3;
+  double crest_rise_fraction = 0.5;
   double max_roughness_m = 0.05;
   // The roughness counts each cell's residual about the fitted plane only beyond this many
   // standard errors of its height (as dip_margin_sigmas does below the ground for the step):
@@ -182,6 +202,8 @@ struct UpdateStats {
   double seconds_grid = 0;   // triangulating, binning and rating
 };
 
+struct RectifiedRig;  // dense_stereo.hpp
+
 class TraversabilityMap {
  public:
   // Throws std::invalid_argument with a one-line message on an option out of range.
@@ -201,6 +223,12 @@ class TraversabilityMap {
   // sigma (m): for tests and for other range sensors. Sizes must agree.
   void AddPoints(const std::vector<Eigen::Vector3d>& points_site,
                  const std::vector<double>& sigma_m);
+  // With crest_view_range_m: marks the cells within radius_m of site point (x, y) framed,
+  // as a pair that saw their tops would (for tests and for other range sensors, whose
+  // points AddPoints takes without a view).
+  void MarkFramed(double x, double y, double radius_m);
+  // Whether the cell holding (x, y) has been framed (false outside the grid).
+  bool Framed(double x, double y) const;
 
   // Centres the grid at (x, y) in the site frame; cells that leave the grid are forgotten.
   void Recentre(double x, double y);
@@ -236,6 +264,9 @@ class TraversabilityMap {
   int n_ = 0;  // cells per side
   double origin_x_ = 0, origin_y_ = 0;
   std::vector<Accumulator> acc_;
+  // Per cell: 1 when some pair framed its column (crest_view_range_m), else 0.
+  std::vector<std::uint8_t> framed_;
+  void MarkFramedBy(const RectifiedRig& rect, const geometry::Pose& T_site_rover, const MapOptions& stereo);
   mutable std::vector<Cell> cells_;
   mutable bool dirty_ = true;
   UpdateStats stats_;

@@ -111,7 +111,10 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
   }
   render::StereoRenderer hazcam_renderer(rh);
   tv::TraversabilityMap map(options.map);
-  tv::TraversabilityMap truth(options.map);
+  // The truth is the exact surface, every crest in it: no view to judge (crest_view_range_m).
+  tv::MapOptions truth_options = options.map;
+  truth_options.crest_view_range_m = 0.0;
+  tv::TraversabilityMap truth(truth_options);
   geometry::Matrix6d cov = geometry::Matrix6d::Zero();
   const double sp = options.pose_sigma_m, sa = options.pose_sigma_deg * M_PI / 180.0;
   cov.diagonal() << sp * sp, sp * sp, sp * sp, sa * sa, sa * sa, sa * sa;
