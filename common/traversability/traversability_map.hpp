@@ -54,7 +54,7 @@ struct Cell {
   float height_sigma_m = -1;
   // With crest_view_range_m: the cell would have been rated safe or caution, but its patch
   // holds ground rising toward a side no pair has framed (crest_view_range_m), so its step
-  // is a lower bound only, and the cell is unknown instead.
+  // is a lower bound only: it is caution at goodness 0.
   bool crest_unseen = false;
 };
 
@@ -108,12 +108,15 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // was driven into). A pair *frames* a cell when the top of a column crest_view_height_m
   // over the rover's ground plane at the cell's centre lies in both of its rectified
   // images (and their source images), inside its stereo range, disparity search and
-  // filters, within crest_view_range_m of the rover; cells keep that, across pairs. A cell
-  // rising crest_rise_fraction of the step limit or more above the ground plane, that is
-  // itself unframed or has an unframed 8-neighbour, may hide a higher crest there: every
-  // cell whose patch holds one, rated safe or caution, is rated unknown instead (never
-  // better: unsafe stays unsafe). Ground hidden behind a rock (framed, no points) does not
-  // count: only a view's frame and range. 0: off.
+  // filters. A cell is *cut* when a pair put points in it without framing it (its foot in
+  // view, its top not), and *open* while cut and not framed by any pair within
+  // crest_view_range_m of the rover (a far view reads a rock low by its resolution). A cell
+  // rising crest_rise_fraction of the step limit or more above the ground plane, open or
+  // with an open 8-neighbour, may have a higher crest there: every cell whose patch holds
+  // one, rated safe or caution, is rated caution at goodness 0 instead, the worst short of
+  // unsafe (never better: unsafe stays unsafe; and not unknown, which a step may cross a
+  // few cells of). Ground never seen, or hidden behind a rock, is unknown by its own lack
+  // of points and does not count here. 0: off.
   double crest_view_range_m = 0.0;
   double crest_view_height_m = 0.3;
   double crest_rise_fraction = 0.5;
@@ -223,12 +226,15 @@ class TraversabilityMap {
   // sigma (m): for tests and for other range sensors. Sizes must agree.
   void AddPoints(const std::vector<Eigen::Vector3d>& points_site,
                  const std::vector<double>& sigma_m);
-  // With crest_view_range_m: marks the cells within radius_m of site point (x, y) framed,
-  // as a pair that saw their tops would (for tests and for other range sensors, whose
-  // points AddPoints takes without a view).
-  void MarkFramed(double x, double y, double radius_m);
-  // Whether the cell holding (x, y) has been framed (false outside the grid).
+  // With crest_view_range_m: marks the cells within radius_m of site point (x, y) framed
+  // (a pair within crest_view_range_m saw their tops) or, with framed false, cut (a pair saw
+  // their feet and not their tops), as AddStereoPair does; for tests and for other range
+  // sensors, whose points AddPoints takes without a view.
+  void MarkView(double x, double y, double radius_m, bool framed);
+  // Whether the cell holding (x, y) has been framed; open: cut and never framed (false
+  // outside the grid).
   bool Framed(double x, double y) const;
+  bool Open(double x, double y) const;
 
   // Centres the grid at (x, y) in the site frame; cells that leave the grid are forgotten.
   void Recentre(double x, double y);
@@ -264,9 +270,13 @@ class TraversabilityMap {
   int n_ = 0;  // cells per side
   double origin_x_ = 0, origin_y_ = 0;
   std::vector<Accumulator> acc_;
-  // Per cell: 1 when some pair framed its column (crest_view_range_m), else 0.
+  // Per cell (crest_view_range_m): kFramed when some pair within range framed its column,
+  // kCut when a pair put points in it without framing it.
+  static constexpr std::uint8_t kFramed = 1, kCut = 2;
   std::vector<std::uint8_t> framed_;
-  void MarkFramedBy(const RectifiedRig& rect, const geometry::Pose& T_site_rover, const MapOptions& stereo);
+  void MarkFramedBy(const RectifiedRig& rect, const geometry::Pose& T_site_rover, const MapOptions& stereo,
+                    const std::vector<Eigen::Vector3d>& points_site);
+  std::uint8_t ViewAt(double x, double y) const;
   mutable std::vector<Cell> cells_;
   mutable bool dirty_ = true;
   UpdateStats stats_;

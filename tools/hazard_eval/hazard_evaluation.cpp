@@ -159,14 +159,15 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
         const int band = Band(std::hypot(x - ep.x, y - ep.y));
         if (band < 0) continue;
         const Eigen::Vector3d ground(x, y, -world.Elevation(x, y));
+        const std::size_t idx = static_cast<std::size_t>(i) * map.cols() + j;
+        const double range = std::hypot(x - ep.x, y - ep.y);
+        // Rated cells, and those unknown only by an unseen crest (crest_view_range_m).
+        if (range < options.dump_range_m && (mc[idx].state != tv::CellState::kUnknown || mc[idx].crest_unseen))
+          result.dumped.push_back({static_cast<int>(k) + 1, x, y, range, mc[idx], tc[idx]});
         if (!InView(images.rig, T_rover_site, ground) &&
             !(hazcam && InHazcamView(hazcam_images.rig, options.hazcam_map, T_rover_site, ground)))
           continue;
         BandCounts& b = result.bands[band];
-        const std::size_t idx = static_cast<std::size_t>(i) * map.cols() + j;
-        const double range = std::hypot(x - ep.x, y - ep.y);
-        if (range < options.dump_range_m && mc[idx].state != tv::CellState::kUnknown)
-          result.dumped.push_back({static_cast<int>(k) + 1, x, y, range, mc[idx], tc[idx]});
         ++b.in_view_cells;
         if (mc[idx].state == tv::CellState::kUnknown) ++b.unknown_cells;
         if (tc[idx].state == tv::CellState::kUnsafe) {

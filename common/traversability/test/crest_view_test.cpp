@@ -1,7 +1,7 @@
 // Crests out of frame (MapOptions::crest_view_range_m), with known answers: a rock over the
 // rover's step limit at the edge of the front HAZCAM's view shows its near flank and not
-// its top, and the flank's cells read under the limit; with the option they are unknown
-// (unseen ground), never safe or caution. Seen whole, the same rock reads as before.
+// its top, and the flank's cells read under the limit; with the option they are caution at
+// goodness 0, the worst short of unsafe. Seen whole, the same rock reads as before.
 #include "traversability/dense_stereo.hpp"
 #include "traversability/traversability_map.hpp"
 
@@ -87,6 +87,7 @@ void MapFrom(TraversabilityMap& map, const ShippedOptions& o, const terrain::Wor
 // The states of the cells within `radius` of (x, y): counts per state.
 struct Census {
   int unknown = 0, safe = 0, caution = 0, unsafe = 0, crest_unseen = 0, with_points = 0;
+  int good_caution = 0;  // caution cells at goodness over 0
   double highest_step = 0;  // among the rated (known) cells
 };
 Census CellsNear(const TraversabilityMap& map, double x, double y, double radius, bool print = false) {
@@ -99,13 +100,13 @@ Census CellsNear(const TraversabilityMap& map, double x, double y, double radius
       const Cell& cell = cells[static_cast<std::size_t>(i) * map.cols() + j];
       if (print)
         std::printf("  cell %.1f,%.1f %s step %.3f pts %d framed %d\n", cx, cy, CellStateName(cell.state), cell.step_m,
-                    cell.height_sigma_m >= 0, map.Framed(cx, cy));
+                    cell.height_sigma_m >= 0, map.Framed(cx, cy) + 2 * map.Open(cx, cy));
       c.with_points += cell.height_sigma_m >= 0;
       c.crest_unseen += cell.crest_unseen;
       switch (cell.state) {
         case CellState::kUnknown: ++c.unknown; break;
         case CellState::kSafe: ++c.safe; break;
-        case CellState::kCaution: ++c.caution; break;
+        case CellState::kCaution: ++c.caution, c.good_caution += cell.goodness > 0.0f; break;
         case CellState::kUnsafe: ++c.unsafe; break;
       }
       if (cell.state != CellState::kUnknown) c.highest_step = std::max<double>(c.highest_step, cell.step_m);
@@ -113,10 +114,10 @@ Census CellsNear(const TraversabilityMap& map, double x, double y, double radius
   return c;
 }
 
-// Synthetic: level ground of known cells (x, y in [0, 2) m), one cell at (1.1, 0.1)
-// standing `rise_m` over it, and the cell beyond it, (1.3, 0.1), without points. Every
-// cell is framed except, when `beyond_framed` is false, that one.
-TraversabilityMap Flank(double rise_m, bool beyond_framed, double range_m) {
+// Synthetic: level ground of known cells (x, y in [0, 2) m) and one cell at (1.1, 0.1)
+// standing `rise_m` over it. Every cell is framed except, when `flank_open`, that one,
+// which a pair saw without its top (cut).
+TraversabilityMap Flank(double rise_m, bool flank_open, double range_m) {
   MapOptions o;
   o.cell_size_m = 0.2;
   o.extent_m = 6.0;
@@ -128,54 +129,56 @@ TraversabilityMap Flank(double rise_m, bool beyond_framed, double range_m) {
   std::vector<Eigen::Vector3d> pts;
   for (double x = 0.1; x < 2.0; x += 0.2)
     for (double y = -0.9; y < 1.0; y += 0.2) {
-      if (std::hypot(x - 1.3, y - 0.1) < 0.05) continue;  // the cell beyond: no points
       const double h = std::hypot(x - 1.1, y - 0.1) < 0.05 ? rise_m : 0.0;
       for (int k = 0; k < 4; ++k) pts.emplace_back(x + 0.02 * (k % 2), y + 0.02 * (k / 2), -h);
     }
   map.AddPoints(pts, std::vector<double>(pts.size(), 0.01));
-  map.MarkFramed(1.0, 0.0, 3.0);
-  if (!beyond_framed) {
-    // Unframe (1.3, 0.1) alone: a new map framed everywhere but there.
-    TraversabilityMap out(o);
-    out.AddPoints(pts, std::vector<double>(pts.size(), 0.01));
-    for (double x = -1.9; x < 4.0; x += 0.2)
-      for (double y = -2.9; y < 3.0; y += 0.2)
-        if (std::hypot(x - 1.3, y - 0.1) > 0.05) out.MarkFramed(x, y, 0.01);
-    return out;
-  }
+  for (double x = -1.9; x < 4.0; x += 0.2)
+    for (double y = -2.9; y < 3.0; y += 0.2) {
+      const bool flank = std::hypot(x - 1.1, y - 0.1) < 0.05;
+      map.MarkView(x, y, 0.01, !(flank && flank_open));
+    }
   return map;
 }
 
-// A 0.20 m flank cell (caution under the 0.25 m limit) beside a cell no pair framed: the
-// cells whose patch holds it are unknown with the rule, caution without it; with the cell
-// beyond framed (its ground hidden behind the flank, or bare) they are caution as before.
-TEST(CrestView, AFlankRisingTowardAnUnframedCellIsUnknown) {
+// A 0.20 m flank cell (caution under the 0.25 m limit, goodness 0.2) that a pair saw
+// without its top and none has framed: the cells whose patch holds it are caution at
+// goodness 0 with the rule; framed (its top seen), they are as before.
+TEST(CrestView, AFlankCellCutByTheFrameIsAtGoodnessZero) {
   for (const bool on : {false, true}) {
-    const TraversabilityMap map = Flank(0.20, false, on ? 3.0 : 0.0);
-    EXPECT_FALSE(map.Framed(1.3, 0.1));
-    EXPECT_TRUE(map.Framed(1.1, 0.1));
-    for (const auto& [x, y] : {std::pair{1.1, 0.1}, std::pair{0.9, 0.1}, std::pair{1.1, 0.3}, std::pair{1.1, -0.1}}) {
+    const TraversabilityMap map = Flank(0.20, true, on ? 3.0 : 0.0);
+    EXPECT_TRUE(map.Open(1.1, 0.1));
+    EXPECT_FALSE(map.Open(1.3, 0.1));
+    EXPECT_TRUE(map.Framed(1.3, 0.1));
+    for (const auto& [x, y] : {std::pair{1.1, 0.1}, std::pair{0.9, 0.1}, std::pair{1.1, 0.3}, std::pair{1.3, 0.1}}) {
       const Cell c = map.At(x, y);
-      EXPECT_EQ(c.state, on ? CellState::kUnknown : CellState::kCaution) << x << ", " << y << " on " << on;
+      EXPECT_EQ(c.state, CellState::kCaution) << x << ", " << y << " on " << on;
       EXPECT_EQ(c.crest_unseen, on) << x << ", " << y;
+      if (on)
+        EXPECT_EQ(c.goodness, 0.0f) << x << ", " << y;
+      else
+        EXPECT_NEAR(c.goodness, 0.2, 0.03) << x << ", " << y;
     }
     // Beyond the patch (0.3 m) of the flank cell: level ground, safe either way.
     EXPECT_EQ(map.At(0.5, 0.1).state, CellState::kSafe);
     EXPECT_EQ(map.At(1.1, 0.7).state, CellState::kSafe);
   }
-  const TraversabilityMap framed = Flank(0.20, true, 3.0);
+  const TraversabilityMap framed = Flank(0.20, false, 3.0);
+  EXPECT_FALSE(framed.Open(1.1, 0.1));
   EXPECT_EQ(framed.At(1.1, 0.1).state, CellState::kCaution);
+  EXPECT_NEAR(framed.At(1.1, 0.1).goodness, 0.2, 0.03);
   EXPECT_FALSE(framed.At(1.1, 0.1).crest_unseen);
 }
 
 // Never better than without the rule: an unsafe step stays unsafe, and a cell rising under
 // crest_rise_fraction of the limit (0.10 m, a cobble) beside unframed ground reads as before.
 TEST(CrestView, UnsafeStaysUnsafeAndLowGroundIsUnchanged) {
-  EXPECT_EQ(Flank(0.30, false, 3.0).At(1.1, 0.1).state, CellState::kUnsafe);
-  const TraversabilityMap low = Flank(0.10, false, 3.0), off = Flank(0.10, false, 0.0);
+  EXPECT_EQ(Flank(0.30, true, 3.0).At(1.1, 0.1).state, CellState::kUnsafe);
+  const TraversabilityMap low = Flank(0.10, true, 3.0), off = Flank(0.10, true, 0.0);
   for (const auto& [x, y] : {std::pair{1.1, 0.1}, std::pair{0.9, 0.1}, std::pair{1.1, 0.3}}) {
     EXPECT_EQ(low.At(x, y).state, off.At(x, y).state) << x << ", " << y;
-    EXPECT_NE(low.At(x, y).state, CellState::kUnknown) << x << ", " << y;
+    EXPECT_EQ(low.At(x, y).goodness, off.At(x, y).goodness) << x << ", " << y;
+    EXPECT_FALSE(low.At(x, y).crest_unseen) << x << ", " << y;
   }
   // Options out of range are refused.
   MapOptions bad;
@@ -186,10 +189,10 @@ TEST(CrestView, UnsafeStaysUnsafeAndLowGroundIsUnchanged) {
 // The rock 1.6 m ahead and 1.4 m to the left (and 1.5 m ahead, 1.3 m to the right), seen
 // from the start by the HAZCAM at the edge of its view (its top out of the frame) and not
 // by the NAVCAM: without the rule its cells read 0.17 to 0.20 m, caution, none unsafe (the
-// collision's class); with it none within 0.5 m of the rock is caution, and none on the
-// rock's crest safe or caution: unknown. Turned toward it, both pairs frame it, and it
-// reads unsafe with the rule as without.
-TEST(CrestView, ARockAtTheHazcamsEdgeIsUnknownUntilFramed) {
+// collision's class); with it every caution cell within 0.5 m of the rock is at goodness
+// 0, and the rock's crest's cells too. Turned toward it, both pairs frame it, and it reads
+// unsafe with the rule as without.
+TEST(CrestView, ARockAtTheHazcamsEdgeIsAtGoodnessZeroUntilFramed) {
   for (const auto& [x, y] : {std::pair{1.6, 1.4}, std::pair{1.5, -1.3}}) {
     SCOPED_TRACE(std::to_string(x) + ", " + std::to_string(y));
     const terrain::World world = OneRock(x, y);
@@ -200,14 +203,12 @@ TEST(CrestView, ARockAtTheHazcamsEdgeIsUnknownUntilFramed) {
     EXPECT_GE(before.caution, 3);
     EXPECT_EQ(before.unsafe, 0);
     EXPECT_GE(before.with_points, 4);  // its flank was seen
-    EXPECT_EQ(after.caution, 0);
+    EXPECT_GE(before.good_caution, 3);
+    EXPECT_EQ(after.good_caution, 0);
     EXPECT_EQ(after.unsafe, 0);
-    EXPECT_GE(after.crest_unseen, 3);
-    // Its crest's cells are unknown, in unseen ground wider than a rock over the limit
-    // needs (the strict rule's hidden_patch_m, 0.6 m: 9 cells): the body stays off it. Its
-    // foot's cells read 0.12 m, under crest_rise_fraction, and stay safe.
-    EXPECT_EQ(CellsNear(on, x, y, 0.15).safe + CellsNear(on, x, y, 0.15).caution, 0);
-    EXPECT_GE(after.unknown, 12);
+    EXPECT_GE(after.crest_unseen, before.caution);
+    const Census crest = CellsNear(on, x, y, 0.15);
+    EXPECT_EQ(crest.safe + crest.good_caution, 0);
     // Turned toward it: framed, unsafe.
     TraversabilityMap looked(Shipped(3.0).map);
     MapFrom(looked, Shipped(3.0), world, {{0, 0, std::atan2(y, x) * 180.0 / M_PI}});
