@@ -605,13 +605,18 @@ void TraversabilityMap::Rate() const {
       out.state = worst >= 1.0                  ? CellState::kUnsafe
                   : worst >= o.caution_fraction ? CellState::kCaution
                                                 : CellState::kSafe;
-      // The step read is a lower bound only: the cell is at least caution, at the worst
-      // goodness a rated cell that is not unsafe has (an unsafe cell stays unsafe). Not
-      // unknown: the vote lets a step cross a few unknown cells, and a rock's flank is a
-      // few cells (navbench seed 7 k0.20_r05 put a body corner on a 0.30 m rock so).
+      // The step read is a lower bound only: the cell is at least caution, and its step
+      // reads the limit itself (a crest up to it may stand there unseen), which no rated
+      // cell short of unsafe reaches otherwise; the vote drives a step over such a cell only
+      // when no other is allowed (hazards.map: DrivenStepLimit). An unsafe cell stays
+      // unsafe. Not unknown: the vote lets a step cross a few unknown cells, and a rock's
+      // flank is a few cells (navbench seed 7 k0.20_r05 put a body corner on a 0.30 m rock
+      // so). Nor goodness 0: the vote's look-ahead takes its worst cell, and arcs that all
+      // met one were told apart by the goal alone (k0.20_r02 drove into a rock so).
       if (crest_unseen && out.state != CellState::kUnsafe) {
         out.state = CellState::kCaution;
-        out.goodness = 0.0f;
+        out.goodness = std::min(out.goodness, static_cast<float>(1.0 - o.caution_fraction));
+        out.step_m = static_cast<float>(o.max_step_m);
         out.crest_unseen = true;
       }
     }

@@ -54,7 +54,8 @@ struct Cell {
   float height_sigma_m = -1;
   // With crest_view_range_m: the cell would have been rated safe or caution, but its patch
   // holds ground rising toward a side no pair has framed (crest_view_range_m), so its step
-  // is a lower bound only: it is caution at goodness 0.
+  // is a lower bound only: it is caution (goodness at most 1 - caution_fraction) and its
+  // step_m reads max_step_m.
   bool crest_unseen = false;
 };
 
@@ -113,10 +114,12 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // crest_view_range_m of the rover (a far view reads a rock low by its resolution). A cell
   // rising crest_rise_fraction of the step limit or more above the ground plane, open or
   // with an open 8-neighbour, may have a higher crest there: every cell whose patch holds
-  // one, rated safe or caution, is rated caution at goodness 0 instead, the worst short of
-  // unsafe (never better: unsafe stays unsafe; and not unknown, which a step may cross a
-  // few cells of). Ground never seen, or hidden behind a rock, is unknown by its own lack
-  // of points and does not count here. 0: off.
+  // one, rated safe or caution, is rated caution instead, its step at the limit itself
+  // (max_step_m), which a cell short of unsafe reads only so: the arc vote drives a step over
+  // it only when no other step is allowed (hazards.map's driven-step limit). Never better:
+  // unsafe stays unsafe; and not unknown, which a step may cross a few cells of. Ground
+  // never seen, or hidden behind a rock, is unknown by its own lack of points and does not
+  // count here. 0: off.
   double crest_view_range_m = 0.0;
   double crest_view_height_m = 0.3;
   double crest_rise_fraction = 0.5;

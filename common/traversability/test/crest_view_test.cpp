@@ -1,7 +1,8 @@
 // Crests out of frame (MapOptions::crest_view_range_m), with known answers: a rock over the
 // rover's step limit at the edge of the front HAZCAM's view shows its near flank and not
-// its top, and the flank's cells read under the limit; with the option they are caution at
-// goodness 0, the worst short of unsafe. Seen whole, the same rock reads as before.
+// its top, and the flank's cells read under the limit; with the option they are caution
+// with their step at the limit (which the arc vote drives over only when nothing else is
+// allowed). Seen whole, the same rock reads as before.
 #include "traversability/dense_stereo.hpp"
 #include "traversability/traversability_map.hpp"
 
@@ -87,7 +88,7 @@ void MapFrom(TraversabilityMap& map, const ShippedOptions& o, const terrain::Wor
 // The states of the cells within `radius` of (x, y): counts per state.
 struct Census {
   int unknown = 0, safe = 0, caution = 0, unsafe = 0, crest_unseen = 0, with_points = 0;
-  int good_caution = 0;  // caution cells at goodness over 0
+  int good_caution = 0;  // caution cells whose step reads under the limit (0.25 m)
   double highest_step = 0;  // among the rated (known) cells
 };
 Census CellsNear(const TraversabilityMap& map, double x, double y, double radius, bool print = false) {
@@ -106,7 +107,7 @@ Census CellsNear(const TraversabilityMap& map, double x, double y, double radius
       switch (cell.state) {
         case CellState::kUnknown: ++c.unknown; break;
         case CellState::kSafe: ++c.safe; break;
-        case CellState::kCaution: ++c.caution, c.good_caution += cell.goodness > 0.0f; break;
+        case CellState::kCaution: ++c.caution, c.good_caution += cell.step_m < 0.25f; break;
         case CellState::kUnsafe: ++c.unsafe; break;
       }
       if (cell.state != CellState::kUnknown) c.highest_step = std::max<double>(c.highest_step, cell.step_m);
@@ -142,9 +143,9 @@ TraversabilityMap Flank(double rise_m, bool flank_open, double range_m) {
 }
 
 // A 0.20 m flank cell (caution under the 0.25 m limit, goodness 0.2) that a pair saw
-// without its top and none has framed: the cells whose patch holds it are caution at
-// goodness 0 with the rule; framed (its top seen), they are as before.
-TEST(CrestView, AFlankCellCutByTheFrameIsAtGoodnessZero) {
+// without its top and none has framed: the cells whose patch holds it are caution with
+// their step at the limit with the rule; framed (its top seen), they are as before.
+TEST(CrestView, AFlankCellCutByTheFrameReadsTheStepLimit) {
   for (const bool on : {false, true}) {
     const TraversabilityMap map = Flank(0.20, true, on ? 3.0 : 0.0);
     EXPECT_TRUE(map.Open(1.1, 0.1));
@@ -154,10 +155,11 @@ TEST(CrestView, AFlankCellCutByTheFrameIsAtGoodnessZero) {
       const Cell c = map.At(x, y);
       EXPECT_EQ(c.state, CellState::kCaution) << x << ", " << y << " on " << on;
       EXPECT_EQ(c.crest_unseen, on) << x << ", " << y;
+      EXPECT_NEAR(c.goodness, 0.2, 0.03) << x << ", " << y;
       if (on)
-        EXPECT_EQ(c.goodness, 0.0f) << x << ", " << y;
+        EXPECT_EQ(c.step_m, 0.25f) << x << ", " << y;
       else
-        EXPECT_NEAR(c.goodness, 0.2, 0.03) << x << ", " << y;
+        EXPECT_NEAR(c.step_m, 0.20, 0.01) << x << ", " << y;
     }
     // Beyond the patch (0.3 m) of the flank cell: level ground, safe either way.
     EXPECT_EQ(map.At(0.5, 0.1).state, CellState::kSafe);
@@ -178,6 +180,7 @@ TEST(CrestView, UnsafeStaysUnsafeAndLowGroundIsUnchanged) {
   for (const auto& [x, y] : {std::pair{1.1, 0.1}, std::pair{0.9, 0.1}, std::pair{1.1, 0.3}}) {
     EXPECT_EQ(low.At(x, y).state, off.At(x, y).state) << x << ", " << y;
     EXPECT_EQ(low.At(x, y).goodness, off.At(x, y).goodness) << x << ", " << y;
+    EXPECT_EQ(low.At(x, y).step_m, off.At(x, y).step_m) << x << ", " << y;
     EXPECT_FALSE(low.At(x, y).crest_unseen) << x << ", " << y;
   }
   // Options out of range are refused.
@@ -189,10 +192,10 @@ TEST(CrestView, UnsafeStaysUnsafeAndLowGroundIsUnchanged) {
 // The rock 1.6 m ahead and 1.4 m to the left (and 1.5 m ahead, 1.3 m to the right), seen
 // from the start by the HAZCAM at the edge of its view (its top out of the frame) and not
 // by the NAVCAM: without the rule its cells read 0.17 to 0.20 m, caution, none unsafe (the
-// collision's class); with it every caution cell within 0.5 m of the rock is at goodness
-// 0, and the rock's crest's cells too. Turned toward it, both pairs frame it, and it reads
+// collision's class); with it every caution cell within 0.5 m of the rock reads its step
+// at the limit, and the rock's crest's cells too. Turned toward it, both pairs frame it, and it reads
 // unsafe with the rule as without.
-TEST(CrestView, ARockAtTheHazcamsEdgeIsAtGoodnessZeroUntilFramed) {
+TEST(CrestView, ARockAtTheHazcamsEdgeReadsTheStepLimitUntilFramed) {
   for (const auto& [x, y] : {std::pair{1.6, 1.4}, std::pair{1.5, -1.3}}) {
     SCOPED_TRACE(std::to_string(x) + ", " + std::to_string(y));
     const terrain::World world = OneRock(x, y);
