@@ -23,6 +23,8 @@ void BandCounts::Add(const BandCounts& o) {
   false_unsafe_cells += o.false_unsafe_cells;
   unsafe_cells += o.unsafe_cells;
   unsafe_found_cells += o.unsafe_found_cells;
+  crest_cells += o.crest_cells;
+  crest_truly_unsafe += o.crest_truly_unsafe;
 }
 
 BandCounts EvalResult::Within4m() const {
@@ -170,6 +172,10 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
         BandCounts& b = result.bands[band];
         ++b.in_view_cells;
         if (mc[idx].state == tv::CellState::kUnknown) ++b.unknown_cells;
+        if (mc[idx].crest_unseen) {
+          ++b.crest_cells;
+          b.crest_truly_unsafe += tc[idx].state == tv::CellState::kUnsafe;
+        }
         if (tc[idx].state == tv::CellState::kUnsafe) {
           ++b.unsafe_cells;
           if (mc[idx].state == tv::CellState::kUnsafe) ++b.unsafe_found_cells;
@@ -251,6 +257,11 @@ std::string FormatTable(const EvalResult& r, double rock_limit_m) {
                 near.unsafe_cells, near.unsafe_found_cells,
                 pct(near.unsafe_found_cells, near.unsafe_cells).c_str());
   out << line;
+  if (near.crest_cells > 0) {
+    std::snprintf(line, sizeof line, "cells read at the step limit for an unseen crest (0-4 m): %d, unsafe in truth: %d %s\n",
+                  near.crest_cells, near.crest_truly_unsafe, pct(near.crest_truly_unsafe, near.crest_cells).c_str());
+    out << line;
+  }
   return out.str();
 }
 
