@@ -15,8 +15,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 
 namespace rover::traversability {
@@ -91,7 +89,7 @@ struct Census {
   int good_caution = 0;  // caution cells whose step reads under the limit (0.25 m)
   double highest_step = 0;  // among the rated (known) cells
 };
-Census CellsNear(const TraversabilityMap& map, double x, double y, double radius, bool print = false) {
+Census CellsNear(const TraversabilityMap& map, double x, double y, double radius) {
   Census c;
   const auto& cells = map.cells();
   for (int i = 0; i < map.rows(); ++i)
@@ -99,9 +97,6 @@ Census CellsNear(const TraversabilityMap& map, double x, double y, double radius
       const double cx = map.origin_x() + (i + 0.5) * map.cell_size(), cy = map.origin_y() + (j + 0.5) * map.cell_size();
       if (std::hypot(cx - x, cy - y) > radius) continue;
       const Cell& cell = cells[static_cast<std::size_t>(i) * map.cols() + j];
-      if (print)
-        std::printf("  cell %.1f,%.1f %s step %.3f pts %d framed %d\n", cx, cy, CellStateName(cell.state), cell.step_m,
-                    cell.height_sigma_m >= 0, map.Framed(cx, cy) + 2 * map.Open(cx, cy));
       c.with_points += cell.height_sigma_m >= 0;
       c.crest_unseen += cell.crest_unseen;
       switch (cell.state) {
@@ -235,22 +230,6 @@ TEST(CrestView, ARockSeenWholeReadsAsBefore) {
   }
   EXPECT_GT(rated, 200);
   EXPECT_GE(CellsNear(on, 1.7, 0.0, 0.5).unsafe, 8);
-}
-
-TEST(CrestView, DISABLED_Explore) {
-  const char* env = std::getenv("CREST_EXPLORE");
-  if (!env) return;
-  double x = 0, y = 0, yaw = 0;
-  std::sscanf(env, "%lf,%lf,%lf", &x, &y, &yaw);
-  const terrain::World world = OneRock(x, y);
-  for (double range : {0.0, 3.0}) {
-    TraversabilityMap map(Shipped(range).map);
-    MapFrom(map, Shipped(range), world, {{0, 0, yaw}});
-    std::printf("range %.1f\n", range);
-    const Census c = CellsNear(map, x, y, 0.5, true);
-    std::printf("unknown %d safe %d caution %d unsafe %d crest_unseen %d points %d highest %.3f\n", c.unknown, c.safe,
-                c.caution, c.unsafe, c.crest_unseen, c.with_points, c.highest_step);
-  }
 }
 
 }  // namespace
