@@ -60,6 +60,14 @@ struct MapCheckOptions {
   double DrivenStepLimit(double map_max_step_m) const {
     return driven_step_fraction < 1.0 ? driven_step_fraction * map_max_step_m : 0.0;
   }
+  // With a map that marks unseen crests (traversability crest_view_range_m): at a fraction
+  // of 1 the map's own step limit, which only such cells reach without being unsafe (their
+  // step reads the limit: a crest up to it may stand out of view), so that the vote drives
+  // over them only when no other step is allowed; a fraction under 1 as above.
+  double DrivenStepLimit(double map_max_step_m, bool map_marks_unseen_crests) const {
+    if (driven_step_fraction < 1.0 || !map_marks_unseen_crests) return DrivenStepLimit(map_max_step_m);
+    return map_max_step_m;
+  }
   avoidance::UnknownLimits Unknown() const {
     return {max_unknown_fraction, hidden_patch_m, max_scattered_unknown_fraction};
   }

@@ -187,6 +187,34 @@ double SourceStretch(const RectifiedRig& r, int u, int v) {
 
 std::size_t RectificationsBuilt() { return rectifications_built; }
 
+std::shared_ptr<const RectifiedRig> PairRectification(const geometry::StereoRig& rig, int image_width,
+                                                      const MapOptions& o) {
+  const double scale = o.stereo_width_px > 0 && image_width > o.stereo_width_px
+                           ? static_cast<double>(o.stereo_width_px) / image_width
+                           : 1.0;
+  return CachedRectification(rig, scale, o.rectified_fov_deg);
+}
+
+bool PairFrames(const RectifiedRig& r, const Eigen::Vector3d& p_rover, const MapOptions& o) {
+  if (p_rover.x() < o.min_x_m) return false;
+  const Eigen::Vector3d rel = p_rover - r.left_centre;
+  const double range2 = rel.squaredNorm();
+  if (range2 > o.max_range_m * o.max_range_m || range2 < o.min_range_m * o.min_range_m) return false;
+  const Eigen::Vector3d q = r.R_rover_rect.transpose() * rel;  // rectified optical frame
+  if (!(q.z() > 1e-6)) return false;
+  const double u = r.cx + r.f * q.x() / q.z(), v = r.cy + r.f * q.y() / q.z();
+  const double d = r.f * r.baseline_m / q.z();
+  const int num_disp = ((o.num_disparities + 15) / 16) * 16;
+  if (d >= num_disp) return false;  // nearer than the disparity search reaches
+  const double margin = o.block_size / 2 + 1;
+  const double ur = u - d;
+  if (!(v >= margin && v <= r.height - 1 - margin && ur >= margin && u <= r.width - 1 - margin)) return false;
+  const int iv = static_cast<int>(std::lround(v));
+  const int iu = static_cast<int>(std::lround(u)), iur = static_cast<int>(std::lround(ur));
+  // Rectified pixels whose ray leaves the source image (a fish-eye's corners) hold nothing.
+  return r.map_lx.at<float>(iv, iu) >= -0.5f && r.map_rx.at<float>(iv, iur) >= -0.5f;
+}
+
 RectifiedRig Rectify(const geometry::StereoRig& rig, double scale, double fov_deg) {
   if (!rig.left || !rig.right) Bad("the rig has no left or right model");
   if (!(scale > 0 && scale <= 1)) Bad("the rectification scale must be in (0, 1]");
@@ -287,10 +315,7 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
     }
   }
   auto t0 = std::chrono::steady_clock::now();
-  const double scale = o.stereo_width_px > 0 && left.cols > o.stereo_width_px
-                          ? static_cast<double>(o.stereo_width_px) / left.cols
-                          : 1.0;
-  const std::shared_ptr<const RectifiedRig> cached = CachedRectification(rig, scale, o.rectified_fov_deg);
+  const std::shared_ptr<const RectifiedRig> cached = PairRectification(rig, left.cols, o);
   const RectifiedRig& r = *cached;
   const int levels = r.pyramid_levels;
   cv::Mat srcL = left, srcR = right, tmp;

@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include <memory>
 #include <vector>
 
 namespace rover::traversability {
@@ -85,6 +86,18 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
 void PlaceStereoPoints(const StereoPoints& sp, const Eigen::Vector3d& lens, const geometry::Pose& T_site_rover,
                        const geometry::Matrix6d& pose_cov, const MapOptions& stereo,
                        std::vector<Eigen::Vector3d>* points_site, std::vector<double>* sigma_m);
+
+// The rectification DenseStereo uses for a pair of `image_width` columns from `rig` with
+// `options` (the same cached one).
+std::shared_ptr<const RectifiedRig> PairRectification(const geometry::StereoRig& rig, int image_width,
+                                                      const MapOptions& options);
+
+// Whether a rover-frame point could be matched and kept by DenseStereo with `options`:
+// it lies in front of the rectified pair, inside both rectified images away from their
+// edges by half a block (and the pixel of SGBM's prefilter), on the source images, within
+// the disparity search and the stereo range, and not behind min_x_m. Occlusion by nearer
+// ground is not judged.
+bool PairFrames(const RectifiedRig& r, const Eigen::Vector3d& p_rover, const MapOptions& options);
 
 // How many rectifications DenseStereo has built on this thread (its cache's misses).
 std::size_t RectificationsBuilt();

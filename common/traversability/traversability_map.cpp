@@ -39,6 +39,7 @@ TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(optio
   CheckMapOptions(options_);
   n_ = std::max(1, static_cast<int>(std::lround(options_.extent_m / options_.cell_size_m)));
   acc_.assign(static_cast<std::size_t>(n_) * n_, Accumulator{});
+  framed_.assign(acc_.size(), 0);
   Recentre(0, 0);
 }
 
@@ -79,6 +80,9 @@ void CheckMapOptions(const MapOptions& o) {
     Bad("dip_margin_sigmas must be in [0, 10]");
   if (!std::isfinite(o.relief_sigmas) || o.relief_sigmas < 0 || o.relief_sigmas > 10)
     Bad("relief_sigmas must be in [0, 10]");
+  if (!(o.crest_view_range_m >= 0 && o.crest_view_range_m <= 100) || !(o.crest_view_height_m > 0 && o.crest_view_height_m <= 10) ||
+      !(o.crest_rise_fraction > 0 && o.crest_rise_fraction <= 1))
+    Bad("crest_view_range_m must be in [0, 100], crest_view_height_m in (0, 10] and crest_rise_fraction in (0, 1]");
   if (!std::isfinite(o.roughness_margin_sigmas) || o.roughness_margin_sigmas < 0 || o.roughness_margin_sigmas > 10)
     Bad("roughness_margin_sigmas must be in [0, 10]");
   if (!std::isfinite(o.min_texture_snr) || o.min_texture_snr < 0 || o.min_texture_snr > 100)
@@ -97,6 +101,7 @@ void CheckMapOptions(const MapOptions& o) {
 
 void TraversabilityMap::Clear() {
   std::fill(acc_.begin(), acc_.end(), Accumulator{});
+  std::fill(framed_.begin(), framed_.end(), 0);
   MarkAllStale();
 }
 
@@ -122,6 +127,7 @@ void TraversabilityMap::Recentre(double x, double y) {
   std::vector<Accumulator> moved(acc_.size());
   std::vector<Cell> moved_cells(keep_ratings ? acc_.size() : 0);
   std::vector<char> moved_changed(keep_ratings ? acc_.size() : 0, 1);
+  std::vector<std::uint8_t> moved_framed(framed_.size(), 0);
   const long di = ox - old_x, dj = oy - old_y;
   for (int i = 0; i < n_; ++i) {
     const long si = i + di;
@@ -131,6 +137,7 @@ void TraversabilityMap::Recentre(double x, double y) {
       if (sj < 0 || sj >= n_) continue;
       const std::size_t to = static_cast<std::size_t>(i) * n_ + j, from = static_cast<std::size_t>(si) * n_ + sj;
       moved[to] = acc_[from];
+      moved_framed[to] = framed_[from];
       if (keep_ratings) {
         moved_cells[to] = cells_[from];
         moved_changed[to] = changed_[from];
@@ -138,6 +145,7 @@ void TraversabilityMap::Recentre(double x, double y) {
     }
   }
   acc_ = std::move(moved);
+  framed_ = std::move(moved_framed);
   origin_x_ = ox * cell;
   origin_y_ = oy * cell;
   if (keep_ratings) {
@@ -240,10 +248,79 @@ void TraversabilityMap::AddStereoPair(const cv::Mat& left, const cv::Mat& right,
   std::vector<double> sig;
   PlaceStereoPoints(sp, rig.left->Center(), T_site_rover, pose_cov, stereo, &pts, &sig);
   AddPoints(pts, sig);
+  if (options_.crest_view_range_m > 0)
+    MarkFramedBy(*PairRectification(rig, left.cols, stereo), T_site_rover, stereo, pts);
   stats_.points = static_cast<int>(pts.size());
   Rate();
   stats_.seconds_grid = SecondsSince(t0);
 }
+
+// The cells whose column (crest_view_height_m over the rover's ground plane at the cell's
+// centre, where the rover stands at capture) this pair saw to its top: a crest there was
+// in both images, inside the stereo's range and filters (PairFrames), and on rays below
+// the horizon band that PlaceStereoPoints drops. Framed within crest_view_range_m: kFramed;
+// not framed but holding some of this pair's points (`points_site`): kCut.
+void TraversabilityMap::MarkFramedBy(const RectifiedRig& rect, const geometry::Pose& T_site_rover,
+                                     const MapOptions& stereo, const std::vector<Eigen::Vector3d>& points_site) {
+  const double cell = options_.cell_size_m;
+  std::vector<std::uint8_t> touched(framed_.size(), 0);
+  for (const Eigen::Vector3d& p : points_site) {
+    const double fi = std::floor((p.x() - origin_x_) / cell), fj = std::floor((p.y() - origin_y_) / cell);
+    if (fi >= 0 && fj >= 0 && fi < n_ && fj < n_) touched[static_cast<std::size_t>(fi) * n_ + static_cast<std::size_t>(fj)] = 1;
+  }
+  const double reach = stereo.max_range_m + cell;
+  const Eigen::Vector3d at = T_site_rover.translation();
+  const geometry::Pose T_rover_site = T_site_rover.inverse();
+  const Eigen::Matrix3d R_site_rover = T_site_rover.linear();
+  const double sin_min_depression =
+      stereo.min_depression_deg > 0 ? std::sin(stereo.min_depression_deg * M_PI / 180.0) : -2.0;
+  const int r = static_cast<int>(std::ceil(reach / cell)) + 1;
+  const long ci = static_cast<long>(std::floor((at.x() - origin_x_) / cell));
+  const long cj = static_cast<long>(std::floor((at.y() - origin_y_) / cell));
+  for (long i = std::max(0L, ci - r); i <= std::min<long>(n_ - 1, ci + r); ++i) {
+    for (long j = std::max(0L, cj - r); j <= std::min<long>(n_ - 1, cj + r); ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * n_ + j;
+      if (framed_[k] & kFramed) continue;
+      const double x = origin_x_ + (i + 0.5) * cell, y = origin_y_ + (j + 0.5) * cell;
+      const double range = std::hypot(x - at.x(), y - at.y());
+      if (range > reach) continue;
+      // The cell's centre on the rover's own plane (z 0, down), and the column's top.
+      Eigen::Vector3d p = T_rover_site * Eigen::Vector3d(x, y, at.z());
+      p.z() = -options_.crest_view_height_m;
+      const Eigen::Vector3d ray = p - rect.left_centre;
+      const double min_down = sin_min_depression * ray.norm();
+      const bool frames =
+          !(ray.z() < min_down || (R_site_rover * ray).z() < min_down) && PairFrames(rect, p, stereo);
+      if (frames && range <= options_.crest_view_range_m)
+        framed_[k] |= kFramed;
+      else if (!frames && touched[k])
+        framed_[k] |= kCut;
+    }
+  }
+  // The crest rule reads the view flags of a patch's cells and their 8-neighbours, which
+  // the incremental rating's changed cells do not track: rate every cell after a view.
+  MarkAllStale();
+}
+
+void TraversabilityMap::MarkView(double x, double y, double radius_m, bool framed) {
+  const double cell = options_.cell_size_m;
+  for (int i = 0; i < n_; ++i)
+    for (int j = 0; j < n_; ++j)
+      if (std::hypot(origin_x_ + (i + 0.5) * cell - x, origin_y_ + (j + 0.5) * cell - y) <= radius_m)
+        framed_[static_cast<std::size_t>(i) * n_ + j] |= framed ? kFramed : kCut;
+  MarkAllStale();  // as after MarkFramedBy
+}
+
+std::uint8_t TraversabilityMap::ViewAt(double x, double y) const {
+  const double inv_cell = 1.0 / options_.cell_size_m;
+  const double fi = std::floor((x - origin_x_) * inv_cell);
+  const double fj = std::floor((y - origin_y_) * inv_cell);
+  if (!(fi >= 0 && fj >= 0 && fi < n_ && fj < n_)) return 0;
+  return framed_[static_cast<std::size_t>(fi) * n_ + static_cast<std::size_t>(fj)];
+}
+
+bool TraversabilityMap::Framed(double x, double y) const { return (ViewAt(x, y) & kFramed) != 0; }
+bool TraversabilityMap::Open(double x, double y) const { return ViewAt(x, y) == kCut; }
 
 Cell TraversabilityMap::At(double x, double y) const {
   const double inv_cell = 1.0 / options_.cell_size_m;
@@ -344,8 +421,9 @@ void TraversabilityMap::Rate() const {
   // The known cells of a patch round (i, j), as (dx, dy, h) from the cell centre.
   auto gather = [&](const std::vector<std::pair<int, int>>& offs, int i, int j, std::vector<Eigen::Vector3d>& out,
                     std::vector<float>* sigmas, std::vector<float>* errors = nullptr,
-                    std::vector<float>* reliefs = nullptr) {
+                    std::vector<float>* reliefs = nullptr, std::vector<std::size_t>* indices = nullptr) {
     out.clear();
+    if (indices) indices->clear();
     if (sigmas) sigmas->clear();
     if (errors) errors->clear();
     if (reliefs) reliefs->clear();
@@ -358,6 +436,7 @@ void TraversabilityMap::Rate() const {
       if (sigmas) sigmas->push_back(s[k]);
       if (errors) errors->push_back(e[k]);
       if (reliefs) reliefs->push_back(relief[k]);
+      if (indices) indices->push_back(k);
     }
   };
   // Plane h = c0 + c1 dx + c2 dy by least squares over the known cells, then again
@@ -501,11 +580,29 @@ void TraversabilityMap::Rate() const {
     for (float x : v) sum += static_cast<double>(x) * x;
     return v.empty() ? 0.0 : std::sqrt(sum / v.size());
   };
+  // Crests out of frame (crest_view_range_m): a cell that is open (cut by a pair's frame,
+  // never framed within range), or has an open 8-neighbour, may have a crest out of view.
+  const bool crests = o.crest_view_range_m > 0;
+  std::vector<char> open_side(crests ? count : 0, 0);
+  if (crests) {
+    for (int i = 0; i < n_; ++i)
+      for (int j = 0; j < n_; ++j) {
+        char open = 0;
+        for (int di = -1; di <= 1 && !open; ++di)
+          for (int dj = -1; dj <= 1 && !open; ++dj) {
+            const int a = i + di, b = j + dj;
+            open = a >= 0 && b >= 0 && a < n_ && b < n_ && framed_[static_cast<std::size_t>(a) * n_ + b] == kCut;
+          }
+        open_side[static_cast<std::size_t>(i) * n_ + j] = open;
+      }
+  }
+  const double crest_rise = o.crest_rise_fraction * o.max_step_m;
+  std::vector<std::size_t> xi;
   std::vector<float> st;
   for (int i = 0; i < n_; ++i) {
     for (int j = 0; j < n_; ++j) {
       if (!rate[static_cast<std::size_t>(i) * n_ + j]) continue;
-      gather(patch, i, j, xs, &ss, &se, &sr);
+      gather(patch, i, j, xs, &ss, &se, &sr, &xi);
       if (xs.size() < min_known) continue;
       Eigen::Vector3d c_fit;  // roughness: the scatter about the plane fitted
       Eigen::Vector3d c = fit(xs, ss, &c_fit);
@@ -540,9 +637,12 @@ void TraversabilityMap::Rate() const {
       // alone (a cell of 7 HAZCAM points, 3 of them a mismatched streak 0.25 m low, took
       // a 0.19 m cobble's step to 0.25 m). A hole deeper than its error still counts.
       double lo = 0, hi = 0, sum2 = 0, sig2 = 0;
+      bool crest_unseen = false;
       for (std::size_t k = 0; k < xs.size(); ++k) {
         const double res = xs[k].z() - (c_fit[0] + c_fit[1] * xs[k].x() + c_fit[2] * xs[k].y());
         const double above = xs[k].z() - (ground[0] + ground[1] * xs[k].x() + ground[2] * xs[k].y());
+        // Rising toward a side no pair framed: the crest may stand there, higher.
+        if (crests && above >= crest_rise && open_side[xi[k]]) crest_unseen = true;
         lo = std::min(lo, above + o.dip_margin_sigmas * se[k]);
         hi = std::max(hi, above + o.relief_sigmas * sr[k]);
         // The roughness: how far each cell lies off the plane beyond what its own height
@@ -564,6 +664,20 @@ void TraversabilityMap::Rate() const {
       out.state = worst >= 1.0                  ? CellState::kUnsafe
                   : worst >= o.caution_fraction ? CellState::kCaution
                                                 : CellState::kSafe;
+      // The step read is a lower bound only: the cell is at least caution, and its step
+      // reads the limit itself (a crest up to it may stand there unseen), which no rated
+      // cell short of unsafe reaches otherwise; the vote drives a step over such a cell only
+      // when no other is allowed (hazards.map: DrivenStepLimit). An unsafe cell stays
+      // unsafe. Not unknown: the vote lets a step cross a few unknown cells, and a rock's
+      // flank is a few cells (navbench seed 7 k0.20_r05 put a body corner on a 0.30 m rock
+      // so). Nor goodness 0: the vote's look-ahead takes its worst cell, and arcs that all
+      // met one were told apart by the goal alone (k0.20_r02 drove into a rock so).
+      if (crest_unseen && out.state != CellState::kUnsafe) {
+        out.state = CellState::kCaution;
+        out.goodness = std::min(out.goodness, static_cast<float>(1.0 - o.caution_fraction));
+        out.step_m = static_cast<float>(o.max_step_m);
+        out.crest_unseen = true;
+      }
     }
   }
   dirty_ = false;
@@ -604,6 +718,9 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("dip_margin_sigmas", o.dip_margin_sigmas, 0.0, 10.0);
   node.Get("roughness_margin_sigmas", o.roughness_margin_sigmas, 0.0, 10.0);
   node.Get("relief_sigmas", o.relief_sigmas, 0.0, 10.0);
+  node.Get("crest_view_range_m", o.crest_view_range_m, 0.0, 100.0);
+  node.Get("crest_view_height_m", o.crest_view_height_m, 1e-3, 10.0);
+  node.Get("crest_rise_fraction", o.crest_rise_fraction, 1e-3, 1.0);
   node.Get("drop_unseen_border", o.drop_unseen_border);
   node.Get("lr_max_diff_px", o.lr_max_diff_px, 0.0, 64.0);
   node.Get("ground_band_fraction", o.ground_band_fraction, 0.0, 0.5);
@@ -621,7 +738,8 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
 const std::vector<std::string> kMapOnlyKeys = {
     "cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
     "max_roughness_m", "min_points", "caution_fraction", "min_patch_fraction", "tilt_margin_sigmas", "dip_margin_sigmas",
-    "roughness_margin_sigmas", "relief_sigmas", "ground_band_fraction"};
+    "roughness_margin_sigmas", "relief_sigmas", "ground_band_fraction", "crest_view_range_m", "crest_view_height_m",
+    "crest_rise_fraction"};
 
 }  // namespace
 

@@ -52,6 +52,11 @@ struct Cell {
   // height_sigma_m < 0: the cell has too few points.
   float elevation_m = 0;
   float height_sigma_m = -1;
+  // With crest_view_range_m: the cell would have been rated safe or caution, but its patch
+  // holds ground rising toward a side no pair has framed (crest_view_range_m), so its step
+  // is a lower bound only: it is caution (goodness at most 1 - caution_fraction) and its
+  // step_m reads max_step_m.
+  bool crest_unseen = false;
 };
 
 struct MapOptions {           // read from YAML by LoadMapOptions (key names = field names)
@@ -97,6 +102,27 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // 1.7 m straight on, and 0.16 to 0.20 m from the HAZCAM's edge, which saw only its near
   // flank); noise alone adds no relief, so level ground reads as before. 0: the mean.
   double relief_sigmas = 0.0;
+  // Crests out of frame. A rock at the edge of a camera's view shows its near flank and not
+  // its top: a vertical edge leans outward toward the image's sides (the cameras look
+  // down), so the top leaves the frame first, and the flank's cells read well under the
+  // rock (a 0.32 m rock 59 to 67 deg off the HAZCAM's axis read 0.16 to 0.20 m, caution, and
+  // was driven into). A pair *frames* a cell when the top of a column crest_view_height_m
+  // over the rover's ground plane at the cell's centre lies in both of its rectified
+  // images (and their source images), inside its stereo range, disparity search and
+  // filters. A cell is *cut* when a pair put points in it without framing it (its foot in
+  // view, its top not), and *open* while cut and not framed by any pair within
+  // crest_view_range_m of the rover (a far view reads a rock low by its resolution). A cell
+  // rising crest_rise_fraction of the step limit or more above the ground plane, open or
+  // with an open 8-neighbour, may have a higher crest there: every cell whose patch holds
+  // one, rated safe or caution, is rated caution instead, its step at the limit itself
+  // (max_step_m), which a cell short of unsafe reads only so: the arc vote drives a step over
+  // it only when no other step is allowed (hazards.map's driven-step limit). Never better:
+  // unsafe stays unsafe; and not unknown, which a step may cross a few cells of. Ground
+  // never seen, or hidden behind a rock, is unknown by its own lack of points and does not
+  // count here. 0: off.
+  double crest_view_range_m = 0.0;
+  double crest_view_height_m = 0.3;
+  double crest_rise_fraction = 0.5;
   double max_roughness_m = 0.05;
   // The roughness counts each cell's residual about the fitted plane only beyond this many
   // standard errors of its height (as dip_margin_sigmas does below the ground for the step):
@@ -182,6 +208,8 @@ struct UpdateStats {
   double seconds_grid = 0;   // triangulating, binning and rating
 };
 
+struct RectifiedRig;  // dense_stereo.hpp
+
 class TraversabilityMap {
  public:
   // Throws std::invalid_argument with a one-line message on an option out of range.
@@ -201,6 +229,15 @@ class TraversabilityMap {
   // sigma (m): for tests and for other range sensors. Sizes must agree.
   void AddPoints(const std::vector<Eigen::Vector3d>& points_site,
                  const std::vector<double>& sigma_m);
+  // With crest_view_range_m: marks the cells within radius_m of site point (x, y) framed
+  // (a pair within crest_view_range_m saw their tops) or, with framed false, cut (a pair saw
+  // their feet and not their tops), as AddStereoPair does; for tests and for other range
+  // sensors, whose points AddPoints takes without a view.
+  void MarkView(double x, double y, double radius_m, bool framed);
+  // Whether the cell holding (x, y) has been framed; open: cut and never framed (false
+  // outside the grid).
+  bool Framed(double x, double y) const;
+  bool Open(double x, double y) const;
 
   // Centres the grid at (x, y) in the site frame; cells that leave the grid are forgotten.
   void Recentre(double x, double y);
@@ -240,6 +277,13 @@ class TraversabilityMap {
   int n_ = 0;  // cells per side
   double origin_x_ = 0, origin_y_ = 0;
   std::vector<Accumulator> acc_;
+  // Per cell (crest_view_range_m): kFramed when some pair within range framed its column,
+  // kCut when a pair put points in it without framing it.
+  static constexpr std::uint8_t kFramed = 1, kCut = 2;
+  std::vector<std::uint8_t> framed_;
+  void MarkFramedBy(const RectifiedRig& rect, const geometry::Pose& T_site_rover, const MapOptions& stereo,
+                    const std::vector<Eigen::Vector3d>& points_site);
+  std::uint8_t ViewAt(double x, double y) const;
   mutable std::vector<Cell> cells_;
   mutable bool dirty_ = true;
   // Since the last Rate: the cells whose moments changed (or entered the grid), whether the

@@ -72,7 +72,8 @@ int main(int argc, char** argv) {
     std::unique_ptr<MapWorker> map;
     if (map_check.enabled) {
       const auto map_options = traversability::LoadMapOptions(section["map"]["traversability"]);
-      map_check.max_driven_step_m = map_check.DrivenStepLimit(map_options.max_step_m);
+      map_check.max_driven_step_m =
+          map_check.DrivenStepLimit(map_options.max_step_m, map_options.crest_view_range_m > 0.0);
       if (const std::string note = hazards::MapTiltLimitProblem(map_options.max_tilt_deg, options.tilt);
           !note.empty()) {
         std::cerr << "hazard_monitor: warning: " << note << "\n";

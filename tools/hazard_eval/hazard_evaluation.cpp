@@ -23,6 +23,8 @@ void BandCounts::Add(const BandCounts& o) {
   false_unsafe_cells += o.false_unsafe_cells;
   unsafe_cells += o.unsafe_cells;
   unsafe_found_cells += o.unsafe_found_cells;
+  crest_cells += o.crest_cells;
+  crest_truly_unsafe += o.crest_truly_unsafe;
 }
 
 BandCounts EvalResult::Within4m() const {
@@ -111,7 +113,10 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
   }
   render::StereoRenderer hazcam_renderer(rh);
   tv::TraversabilityMap map(options.map);
-  tv::TraversabilityMap truth(options.map);
+  // The truth is the exact surface, every crest in it: no view to judge (crest_view_range_m).
+  tv::MapOptions truth_options = options.map;
+  truth_options.crest_view_range_m = 0.0;
+  tv::TraversabilityMap truth(truth_options);
   geometry::Matrix6d cov = geometry::Matrix6d::Zero();
   const double sp = options.pose_sigma_m, sa = options.pose_sigma_deg * M_PI / 180.0;
   cov.diagonal() << sp * sp, sp * sp, sp * sp, sa * sa, sa * sa, sa * sa;
@@ -156,16 +161,21 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
         const int band = Band(std::hypot(x - ep.x, y - ep.y));
         if (band < 0) continue;
         const Eigen::Vector3d ground(x, y, -world.Elevation(x, y));
+        const std::size_t idx = static_cast<std::size_t>(i) * map.cols() + j;
+        const double range = std::hypot(x - ep.x, y - ep.y);
+        // Rated cells, and those unknown only by an unseen crest (crest_view_range_m).
+        if (range < options.dump_range_m && (mc[idx].state != tv::CellState::kUnknown || mc[idx].crest_unseen))
+          result.dumped.push_back({static_cast<int>(k) + 1, x, y, range, mc[idx], tc[idx]});
         if (!InView(images.rig, T_rover_site, ground) &&
             !(hazcam && InHazcamView(hazcam_images.rig, options.hazcam_map, T_rover_site, ground)))
           continue;
         BandCounts& b = result.bands[band];
-        const std::size_t idx = static_cast<std::size_t>(i) * map.cols() + j;
-        const double range = std::hypot(x - ep.x, y - ep.y);
-        if (range < options.dump_range_m && mc[idx].state != tv::CellState::kUnknown)
-          result.dumped.push_back({static_cast<int>(k) + 1, x, y, range, mc[idx], tc[idx]});
         ++b.in_view_cells;
         if (mc[idx].state == tv::CellState::kUnknown) ++b.unknown_cells;
+        if (mc[idx].crest_unseen) {
+          ++b.crest_cells;
+          b.crest_truly_unsafe += tc[idx].state == tv::CellState::kUnsafe;
+        }
         if (tc[idx].state == tv::CellState::kUnsafe) {
           ++b.unsafe_cells;
           if (mc[idx].state == tv::CellState::kUnsafe) ++b.unsafe_found_cells;
@@ -247,6 +257,11 @@ std::string FormatTable(const EvalResult& r, double rock_limit_m) {
                 near.unsafe_cells, near.unsafe_found_cells,
                 pct(near.unsafe_found_cells, near.unsafe_cells).c_str());
   out << line;
+  if (near.crest_cells > 0) {
+    std::snprintf(line, sizeof line, "cells read at the step limit for an unseen crest (0-4 m): %d, unsafe in truth: %d %s\n",
+                  near.crest_cells, near.crest_truly_unsafe, pct(near.crest_truly_unsafe, near.crest_cells).c_str());
+    out << line;
+  }
   return out.str();
 }
 

@@ -63,6 +63,9 @@ struct BandCounts {
   int in_view_cells = 0, unknown_cells = 0;
   int traversable_cells = 0, false_unsafe_cells = 0;
   int unsafe_cells = 0, unsafe_found_cells = 0;
+  // Cells the map rates caution at its step limit for an unseen crest (crest_view_range_m),
+  // and those of them that are unsafe in truth.
+  int crest_cells = 0, crest_truly_unsafe = 0;
   void Add(const BandCounts& o);
 };
 

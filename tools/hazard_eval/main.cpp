@@ -203,7 +203,7 @@ int main(int argc, char** argv) {
     for (const auto& d : r.dumped)
       std::printf("  cell from pose %d at %.1f m (%.1f, %.1f): map %s step %.2f tilt %.1f rough %.3f sigma %.3f; "
                   "truth %s step %.2f tilt %.1f rough %.3f\n",
-                  d.pose, d.range_m, d.x, d.y, traversability::CellStateName(d.map.state), d.map.step_m,
+                  d.pose, d.range_m, d.x, d.y, d.map.crest_unseen ? "unknown (crest unseen)" : traversability::CellStateName(d.map.state), d.map.step_m,
                   d.map.tilt_rad * 180 / M_PI, d.map.roughness_m, d.map.sigma_m,
                   traversability::CellStateName(d.truth.state), d.truth.step_m, d.truth.tilt_rad * 180 / M_PI,
                   d.truth.roughness_m);

@@ -128,6 +128,9 @@ TEST(MapCheck, ACellNearTheStepLimitIsNotDrivenOverWhenRefused) {
   MapCheckOptions o;
   ASSERT_DOUBLE_EQ(o.driven_step_fraction, 1.0);  // off by default (README)
   ASSERT_EQ(o.DrivenStepLimit(0.25), 0.0);
+  // A map that marks unseen crests at its step limit: that limit, off at a fraction of 1.
+  ASSERT_EQ(o.DrivenStepLimit(0.25, true), 0.25);
+  ASSERT_EQ(o.DrivenStepLimit(0.25, false), 0.0);
   ASSERT_FALSE(o.driven_step_refused);
   o.driven_step_fraction = 0.8;
   o.driven_step_refused = true;

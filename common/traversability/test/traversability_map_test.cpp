@@ -538,8 +538,28 @@ TEST(TraversabilityMap, AWallOfRocksSeenFromOneSideIsUnsafe) {
 // (each rating incremental), map B only at the end (two moves in between: every cell
 // rated). Ground to the grid's edges, rocks, noise, moves of a few cells either way and a
 // pair that adds points without a move (a HAZCAM pair after its NAVCAM pair's recentre).
+// With the crest rule on (the view flags are read beyond a patch's moments), views
+// between ratings as well: the same comparison.
+int CellsRatedIncrementallyThatDiffer(bool crest_rule, int* rated_out, int* crest_unseen_out);
+
 TEST(TraversabilityMap, IncrementalRatingEqualsRatingEveryCell) {
+  int rated = 0;
+  int crest = 0;
+  EXPECT_EQ(CellsRatedIncrementallyThatDiffer(false, &rated, &crest), 0);
+  EXPECT_GT(rated, 3600 / 2);  // the comparison covers most of the grid (60 x 60 cells)
+}
+
+TEST(TraversabilityMap, IncrementalRatingWithTheCrestRuleEqualsRatingEveryCell) {
+  int rated = 0;
+  int crest = 0;
+  EXPECT_EQ(CellsRatedIncrementallyThatDiffer(true, &rated, &crest), 0);
+  EXPECT_GT(rated, 3600 / 2);
+  EXPECT_GT(crest, 0);  // the rule marked cells, so the comparison covers it
+}
+
+int CellsRatedIncrementallyThatDiffer(bool crest_rule, int* rated_out, int* crest_unseen_out) {
   MapOptions o;
+  if (crest_rule) o.crest_view_range_m = 3.0;
   o.extent_m = 12.0;
   o.footprint_radius_m = 0.3;
   o.tilt_radius_m = 0.75;
@@ -567,24 +587,34 @@ TEST(TraversabilityMap, IncrementalRatingEqualsRatingEveryCell) {
   both([&](TraversabilityMap& m) { AddSurface(&m, ground, 2.5, 0.5, 2.0, 0.02, 2); });
   both([&](TraversabilityMap& m) { AddSurface(&m, ground, 1.0, -0.5, 0.8, 0.02, 3); });
   both([&](TraversabilityMap& m) { m.Recentre(-0.7, 1.3); });
+  if (crest_rule) {
+    both([&](TraversabilityMap& m) { m.MarkView(2.0, 1.3, 0.5, false); });  // rock at (2, 1): cut
+    both([&](TraversabilityMap& m) { m.MarkView(-3.0, 2.5, 0.6, false); });
+  }
   both([&](TraversabilityMap& m) { AddSurface(&m, ground, -2.0, 3.0, 2.5, 0.015, 4); });
+  if (crest_rule) both([&](TraversabilityMap& m) { m.MarkView(-3.0, 2.5, 0.4, true); });
   both([&](TraversabilityMap& m) { m.Recentre(-0.7, 0.1); });
   const std::vector<Cell>& ca = a.cells();
   const std::vector<Cell>& cb = b.cells();
-  ASSERT_EQ(ca.size(), cb.size());
-  ASSERT_EQ(a.origin_x(), b.origin_x());
-  ASSERT_EQ(a.origin_y(), b.origin_y());
+  if (ca.size() != cb.size() || a.origin_x() != b.origin_x() || a.origin_y() != b.origin_y()) {
+    ADD_FAILURE() << "the two maps' grids differ";
+    return -1;
+  }
   int rated = 0, differ = 0;
   for (std::size_t k = 0; k < ca.size(); ++k) {
     rated += ca[k].state != CellState::kUnknown;
     const bool same = ca[k].state == cb[k].state && ca[k].step_m == cb[k].step_m && ca[k].tilt_rad == cb[k].tilt_rad &&
                       ca[k].face_rad == cb[k].face_rad && ca[k].roughness_m == cb[k].roughness_m &&
                       ca[k].goodness == cb[k].goodness && ca[k].sigma_m == cb[k].sigma_m &&
-                      ca[k].elevation_m == cb[k].elevation_m && ca[k].height_sigma_m == cb[k].height_sigma_m;
+                      ca[k].elevation_m == cb[k].elevation_m && ca[k].height_sigma_m == cb[k].height_sigma_m &&
+                      ca[k].crest_unseen == cb[k].crest_unseen;
     differ += !same;
   }
-  EXPECT_EQ(differ, 0) << "of " << ca.size() << " cells";
-  EXPECT_GT(rated, static_cast<int>(ca.size()) / 2);  // the comparison covers most of the grid
+  EXPECT_EQ(ca.size(), 3600u);
+  *rated_out = rated;
+  *crest_unseen_out = 0;
+  for (const Cell& c : ca) *crest_unseen_out += c.crest_unseen;
+  return differ;
 }
 
 }  // namespace
