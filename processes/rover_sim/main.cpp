@@ -33,6 +33,8 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -116,6 +118,388 @@ struct SyncListener {
   }
 };
 
+// --rate R|max: the same range as sim.rate; max is 0.
+double ParseRate(const std::string& r) {
+  if (r == "max") return 0;
+  const double rate = bus::ParseNumberList(r, 1, "rover_sim: argument --rate")[0];
+  if (!(rate >= kMinRate && rate <= kMaxRate)) {
+    std::ostringstream range;
+    range << "[" << kMinRate << ", " << kMaxRate << "]";
+    throw config::ConfigError("rover_sim: argument --rate: \"" + r + "\": expected max or a number in " +
+                              range.str());
+  }
+  return rate;
+}
+
+// The simulated rover at --start X,Y,YAW_DEG, or at the world's start.
+std::unique_ptr<mobility::RoverSimulator> MakeSimulator(const bus::Process& proc, const terrain::World& world,
+                                                        const mobility::MobilityOptions& mobility_options,
+                                                        const SimOptions& options) {
+  const auto s = proc.option("--start");
+  if (!s) return std::make_unique<mobility::RoverSimulator>(world, mobility_options, options.start_utime);
+  const auto v = bus::ParseNumberList(*s, 3, "rover_sim: argument --start");
+  try {
+    return std::make_unique<mobility::RoverSimulator>(world, mobility_options, v[0], v[1], v[2] * M_PI / 180.0,
+                                                      options.start_utime);
+  } catch (const std::invalid_argument& e) {
+    throw config::ConfigError("rover_sim: argument --start: " + std::string(e.what()));
+  }
+}
+
+// --hold-for's names, less rover_sim itself.
+std::vector<std::string> HoldForMembers(const bus::Process& proc) {
+  std::vector<std::string> members;
+  if (auto names = proc.option("--hold-for")) {
+    std::stringstream ss(*names);
+    for (std::string n; std::getline(ss, n, ',');)
+      if (!n.empty() && n != "rover_sim") members.push_back(n);
+  }
+  return members;
+}
+
+// A MOBILITY_COMMAND as the simulator's command; nothing for a type it does not know.
+std::optional<mobility::MotionCommand> ToMotionCommand(const rover_msgs::mobility_command_t& m) {
+  mobility::MotionCommand c;
+  c.id = m.command_id;
+  c.distance_m = m.distance_m;
+  c.curvature_per_m = m.curvature_per_m;
+  c.turn_rad = m.turn_rad;
+  c.speed_mps = m.speed_mps;
+  c.turn_rate_rps = m.turn_rate_rps;
+  switch (m.type) {
+    case rover_msgs::mobility_command_t::TYPE_ARC: c.type = mobility::MotionCommand::Type::kArc; return c;
+    case rover_msgs::mobility_command_t::TYPE_TURN: c.type = mobility::MotionCommand::Type::kTurn; return c;
+    case rover_msgs::mobility_command_t::TYPE_STOP: c.type = mobility::MotionCommand::Type::kStop; return c;
+    default: return std::nullopt;
+  }
+}
+
+// The rover simulator on the bus: commands in; IMU, odometry, status, truth and the clock
+// out; the dead-man between.
+class SimOnBus {
+ public:
+  SimOnBus(bus::Process& proc, const SimOptions& options, mobility::RoverSimulator& sim,
+           mobility::Deadman& deadman)
+      : proc_(proc), options_(options), sim_(sim), deadman_(deadman),
+        next_truth_(sim.utime()), next_status_(sim.utime()) {}
+
+  void OnCommand(const rover_msgs::mobility_command_t& m) {
+    deadman_.OnCommanderMessage(proc_.guard_seconds());
+    const auto c = ToMotionCommand(m);
+    if (!c) {
+      PublishFault(m.command_id, "command " + std::to_string(m.command_id) + ": unknown type " +
+                                     std::to_string(m.type) + " (expected 0 arc, 1 turn, 2 stop)");
+      return;
+    }
+    try {
+      sim_.Command(*c);
+    } catch (const std::invalid_argument& e) {
+      PublishFault(m.command_id, "command " + std::to_string(m.command_id) + " refused: " + e.what());
+    }
+  }
+
+  void OnHeartbeat(const rover_msgs::heartbeat_t& hb) { deadman_.OnHeartbeat(hb.process, proc_.guard_seconds()); }
+
+  // One simulation step, the dead-man judged first, and what it produced on the bus.
+  void Step() {
+    if (const auto why = deadman_.Check(sim_.moving(), proc_.guard_seconds())) {
+      std::cerr << "rover_sim: command " << sim_.status().command_id << ": " << *why << "\n";
+      sim_.Halt(*why);
+    }
+    const mobility::StepOutput out = sim_.Step(options_.step_s);
+    for (const auto& s : out.imu) PublishImu(s);
+    for (const auto& s : out.odometry) PublishOdometry(s);
+    for (const auto& s : out.status) proc_.bus().Publish(channels::kMobilityStatus, ToMsg(s));
+    const std::int64_t now = sim_.utime();
+    if (now >= next_status_) {
+      auto st = sim_.status();
+      st.utime = now;
+      proc_.bus().Publish(channels::kMobilityStatus, ToMsg(st));
+      next_status_ += Period(options_.status_hz);
+    }
+    if (now >= next_truth_) {
+      PublishTruth();
+      next_truth_ += Period(options_.truth_hz);
+    }
+  }
+
+  void PublishClock(std::int64_t now, const simtime::Cut* cut = nullptr) {
+    rover_msgs::rover_clock_t m{};
+    if (cut) bus::SetCut(*cut, &m);
+    m.utime = now;
+    // Virtual time has no fixed ratio to the wall clock (the pacing is only a ceiling): 0,
+    // so that a run at 50x and one as fast as possible publish the same bytes.
+    m.rate = proc_.virtual_time() ? 0.0 : options_.rate;
+    m.mode = proc_.virtual_time() ? rover_msgs::rover_clock_t::MODE_VIRTUAL : rover_msgs::rover_clock_t::MODE_REAL;
+    proc_.bus().Publish(channels::kClock, m);
+  }
+
+  static std::int64_t Period(double hz) { return static_cast<std::int64_t>(1e6 / hz); }
+
+  bus::Process& proc() { return proc_; }
+  const SimOptions& options() const { return options_; }
+  mobility::RoverSimulator& sim() { return sim_; }
+
+ private:
+  void PublishFault(std::int64_t command_id, const std::string& detail) {
+    rover_msgs::mobility_status_t st{};
+    st.utime = sim_.utime();
+    st.command_id = command_id;
+    st.state = rover_msgs::mobility_status_t::STATE_FAULT;
+    st.detail = detail;
+    proc_.bus().Publish(channels::kMobilityStatus, st);
+  }
+  void PublishImu(const mobility::ImuSample& s) {
+    rover_msgs::imu_t m{};
+    m.utime = s.utime;
+    bus::QuaternionToArray(s.q_site_rover, m.orientation);
+    for (int i = 0; i < 3; ++i) {
+      m.angular_rate[i] = s.angular_rate_rps[i];
+      m.accel[i] = s.accel_mps2[i];
+    }
+    proc_.bus().Publish(channels::kImu, m);
+  }
+  void PublishOdometry(const mobility::WheelOdometrySample& s) {
+    rover_msgs::wheel_odometry_t m{};
+    m.utime = s.utime;
+    m.num_wheels = static_cast<std::int32_t>(s.wheel_distance_m.size());
+    m.wheel_distance_m.assign(s.wheel_distance_m.begin(), s.wheel_distance_m.end());
+    m.distance_m = s.distance_m;
+    m.curvature_per_m = s.curvature_per_m;
+    m.turning_in_place = s.turning_in_place;
+    proc_.bus().Publish(channels::kWheelOdometry, m);
+  }
+  void PublishTruth() {
+    const auto t = sim_.Truth();
+    rover_msgs::sim_truth_t m{};
+    m.utime = t.utime;
+    for (int i = 0; i < 3; ++i) {
+      m.position[i] = t.position[i];
+      m.rpy[i] = t.rpy[i];
+    }
+    bus::QuaternionToArray(t.q_site_rover, m.orientation);
+    m.odometer_m = t.odometer_m;
+    m.slip = t.slip;
+    m.soil = terrain::SoilName(t.soil);
+    m.command_id = t.command_id;
+    proc_.bus().Publish(channels::kSimTruth, m);
+  }
+
+  bus::Process& proc_;
+  const SimOptions options_;
+  mobility::RoverSimulator& sim_;
+  mobility::Deadman& deadman_;
+  std::int64_t next_truth_, next_status_;
+};
+
+// ---- Virtual time: one instant at a time, when the whole set has finished it. ----
+class VirtualClock {
+ public:
+  // rover_sim is a member too: the clock must also wait for the commands sent to it.
+  VirtualClock(SimOnBus& rover, std::vector<std::string> members)
+      : rover_(rover), proc_(rover.proc()), options_(rover.options()),
+        barrier_(WithSelf(std::move(members)), options_.barrier_timeout_s, "rover_sim"),
+        sync_bus_(bus::SyncUrl(proc_.bus().url())), listener_{&barrier_, &proc_},
+        tick_us_(static_cast<std::int64_t>(std::llround(options_.tick_s * 1e6))) {
+    if (!sync_bus_.good()) throw std::runtime_error("cannot open the sync bus " + bus::SyncUrl(proc_.bus().url()));
+    sync_bus_.subscribe(bus::kSimSyncChannel, &SyncListener::OnMessage, &listener_)->setQueueCapacity(10000);
+  }
+
+  int Run() {
+    HoldUntilAllHeard();
+    t_ = rover_.sim().utime();
+    rover_start_ = t_;
+    wall_start_ = proc_.wall_seconds();
+    next_heartbeat_ = t_;
+    BeginInstant();
+    tick_wall_ = proc_.wall_seconds();
+    last_note_ = tick_wall_;
+    last_announce_ = tick_wall_;
+    while (!proc_.stopping()) {
+      if (!WaitUntilInstantFinished()) break;  // stopped while waiting: the instant is not finished
+      if (!PaceToRate()) break;
+      NextInstant();
+    }
+    return 0;
+  }
+
+ private:
+  static std::vector<std::string> WithSelf(std::vector<std::string> members) {
+    members.push_back("rover_sim");
+    return members;
+  }
+
+  void HoldUntilAllHeard() {
+    const double hold_start = proc_.wall_seconds();
+    barrier_.Report(proc_.bus().SyncState("rover_sim", -1, false), proc_.wall_seconds());
+    while (!barrier_.AllHeard() && !proc_.stopping()) {
+      HandleEither(proc_.bus().lcm(), &sync_bus_, 50);
+      if (proc_.wall_seconds() - hold_start > 30) {
+        throw std::runtime_error("--hold-for: no sync report within 30 s from: " + barrier_.Holding(-1));
+      }
+    }
+  }
+
+  // The clock carries the cut (simtime/cut.hpp): what the members had published when they
+  // finished the last instant, and what this process has sent for the new one.
+  simtime::Cut CutNow() {
+    simtime::Cut cut = barrier_.Published();
+    const auto own = bus::PublisherId("rover_sim");
+    for (const auto& [channel, count] : proc_.bus().SyncState("rover_sim", t_, false).published) {
+      cut.Set(channel, own, count);
+    }
+    cut.Set(channels::kClock, own, 0);  // the clock is acted on at once, never batched
+    return cut;
+  }
+
+  void BeginInstant() {
+    proc_.ObserveTime(t_);
+    const simtime::Cut cut = CutNow();
+    rover_.PublishClock(t_, &cut);
+    if (t_ >= next_heartbeat_) {
+      proc_.PublishHeartbeat();
+      next_heartbeat_ = t_ + static_cast<std::int64_t>(0.25e6);
+    }
+  }
+
+  // 1. Everyone has finished instant t, and what was sent to rover_sim has come. False:
+  // stopped meanwhile.
+  bool WaitUntilInstantFinished() {
+    double last_pass = proc_.wall_seconds();
+    while (!proc_.stopping()) {
+      // A pass long after the last (this process was stopped or starved): the others'
+      // silence meanwhile is not theirs to answer for.
+      if (proc_.wall_seconds() - last_pass > 1.0) tick_wall_ = proc_.wall_seconds();
+      last_pass = proc_.wall_seconds();
+      barrier_.Report(proc_.bus().SyncState("rover_sim", t_, false), proc_.wall_seconds());
+      if (barrier_.Finished(t_)) return true;
+      DeclareLost();
+      AnnounceAgainForTheFarBehind();
+      if (proc_.wall_seconds() - std::max(last_note_, tick_wall_) > 10.0) {
+        std::cerr << "rover_sim: the clock waits at " << t_ << ": " << barrier_.Holding(t_) << "\n";
+        last_note_ = proc_.wall_seconds();
+      }
+      // Woken by any report or message; the timeout serves only the wall-time rules
+      // above (0.5 s and more), so it need not spin.
+      HandleEither(proc_.bus().lcm(), &sync_bus_, 20);
+    }
+    return false;
+  }
+
+  // The one wall-time rule: a member silent for sim.barrier_timeout_s is lost, and the
+  // rover stops.
+  void DeclareLost() {
+    std::vector<std::string> forgiven;
+    const auto lost = barrier_.DeclareLost(t_, proc_.wall_seconds(), tick_wall_, &forgiven);
+    for (const auto& line : forgiven) {
+      std::cerr << "rover_sim: messages lost on the way (" << line << ") after " << options_.barrier_timeout_s
+                << " s of wall time: forgiven, the clock runs on\n";
+    }
+    for (const auto& name : lost) {
+      const std::string why = "process " + name + " lost: it held the clock for " +
+                              std::to_string(options_.barrier_timeout_s) +
+                              " s of wall time without a word (sim.barrier_timeout_s)";
+      std::cerr << "rover_sim: " << why << "; the rover stops and the clock runs on without it\n";
+      rover_.sim().Halt(why);
+    }
+  }
+
+  // A member back from a freeze may have lost the clock messages in between, and takes a
+  // jump of more than bus.max_clock_step_s only when the next clock message confirms it:
+  // while such a member holds the clock, the instant is announced again (twice a second).
+  // Never in a run without a fault, whose log it would change.
+  void AnnounceAgainForTheFarBehind() {
+    if (proc_.wall_seconds() - std::max(last_announce_, tick_wall_) > 0.5 &&
+        barrier_.FarBehind(t_, static_cast<std::int64_t>(1e6))) {
+      const simtime::Cut cut = CutNow();
+      rover_.PublishClock(t_, &cut);
+      last_announce_ = proc_.wall_seconds();
+    }
+  }
+
+  // 2. No faster than `rate` times the wall clock. False: stopped meanwhile.
+  bool PaceToRate() {
+    if (options_.rate <= 0) return true;
+    const double due = wall_start_ + (t_ + tick_us_ - rover_start_) * 1e-6 / options_.rate;
+    while (!proc_.stopping() && proc_.wall_seconds() < due) {
+      HandleEither(proc_.bus().lcm(), &sync_bus_, std::max(1, static_cast<int>((due - proc_.wall_seconds()) * 1000)));
+    }
+    return !proc_.stopping();
+  }
+
+  // 3. The next instant: what came during this one acts first (commands, heartbeats).
+  void NextInstant() {
+    proc_.bus().SealBatch(t_ + tick_us_);
+    proc_.bus().DispatchBatch();
+    const std::int64_t until = t_ + tick_us_;
+    while (rover_.sim().utime() < until) rover_.Step();
+    t_ = rover_.sim().utime();
+    BeginInstant();
+    tick_wall_ = proc_.wall_seconds();
+  }
+
+  SimOnBus& rover_;
+  bus::Process& proc_;
+  const SimOptions& options_;
+  simtime::Barrier barrier_;
+  lcm::LCM sync_bus_;
+  SyncListener listener_;
+  const std::int64_t tick_us_;
+  std::int64_t t_ = 0, rover_start_ = 0, next_heartbeat_ = 0;
+  double wall_start_ = 0, tick_wall_ = 0, last_note_ = 0, last_announce_ = 0;
+};
+
+// ---- Real time: the clock runs at `rate` times the wall clock, as on a rover. ----
+int RunRealTime(SimOnBus& rover, const std::set<std::string>& waiting) {
+  bus::Process& proc = rover.proc();
+  const SimOptions& options = rover.options();
+  const auto hold_start = std::chrono::steady_clock::now();
+  double next_hold_heartbeat_wall = 0;
+  while (!waiting.empty() && !proc.stopping()) {
+    // Once a wall second, as everywhere: every heartbeat on the bus (this one included)
+    // wakes Handle(), so sending one per wake-up floods the bus.
+    if (proc.wall_seconds() >= next_hold_heartbeat_wall) {
+      proc.PublishHeartbeat();
+      next_hold_heartbeat_wall = proc.wall_seconds() + 1.0;
+    }
+    proc.bus().Handle(200);
+    if (std::chrono::steady_clock::now() - hold_start > std::chrono::seconds(30)) {
+      std::string list;
+      for (const auto& n : waiting) list += " " + n;
+      throw std::runtime_error("--hold-for: no heartbeat within 30 s from:" + list);
+    }
+  }
+  std::int64_t next_clock = rover.sim().utime();
+  const auto wall_start = std::chrono::steady_clock::now();
+  const std::int64_t rover_start = rover.sim().utime();
+  double next_heartbeat_wall = 0;
+  while (!proc.stopping()) {
+    while (proc.bus().Handle(0)) {
+    }
+    rover.Step();
+    const std::int64_t now = rover.sim().utime();
+    proc.ObserveTime(now);
+    if (now >= next_clock) {
+      rover.PublishClock(now);
+      next_clock += SimOnBus::Period(options.clock_hz);
+    }
+    if (proc.wall_seconds() >= next_heartbeat_wall) {
+      proc.PublishHeartbeat();
+      next_heartbeat_wall = proc.wall_seconds() + 0.25;
+    }
+    // Pace rover time at `rate` times the wall clock.
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    const double ahead_s = (now - rover_start) * 1e-6 / options.rate - wall;
+    if (ahead_s > 0) {
+      proc.bus().Handle(static_cast<int>(ahead_s * 1000.0));
+      const double wall2 = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+      const double still = (now - rover_start) * 1e-6 / options.rate - wall2;
+      if (still > 0) std::this_thread::sleep_for(std::chrono::duration<double>(still));
+    }
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -133,19 +517,7 @@ int main(int argc, char** argv) {
                        {"--rate", "R|max", "rover seconds per wall second (overrides sim.rate); max: as fast as the barrier allows (virtual time)"},
                        {"--hold-for", "NAMES", "comma-separated processes the clock waits for: before it starts, and in virtual time at every instant"}});
     SimOptions options = LoadSimOptions(proc.config()["sim"]);
-    if (auto r = proc.option("--rate")) {  // the same range as sim.rate
-      if (*r == "max") {
-        options.rate = 0;
-      } else {
-        options.rate = bus::ParseNumberList(*r, 1, "rover_sim: argument --rate")[0];
-        if (!(options.rate >= kMinRate && options.rate <= kMaxRate)) {
-          std::ostringstream range;
-          range << "[" << kMinRate << ", " << kMaxRate << "]";
-          throw config::ConfigError("rover_sim: argument --rate: \"" + *r + "\": expected max or a number in " +
-                                    range.str());
-        }
-      }
-    }
+    if (auto r = proc.option("--rate")) options.rate = ParseRate(*r);
     if (options.rate <= 0 && !proc.virtual_time()) {
       throw config::ConfigError("rover_sim: rate max (0) needs virtual time (expected $ROVER_TIME=virtual or bus.time: virtual, or a rate > 0)");
     }
@@ -154,293 +526,21 @@ int main(int argc, char** argv) {
     const terrain::World world(terrain::WorldOptions::LoadFile(*world_path));
     const auto mobility_options = mobility::MobilityOptions::Load(proc.config());
     mobility::Deadman deadman(mobility::LoadDeadmanOptions(proc.config()));
-
-    std::unique_ptr<mobility::RoverSimulator> sim;
-    if (auto s = proc.option("--start")) {
-      const auto v = bus::ParseNumberList(*s, 3, "rover_sim: argument --start");
-      try {
-        sim = std::make_unique<mobility::RoverSimulator>(world, mobility_options, v[0], v[1],
-                                                         v[2] * M_PI / 180.0, options.start_utime);
-      } catch (const std::invalid_argument& e) {
-        throw config::ConfigError("rover_sim: argument --start: " + std::string(e.what()));
-      }
-    } else {
-      sim = std::make_unique<mobility::RoverSimulator>(world, mobility_options, options.start_utime);
-    }
+    const auto sim = MakeSimulator(proc, world, mobility_options, options);
     proc.ObserveTime(sim->utime());
 
+    SimOnBus rover(proc, options, *sim, deadman);
     proc.bus().Subscribe<rover_msgs::mobility_command_t>(
-        channels::kMobilityCommand, [&](const rover_msgs::mobility_command_t& m) {
-          deadman.OnCommanderMessage(proc.guard_seconds());
-          mobility::MotionCommand c;
-          c.id = m.command_id;
-          c.distance_m = m.distance_m;
-          c.curvature_per_m = m.curvature_per_m;
-          c.turn_rad = m.turn_rad;
-          c.speed_mps = m.speed_mps;
-          c.turn_rate_rps = m.turn_rate_rps;
-          switch (m.type) {
-            case rover_msgs::mobility_command_t::TYPE_ARC: c.type = mobility::MotionCommand::Type::kArc; break;
-            case rover_msgs::mobility_command_t::TYPE_TURN: c.type = mobility::MotionCommand::Type::kTurn; break;
-            case rover_msgs::mobility_command_t::TYPE_STOP: c.type = mobility::MotionCommand::Type::kStop; break;
-            default: {
-              rover_msgs::mobility_status_t st{};
-              st.utime = sim->utime();
-              st.command_id = m.command_id;
-              st.state = rover_msgs::mobility_status_t::STATE_FAULT;
-              st.detail = "command " + std::to_string(m.command_id) + ": unknown type " +
-                          std::to_string(m.type) + " (expected 0 arc, 1 turn, 2 stop)";
-              proc.bus().Publish(channels::kMobilityStatus, st);
-              return;
-            }
-          }
-          try {
-            sim->Command(c);
-          } catch (const std::invalid_argument& e) {
-            rover_msgs::mobility_status_t st{};
-            st.utime = sim->utime();
-            st.command_id = m.command_id;
-            st.state = rover_msgs::mobility_status_t::STATE_FAULT;
-            st.detail = "command " + std::to_string(m.command_id) + " refused: " + e.what();
-            proc.bus().Publish(channels::kMobilityStatus, st);
-          }
-        });
-
-    std::vector<std::string> members;
-    if (auto names = proc.option("--hold-for")) {
-      std::stringstream ss(*names);
-      for (std::string n; std::getline(ss, n, ',');)
-        if (!n.empty() && n != "rover_sim") members.push_back(n);
-    }
+        channels::kMobilityCommand, [&](const rover_msgs::mobility_command_t& m) { rover.OnCommand(m); });
+    const std::vector<std::string> members = HoldForMembers(proc);
     std::set<std::string> waiting(members.begin(), members.end());  // real time: heartbeats before start
     proc.bus().Subscribe<rover_msgs::heartbeat_t>(
         channels::kHeartbeat, [&](const rover_msgs::heartbeat_t& hb) {
           waiting.erase(hb.process);
-          deadman.OnHeartbeat(hb.process, proc.guard_seconds());
+          rover.OnHeartbeat(hb);
         }, 1000);
 
-    // What one simulation step produced, on the bus.
-    const auto period = [](double hz) { return static_cast<std::int64_t>(1e6 / hz); };
-    std::int64_t next_truth = sim->utime(), next_status = sim->utime();
-    auto publish_step = [&](const mobility::StepOutput& out) {
-      for (const auto& s : out.imu) {
-        rover_msgs::imu_t m{};
-        m.utime = s.utime;
-        bus::QuaternionToArray(s.q_site_rover, m.orientation);
-        for (int i = 0; i < 3; ++i) {
-          m.angular_rate[i] = s.angular_rate_rps[i];
-          m.accel[i] = s.accel_mps2[i];
-        }
-        proc.bus().Publish(channels::kImu, m);
-      }
-      for (const auto& s : out.odometry) {
-        rover_msgs::wheel_odometry_t m{};
-        m.utime = s.utime;
-        m.num_wheels = static_cast<std::int32_t>(s.wheel_distance_m.size());
-        m.wheel_distance_m.assign(s.wheel_distance_m.begin(), s.wheel_distance_m.end());
-        m.distance_m = s.distance_m;
-        m.curvature_per_m = s.curvature_per_m;
-        m.turning_in_place = s.turning_in_place;
-        proc.bus().Publish(channels::kWheelOdometry, m);
-      }
-      for (const auto& s : out.status) proc.bus().Publish(channels::kMobilityStatus, ToMsg(s));
-      const std::int64_t now = sim->utime();
-      if (now >= next_status) {
-        auto st = sim->status();
-        st.utime = now;
-        proc.bus().Publish(channels::kMobilityStatus, ToMsg(st));
-        next_status += period(options.status_hz);
-      }
-      if (now >= next_truth) {
-        const auto t = sim->Truth();
-        rover_msgs::sim_truth_t m{};
-        m.utime = t.utime;
-        for (int i = 0; i < 3; ++i) {
-          m.position[i] = t.position[i];
-          m.rpy[i] = t.rpy[i];
-        }
-        bus::QuaternionToArray(t.q_site_rover, m.orientation);
-        m.odometer_m = t.odometer_m;
-        m.slip = t.slip;
-        m.soil = terrain::SoilName(t.soil);
-        m.command_id = t.command_id;
-        proc.bus().Publish(channels::kSimTruth, m);
-        next_truth += period(options.truth_hz);
-      }
-    };
-    auto publish_clock = [&](std::int64_t now, const simtime::Cut* cut = nullptr) {
-      rover_msgs::rover_clock_t m{};
-      if (cut) bus::SetCut(*cut, &m);
-      m.utime = now;
-      // Virtual time has no fixed ratio to the wall clock (the pacing is only a ceiling): 0,
-      // so that a run at 50x and one as fast as possible publish the same bytes.
-      m.rate = proc.virtual_time() ? 0.0 : options.rate;
-      m.mode = proc.virtual_time() ? rover_msgs::rover_clock_t::MODE_VIRTUAL : rover_msgs::rover_clock_t::MODE_REAL;
-      proc.bus().Publish(channels::kClock, m);
-    };
-    auto check_deadman = [&] {
-      if (const auto why = deadman.Check(sim->moving(), proc.guard_seconds())) {
-        std::cerr << "rover_sim: command " << sim->status().command_id << ": " << *why << "\n";
-        sim->Halt(*why);
-      }
-    };
-
-    if (proc.virtual_time()) {
-      // ---- Virtual time: one instant at a time, when the whole set has finished it. ----
-      // rover_sim is a member too: the clock must also wait for the commands sent to it.
-      std::vector<std::string> with_clock = members;
-      with_clock.push_back("rover_sim");
-      simtime::Barrier barrier(with_clock, options.barrier_timeout_s, "rover_sim");
-      lcm::LCM sync_bus(bus::SyncUrl(proc.bus().url()));
-      if (!sync_bus.good()) throw std::runtime_error("cannot open the sync bus " + bus::SyncUrl(proc.bus().url()));
-      SyncListener listener{&barrier, &proc};
-      sync_bus.subscribe(bus::kSimSyncChannel, &SyncListener::OnMessage, &listener)->setQueueCapacity(10000);
-      const double hold_start = proc.wall_seconds();
-      barrier.Report(proc.bus().SyncState("rover_sim", -1, false), proc.wall_seconds());
-      while (!barrier.AllHeard() && !proc.stopping()) {
-        HandleEither(proc.bus().lcm(), &sync_bus, 50);
-        if (proc.wall_seconds() - hold_start > 30) {
-          throw std::runtime_error("--hold-for: no sync report within 30 s from: " + barrier.Holding(-1));
-        }
-      }
-      std::int64_t t = sim->utime();
-      const std::int64_t tick_us = static_cast<std::int64_t>(std::llround(options.tick_s * 1e6));
-      const std::int64_t rover_start = t;
-      const double wall_start = proc.wall_seconds();
-      std::int64_t next_heartbeat = t;
-      // The clock carries the cut (simtime/cut.hpp): what the members had published when
-      // they finished the last instant, and what this process has sent for the new one.
-      auto cut_now = [&] {
-        simtime::Cut cut = barrier.Published();
-        const auto own = bus::PublisherId("rover_sim");
-        for (const auto& [channel, count] : proc.bus().SyncState("rover_sim", t, false).published) {
-          cut.Set(channel, own, count);
-        }
-        cut.Set(channels::kClock, own, 0);  // the clock is acted on at once, never batched
-        return cut;
-      };
-      auto begin_instant = [&] {
-        proc.ObserveTime(t);
-        const simtime::Cut cut = cut_now();
-        publish_clock(t, &cut);
-        if (t >= next_heartbeat) {
-          proc.PublishHeartbeat();
-          next_heartbeat = t + static_cast<std::int64_t>(0.25e6);
-        }
-      };
-      begin_instant();
-      double tick_wall = proc.wall_seconds(), last_note = tick_wall, last_announce = tick_wall;
-      while (!proc.stopping()) {
-        // 1. Everyone has finished instant t, and what was sent to rover_sim has come.
-        double last_pass = proc.wall_seconds();
-        while (!proc.stopping()) {
-          // A pass long after the last (this process was stopped or starved): the others'
-          // silence meanwhile is not theirs to answer for.
-          if (proc.wall_seconds() - last_pass > 1.0) tick_wall = proc.wall_seconds();
-          last_pass = proc.wall_seconds();
-          barrier.Report(proc.bus().SyncState("rover_sim", t, false), proc.wall_seconds());
-          if (barrier.Finished(t)) break;
-          std::vector<std::string> forgiven;
-          const auto lost = barrier.DeclareLost(t, proc.wall_seconds(), tick_wall, &forgiven);
-          for (const auto& line : forgiven) {
-            std::cerr << "rover_sim: messages lost on the way (" << line << ") after "
-                      << options.barrier_timeout_s << " s of wall time: forgiven, the clock runs on\n";
-          }
-          for (const auto& name : lost) {
-            const std::string why = "process " + name + " lost: it held the clock for " +
-                                    std::to_string(options.barrier_timeout_s) +
-                                    " s of wall time without a word (sim.barrier_timeout_s)";
-            std::cerr << "rover_sim: " << why << "; the rover stops and the clock runs on without it\n";
-            sim->Halt(why);
-          }
-          // A member back from a freeze may have lost the clock messages in between, and
-          // takes a jump of more than bus.max_clock_step_s only when the next clock message
-          // confirms it: while such a member holds the clock, the instant is announced again
-          // (twice a second). Never in a run without a fault, whose log it would change.
-          if (proc.wall_seconds() - std::max(last_announce, tick_wall) > 0.5 &&
-              barrier.FarBehind(t, static_cast<std::int64_t>(1e6))) {
-            const simtime::Cut cut = cut_now();
-            publish_clock(t, &cut);
-            last_announce = proc.wall_seconds();
-          }
-          if (proc.wall_seconds() - std::max(last_note, tick_wall) > 10.0) {
-            std::cerr << "rover_sim: the clock waits at " << t << ": " << barrier.Holding(t) << "\n";
-            last_note = proc.wall_seconds();
-          }
-          // Woken by any report or message; the timeout serves only the wall-time rules
-          // above (0.5 s and more), so it need not spin.
-          HandleEither(proc.bus().lcm(), &sync_bus, 20);
-        }
-        if (proc.stopping()) break;  // stopped while waiting: the instant is not finished
-        // 2. No faster than `rate` times the wall clock.
-        if (options.rate > 0) {
-          const double due = wall_start + (t + tick_us - rover_start) * 1e-6 / options.rate;
-          while (!proc.stopping() && proc.wall_seconds() < due) {
-            HandleEither(proc.bus().lcm(), &sync_bus, std::max(1, static_cast<int>((due - proc.wall_seconds()) * 1000)));
-          }
-          if (proc.stopping()) break;
-        }
-        // 3. The next instant: what came during this one acts first (commands, heartbeats).
-        proc.bus().SealBatch(t + tick_us);
-        proc.bus().DispatchBatch();
-        const std::int64_t until = t + tick_us;
-        while (sim->utime() < until) {
-          check_deadman();
-          publish_step(sim->Step(options.step_s));
-        }
-        t = sim->utime();
-        begin_instant();
-        tick_wall = proc.wall_seconds();
-      }
-      return 0;
-    }
-
-    // ---- Real time: the clock runs at `rate` times the wall clock, as on a rover. ----
-    const auto hold_start = std::chrono::steady_clock::now();
-    double next_hold_heartbeat_wall = 0;
-    while (!waiting.empty() && !proc.stopping()) {
-      // Once a wall second, as everywhere: every heartbeat on the bus (this one included)
-      // wakes Handle(), so sending one per wake-up floods the bus.
-      if (proc.wall_seconds() >= next_hold_heartbeat_wall) {
-        proc.PublishHeartbeat();
-        next_hold_heartbeat_wall = proc.wall_seconds() + 1.0;
-      }
-      proc.bus().Handle(200);
-      if (std::chrono::steady_clock::now() - hold_start > std::chrono::seconds(30)) {
-        std::string list;
-        for (const auto& n : waiting) list += " " + n;
-        throw std::runtime_error("--hold-for: no heartbeat within 30 s from:" + list);
-      }
-    }
-    std::int64_t next_clock = sim->utime();
-    const auto wall_start = std::chrono::steady_clock::now();
-    const std::int64_t rover_start = sim->utime();
-    double next_heartbeat_wall = 0;
-    while (!proc.stopping()) {
-      while (proc.bus().Handle(0)) {
-      }
-      check_deadman();
-      publish_step(sim->Step(options.step_s));
-      const std::int64_t now = sim->utime();
-      proc.ObserveTime(now);
-      if (now >= next_clock) {
-        publish_clock(now);
-        next_clock += period(options.clock_hz);
-      }
-      if (proc.wall_seconds() >= next_heartbeat_wall) {
-        proc.PublishHeartbeat();
-        next_heartbeat_wall = proc.wall_seconds() + 0.25;
-      }
-      // Pace rover time at `rate` times the wall clock.
-      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-      const double ahead_s = (now - rover_start) * 1e-6 / options.rate - wall;
-      if (ahead_s > 0) {
-        proc.bus().Handle(static_cast<int>(ahead_s * 1000.0));
-        const double wall2 = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-        const double still = (now - rover_start) * 1e-6 / options.rate - wall2;
-        if (still > 0) std::this_thread::sleep_for(std::chrono::duration<double>(still));
-      }
-    }
-    return 0;
+    if (proc.virtual_time()) return VirtualClock(rover, members).Run();
+    return RunRealTime(rover, waiting);
   });
 }
