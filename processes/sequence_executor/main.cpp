@@ -163,6 +163,272 @@ class OutputPublisher {
   std::int64_t last_final_ = -1;
 };
 
+// The suspension `goto ... avoid on` judges paths with (ACE clearance); without the
+// `clearance:` section, or with it disabled, the map's cell ratings.
+std::optional<clearance::Suspension> LoadSuspensionIfEnabled(const config::ConfigNode& config) {
+  if (!config.Has("clearance")) return std::nullopt;
+  auto suspension = clearance::LoadSuspension(config["clearance"]);
+  if (!suspension.enabled) return std::nullopt;
+  return suspension;
+}
+
+// What the previous executor left in the state file: a sequence it was running is
+// reported interrupted once the rover clock is known (a STOP stamped 0 would look stale to
+// its receivers).
+struct Restored {
+  std::optional<seq::RunState> interrupted;
+  bool stop_unknown = false;  // the file could not be read: stop, whatever was running
+  seq::RunState written;      // the record on disk
+  bool restarted() const { return interrupted.has_value() || stop_unknown || written.submission_id >= 0; }
+};
+
+// `where` names the setting in errors (argument --state-file, or executor.state_file).
+Restored RestoreRunState(const std::string& state_file, const std::string& where) {
+  Restored r;
+  if (state_file.empty()) return r;
+  // Something other than a file there (a directory, a device) is a configuration mistake,
+  // not a record this executor could not read: one line, and no start.
+  std::error_code ec;
+  const auto kind = std::filesystem::status(state_file, ec).type();
+  if (kind != std::filesystem::file_type::not_found && kind != std::filesystem::file_type::regular &&
+      kind != std::filesystem::file_type::none) {
+    throw config::ConfigError(
+        "sequence_executor: " + where + ": " + state_file + ": " +
+        (kind == std::filesystem::file_type::directory ? "is a directory" : "is not a regular file") +
+        " (expected the path of a file the executor keeps its running sequence in)");
+  }
+  try {
+    if (auto previous = seq::ReadRunStateFile(state_file)) {
+      r.written = *previous;
+      if (seq::WasInterrupted(*previous)) r.interrupted = previous;
+    }
+  } catch (const config::ConfigError& e) {
+    std::cerr << "sequence_executor: " << e.what() << "; cannot tell whether a sequence was running: commanding STOP\n";
+    r.stop_unknown = true;
+  }
+  // A place this process cannot write is a configuration mistake: say so at start.
+  try {
+    seq::WriteRunStateFile(state_file, r.written);
+  } catch (const std::runtime_error& e) {
+    throw config::ConfigError(std::string(e.what()) + " (expected a writable path: executor.state_file or --state-file)");
+  }
+  return r;
+}
+
+// Ids must never repeat across restarts of this process: from the wall clock, except in
+// virtual time on a fresh start, where the same run must give the same messages.
+std::int64_t FirstId(bool virtual_time, const Restored& restored) {
+  if (virtual_time && !restored.restarted()) return 1;
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// ---- Messages in, as the executor's inputs. ----
+seq::PoseEstimate FromMsg(const rover_msgs::pose_t& m) {
+  seq::PoseEstimate p;
+  p.utime = m.utime;
+  p.position = Eigen::Vector3d(m.position[0], m.position[1], m.position[2]);
+  p.orientation = bus::QuaternionFromArray(m.orientation);
+  p.covariance = bus::CovarianceFromArray(m.covariance);
+  p.source = m.source;
+  p.site_index = m.site_index;
+  p.odometer_m = m.odometer_m;
+  p.last_vo_to_frame = m.last_vo_to_frame;
+  return p;
+}
+
+seq::MobilityStatus FromMsg(const rover_msgs::mobility_status_t& m) {
+  seq::MobilityStatus s;
+  s.utime = m.utime;
+  s.command_id = m.command_id;
+  s.state = static_cast<seq::MobilityState>(m.state);
+  s.wheel_distance_m = m.wheel_distance_m;
+  s.wheel_turn_rad = m.wheel_turn_rad;
+  s.detail = m.detail;
+  return s;
+}
+
+seq::VoUpdate FromMsg(const rover_msgs::vo_update_t& m) {
+  seq::VoUpdate u;
+  u.utime = m.utime;
+  u.from_frame_id = m.from_frame_id;
+  u.to_frame_id = m.to_frame_id;
+  u.status = m.status;
+  u.reason = m.reason;
+  return u;
+}
+
+seq::HazardStatus FromMsg(const rover_msgs::hazard_status_t& m) {
+  seq::HazardStatus h;
+  h.utime = m.utime;
+  h.state = static_cast<seq::HazardState>(m.state);
+  h.keepout_violated = m.keepout_violated;
+  h.zone_name = m.zone_name;
+  h.min_clearance_m = m.min_clearance_m;
+  h.tilt_violated = m.tilt_violated;
+  h.roll_rad = m.roll_rad;
+  h.pitch_rad = m.pitch_rad;
+  h.detail = m.detail;
+  return h;
+}
+
+seq::HazardReply FromMsg(const rover_msgs::hazard_reply_t& m) {
+  seq::HazardReply r;
+  r.utime = m.utime;
+  r.query_id = m.query_id;
+  r.verdict = static_cast<seq::HazardVerdict>(m.verdict);
+  r.zone_name = m.zone_name;
+  r.min_clearance_m = m.min_clearance_m;
+  r.detail = m.detail;
+  return r;
+}
+
+// The map for `goto ... avoid on`, with the rules the hazard monitor judges steps by.
+seq::TraversabilityMap FromMsg(const rover_msgs::traversability_map_t& m,
+                               const std::optional<clearance::Suspension>& suspension) {
+  seq::TraversabilityMap t;
+  bus::MapRules rules;
+  t.utime = m.utime;
+  t.last_frame_id = m.last_frame_id;
+  t.grid = bus::GridFromMsg(m, &rules);
+  t.footprint = rules.footprint;
+  t.blind_margin_m = rules.blind_margin_m;
+  t.unknown = rules.unknown;
+  t.max_driven_step_m = rules.max_driven_step_m;
+  t.suspension = suspension;
+  return t;
+}
+
+// The executor on the bus: each message into it, its outputs out (the run's state on disk
+// first), and the report of a sequence a previous executor left running.
+class ExecutorNode {
+ public:
+  ExecutorNode(bus::Process& proc, const seq::ExecutorOptions& options, std::string state_file, Restored restored,
+               std::optional<clearance::Suspension> suspension)
+      : proc_(proc), state_file_(std::move(state_file)), restored_(std::move(restored)),
+        suspension_(std::move(suspension)), executor_(options, FirstId(proc.virtual_time(), restored_)),
+        publisher_(proc) {}
+
+  void Subscribe() {
+    auto& bus = proc_.bus();
+    bus.Subscribe<rover_msgs::sequence_submit_t>(channels::kSequenceSubmit, [this](const rover_msgs::sequence_submit_t& m) {
+      std::cout << "received sequence " << m.name << " (" << m.text.size() << " bytes)\n" << std::flush;
+      ReportInterrupted();
+      executor_.SubmitText(m.text, m.submission_id, m.name);
+      Flush();
+    });
+    bus.Subscribe<rover_msgs::sequence_control_t>(channels::kSequenceControl,
+                                                  [this](const rover_msgs::sequence_control_t& m) { OnControl(m); });
+    bus.Subscribe<rover_msgs::pose_t>(channels::kPose, [this](const rover_msgs::pose_t& m) {
+      proc_.ObserveTime(m.utime);
+      executor_.OnPose(FromMsg(m));
+      Flush();
+    }, 100);
+    bus.Subscribe<rover_msgs::mobility_status_t>(channels::kMobilityStatus, [this](const rover_msgs::mobility_status_t& m) {
+      executor_.OnMobilityStatus(FromMsg(m));
+      Flush();
+    }, 100);
+    bus.Subscribe<rover_msgs::vo_update_t>(channels::kVoUpdate, [this](const rover_msgs::vo_update_t& m) {
+      executor_.OnVoUpdate(FromMsg(m));
+      Flush();
+    });
+    bus.Subscribe<rover_msgs::hazard_status_t>(channels::kHazardStatus, [this](const rover_msgs::hazard_status_t& m) {
+      executor_.OnHazardStatus(FromMsg(m));
+      Flush();
+    });
+    bus.Subscribe<rover_msgs::hazard_reply_t>(channels::kHazardReply, [this](const rover_msgs::hazard_reply_t& m) {
+      executor_.OnHazardReply(FromMsg(m));
+      Flush();
+    });
+    bus.Subscribe<rover_msgs::traversability_map_t>(
+        channels::kTraversabilityMap, [this](const rover_msgs::traversability_map_t& m) {
+          executor_.OnTraversabilityMap(FromMsg(m, suspension_));
+          Flush();
+        }, 4);
+    bus.Subscribe<rover_msgs::stereo_frame_t>(channels::kStereoFrame, [this](const rover_msgs::stereo_frame_t& m) {
+      executor_.OnStereoFrame(m.frame_id);
+      Flush();
+    }, 2);
+    bus.Subscribe<rover_msgs::heartbeat_t>(channels::kHeartbeat, [this](const rover_msgs::heartbeat_t& m) {
+      executor_.OnHeartbeat(m.process, proc_.guard_seconds());
+      Flush();
+    }, 100);
+  }
+
+  void Tick() {
+    // The heartbeats that arrived while this process was starved count before the tick
+    // judges its peers lost (at most 50 ms of them, so a flood cannot stall it; in virtual
+    // time nothing is starved: they came in this tick's batch).
+    proc_.HandleReceived(50);
+    executor_.Tick(proc_.now(), proc_.guard_seconds());
+    Flush();
+    if (proc_.now() > 0 || (!proc_.virtual_time() && proc_.wall_seconds() > 2.0)) ReportInterrupted();
+    proc_.SetHealth(0, seq::ToString(executor_.state()));
+  }
+
+  // Stopping the executor while it drives stops the rover: commanding nothing is safe.
+  void Shutdown() {
+    if (!executor_.Active()) return;
+    executor_.Abort("sequence_executor shutting down");
+    Flush();
+  }
+
+ private:
+  void OnControl(const rover_msgs::sequence_control_t& m) {
+    ReportInterrupted();
+    switch (m.action) {
+      case rover_msgs::sequence_control_t::ACTION_ABORT: executor_.Abort(m.reason); break;
+      case rover_msgs::sequence_control_t::ACTION_PAUSE: executor_.Pause(); break;
+      case rover_msgs::sequence_control_t::ACTION_RESUME: executor_.Resume(); break;
+      default:
+        std::cerr << "sequence_executor: SEQUENCE_CONTROL: unknown action " << static_cast<int>(m.action)
+                  << " (expected 0 abort, 1 pause, 2 resume)\n";
+    }
+    Flush();
+  }
+
+  void SaveState() {
+    if (state_file_.empty() || restored_.interrupted) return;  // the old record stands until reported
+    const seq::RunState now = seq::RunStateOf(executor_.CurrentStatus());
+    if (now == restored_.written) return;
+    try {
+      seq::WriteRunStateFile(state_file_, now);
+      restored_.written = now;
+      write_failing_ = false;
+    } catch (const std::runtime_error& e) {
+      if (!write_failing_) std::cerr << "sequence_executor: " << e.what() << "\n";
+      write_failing_ = true;
+    }
+  }
+
+  void Flush() {
+    auto outputs = executor_.TakeOutputs();
+    SaveState();  // on disk before the commands it leads to leave
+    for (const auto& out : outputs) std::visit(publisher_, out);
+  }
+
+  void ReportInterrupted() {
+    if (!restored_.interrupted && !restored_.stop_unknown) return;
+    executor_.Tick(proc_.now(), proc_.guard_seconds());
+    if (restored_.stop_unknown) executor_.Abort("");  // nothing active: STOP only
+    restored_.stop_unknown = false;
+    if (restored_.interrupted) {
+      const seq::RunState previous = *restored_.interrupted;
+      restored_.interrupted.reset();
+      executor_.RecordInterrupted(previous.submission_id, previous.sequence_name, seq::InterruptedDetail(previous));
+    }
+    Flush();
+  }
+
+  bus::Process& proc_;
+  const std::string state_file_;
+  Restored restored_;
+  const std::optional<clearance::Suspension> suspension_;
+  seq::SequenceExecutor executor_;
+  OutputPublisher publisher_;
+  bool write_failing_ = false;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -181,220 +447,15 @@ int main(int argc, char** argv) {
     auto options = seq::LoadExecutorOptions(proc.config());
     // Choosing a `goto ... avoid on` step costs rover time in simulation (the compute profile).
     options.plan_compute_s = proc.virtual_time() ? proc.compute().plan_s : 0.0;
-    // The suspension `goto ... avoid on` judges paths with (ACE clearance); without the
-    // section, the map's cell ratings.
-    std::optional<clearance::Suspension> suspension;
-    if (proc.config().Has("clearance")) {
-      suspension = clearance::LoadSuspension(proc.config()["clearance"]);
-      if (!suspension->enabled) suspension.reset();
-    }
+    auto suspension = LoadSuspensionIfEnabled(proc.config());
     std::string state_file = options.state_file;
     if (auto f = proc.option("--state-file")) state_file = *f;
-
-    // What the previous executor left: a sequence it was running is reported interrupted
-    // once the rover clock is known (a STOP stamped 0 would look stale to its receivers).
-    std::optional<seq::RunState> interrupted;
-    bool stop_unknown = false;  // the file could not be read: stop, whatever was running
-    seq::RunState written;      // the record on disk
-    if (!state_file.empty()) {
-      // Something other than a file there (a directory, a device) is a configuration
-      // mistake, not a record this executor could not read: one line, and no start.
-      std::error_code ec;
-      const auto kind = std::filesystem::status(state_file, ec).type();
-      if (kind != std::filesystem::file_type::not_found && kind != std::filesystem::file_type::regular &&
-          kind != std::filesystem::file_type::none) {
-        throw config::ConfigError(
-            "sequence_executor: " + std::string(proc.option("--state-file") ? "argument --state-file" : "executor.state_file") +
-            ": " + state_file + ": " + (kind == std::filesystem::file_type::directory ? "is a directory" : "is not a regular file") +
-            " (expected the path of a file the executor keeps its running sequence in)");
-      }
-      try {
-        if (auto previous = seq::ReadRunStateFile(state_file)) {
-          written = *previous;
-          if (seq::WasInterrupted(*previous)) interrupted = previous;
-        }
-      } catch (const config::ConfigError& e) {
-        std::cerr << "sequence_executor: " << e.what()
-                  << "; cannot tell whether a sequence was running: commanding STOP\n";
-        stop_unknown = true;
-      }
-      // A place this process cannot write is a configuration mistake: say so at start.
-      try {
-        seq::WriteRunStateFile(state_file, written);
-      } catch (const std::runtime_error& e) {
-        throw config::ConfigError(std::string(e.what()) +
-                                  " (expected a writable path: executor.state_file or --state-file)");
-      }
-    }
-    // Ids must never repeat across restarts of this process: from the wall clock, except in
-    // virtual time on a fresh start, where the same run must give the same messages.
-    const bool restarted = interrupted.has_value() || stop_unknown || written.submission_id >= 0;
-    const auto first_id = proc.virtual_time() && !restarted
-                              ? std::int64_t{1}
-                              : std::chrono::duration_cast<std::chrono::milliseconds>(
-                                    std::chrono::system_clock::now().time_since_epoch())
-                                    .count();
-    seq::SequenceExecutor executor(options, first_id);
-    OutputPublisher publisher(proc);
-    bool write_failing = false;
-    auto save_state = [&] {
-      if (state_file.empty() || interrupted) return;  // the old record stands until reported
-      const seq::RunState now = seq::RunStateOf(executor.CurrentStatus());
-      if (now == written) return;
-      try {
-        seq::WriteRunStateFile(state_file, now);
-        written = now;
-        write_failing = false;
-      } catch (const std::runtime_error& e) {
-        if (!write_failing) std::cerr << "sequence_executor: " << e.what() << "\n";
-        write_failing = true;
-      }
-    };
-    auto flush = [&] {
-      auto outputs = executor.TakeOutputs();
-      save_state();  // on disk before the commands it leads to leave
-      for (const auto& out : outputs) std::visit(publisher, out);
-    };
-    auto report_interrupted = [&] {
-      if (!interrupted && !stop_unknown) return;
-      executor.Tick(proc.now(), proc.guard_seconds());
-      if (stop_unknown) executor.Abort("");  // nothing active: STOP only
-      stop_unknown = false;
-      if (interrupted) {
-        const seq::RunState previous = *interrupted;
-        interrupted.reset();
-        executor.RecordInterrupted(previous.submission_id, previous.sequence_name,
-                                   seq::InterruptedDetail(previous));
-      }
-      flush();
-    };
-
-    proc.bus().Subscribe<rover_msgs::sequence_submit_t>(
-        channels::kSequenceSubmit, [&](const rover_msgs::sequence_submit_t& m) {
-          std::cout << "received sequence " << m.name << " (" << m.text.size() << " bytes)\n"
-                    << std::flush;
-          report_interrupted();
-          executor.SubmitText(m.text, m.submission_id, m.name);
-          flush();
-        });
-    proc.bus().Subscribe<rover_msgs::sequence_control_t>(
-        channels::kSequenceControl, [&](const rover_msgs::sequence_control_t& m) {
-          report_interrupted();
-          switch (m.action) {
-            case rover_msgs::sequence_control_t::ACTION_ABORT: executor.Abort(m.reason); break;
-            case rover_msgs::sequence_control_t::ACTION_PAUSE: executor.Pause(); break;
-            case rover_msgs::sequence_control_t::ACTION_RESUME: executor.Resume(); break;
-            default:
-              std::cerr << "sequence_executor: SEQUENCE_CONTROL: unknown action "
-                        << static_cast<int>(m.action) << " (expected 0 abort, 1 pause, 2 resume)\n";
-          }
-          flush();
-        });
-    proc.bus().Subscribe<rover_msgs::pose_t>(channels::kPose, [&](const rover_msgs::pose_t& m) {
-      proc.ObserveTime(m.utime);
-      seq::PoseEstimate p;
-      p.utime = m.utime;
-      p.position = Eigen::Vector3d(m.position[0], m.position[1], m.position[2]);
-      p.orientation = bus::QuaternionFromArray(m.orientation);
-      p.covariance = bus::CovarianceFromArray(m.covariance);
-      p.source = m.source;
-      p.site_index = m.site_index;
-      p.odometer_m = m.odometer_m;
-      p.last_vo_to_frame = m.last_vo_to_frame;
-      executor.OnPose(p);
-      flush();
-    }, 100);
-    proc.bus().Subscribe<rover_msgs::mobility_status_t>(
-        channels::kMobilityStatus, [&](const rover_msgs::mobility_status_t& m) {
-          seq::MobilityStatus s;
-          s.utime = m.utime;
-          s.command_id = m.command_id;
-          s.state = static_cast<seq::MobilityState>(m.state);
-          s.wheel_distance_m = m.wheel_distance_m;
-          s.wheel_turn_rad = m.wheel_turn_rad;
-          s.detail = m.detail;
-          executor.OnMobilityStatus(s);
-          flush();
-        }, 100);
-    proc.bus().Subscribe<rover_msgs::vo_update_t>(channels::kVoUpdate, [&](const rover_msgs::vo_update_t& m) {
-      seq::VoUpdate u;
-      u.utime = m.utime;
-      u.from_frame_id = m.from_frame_id;
-      u.to_frame_id = m.to_frame_id;
-      u.status = m.status;
-      u.reason = m.reason;
-      executor.OnVoUpdate(u);
-      flush();
-    });
-    proc.bus().Subscribe<rover_msgs::hazard_status_t>(
-        channels::kHazardStatus, [&](const rover_msgs::hazard_status_t& m) {
-          seq::HazardStatus h;
-          h.utime = m.utime;
-          h.state = static_cast<seq::HazardState>(m.state);
-          h.keepout_violated = m.keepout_violated;
-          h.zone_name = m.zone_name;
-          h.min_clearance_m = m.min_clearance_m;
-          h.tilt_violated = m.tilt_violated;
-          h.roll_rad = m.roll_rad;
-          h.pitch_rad = m.pitch_rad;
-          h.detail = m.detail;
-          executor.OnHazardStatus(h);
-          flush();
-        });
-    proc.bus().Subscribe<rover_msgs::hazard_reply_t>(
-        channels::kHazardReply, [&](const rover_msgs::hazard_reply_t& m) {
-          seq::HazardReply r;
-          r.utime = m.utime;
-          r.query_id = m.query_id;
-          r.verdict = static_cast<seq::HazardVerdict>(m.verdict);
-          r.zone_name = m.zone_name;
-          r.min_clearance_m = m.min_clearance_m;
-          r.detail = m.detail;
-          executor.OnHazardReply(r);
-          flush();
-        });
-    proc.bus().Subscribe<rover_msgs::traversability_map_t>(
-        channels::kTraversabilityMap, [&](const rover_msgs::traversability_map_t& m) {
-          seq::TraversabilityMap t;  // for `goto ... avoid on`
-          bus::MapRules rules;
-          t.utime = m.utime;
-          t.last_frame_id = m.last_frame_id;
-          t.grid = bus::GridFromMsg(m, &rules);
-          t.footprint = rules.footprint;
-          t.blind_margin_m = rules.blind_margin_m;
-          t.unknown = rules.unknown;
-          t.max_driven_step_m = rules.max_driven_step_m;
-          t.suspension = suspension;
-          executor.OnTraversabilityMap(t);
-          flush();
-        }, 4);
-    proc.bus().Subscribe<rover_msgs::stereo_frame_t>(
-        channels::kStereoFrame, [&](const rover_msgs::stereo_frame_t& m) {
-          executor.OnStereoFrame(m.frame_id);
-          flush();
-        }, 2);
-    proc.bus().Subscribe<rover_msgs::heartbeat_t>(channels::kHeartbeat,
-                                                  [&](const rover_msgs::heartbeat_t& m) {
-                                                    executor.OnHeartbeat(m.process, proc.guard_seconds());
-                                                    flush();
-                                                  }, 100);
-    proc.Run(
-        [&] {
-          // The heartbeats that arrived while this process was starved count before the
-          // tick judges its peers lost (at most 50 ms of them, so a flood cannot stall it;
-          // in virtual time nothing is starved: they came in this tick's batch).
-          proc.HandleReceived(50);
-          executor.Tick(proc.now(), proc.guard_seconds());
-          flush();
-          if (proc.now() > 0 || (!proc.virtual_time() && proc.wall_seconds() > 2.0)) report_interrupted();
-          proc.SetHealth(0, seq::ToString(executor.state()));
-        },
-        25);
-    // Stopping the executor while it drives stops the rover: commanding nothing is safe.
-    if (executor.Active()) {
-      executor.Abort("sequence_executor shutting down");
-      flush();
-    }
+    Restored restored =
+        RestoreRunState(state_file, proc.option("--state-file") ? "argument --state-file" : "executor.state_file");
+    ExecutorNode node(proc, options, state_file, std::move(restored), std::move(suspension));
+    node.Subscribe();
+    proc.Run([&] { node.Tick(); }, 25);
+    node.Shutdown();
     return 0;
   });
 }

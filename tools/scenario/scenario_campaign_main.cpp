@@ -233,234 +233,278 @@ std::string Fixed(double v, int digits) {
   return os.str();
 }
 
+struct CampaignArgs {
+  std::string scenario_path, out_dir, each_list;
+  int variants = 0, window = 2, jobs = 1;
+  std::uint64_t seed = 1;
+  double min_pass_pct = 95.0, slide_pct = 10.0;
+  bool plot = true, prepare_only = false;
+  bool each() const { return !each_list.empty(); }
+};
+
+// The command line; nothing after --help (printed).
+std::optional<CampaignArgs> ParseArgs(int argc, char** argv) {
+  CampaignArgs a;
+  auto number = [&](int& i, const std::string& flag) -> double {
+    if (i + 1 >= argc) throw ConfigError("scenario_campaign: " + flag + ": missing value");
+    const std::string v = argv[++i];
+    char* end = nullptr;
+    const double d = std::strtod(v.c_str(), &end);
+    if (v.empty() || *end != '\0' || !std::isfinite(d)) {
+      throw ConfigError("scenario_campaign: argument " + flag + " \"" + v + "\": expected a number");
+    }
+    return d;
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      std::cout << "usage: scenario_campaign SCENARIO.yaml --variants N [--out DIR] [--seed S] [--jobs N]\n"
+                   "       scenario_campaign --each LIST [--out DIR] [--jobs N]\n"
+                   "                         [--min-pass PCT] [--slide-window N] [--slide-progress PCT] [--no-plot]\n\n"
+                   "Runs N seeded variants of a scenario (seeds, start pose, slope; the scenario's\n"
+                   "`campaign:` section sets the jitter), prints a table and the pass rate, and\n"
+                   "writes DIR/campaign.json (default DIR: out/campaign/NAME). Exit 1 when the\n"
+                   "pass rate is below --min-pass (default 95 %) or a variant slid blind: drove on\n"
+                   "after --slide-window (2) arc steps with true progress below --slide-progress\n"
+                   "(10 %) of the commanded. --no-plot skips each variant's pictures (about 4 s each).\n"
+                   "--jobs N runs N variants at once, each on its own private bus; in virtual time\n"
+                   "each variant's result and log digest are the same as with --jobs 1.\n"
+                   "--prepare writes DIR/vK/scenario.yaml for every variant and runs none (to spread\n"
+                   "a campaign over several machines: README, \"Campaigns scale out\").\n"
+                   "--each LIST runs the scenario files listed in LIST (one path a line) once each,\n"
+                   "as written, into the folder that holds each (./rover navbench uses it); DIR\n"
+                   "(default: LIST's folder) gets campaign.json.\n";
+      return std::nullopt;
+    } else if (arg == "--variants") {
+      const double n = number(i, arg);
+      if (n < 1 || n > 10000 || n != std::floor(n)) {
+        throw ConfigError("scenario_campaign: --variants " + Fixed(n, 2) + ": expected a whole number in [1, 10000]");
+      }
+      a.variants = static_cast<int>(n);
+    } else if (arg == "--out" && i + 1 < argc) {
+      a.out_dir = argv[++i];
+    } else if (arg == "--seed") {
+      const double s = number(i, arg);
+      if (s < 0 || s != std::floor(s)) throw ConfigError("scenario_campaign: --seed: expected a whole number >= 0");
+      a.seed = static_cast<std::uint64_t>(s);
+    } else if (arg == "--min-pass") {
+      a.min_pass_pct = number(i, arg);
+      if (a.min_pass_pct < 0 || a.min_pass_pct > 100) throw ConfigError("scenario_campaign: --min-pass: expected 0 to 100");
+    } else if (arg == "--slide-window") {
+      const double n = number(i, arg);
+      if (n < 1 || n > 100 || n != std::floor(n)) throw ConfigError("scenario_campaign: --slide-window: expected 1 to 100");
+      a.window = static_cast<int>(n);
+    } else if (arg == "--each" && i + 1 < argc) {
+      a.each_list = argv[++i];
+    } else if (arg == "--no-plot") {
+      a.plot = false;
+    } else if (arg == "--prepare") {
+      a.prepare_only = true;
+    } else if (arg == "--jobs") {
+      const double n = number(i, arg);
+      if (n < 1 || n > 64 || n != std::floor(n)) throw ConfigError("scenario_campaign: --jobs: expected a whole number in [1, 64]");
+      a.jobs = static_cast<int>(n);
+    } else if (arg == "--slide-progress") {
+      a.slide_pct = number(i, arg);
+    } else if (a.scenario_path.empty() && arg.rfind("--", 0) != 0) {
+      a.scenario_path = arg;
+    } else {
+      throw ConfigError("scenario_campaign: argument " + arg +
+                        ": unexpected (expected SCENARIO.yaml --variants N [--out DIR])");
+    }
+  }
+  if (a.each() && (!a.scenario_path.empty() || a.variants != 0 || a.prepare_only)) {
+    throw ConfigError("scenario_campaign: --each LIST takes no SCENARIO.yaml, --variants or --prepare");
+  }
+  if (!a.each() && a.scenario_path.empty()) throw ConfigError("scenario_campaign: missing SCENARIO.yaml");
+  if (!a.each() && a.variants == 0) throw ConfigError("scenario_campaign: missing --variants N");
+  return a;
+}
+
+void PrintHeader(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec, std::optional<double> slope) {
+  if (a.each()) {
+    std::cout << "campaign " << a.each_list << ": " << a.variants << " scenarios as written\n";
+  } else {
+    std::cout << "campaign " << spec.name << ": " << a.variants << " variants (seed " << a.seed << "), start +/- "
+              << spec.campaign_start_jitter_m << " m, +/- " << spec.campaign_yaw_jitter_deg << " deg"
+              << (slope ? ", slope " + Fixed(*slope, 1) + " +/- " + Fixed(spec.campaign_slope_jitter_deg, 1) + " deg"
+                        : std::string(", no slope"))
+              << "; expected " << spec.expect_outcome
+              << (spec.expect_abort_reason.empty() ? "" : " (" + spec.expect_abort_reason + ")") << "\n";
+  }
+  std::cout << std::left << std::setw(4) << "var" << std::setw(22) << " seeds w/m/r" << std::setw(24)
+            << " start x, y, yaw" << std::setw(7) << " slope" << std::setw(11) << " outcome" << std::setw(20)
+            << " reason" << std::setw(10) << " clear m" << std::setw(8) << " err %" << std::setw(10)
+            << " VO ok/fls" << std::setw(14) << " log digest" << " result\n" << std::flush;
+}
+
+void PrintRow(int k, const Variant& v) {
+  std::ostringstream seeds, start;
+  seeds << v.world_seed << "/" << v.mobility_seed << "/" << v.render_seed;
+  start << Fixed(v.x, 2) << ", " << Fixed(v.y, 2) << ", " << Fixed(v.yaw_deg, 1);
+  std::cout << std::left << std::setw(4) << k << " " << std::setw(21) << seeds.str() << " " << std::setw(23)
+            << start.str() << " " << std::setw(6) << (v.slope_deg ? Fixed(*v.slope_deg, 1) : "-") << " "
+            << std::setw(10) << v.outcome << " " << std::setw(19) << (v.abort_reason.empty() ? "-" : v.abort_reason)
+            << " " << std::setw(9) << (v.clearance_m ? Fixed(*v.clearance_m, 3) : "-") << " " << std::setw(7)
+            << Fixed(v.position_error_pct, 2) << " " << std::setw(9)
+            << (std::to_string(v.vo_accepted) + "/" + std::to_string(v.false_updates)) << " "
+            << std::setw(13) << (v.log_digest.empty() ? "-" : v.log_digest.substr(0, 12)) << " "
+            << (v.passed() ? "pass" : v.exit_code == 0 ? "FAIL (blind slide: " + v.blind_slide + ")"
+                                                      : "FAIL (see " + v.dir + "/runner.log)")
+            << "\n" << std::flush;
+}
+
+// --prepare: every variant's scenario.yaml, none run.
+void PrepareVariants(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec, std::optional<double> slope) {
+  for (int k = 1; k <= a.variants; ++k) {
+    Variant v = MakeVariant(spec, slope, a.seed, k);
+    v.dir = a.out_dir + "/v" + std::to_string(k);
+    fs::create_directories(v.dir);
+    WriteVariantScenario(spec, v, v.dir + "/scenario.yaml");
+  }
+  std::cout << "wrote " << a.variants << " variant scenarios: " << a.out_dir << "/v1/scenario.yaml ... v"
+            << a.variants << "/scenario.yaml\n";
+}
+
+// Variant k's scenario: the listed file as written (--each), or drawn and written to DIR/vK.
+Variant NextVariant(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec, std::optional<double> slope,
+                    const std::vector<std::string>& listed, int k, std::string* variant_yaml) {
+  if (a.each()) {
+    *variant_yaml = listed[static_cast<std::size_t>(k - 1)];
+    return PreparedVariant(*variant_yaml, k);
+  }
+  Variant v = MakeVariant(spec, slope, a.seed, k);
+  v.dir = a.out_dir + "/v" + std::to_string(k);
+  fs::create_directories(v.dir);
+  *variant_yaml = v.dir + "/scenario.yaml";
+  WriteVariantScenario(spec, v, *variant_yaml);
+  return v;
+}
+
+// Up to `jobs` variants run at once (each scenario_runner opens its own private bus); rows
+// are printed in variant order as soon as each one and those before it are done.
+std::vector<Variant> RunVariants(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec,
+                                 std::optional<double> slope, const std::vector<std::string>& listed) {
+  const std::string runner = rover::launch::BinDir() + "/scenario_runner";
+  std::vector<Variant> results(static_cast<std::size_t>(a.variants));
+  std::map<pid_t, int> running;  // pid -> variant index (0-based)
+  int next = 0, printed = 0;
+  std::vector<bool> done(static_cast<std::size_t>(a.variants), false);
+  while (printed < a.variants) {
+    while (next < a.variants && static_cast<int>(running.size()) < a.jobs) {
+      std::string variant_yaml;
+      const Variant v = NextVariant(a, spec, slope, listed, next + 1, &variant_yaml);
+      std::vector<std::string> runner_args = {runner, variant_yaml, "--out", v.dir, "--quiet"};
+      if (!a.plot) runner_args.push_back("--no-plot");
+      results[static_cast<std::size_t>(next)] = v;
+      running[StartLogged(runner_args, v.dir + "/runner.log")] = next;
+      ++next;
+    }
+    const auto [pid, code] = WaitAny();
+    const auto it = running.find(pid);
+    if (it == running.end()) continue;
+    Variant& v = results[static_cast<std::size_t>(it->second)];
+    v.exit_code = code;
+    ReadResults(v, a.window, a.slide_pct / 100.0);
+    done[static_cast<std::size_t>(it->second)] = true;
+    running.erase(it);
+    while (printed < a.variants && done[static_cast<std::size_t>(printed)]) {
+      PrintRow(printed + 1, results[static_cast<std::size_t>(printed)]);
+      ++printed;
+    }
+  }
+  return results;
+}
+
+struct Totals {
+  int passed = 0, slides = 0, accepted = 0, false_updates = 0;
+  double pass_pct = 0;
+};
+
+Totals Count(const std::vector<Variant>& results) {
+  Totals t;
+  for (const auto& v : results) {
+    t.passed += v.passed();
+    t.slides += !v.blind_slide.empty();
+    t.accepted += v.vo_accepted;
+    t.false_updates += v.false_updates;
+  }
+  t.pass_pct = 100.0 * t.passed / static_cast<double>(results.size());
+  return t;
+}
+
+void WriteCampaignJson(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec,
+                       const std::vector<Variant>& results, const Totals& t) {
+  rover::tools::JsonWriter j;
+  j.BeginObject();
+  j.Field("scenario", a.each() ? a.each_list : spec.source).Field("seed", static_cast<long long>(a.seed)).Field("variants", a.variants);
+  j.Field("passed", t.passed).Field("pass_rate_pct", t.pass_pct).Field("min_pass_pct", a.min_pass_pct);
+  j.Field("blind_slides", t.slides).Field("vo_updates_accepted", t.accepted).Field("false_updates", t.false_updates);
+  j.Key("runs").BeginArray();
+  for (const auto& v : results) {
+    j.BeginObject();
+    j.Field("variant", v.index).Field("dir", v.dir);
+    j.Field("world_seed", static_cast<long long>(v.world_seed));
+    j.Field("mobility_seed", static_cast<long long>(v.mobility_seed));
+    j.Field("render_seed", static_cast<long long>(v.render_seed));
+    j.Field("start_x", v.x).Field("start_y", v.y).Field("start_yaw_deg", v.yaw_deg);
+    j.Key("slope_deg");
+    if (v.slope_deg) {
+      j.Value(*v.slope_deg);
+    } else {
+      j.Null();
+    }
+    j.Field("outcome", v.outcome).Field("abort_reason", v.abort_reason).Field("detail", v.detail);
+    j.Key("min_keepout_clearance_m");
+    if (v.clearance_m) {
+      j.Value(*v.clearance_m);
+    } else {
+      j.Null();
+    }
+    j.Field("position_error_pct", v.position_error_pct).Field("steps", v.steps);
+    j.Field("vo_updates_accepted", v.vo_accepted).Field("false_updates", v.false_updates);
+    j.Field("log_digest", v.log_digest);
+    j.Field("blind_slide", v.blind_slide).Field("runner_exit", v.exit_code).Field("passed", v.passed());
+    j.EndObject();
+  }
+  j.EndArray();
+  j.EndObject();
+  std::ofstream(a.out_dir + "/campaign.json") << j.str();
+  std::cout << "wrote " << a.out_dir << "/campaign.json\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   return rover::bus::RunMain("scenario_campaign", [&]() -> int {
-    std::string scenario_path, out_dir, each_list;
-    int variants = 0, window = 2, jobs = 1;
-    std::uint64_t seed = 1;
-    double min_pass_pct = 95.0, slide_pct = 10.0;
-    bool plot = true, prepare_only = false;
-    auto number = [&](int& i, const std::string& flag) -> double {
-      if (i + 1 >= argc) throw ConfigError("scenario_campaign: " + flag + ": missing value");
-      const std::string v = argv[++i];
-      char* end = nullptr;
-      const double d = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end != '\0' || !std::isfinite(d)) {
-        throw ConfigError("scenario_campaign: argument " + flag + " \"" + v + "\": expected a number");
-      }
-      return d;
-    };
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      if (arg == "--help" || arg == "-h") {
-        std::cout << "usage: scenario_campaign SCENARIO.yaml --variants N [--out DIR] [--seed S] [--jobs N]\n"
-                     "       scenario_campaign --each LIST [--out DIR] [--jobs N]\n"
-                     "                         [--min-pass PCT] [--slide-window N] [--slide-progress PCT] [--no-plot]\n\n"
-                     "Runs N seeded variants of a scenario (seeds, start pose, slope; the scenario's\n"
-                     "`campaign:` section sets the jitter), prints a table and the pass rate, and\n"
-                     "writes DIR/campaign.json (default DIR: out/campaign/NAME). Exit 1 when the\n"
-                     "pass rate is below --min-pass (default 95 %) or a variant slid blind: drove on\n"
-                     "after --slide-window (2) arc steps with true progress below --slide-progress\n"
-                     "(10 %) of the commanded. --no-plot skips each variant's pictures (about 4 s each).\n"
-                     "--jobs N runs N variants at once, each on its own private bus; in virtual time\n"
-                     "each variant's result and log digest are the same as with --jobs 1.\n"
-                     "--prepare writes DIR/vK/scenario.yaml for every variant and runs none (to spread\n"
-                     "a campaign over several machines: README, \"Campaigns scale out\").\n"
-                     "--each LIST runs the scenario files listed in LIST (one path a line) once each,\n"
-                     "as written, into the folder that holds each (./rover navbench uses it); DIR\n"
-                     "(default: LIST's folder) gets campaign.json.\n";
-        return 0;
-      } else if (arg == "--variants") {
-        const double n = number(i, arg);
-        if (n < 1 || n > 10000 || n != std::floor(n)) {
-          throw ConfigError("scenario_campaign: --variants " + Fixed(n, 2) + ": expected a whole number in [1, 10000]");
-        }
-        variants = static_cast<int>(n);
-      } else if (arg == "--out" && i + 1 < argc) {
-        out_dir = argv[++i];
-      } else if (arg == "--seed") {
-        const double s = number(i, arg);
-        if (s < 0 || s != std::floor(s)) throw ConfigError("scenario_campaign: --seed: expected a whole number >= 0");
-        seed = static_cast<std::uint64_t>(s);
-      } else if (arg == "--min-pass") {
-        min_pass_pct = number(i, arg);
-        if (min_pass_pct < 0 || min_pass_pct > 100) throw ConfigError("scenario_campaign: --min-pass: expected 0 to 100");
-      } else if (arg == "--slide-window") {
-        const double n = number(i, arg);
-        if (n < 1 || n > 100 || n != std::floor(n)) throw ConfigError("scenario_campaign: --slide-window: expected 1 to 100");
-        window = static_cast<int>(n);
-      } else if (arg == "--each" && i + 1 < argc) {
-        each_list = argv[++i];
-      } else if (arg == "--no-plot") {
-        plot = false;
-      } else if (arg == "--prepare") {
-        prepare_only = true;
-      } else if (arg == "--jobs") {
-        const double n = number(i, arg);
-        if (n < 1 || n > 64 || n != std::floor(n)) throw ConfigError("scenario_campaign: --jobs: expected a whole number in [1, 64]");
-        jobs = static_cast<int>(n);
-      } else if (arg == "--slide-progress") {
-        slide_pct = number(i, arg);
-      } else if (scenario_path.empty() && arg.rfind("--", 0) != 0) {
-        scenario_path = arg;
-      } else {
-        throw ConfigError("scenario_campaign: argument " + arg +
-                          ": unexpected (expected SCENARIO.yaml --variants N [--out DIR])");
-      }
+    auto parsed = ParseArgs(argc, argv);
+    if (!parsed) return 0;
+    CampaignArgs& a = *parsed;
+    const std::vector<std::string> listed = a.each() ? ReadScenarioList(a.each_list) : std::vector<std::string>{};
+    if (a.each()) {
+      a.variants = static_cast<int>(listed.size());
+      a.scenario_path = listed.front();
     }
-    const bool each = !each_list.empty();
-    if (each && (!scenario_path.empty() || variants != 0 || prepare_only)) {
-      throw ConfigError("scenario_campaign: --each LIST takes no SCENARIO.yaml, --variants or --prepare");
+    const auto spec = rover::tools::LoadScenario(a.scenario_path);
+    if (a.out_dir.empty()) {
+      a.out_dir = a.each() ? fs::path(a.each_list).parent_path().string() : "out/campaign/" + spec.name;
+      if (a.out_dir.empty()) a.out_dir = ".";
     }
-    if (!each && scenario_path.empty()) throw ConfigError("scenario_campaign: missing SCENARIO.yaml");
-    if (!each && variants == 0) throw ConfigError("scenario_campaign: missing --variants N");
-    const std::vector<std::string> listed = each ? ReadScenarioList(each_list) : std::vector<std::string>{};
-    if (each) {
-      variants = static_cast<int>(listed.size());
-      scenario_path = listed.front();
-    }
-    const auto spec = rover::tools::LoadScenario(scenario_path);
-    if (out_dir.empty()) {
-      out_dir = each ? fs::path(each_list).parent_path().string() : "out/campaign/" + spec.name;
-      if (out_dir.empty()) out_dir = ".";
-    }
-    fs::create_directories(out_dir);
-    const std::optional<double> slope = each ? std::nullopt : FirstSlope(spec);
-    const std::string runner = rover::launch::BinDir() + "/scenario_runner";
-
-    if (each) {
-      std::cout << "campaign " << each_list << ": " << variants << " scenarios as written\n";
-    } else {
-      std::cout << "campaign " << spec.name << ": " << variants << " variants (seed " << seed << "), start +/- "
-                << spec.campaign_start_jitter_m << " m, +/- " << spec.campaign_yaw_jitter_deg << " deg"
-                << (slope ? ", slope " + Fixed(*slope, 1) + " +/- " + Fixed(spec.campaign_slope_jitter_deg, 1) + " deg"
-                          : std::string(", no slope"))
-                << "; expected " << spec.expect_outcome
-                << (spec.expect_abort_reason.empty() ? "" : " (" + spec.expect_abort_reason + ")") << "\n";
-    }
-    std::cout << std::left << std::setw(4) << "var" << std::setw(22) << " seeds w/m/r" << std::setw(24)
-              << " start x, y, yaw" << std::setw(7) << " slope" << std::setw(11) << " outcome" << std::setw(20)
-              << " reason" << std::setw(10) << " clear m" << std::setw(8) << " err %" << std::setw(10)
-              << " VO ok/fls" << std::setw(14) << " log digest" << " result\n" << std::flush;
-
-    // Up to `jobs` variants run at once (each scenario_runner opens its own private bus);
-    // rows are printed in variant order as soon as each one and those before it are done.
-    if (prepare_only) {
-      for (int k = 1; k <= variants; ++k) {
-        Variant v = MakeVariant(spec, slope, seed, k);
-        v.dir = out_dir + "/v" + std::to_string(k);
-        fs::create_directories(v.dir);
-        WriteVariantScenario(spec, v, v.dir + "/scenario.yaml");
-      }
-      std::cout << "wrote " << variants << " variant scenarios: " << out_dir << "/v1/scenario.yaml ... v"
-                << variants << "/scenario.yaml\n";
+    fs::create_directories(a.out_dir);
+    const std::optional<double> slope = a.each() ? std::nullopt : FirstSlope(spec);
+    PrintHeader(a, spec, slope);
+    if (a.prepare_only) {
+      PrepareVariants(a, spec, slope);
       return 0;
     }
-    std::vector<Variant> results(static_cast<std::size_t>(variants));
-    std::map<pid_t, int> running;  // pid -> variant index (0-based)
-    int next = 0, printed = 0;
-    std::vector<bool> done(static_cast<std::size_t>(variants), false);
-    auto print_row = [&](int k, const Variant& v) {
-      std::ostringstream seeds, start;
-      seeds << v.world_seed << "/" << v.mobility_seed << "/" << v.render_seed;
-      start << Fixed(v.x, 2) << ", " << Fixed(v.y, 2) << ", " << Fixed(v.yaw_deg, 1);
-      std::cout << std::left << std::setw(4) << k << " " << std::setw(21) << seeds.str() << " " << std::setw(23)
-                << start.str() << " " << std::setw(6) << (v.slope_deg ? Fixed(*v.slope_deg, 1) : "-") << " "
-                << std::setw(10) << v.outcome << " " << std::setw(19) << (v.abort_reason.empty() ? "-" : v.abort_reason)
-                << " " << std::setw(9) << (v.clearance_m ? Fixed(*v.clearance_m, 3) : "-") << " " << std::setw(7)
-                << Fixed(v.position_error_pct, 2) << " " << std::setw(9)
-                << (std::to_string(v.vo_accepted) + "/" + std::to_string(v.false_updates)) << " "
-                << std::setw(13) << (v.log_digest.empty() ? "-" : v.log_digest.substr(0, 12)) << " "
-                << (v.passed() ? "pass" : v.exit_code == 0 ? "FAIL (blind slide: " + v.blind_slide + ")"
-                                                          : "FAIL (see " + v.dir + "/runner.log)")
-                << "\n" << std::flush;
-    };
-    while (printed < variants) {
-      while (next < variants && static_cast<int>(running.size()) < jobs) {
-        const int k = next + 1;
-        Variant v;
-        std::string variant_yaml;
-        if (each) {
-          variant_yaml = listed[static_cast<std::size_t>(next)];
-          v = PreparedVariant(variant_yaml, k);
-        } else {
-          v = MakeVariant(spec, slope, seed, k);
-          v.dir = out_dir + "/v" + std::to_string(k);
-          fs::create_directories(v.dir);
-          variant_yaml = v.dir + "/scenario.yaml";
-          WriteVariantScenario(spec, v, variant_yaml);
-        }
-        std::vector<std::string> runner_args = {runner, variant_yaml, "--out", v.dir, "--quiet"};
-        if (!plot) runner_args.push_back("--no-plot");
-        results[static_cast<std::size_t>(next)] = v;
-        running[StartLogged(runner_args, v.dir + "/runner.log")] = next;
-        ++next;
-      }
-      const auto [pid, code] = WaitAny();
-      const auto it = running.find(pid);
-      if (it == running.end()) continue;
-      Variant& v = results[static_cast<std::size_t>(it->second)];
-      v.exit_code = code;
-      ReadResults(v, window, slide_pct / 100.0);
-      done[static_cast<std::size_t>(it->second)] = true;
-      running.erase(it);
-      while (printed < variants && done[static_cast<std::size_t>(printed)]) {
-        print_row(printed + 1, results[static_cast<std::size_t>(printed)]);
-        ++printed;
-      }
-    }
-
-    int passed = 0, slides = 0, accepted = 0, false_updates = 0;
-    for (const auto& v : results) {
-      passed += v.passed();
-      slides += !v.blind_slide.empty();
-      accepted += v.vo_accepted;
-      false_updates += v.false_updates;
-    }
-    const double pass_pct = 100.0 * passed / variants;
-    std::cout << "pass rate: " << passed << "/" << variants << " (" << Fixed(pass_pct, 1) << " %, threshold "
-              << Fixed(min_pass_pct, 1) << " %); blind slides: " << slides << "; false VO updates: " << false_updates
-              << " of " << accepted << " accepted"
-              << (accepted > 0 ? " (" + Fixed(100.0 * false_updates / accepted, 2) + " %)" : std::string()) << "\n";
-
-    rover::tools::JsonWriter j;
-    j.BeginObject();
-    j.Field("scenario", each ? each_list : spec.source).Field("seed", static_cast<long long>(seed)).Field("variants", variants);
-    j.Field("passed", passed).Field("pass_rate_pct", pass_pct).Field("min_pass_pct", min_pass_pct);
-    j.Field("blind_slides", slides).Field("vo_updates_accepted", accepted).Field("false_updates", false_updates);
-    j.Key("runs").BeginArray();
-    for (const auto& v : results) {
-      j.BeginObject();
-      j.Field("variant", v.index).Field("dir", v.dir);
-      j.Field("world_seed", static_cast<long long>(v.world_seed));
-      j.Field("mobility_seed", static_cast<long long>(v.mobility_seed));
-      j.Field("render_seed", static_cast<long long>(v.render_seed));
-      j.Field("start_x", v.x).Field("start_y", v.y).Field("start_yaw_deg", v.yaw_deg);
-      j.Key("slope_deg");
-      if (v.slope_deg) {
-        j.Value(*v.slope_deg);
-      } else {
-        j.Null();
-      }
-      j.Field("outcome", v.outcome).Field("abort_reason", v.abort_reason).Field("detail", v.detail);
-      j.Key("min_keepout_clearance_m");
-      if (v.clearance_m) {
-        j.Value(*v.clearance_m);
-      } else {
-        j.Null();
-      }
-      j.Field("position_error_pct", v.position_error_pct).Field("steps", v.steps);
-      j.Field("vo_updates_accepted", v.vo_accepted).Field("false_updates", v.false_updates);
-      j.Field("log_digest", v.log_digest);
-      j.Field("blind_slide", v.blind_slide).Field("runner_exit", v.exit_code).Field("passed", v.passed());
-      j.EndObject();
-    }
-    j.EndArray();
-    j.EndObject();
-    std::ofstream(out_dir + "/campaign.json") << j.str();
-    std::cout << "wrote " << out_dir << "/campaign.json\n";
-    return pass_pct + 1e-9 >= min_pass_pct && slides == 0 ? 0 : 1;
+    const std::vector<Variant> results = RunVariants(a, spec, slope, listed);
+    const Totals t = Count(results);
+    std::cout << "pass rate: " << t.passed << "/" << a.variants << " (" << Fixed(t.pass_pct, 1) << " %, threshold "
+              << Fixed(a.min_pass_pct, 1) << " %); blind slides: " << t.slides << "; false VO updates: "
+              << t.false_updates << " of " << t.accepted << " accepted"
+              << (t.accepted > 0 ? " (" + Fixed(100.0 * t.false_updates / t.accepted, 2) + " %)" : std::string())
+              << "\n";
+    WriteCampaignJson(a, spec, results, t);
+    return t.pass_pct + 1e-9 >= a.min_pass_pct && t.slides == 0 ? 0 : 1;
   });
 }

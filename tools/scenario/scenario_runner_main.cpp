@@ -188,373 +188,493 @@ class SyncWatch {
   std::map<std::string, std::pair<std::int64_t, bool>> last_;  // process -> (utime, busy)
 };
 
-}  // namespace
+struct RunnerArgs {
+  std::string scenario_path, out_dir, url, rate_arg;
+  bool quiet = false, plot = true;
+};
 
-int main(int argc, char** argv) {
-  return rover::bus::RunMain("scenario_runner", [&]() -> int {
-    std::string scenario_path, out_dir, url, rate_arg;
-    bool quiet = false, plot = true;
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      if (arg == "--help" || arg == "-h") {
-        std::cout << "usage: scenario_runner SCENARIO.yaml --out DIR [--lcm-url URL] [--rate R|max] [--quiet] [--no-plot]\n\n"
-                     "Runs a scenario (configs/scenarios/) on a fresh bus, records DIR/log.lcm\n"
-                     "with rover_recorder, checks that the log lost nothing and writes\n"
-                     "DIR/summary.json. Exit status 1 when the run did not end as the\n"
-                     "scenario's `expect:` says. Then draws the run's pictures in DIR with\n"
-                     "rover_plot (traverse.png, error.png, slip.png, vo_steps/) unless --no-plot.\n"
-                     "--rate overrides the scenario's sim_rate (max: as fast as the barrier allows).\n"
-                     "It prints the log's digest: the same scenario and seeds give the same digest\n"
-                     "on any load and at any rate (README, \"Simulated time\").\n";
-        return 0;
-      } else if (arg == "--out" && i + 1 < argc) {
-        out_dir = argv[++i];
-      } else if (arg == "--lcm-url" && i + 1 < argc) {
-        url = argv[++i];
-      } else if (arg == "--quiet") {
-        quiet = true;
-      } else if (arg == "--no-plot") {
-        plot = false;
-      } else if (arg == "--rate" && i + 1 < argc) {
-        rate_arg = argv[++i];  // rover_sim checks it (a number, or max)
-      } else if (scenario_path.empty() && arg.rfind("--", 0) != 0) {
-        scenario_path = arg;
-      } else {
-        throw ConfigError("scenario_runner: argument " + arg +
-                          ": unexpected (expected SCENARIO.yaml --out DIR)");
-      }
+// The command line; nothing after --help (printed).
+std::optional<RunnerArgs> ParseArgs(int argc, char** argv) {
+  RunnerArgs a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      std::cout << "usage: scenario_runner SCENARIO.yaml --out DIR [--lcm-url URL] [--rate R|max] [--quiet] [--no-plot]\n\n"
+                   "Runs a scenario (configs/scenarios/) on a fresh bus, records DIR/log.lcm\n"
+                   "with rover_recorder, checks that the log lost nothing and writes\n"
+                   "DIR/summary.json. Exit status 1 when the run did not end as the\n"
+                   "scenario's `expect:` says. Then draws the run's pictures in DIR with\n"
+                   "rover_plot (traverse.png, error.png, slip.png, vo_steps/) unless --no-plot.\n"
+                   "--rate overrides the scenario's sim_rate (max: as fast as the barrier allows).\n"
+                   "It prints the log's digest: the same scenario and seeds give the same digest\n"
+                   "on any load and at any rate (README, \"Simulated time\").\n";
+      return std::nullopt;
+    } else if (arg == "--out" && i + 1 < argc) {
+      a.out_dir = argv[++i];
+    } else if (arg == "--lcm-url" && i + 1 < argc) {
+      a.url = argv[++i];
+    } else if (arg == "--quiet") {
+      a.quiet = true;
+    } else if (arg == "--no-plot") {
+      a.plot = false;
+    } else if (arg == "--rate" && i + 1 < argc) {
+      a.rate_arg = argv[++i];  // rover_sim checks it (a number, or max)
+    } else if (a.scenario_path.empty() && arg.rfind("--", 0) != 0) {
+      a.scenario_path = arg;
+    } else {
+      throw ConfigError("scenario_runner: argument " + arg + ": unexpected (expected SCENARIO.yaml --out DIR)");
     }
-    if (scenario_path.empty()) throw ConfigError("scenario_runner: missing SCENARIO.yaml");
-    if (out_dir.empty()) throw ConfigError("scenario_runner: missing --out DIR");
-    const auto spec = rover::tools::LoadScenario(scenario_path);
-    const auto deployment = rover::launch::LoadDeployment(spec.deployment);
-    const std::string sequence_text = ReadSequenceFile(spec.sequence);
-    std::vector<std::string> then_texts;
-    for (const auto& f : spec.then_sequences) then_texts.push_back(ReadSequenceFile(f));
-    fs::create_directories(out_dir);
-    // The scenario's seeds and overrides go into copies in DIR; the processes read those.
-    const auto configs = rover::tools::PrepareRunConfigs(spec.rover_config, spec.overrides, spec.world,
-                                                         spec.world_overrides, out_dir);
-    const auto rover_config = rover::config::ConfigNode::LoadFile(configs.rover_config);
-    const auto footprint = rover::hazards::LoadHazardOptions(rover_config["hazards"], {"publish_hz"}).footprint;
-    // The estimator starts at the height of the ground under the start point, from the same
-    // world the simulator builds; a rock there is not the ground (the rover stands on its
-    // wheels). The rover origin sits mobility.geometry.origin_height_m above the contacts.
-    const rover::terrain::World world(rover::terrain::WorldOptions::LoadFile(configs.world));
+  }
+  if (a.scenario_path.empty()) throw ConfigError("scenario_runner: missing SCENARIO.yaml");
+  if (a.out_dir.empty()) throw ConfigError("scenario_runner: missing --out DIR");
+  if (a.url.empty()) a.url = PrivateUrl();
+  return a;
+}
+
+// What a run is made of: the scenario, its deployment, and the copies of the rover config
+// and world in DIR that carry the scenario's seeds and overrides (the processes read those).
+struct RunPlan {
+  explicit RunPlan(const RunnerArgs& args)
+      : spec(rover::tools::LoadScenario(args.scenario_path)),
+        deployment(rover::launch::LoadDeployment(spec.deployment)),
+        sequence_text(ReadSequenceFile(spec.sequence)),
+        then_texts(ReadSequenceFiles(spec.then_sequences)),
+        configs(PrepareConfigs(spec, args.out_dir)),
+        rover_config(rover::config::ConfigNode::LoadFile(configs.rover_config)),
+        footprint(rover::hazards::LoadHazardOptions(rover_config["hazards"], {"publish_hz"}).footprint),
+        world(rover::terrain::WorldOptions::LoadFile(configs.world)),
+        log_path(args.out_dir + "/log.lcm"),
+        state_path(args.out_dir + "/executor_state.yaml") {
+    // The estimator starts at the height of the ground under the start point, from the
+    // same world the simulator builds; a rock there is not the ground (the rover stands on
+    // its wheels). The rover origin sits mobility.geometry.origin_height_m above the
+    // contacts.
     double origin_height_m = 0.0;
     rover_config["mobility"]["geometry"].Get("origin_height_m", origin_height_m);
-    const double start_z = world.StartHeight(spec.start_x, spec.start_y, origin_height_m);
-    if (url.empty()) url = PrivateUrl();
+    start_z = world.StartHeight(spec.start_x, spec.start_y, origin_height_m);
+  }
 
+  static std::vector<std::string> ReadSequenceFiles(const std::vector<std::string>& paths) {
+    std::vector<std::string> texts;
+    for (const auto& f : paths) texts.push_back(ReadSequenceFile(f));
+    return texts;
+  }
+
+  static rover::tools::RunConfigs PrepareConfigs(const rover::tools::ScenarioSpec& spec, const std::string& out_dir) {
     fs::create_directories(out_dir);
-    const std::string log_path = out_dir + "/log.lcm";
-    fs::remove(log_path);
-    // The executor keeps its running sequence here (a restart reports it interrupted); a
-    // new run starts with none.
-    const std::string state_path = out_dir + "/executor_state.yaml";
-    fs::remove(state_path);
-    std::signal(SIGINT, OnSignal);
-    std::signal(SIGTERM, OnSignal);
-    const auto wall_start = std::chrono::steady_clock::now();
-    auto wall = [&] {
-      return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    };
+    return rover::tools::PrepareRunConfigs(spec.rover_config, spec.overrides, spec.world, spec.world_overrides,
+                                           out_dir);
+  }
 
-    rover::bus::Bus bus(url);
-    bus.set_publisher("scenario_runner");
-    if (const auto key = ExecutorKey(deployment)) bus.set_auth(rover::bus::MakeBusAuth(*key, "scenario_runner"));
-    std::set<std::string> alive;
-    std::optional<rover_msgs::sequence_status_t> final_status;
-    std::int64_t submission_id = 1;
-    int steps_seen = 0;
-    std::string last_line;
-    bus.Subscribe<rover_msgs::heartbeat_t>(rover::channels::kHeartbeat,
-                                           [&](const rover_msgs::heartbeat_t& hb) {
-                                             alive.insert(hb.process);
-                                           });
-    bus.Subscribe<rover_msgs::step_report_t>(rover::channels::kStepReport,
-                                             [&](const rover_msgs::step_report_t&) {
-                                               ++steps_seen;
-                                             });
-    bus.Subscribe<rover_msgs::sequence_status_t>(
-        rover::channels::kSequenceStatus, [&](const rover_msgs::sequence_status_t& st) {
-          if (st.submission_id != submission_id) return;
-          if (!quiet && st.detail != last_line) {
-            std::cout << "[t=" << std::fixed << std::setprecision(1) << st.elapsed_s << " s] "
-                      << st.detail << "\n" << std::flush;
-            last_line = st.detail;
-          }
-          if (st.state == rover_msgs::sequence_status_t::STATE_COMPLETED ||
-              st.state == rover_msgs::sequence_status_t::STATE_ABORTED ||
-              st.state == rover_msgs::sequence_status_t::STATE_REJECTED) {
-            if (!final_status) final_status = st;
-            // The next sequence on the same running stack, when this one completed.
-            if (st.state == rover_msgs::sequence_status_t::STATE_COMPLETED &&
-                submission_id <= static_cast<std::int64_t>(spec.then_sequences.size())) {
-              rover_msgs::sequence_submit_t next{};
-              next.submission_id = ++submission_id;
-              next.name = spec.then_sequences[static_cast<std::size_t>(submission_id - 2)];
-              next.text = then_texts[static_cast<std::size_t>(submission_id - 2)];
-              bus.Publish(rover::channels::kSequenceSubmit, next);
-              final_status.reset();
-            }
-          }
-        });
+  bool virtual_time() const { return deployment.time == "virtual"; }
 
+  const rover::tools::ScenarioSpec spec;
+  const rover::launch::Deployment deployment;
+  const std::string sequence_text;
+  const std::vector<std::string> then_texts;
+  const rover::tools::RunConfigs configs;
+  const rover::config::ConfigNode rover_config;
+  const rover::hazards::Footprint footprint;
+  const rover::terrain::World world;
+  double start_z = 0.0;
+  const std::string log_path;
+  // The executor keeps its running sequence here (a restart reports it interrupted); a
+  // new run starts with none.
+  const std::string state_path;
+};
+
+// The deployment's processes, each pointed at the run's copies, its start pose and rate;
+// their command lines go to DIR/commands.txt.
+void StartProcesses(const RunPlan& plan, const RunnerArgs& args, const std::vector<std::string>& env,
+                    rover::launch::ProcessSet& set) {
+  std::string others;  // the simulator holds its clock until these are up
+  for (const auto& p : plan.deployment.processes)
+    if (p.name != "rover_sim") others += (others.empty() ? "" : ",") + p.name;
+  const auto& spec = plan.spec;
+  std::ofstream commands(args.out_dir + "/commands.txt");
+  for (auto p : plan.deployment.processes) {
+    ReplaceConfig(p.args, spec.rover_config, plan.configs.rover_config);
+    if (p.name == "rover_sim") {
+      SetOption(p.args, "--world", plan.configs.world);
+      SetOption(p.args, "--start", Num(spec.start_x) + "," + Num(spec.start_y) + "," + Num(spec.start_yaw_deg));
+      SetOption(p.args, "--rate", args.rate_arg.empty() ? Num(spec.sim_rate) : args.rate_arg);
+      SetOption(p.args, "--hold-for", plan.virtual_time() ? others + ",rover_recorder,scenario_runner" : others);
+    } else if (p.name == "camera_capture") {
+      SetOption(p.args, "--world", plan.configs.world);
+    } else if (p.name == "sequence_executor") {
+      SetOption(p.args, "--state-file", plan.state_path);
+    } else if (p.name == "state_estimator") {
+      if (HasOption(p.args, "--world")) SetOption(p.args, "--world", plan.configs.world);
+      SetOption(p.args, "--start", Num(spec.start_x) + "," + Num(spec.start_y) + "," + Num(plan.start_z) + "," +
+                                       Num(spec.start_yaw_deg));
+    }
+    set.Start(p, env);
+    commands << p.name;
+    for (const auto& a : p.args) commands << " " << a;
+    commands << "\n";
+  }
+}
+
+// One run on the bus: the recorder and the set started, the sequence submitted and
+// followed to its end (with the scenario's injected kill), everything stopped.
+class Run {
+ public:
+  Run(const RunPlan& plan, const RunnerArgs& args)
+      : plan_(plan), args_(args), spec_(plan.spec), virtual_time_(plan.virtual_time()),
+        wall_start_(std::chrono::steady_clock::now()), bus_(args.url), sync_(args.url),
+        env_{"ROVER_LCM_URL=" + args.url, "ROVER_TIME=" + plan.deployment.time},
+        recorder_(rover::launch::BinDir(), args.out_dir, false), set_(rover::launch::BinDir(), args.out_dir, false) {
+    bus_.set_publisher("scenario_runner");
+    if (const auto key = ExecutorKey(plan.deployment)) bus_.set_auth(rover::bus::MakeBusAuth(*key, "scenario_runner"));
+    Subscribe();
+  }
+
+  // Runs it; whether rover_recorder wrote the whole log.
+  bool Execute() {
+    StartRecorder();
+    StartProcesses(plan_, args_, env_, set_);
+    std::cout << "scenario " << spec_.name << ": " << plan_.deployment.processes.size() << " processes on "
+              << args_.url << "; output in " << args_.out_dir << "/\n"
+              << std::flush;
+    WaitUntilReady();
+    Submit();
+    Follow();
+    NoteWhyUnfinished();
+    return StopEverything();
+  }
+
+  double wall() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start_).count(); }
+  const std::vector<std::string>& process_events() const { return process_events_; }
+  const std::optional<rover_msgs::sequence_status_t>& final_status() const { return final_status_; }
+
+ private:
+  void Note(const std::string& e) {
+    process_events_.push_back(e);
+    std::cout << e << "\n" << std::flush;
+  }
+
+  void Subscribe() {
+    bus_.Subscribe<rover_msgs::heartbeat_t>(rover::channels::kHeartbeat,
+                                            [this](const rover_msgs::heartbeat_t& hb) { alive_.insert(hb.process); });
+    bus_.Subscribe<rover_msgs::step_report_t>(rover::channels::kStepReport,
+                                              [this](const rover_msgs::step_report_t&) { ++steps_seen_; });
+    bus_.Subscribe<rover_msgs::sequence_status_t>(
+        rover::channels::kSequenceStatus, [this](const rover_msgs::sequence_status_t& st) { OnStatus(st); });
     // Virtual time (README, "Simulated time"): the runner and the recorder are members of
     // the set too, so that the sequence goes in at the first instant and the log holds
     // every message of every instant, whatever the machine's load.
-    const bool virtual_time = deployment.time == "virtual";
-    if (virtual_time) {
-      bus.clock().set_virtual(true);
+    if (virtual_time_) {
+      bus_.clock().set_virtual(true);
       // As every member: what comes in an instant is handed over when the clock's cut says
       // all of it has come (simtime/barrier.hpp, "One round an instant").
-      bus.set_deferred(true, {rover::channels::kClock});
+      bus_.set_deferred(true, {rover::channels::kClock});
     }
-    const std::vector<std::string> env = {"ROVER_LCM_URL=" + url, "ROVER_TIME=" + deployment.time};
-    rover::bus::SyncSender sync(url);
-    std::int64_t instant = -1;  // the rover time the runner has finished (-1: before the clock)
-    std::int64_t clock_seen = -1;
-    double clock_seen_wall = 0;
-    bus.Subscribe<rover_msgs::rover_clock_t>(rover::channels::kClock, [&](const rover_msgs::rover_clock_t& c) {
-      if (rover::bus::StampOf(c)->first != rover::bus::PublisherId("rover_sim") || c.utime <= clock_seen) return;
-      clock_seen = c.utime;
-      clock_seen_wall = wall();
-      if (virtual_time) bus.ClockMoved(c.utime, rover::bus::CutOf(c));
+    bus_.Subscribe<rover_msgs::rover_clock_t>(rover::channels::kClock, [this](const rover_msgs::rover_clock_t& c) {
+      if (rover::bus::StampOf(c)->first != rover::bus::PublisherId("rover_sim") || c.utime <= clock_seen_) return;
+      clock_seen_ = c.utime;
+      clock_seen_wall_ = wall();
+      if (virtual_time_) bus_.ClockMoved(c.utime, rover::bus::CutOf(c));
     }, 10000);
-    auto send_sync = [&] { sync.Send(bus.SyncState("scenario_runner", instant, false)); };
-    // The recorder first, and heard on the bus before any process starts, so that the log
-    // holds every publisher from its first message (the completeness check expects each
-    // count to start at 0). It stops last, after the processes, and flushes.
-    rover::launch::ProcessSet recorder(rover::launch::BinDir(), out_dir, false);
-    recorder.Start({"rover_recorder", "rover_recorder", {"--lcm-url", url, log_path}}, env);
-    while (!virtual_time && !alive.count("rover_recorder") && !g_stop && wall() < 10) {
-      bus.Handle(50);
-      for (const auto& [name, how] : recorder.Poll(0)) {
-        throw std::runtime_error("rover_recorder " + how + " at start (see " + out_dir +
-                                 "/rover_recorder.log)");
+  }
+
+  void OnStatus(const rover_msgs::sequence_status_t& st) {
+    if (st.submission_id != submission_id_) return;
+    if (!args_.quiet && st.detail != last_line_) {
+      std::cout << "[t=" << std::fixed << std::setprecision(1) << st.elapsed_s << " s] " << st.detail << "\n"
+                << std::flush;
+      last_line_ = st.detail;
+    }
+    if (st.state != rover_msgs::sequence_status_t::STATE_COMPLETED &&
+        st.state != rover_msgs::sequence_status_t::STATE_ABORTED &&
+        st.state != rover_msgs::sequence_status_t::STATE_REJECTED) {
+      return;
+    }
+    if (!final_status_) final_status_ = st;
+    // The next sequence on the same running stack, when this one completed.
+    if (st.state == rover_msgs::sequence_status_t::STATE_COMPLETED &&
+        submission_id_ <= static_cast<std::int64_t>(spec_.then_sequences.size())) {
+      rover_msgs::sequence_submit_t next{};
+      next.submission_id = ++submission_id_;
+      next.name = spec_.then_sequences[static_cast<std::size_t>(submission_id_ - 2)];
+      next.text = plan_.then_texts[static_cast<std::size_t>(submission_id_ - 2)];
+      bus_.Publish(rover::channels::kSequenceSubmit, next);
+      final_status_.reset();
+    }
+  }
+
+  void SendSync() { sync_.Send(bus_.SyncState("scenario_runner", instant_, false)); }
+
+  // The recorder first, and heard on the bus before any process starts, so that the log
+  // holds every publisher from its first message (the completeness check expects each
+  // count to start at 0). It stops last, after the processes, and flushes.
+  void StartRecorder() {
+    fs::remove(plan_.log_path);
+    fs::remove(plan_.state_path);
+    recorder_.Start({"rover_recorder", "rover_recorder", {"--lcm-url", args_.url, plan_.log_path}}, env_);
+    while (!virtual_time_ && !alive_.count("rover_recorder") && !g_stop && wall() < 10) {
+      bus_.Handle(50);
+      for (const auto& [name, how] : recorder_.Poll(0)) {
+        throw std::runtime_error("rover_recorder " + how + " at start (see " + args_.out_dir + "/rover_recorder.log)");
       }
     }
-    if (!virtual_time && !alive.count("rover_recorder")) {
+    if (!virtual_time_ && !alive_.count("rover_recorder")) {
       throw std::runtime_error("rover_recorder sent no heartbeat within 10 s");
     }
-    rover::launch::ProcessSet set(rover::launch::BinDir(), out_dir, false);
-    std::string others;  // the simulator holds its clock until these are up
-    for (const auto& p : deployment.processes)
-      if (p.name != "rover_sim") others += (others.empty() ? "" : ",") + p.name;
-    std::ofstream commands(out_dir + "/commands.txt");
-    for (auto p : deployment.processes) {
-      ReplaceConfig(p.args, spec.rover_config, configs.rover_config);
-      if (p.name == "rover_sim") {
-        SetOption(p.args, "--world", configs.world);
-        SetOption(p.args, "--start",
-                  Num(spec.start_x) + "," + Num(spec.start_y) + "," + Num(spec.start_yaw_deg));
-        SetOption(p.args, "--rate", rate_arg.empty() ? Num(spec.sim_rate) : rate_arg);
-        SetOption(p.args, "--hold-for", virtual_time ? others + ",rover_recorder,scenario_runner" : others);
-      } else if (p.name == "camera_capture") {
-        SetOption(p.args, "--world", configs.world);
-      } else if (p.name == "sequence_executor") {
-        SetOption(p.args, "--state-file", state_path);
-      } else if (p.name == "state_estimator") {
-        if (HasOption(p.args, "--world")) SetOption(p.args, "--world", configs.world);
-        SetOption(p.args, "--start", Num(spec.start_x) + "," + Num(spec.start_y) + "," +
-                                         Num(start_z) + "," + Num(spec.start_yaw_deg));
-      }
-      set.Start(p, env);
-      commands << p.name;
-      for (const auto& a : p.args) commands << " " << a;
-      commands << "\n";
-    }
-    commands.close();
-    std::cout << "scenario " << spec.name << ": " << deployment.processes.size()
-              << " processes on " << url << "; output in " << out_dir << "/\n" << std::flush;
+  }
 
-    rover::tools::ScenarioSummary partial;
-    auto note = [&](const std::string& e) {
-      partial.process_events.push_back(e);
-      std::cout << e << "\n" << std::flush;
-    };
-    // Wait until every process has said it is alive (in virtual time: until the clock
-    // starts, which it does when every member, this runner included, has reported).
+  // Until every process has said it is alive (in virtual time: until the clock starts,
+  // which it does when every member, this runner included, has reported).
+  void WaitUntilReady() {
     bool ready = false;
     auto last_hello = wall() - 1;
-    while (virtual_time && clock_seen < 0 && !g_stop && wall() < 30) {
+    while (virtual_time_ && clock_seen_ < 0 && !g_stop && wall() < 30) {
       if (wall() - last_hello > 0.2) {
-        send_sync();
+        SendSync();
         last_hello = wall();
       }
-      bus.Handle(20);
-      for (const auto& [name, how] : set.Poll(0)) note(name + " " + how + " at start");
+      bus_.Handle(20);
+      for (const auto& [name, how] : set_.Poll(0)) Note(name + " " + how + " at start");
     }
-    if (virtual_time && clock_seen < 0) note("the clock did not start within 30 s (see rover_sim.log)");
-    if (virtual_time) ready = true;
-    while (!virtual_time && !ready && !g_stop && wall() < 30) {
-      bus.Handle(50);
-      for (const auto& [name, how] : set.Poll(0)) note(name + " " + how + " at start");
+    if (virtual_time_ && clock_seen_ < 0) Note("the clock did not start within 30 s (see rover_sim.log)");
+    if (virtual_time_) ready = true;
+    while (!virtual_time_ && !ready && !g_stop && wall() < 30) {
+      bus_.Handle(50);
+      for (const auto& [name, how] : set_.Poll(0)) Note(name + " " + how + " at start");
       ready = true;
-      for (const auto& p : deployment.processes) ready = ready && alive.count(p.name) > 0;
+      for (const auto& p : plan_.deployment.processes) ready = ready && alive_.count(p.name) > 0;
     }
-    if (!ready) note("not every process sent a heartbeat within 30 s");
+    if (!ready) Note("not every process sent a heartbeat within 30 s");
+  }
 
+  void Submit() {
     rover_msgs::sequence_submit_t submit{};
     submit.submission_id = 1;
-    submit.name = spec.sequence;
-    submit.text = sequence_text;
-    bus.Publish(rover::channels::kSequenceSubmit, submit);
-
-    bool killed = false;
-    std::optional<double> done_at;
-    std::optional<std::int64_t> final_utime;
-    auto last_sync = wall();
+    submit.name = spec_.sequence;
+    submit.text = plan_.sequence_text;
+    bus_.Publish(rover::channels::kSequenceSubmit, submit);
     // The run's limit. On a real clock it is timeout_s of wall time. In virtual time it is
     // rover time, timeout_s x the scenario's sim_rate from the submission (what timeout_s
     // means at the rate the scenario was written for), so that load cannot change where a
     // run is cut; the one wall-time rule is a liveness limit on the clock itself.
-    const std::int64_t submitted_at = std::max<std::int64_t>(clock_seen, 0);
-    const auto rover_limit_us = static_cast<std::int64_t>(spec.timeout_s * spec.sim_rate * 1e6);
-    std::int64_t clock_moved = clock_seen;
-    double clock_moved_wall = wall();
-    auto within_limit = [&] {
-      if (!virtual_time) return wall() < spec.timeout_s;
-      if (clock_seen != clock_moved) {
-        clock_moved = clock_seen;
-        clock_moved_wall = wall();
-      }
-      return clock_seen - submitted_at < rover_limit_us && wall() - clock_moved_wall < kClockStallS;
-    };
+    submitted_at_ = std::max<std::int64_t>(clock_seen_, 0);
+    rover_limit_us_ = static_cast<std::int64_t>(spec_.timeout_s * spec_.sim_rate * 1e6);
+    clock_moved_ = clock_seen_;
+    clock_moved_wall_ = wall();
+  }
+
+  bool WithinLimit() {
+    if (!virtual_time_) return wall() < spec_.timeout_s;
+    if (clock_seen_ != clock_moved_) {
+      clock_moved_ = clock_seen_;
+      clock_moved_wall_ = wall();
+    }
+    return clock_seen_ - submitted_at_ < rover_limit_us_ && wall() - clock_moved_wall_ < kClockStallS;
+  }
+
+  // Follows the sequence to its final status, or the run's limit.
+  void Follow() {
+    auto last_sync = wall();
     bool report_due = false;
-    std::optional<SyncWatch> sync_watch;
-    if (virtual_time && !spec.kill_process.empty()) sync_watch.emplace(url);
-    while (!g_stop && within_limit()) {
-      if (virtual_time) {
-        // One instant at a time: what came in it is counted, then the runner reports it
-        // finished. It ends 2 s of rover time after the final status (the last messages:
-        // stop, final pose, truth) by not finishing that instant: the clock stops there.
-        if (bus.Handle(20)) {
-          const auto burst_end = wall() + 0.02;
-          while (wall() < burst_end && bus.Handle(0)) {
-          }
-        }
-        if (final_utime && clock_seen >= *final_utime + 2000000) break;
-        // The new instant's batch once all of it has come (a message lost on the way is
-        // given up a wall second after its clock, as in every process).
-        std::string missing;
-        bool sealed = false;
-        if (bus.seal_pending() && bus.SealWhenReady(wall() - clock_seen_wall > 1.0, &missing)) {
-          if (!missing.empty()) std::cerr << "scenario_runner: a batch went without " << missing << "\n";
-          bus.DispatchBatch();
-          instant = clock_seen;
-          sealed = true;
-        }
-        if (final_status && !final_utime) final_utime = final_status->utime;  // the executor's instant
-        report_due = report_due || sealed;
+    std::optional<double> done_at;
+    if (virtual_time_ && !spec_.kill_process.empty()) sync_watch_.emplace(args_.url);
+    while (!g_stop && WithinLimit()) {
+      if (virtual_time_) {
+        if (!TakeInstant(&report_due)) break;
       } else {
-        bus.Handle(20);
+        bus_.Handle(20);
       }
-      for (const auto& [name, how] : set.Poll(0)) {
-        if (killed && name == spec.kill_process) continue;
-        note(name + " " + how + " unexpectedly");
+      for (const auto& [name, how] : set_.Poll(0)) {
+        if (killed_ && name == spec_.kill_process) continue;
+        Note(name + " " + how + " unexpectedly");
       }
-      if (!spec.kill_process.empty() && !killed && steps_seen >= spec.kill_after_steps &&
-          steps_seen > 0) {
-        note("injected fault: killing " + spec.kill_process + " after " +
-             std::to_string(steps_seen) + " steps");
-        if (sync_watch && !sync_watch->WaitFinished(spec.kill_process, instant, 5.0)) {
-          note(spec.kill_process + " had not finished rover time " + std::to_string(instant) +
-               " within 5 s of wall time: killed anyway");
-        }
-        set.Signal(spec.kill_process, SIGKILL);
-        killed = true;
-      }
+      InjectKillWhenDue();
       // The instant is reported finished only now, after an injected kill: the clock cannot
       // move on before it, so the process dies at the same instant in every run.
-      if (virtual_time && (report_due || wall() - last_sync > 0.25)) {
-        send_sync();
+      if (virtual_time_ && (report_due || wall() - last_sync > 0.25)) {
+        SendSync();
         last_sync = wall();
         report_due = false;
       }
-      if (final_status && !done_at) done_at = wall();
+      if (final_status_ && !done_at) done_at = wall();
       // Let the last messages (stop, final pose, truth) reach the log.
-      if (!virtual_time && done_at && wall() - *done_at > 1.0) break;
+      if (!virtual_time_ && done_at && wall() - *done_at > 1.0) break;
     }
-    if (!final_status && !virtual_time) note("no final status within " + Num(spec.timeout_s) + " s");
-    if (!final_status && virtual_time && wall() - clock_moved_wall >= kClockStallS) {
-      note("the clock stood still for " + Num(kClockStallS) +
+  }
+
+  // Virtual time, one instant at a time: what came in it is counted, then the runner
+  // reports it finished. It ends 2 s of rover time after the final status (the last
+  // messages: stop, final pose, truth) by not finishing that instant: the clock stops
+  // there. False: that instant has come.
+  bool TakeInstant(bool* report_due) {
+    if (bus_.Handle(20)) {
+      const auto burst_end = wall() + 0.02;
+      while (wall() < burst_end && bus_.Handle(0)) {
+      }
+    }
+    if (final_utime_ && clock_seen_ >= *final_utime_ + 2000000) return false;
+    // The new instant's batch once all of it has come (a message lost on the way is given
+    // up a wall second after its clock, as in every process).
+    std::string missing;
+    bool sealed = false;
+    if (bus_.seal_pending() && bus_.SealWhenReady(wall() - clock_seen_wall_ > 1.0, &missing)) {
+      if (!missing.empty()) std::cerr << "scenario_runner: a batch went without " << missing << "\n";
+      bus_.DispatchBatch();
+      instant_ = clock_seen_;
+      sealed = true;
+    }
+    if (final_status_ && !final_utime_) final_utime_ = final_status_->utime;  // the executor's instant
+    *report_due = *report_due || sealed;
+    return true;
+  }
+
+  // The scenario's fault: its process killed once enough steps were reported, at an
+  // instant it has finished.
+  void InjectKillWhenDue() {
+    if (spec_.kill_process.empty() || killed_ || steps_seen_ < spec_.kill_after_steps || steps_seen_ <= 0) return;
+    Note("injected fault: killing " + spec_.kill_process + " after " + std::to_string(steps_seen_) + " steps");
+    if (sync_watch_ && !sync_watch_->WaitFinished(spec_.kill_process, instant_, 5.0)) {
+      Note(spec_.kill_process + " had not finished rover time " + std::to_string(instant_) +
+           " within 5 s of wall time: killed anyway");
+    }
+    set_.Signal(spec_.kill_process, SIGKILL);
+    killed_ = true;
+  }
+
+  void NoteWhyUnfinished() {
+    if (final_status_) return;
+    if (!virtual_time_) {
+      Note("no final status within " + Num(spec_.timeout_s) + " s");
+    } else if (wall() - clock_moved_wall_ >= kClockStallS) {
+      Note("the clock stood still for " + Num(kClockStallS) +
            " s of wall time with no final status (a hung rover_sim? see rover_sim.log)");
-    } else if (!final_status && virtual_time) {
-      note("no final status within " + Num(rover_limit_us / 1e6) + " s of rover time (timeout_s " +
-           Num(spec.timeout_s) + " at sim_rate " + Num(spec.sim_rate) + ")");
+    } else {
+      Note("no final status within " + Num(rover_limit_us_ / 1e6) + " s of rover time (timeout_s " +
+           Num(spec_.timeout_s) + " at sim_rate " + Num(spec_.sim_rate) + ")");
     }
-    // The clock first, so that nothing moves while the others stop (in virtual time it
-    // waits for this runner, which has stopped reporting: the log ends at one instant).
-    set.Signal("rover_sim", SIGTERM);
-    for (const double until = wall() + 5; set.Running("rover_sim") && wall() < until;) set.Poll(20);
-    set.StopAll();
-    recorder.Signal("rover_recorder", SIGTERM);  // it writes what it holds, then exits
+  }
+
+  // The clock first, so that nothing moves while the others stop (in virtual time it waits
+  // for this runner, which has stopped reporting: the log ends at one instant); the
+  // recorder last. Whether it wrote the whole log.
+  bool StopEverything() {
+    set_.Signal("rover_sim", SIGTERM);
+    for (const double until = wall() + 5; set_.Running("rover_sim") && wall() < until;) set_.Poll(20);
+    set_.StopAll();
+    recorder_.Signal("rover_recorder", SIGTERM);  // it writes what it holds, then exits
     bool log_whole = true;
-    for (const double until = wall() + 10; recorder.Running("rover_recorder") && wall() < until;) {
-      for (const auto& [name, how] : recorder.Poll(50)) {
+    for (const double until = wall() + 10; recorder_.Running("rover_recorder") && wall() < until;) {
+      for (const auto& [name, how] : recorder_.Poll(50)) {
         if (how != "exited with code 0") {
-          note(name + " " + how + " (see " + out_dir + "/rover_recorder.log)");
+          Note(name + " " + how + " (see " + args_.out_dir + "/rover_recorder.log)");
           log_whole = false;  // exit 1: a write failed (a full disk); a crash: the same for us
         }
       }
     }
-    recorder.StopAll();
+    recorder_.StopAll();
+    return log_whole;
+  }
 
-    auto summary = rover::tools::SummarizeLog(log_path, footprint);
-    summary.log_digest = rover::logcheck::DigestLog(log_path).sha256_hex;
-    summary.rover_time = rover::tools::BreakdownFromLog(log_path);
-    {
-      // Truth clearance to the rocks the rover cannot drive over (the simulator faults on them).
-      double max_height_m = 0.3;
-      rover_config["mobility"]["rock_collision"].Get("max_height_m", max_height_m);
-      std::vector<rover::tools::RockDisc> rocks;
-      for (const auto& r : world.rocks()) {
-        if (r.height_m > max_height_m) rocks.push_back({r.name, r.position.x(), r.position.y(), 0.5 * r.diameter_m});
-      }
-      rover::tools::AddRockClearance(rocks, footprint, &summary);
-    }
-    summary.scenario = spec.name;
-    summary.wall_time_s = wall();
-    summary.process_events = partial.process_events;
-    const std::string summary_path = out_dir + "/summary.json";
-    const bool summary_written = WriteWhole(summary_path, rover::tools::SummaryJson(summary));
-    const std::string summary_error = summary_written ? "" : std::strerror(errno);
-    std::cout << "\n" << rover::tools::SummaryText(summary);
-    // The figures come from the log: a log that could not be written whole says less than
-    // the drive did. The executor's own last word, heard live, says how the drive ended.
-    if (!log_whole) {
-      std::cout << "  THE LOG IS NOT WHOLE: rover_recorder could not write " << log_path
-                << " (see " << out_dir << "/rover_recorder.log; a full disk?): the figures above are of "
-                << "what it holds";
-      if (final_status) {
-        std::cout << "; on the bus the executor reported the sequence "
-                  << (final_status->state == rover_msgs::sequence_status_t::STATE_COMPLETED ? "completed"
-                      : final_status->state == rover_msgs::sequence_status_t::STATE_ABORTED
-                          ? "aborted (" + final_status->abort_reason + ")"
-                          : "rejected")
-                  << " at command " << final_status->command_index + 1 << " of " << final_status->num_commands;
-      }
-      std::cout << "\n";
-    }
-    std::string missed;
-    const bool as_expected = rover::tools::AsExpected(spec, summary, &missed);
-    if (!spec.expect_outcome.empty()) {
-      std::cout << "  expected: " << spec.expect_outcome
-                << (spec.expect_abort_reason.empty() ? "" : " (" + spec.expect_abort_reason + ")")
-                << (as_expected ? " - as expected\n" : " - NOT as expected: " + missed + "\n");
-    }
-    if (summary_written && log_whole) {
-      std::cout << "  wrote " << summary_path << " and " << log_path << "\n";
-    } else {
-      std::cout << "  NOT WRITTEN: " << (summary_written ? "" : summary_path + " (" + summary_error + ")")
-                << (summary_written || log_whole ? "" : " and ") << (log_whole ? "" : log_path + " (partial)")
-                << "\n";
-    }
-    if (plot && log_whole) RunPlot(out_dir);
-    // Exit 1 when the run did not end, ended other than the scenario expects, or its
-    // record could not be written.
-    return summary.outcome == "incomplete" || !as_expected || !summary_written || !log_whole ? 1 : 0;
+  const RunPlan& plan_;
+  const RunnerArgs& args_;
+  const rover::tools::ScenarioSpec& spec_;
+  const bool virtual_time_;
+  const std::chrono::steady_clock::time_point wall_start_;
+  rover::bus::Bus bus_;
+  rover::bus::SyncSender sync_;
+  const std::vector<std::string> env_;
+  rover::launch::ProcessSet recorder_, set_;
+  std::vector<std::string> process_events_;
+  std::set<std::string> alive_;
+  std::optional<rover_msgs::sequence_status_t> final_status_;
+  std::int64_t submission_id_ = 1;
+  int steps_seen_ = 0;
+  std::string last_line_;
+  std::int64_t instant_ = -1;  // the rover time the runner has finished (-1: before the clock)
+  std::int64_t clock_seen_ = -1;
+  double clock_seen_wall_ = 0;
+  std::int64_t submitted_at_ = 0, rover_limit_us_ = 0, clock_moved_ = -1;
+  double clock_moved_wall_ = 0;
+  std::optional<std::int64_t> final_utime_;
+  bool killed_ = false;
+  std::optional<SyncWatch> sync_watch_;
+};
+
+// The run's figures from its log, against truth.
+rover::tools::ScenarioSummary Summarize(const RunPlan& plan, const Run& run) {
+  auto summary = rover::tools::SummarizeLog(plan.log_path, plan.footprint);
+  summary.log_digest = rover::logcheck::DigestLog(plan.log_path).sha256_hex;
+  summary.rover_time = rover::tools::BreakdownFromLog(plan.log_path);
+  // Truth clearance to the rocks the rover cannot drive over (the simulator faults on them).
+  double max_height_m = 0.3;
+  plan.rover_config["mobility"]["rock_collision"].Get("max_height_m", max_height_m);
+  std::vector<rover::tools::RockDisc> rocks;
+  for (const auto& r : plan.world.rocks()) {
+    if (r.height_m > max_height_m) rocks.push_back({r.name, r.position.x(), r.position.y(), 0.5 * r.diameter_m});
+  }
+  rover::tools::AddRockClearance(rocks, plan.footprint, &summary);
+  summary.scenario = plan.spec.name;
+  summary.wall_time_s = run.wall();
+  summary.process_events = run.process_events();
+  return summary;
+}
+
+// The figures come from the log: a log that could not be written whole says less than
+// the drive did. The executor's own last word, heard live, says how the drive ended.
+void PrintLogNotWhole(const RunPlan& plan, const RunnerArgs& args,
+                      const std::optional<rover_msgs::sequence_status_t>& final_status) {
+  std::cout << "  THE LOG IS NOT WHOLE: rover_recorder could not write " << plan.log_path << " (see " << args.out_dir
+            << "/rover_recorder.log; a full disk?): the figures above are of "
+            << "what it holds";
+  if (final_status) {
+    std::cout << "; on the bus the executor reported the sequence "
+              << (final_status->state == rover_msgs::sequence_status_t::STATE_COMPLETED ? "completed"
+                  : final_status->state == rover_msgs::sequence_status_t::STATE_ABORTED
+                      ? "aborted (" + final_status->abort_reason + ")"
+                      : "rejected")
+              << " at command " << final_status->command_index + 1 << " of " << final_status->num_commands;
+  }
+  std::cout << "\n";
+}
+
+// Writes summary.json and prints the summary; the exit status: 1 when the run did not
+// end, ended other than the scenario expects, or its record could not be written.
+int Report(const RunPlan& plan, const RunnerArgs& args, const Run& run, bool log_whole) {
+  const auto summary = Summarize(plan, run);
+  const std::string summary_path = args.out_dir + "/summary.json";
+  const bool summary_written = WriteWhole(summary_path, rover::tools::SummaryJson(summary));
+  const std::string summary_error = summary_written ? "" : std::strerror(errno);
+  std::cout << "\n" << rover::tools::SummaryText(summary);
+  if (!log_whole) PrintLogNotWhole(plan, args, run.final_status());
+  std::string missed;
+  const auto& spec = plan.spec;
+  const bool as_expected = rover::tools::AsExpected(spec, summary, &missed);
+  if (!spec.expect_outcome.empty()) {
+    std::cout << "  expected: " << spec.expect_outcome
+              << (spec.expect_abort_reason.empty() ? "" : " (" + spec.expect_abort_reason + ")")
+              << (as_expected ? " - as expected\n" : " - NOT as expected: " + missed + "\n");
+  }
+  if (summary_written && log_whole) {
+    std::cout << "  wrote " << summary_path << " and " << plan.log_path << "\n";
+  } else {
+    std::cout << "  NOT WRITTEN: " << (summary_written ? "" : summary_path + " (" + summary_error + ")")
+              << (summary_written || log_whole ? "" : " and ") << (log_whole ? "" : plan.log_path + " (partial)")
+              << "\n";
+  }
+  if (args.plot && log_whole) RunPlot(args.out_dir);
+  return summary.outcome == "incomplete" || !as_expected || !summary_written || !log_whole ? 1 : 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return rover::bus::RunMain("scenario_runner", [&]() -> int {
+    const auto args = ParseArgs(argc, argv);
+    if (!args) return 0;
+    const RunPlan plan(*args);
+    std::signal(SIGINT, OnSignal);
+    std::signal(SIGTERM, OnSignal);
+    Run run(plan, *args);
+    const bool log_whole = run.Execute();
+    return Report(plan, *args, run, log_whole);
   });
 }

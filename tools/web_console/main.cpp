@@ -271,6 +271,400 @@ std::optional<std::int64_t> RequestedTime(const httplib::Request& req, std::stri
   return std::nullopt;
 }
 
+// The console's command line.
+struct ConsoleArgs {
+  Listen listen;
+  int image_width = 256;
+  std::string secret;                   // "": commands off
+  std::optional<std::string> log_path;  // playback
+};
+
+ConsoleArgs ParseConsoleArgs(const rover::bus::Process& proc) {
+  ConsoleArgs a;
+  if (auto l = proc.option("--listen")) a.listen = ParseListen(*l);
+  if (auto p = proc.option("--port")) {
+    if (proc.option("--listen")) throw ConfigError("rover_web: --port and --listen: expected one of them, not both");
+    a.listen.port = ParsePort(*p, "--port");
+  }
+  if (auto w = proc.option("--image-width")) {
+    a.image_width = ParsePort(*w, "--image-width");
+    if (a.image_width < 32 || a.image_width > 1024) {
+      throw ConfigError("rover_web: argument --image-width: \"" + *w + "\": expected 32 to 1024");
+    }
+  }
+  a.secret = LoadSecret(proc.option("--secret-file"), proc.option("--secret"));
+  a.log_path = proc.option("--log");
+  if (a.log_path && !a.secret.empty()) {
+    throw ConfigError("rover_web: --log and an operator secret: a playback sends no commands (expected one of them)");
+  }
+  return a;
+}
+
+// The recorded log to play back, with one line on what it holds.
+std::unique_ptr<rover::web::LogPlayback> OpenPlayback(const std::string& log_path,
+                                                      const rover::web::WebStateOptions& options) {
+  std::unique_ptr<rover::web::LogPlayback> playback;
+  try {
+    playback = std::make_unique<rover::web::LogPlayback>(log_path, options);
+  } catch (const std::runtime_error& e) {
+    throw ConfigError(std::string("rover_web: argument --log: ") + e.what());
+  }
+  char span[96];
+  std::snprintf(span, sizeof(span), "log time %.3f to %.3f s (%.1f s)", playback->first_utime() * 1e-6,
+                playback->last_utime() * 1e-6, (playback->last_utime() - playback->first_utime()) * 1e-6);
+  std::cout << "rover_web: playing back " << log_path << ": " << playback->messages() << " messages, " << span
+            << (playback->rejected() > 0 ? ", " + std::to_string(playback->rejected()) +
+                                               " left out (they do not decode or fail the bus's checks)"
+                                         : std::string())
+            << "\n" << std::flush;
+  return playback;
+}
+
+// What the page shows, from the bus. Rover time: the Process keeps the clock (ROVER_CLOCK,
+// checked and, with a key, its signature verified once); each tick hands its newest time
+// to the state. A second subscription to ROVER_CLOCK here would verify each signed clock
+// message twice, and the second time drop it as a replay.
+void FeedStateFromBus(rover::bus::Bus& bus, rover::web::WebState& state) {
+  namespace ch = rover::channels;
+  auto feed = [&state](const auto& m) { state.On(m, Now()); };
+  bus.Subscribe<rover_msgs::pose_t>(ch::kPose, feed, 100);
+  bus.Subscribe<rover_msgs::sim_truth_t>(ch::kSimTruth, feed, 100);
+  bus.Subscribe<rover_msgs::traversability_map_t>(ch::kTraversabilityMap, feed, 10);
+  bus.Subscribe<rover_msgs::keepout_zones_t>(ch::kKeepOutZones, feed, 10);
+  bus.Subscribe<rover_msgs::sequence_status_t>(ch::kSequenceStatus, feed, 50);
+  bus.Subscribe<rover_msgs::sequence_submit_t>(ch::kSequenceSubmit, feed, 10);
+  bus.Subscribe<rover_msgs::step_report_t>(ch::kStepReport, feed, 50);
+  bus.Subscribe<rover_msgs::vo_update_t>(ch::kVoUpdate, feed, 50);
+  bus.Subscribe<rover_msgs::hazard_status_t>(ch::kHazardStatus, feed, 50);
+  bus.Subscribe<rover_msgs::heartbeat_t>(ch::kHeartbeat, feed, 100);
+  bus.Subscribe<rover_msgs::stereo_frame_t>(ch::kStereoFrame, feed, 4);
+}
+
+// The HTTP side: the page, the state, the image and the commands, over the live state or
+// a playback.
+class WebConsole {
+ public:
+  WebConsole(rover::bus::Process& proc, ConsoleArgs args, rover::web::WebStateOptions options)
+      : proc_(proc), args_(std::move(args)), options_(options), state_(options_) {
+    if (args_.log_path) playback_ = OpenPlayback(*args_.log_path, options_);
+    FeedStateFromBus(proc_.bus(), state_);
+    server_.set_payload_max_length(rover::config::kMaxSequenceFileBytes);  // larger: 413
+    server_.set_read_timeout(5, 0);
+    server_.set_write_timeout(5, 0);
+    server_.set_keep_alive_timeout(1);
+    RefuseOtherHosts();
+    ExplainRefusals();
+    ServePages();
+    TakeCommands();
+  }
+
+  int Run() {
+    const int port = Bind();
+    std::thread http([&] { server_.listen_after_bind(); });
+    Announce(port);
+    if (playback_) {
+      // Nothing to hear or send: serve until SIGINT or SIGTERM.
+      while (!proc_.stopping()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    } else {
+      proc_.Run([&] { PublishPendingCommands(); }, 20);
+    }
+    stopping_ = true;
+    server_.stop();
+    http.join();
+    if (!args_.listen.unix_path.empty()) unlink(args_.listen.unix_path.c_str());
+    for (auto& p : commands_.Take()) p->done.set_value("rover_web is stopping");
+    return 0;
+  }
+
+ private:
+  // A page from another site that a DNS name re-pointed at 127.0.0.1 sends its own name in
+  // Host: refuse it, so no other site can read the bus through the browser.
+  void RefuseOtherHosts() {
+    server_.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+      const Listen& listen = args_.listen;
+      if (!listen.unix_path.empty() || IsLoopback(listen.host)) {
+        const std::string host = req.get_header_value("Host");
+        const bool allowed = listen.unix_path.empty()
+                                 ? std::find(allowed_hosts_.begin(), allowed_hosts_.end(), host) != allowed_hosts_.end()
+                                 : IsLoopbackHostHeader(host);
+        if (!allowed) {
+          Text(res, 403, "refused: Host \"" + host + "\" is not this console (expected 127.0.0.1 or localhost with its port)");
+          return httplib::Server::HandlerResponse::Handled;
+        }
+      }
+      res.set_header("Cache-Control", "no-store");
+      res.set_header("X-Content-Type-Options", "nosniff");
+      res.set_header("X-Frame-Options", "DENY");
+      return httplib::Server::HandlerResponse::Unhandled;
+    });
+  }
+
+  // httplib's own refusals (no route, no Content-Length, too large) get a line too.
+  void ExplainRefusals() {
+    server_.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
+      if (!res.body.empty()) return;
+      std::string line = "HTTP " + std::to_string(res.status);
+      if (res.status == 404) {
+        line = "not found: " + req.path + " (expected /, /api/state, /api/events, /api/image.png, or a POST to "
+               "/api/submit, /api/pause, /api/resume, /api/abort)";
+      } else if (res.status == 413) {
+        line = "request too large (a sequence is at most " + std::to_string(rover::config::kMaxSequenceFileBytes) + " bytes)";
+      } else if (res.status == 400) {
+        line = "bad request (a POST needs a Content-Length header and a body, which may be empty)";
+      }
+      Text(res, res.status, line);
+    });
+  }
+
+  // The picture a request asks for: the live state, or the playback's at ?at= (else where
+  // it is). "" with `bad` set for a bad ?at=.
+  std::string StateJson(const httplib::Request& req, std::string* bad) {
+    if (!playback_) return state_.StateJson(Now());
+    const auto at = RequestedTime(req, bad);
+    return bad->empty() ? playback_->StateJsonAt(at) : "";
+  }
+
+  void ServePages() {
+    server_.Get("/", [this](const httplib::Request& req, httplib::Response& res) { Page(req, res); });
+    server_.Get("/app.js", [](const httplib::Request&, httplib::Response& res) {
+      res.set_content(rover::web::kAppJs, "text/javascript; charset=utf-8");
+    });
+    server_.Get("/api/state", [this](const httplib::Request& req, httplib::Response& res) {
+      std::string bad;
+      std::string json = StateJson(req, &bad);
+      if (!bad.empty()) return Text(res, 400, bad);
+      res.set_content(json, "application/json");
+    });
+    server_.Get("/api/events", [this](const httplib::Request&, httplib::Response& res) {
+      res.set_chunked_content_provider("text/event-stream", [this](std::size_t, httplib::DataSink& sink) {
+        // In playback: where the playback is (the page asks /api/state?at= itself).
+        const std::string event =
+            "data: " + (playback_ ? playback_->StateJsonAt(std::nullopt) : state_.StateJson(Now())) + "\n\n";
+        if (!sink.write(event.data(), event.size())) return false;
+        for (int i = 0; i < 10 && !stopping_; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        if (stopping_) sink.done();
+        return true;
+      });
+    });
+    server_.Get("/api/image.png", [this](const httplib::Request& req, httplib::Response& res) { Image(req, res); });
+  }
+
+  // The page carries the state it was served with (in a JSON data block, which no browser
+  // runs), so its first picture needs no round trip. '<' never appears in JSON outside
+  // strings, and as \u003c no string can close the block.
+  void Page(const httplib::Request& req, httplib::Response& res) {
+    std::string bad;
+    std::string json = StateJson(req, &bad);
+    if (!bad.empty()) return Text(res, 400, bad);
+    std::string escaped;
+    escaped.reserve(json.size());
+    for (char c : json) escaped += c == '<' ? std::string("\\u003c") : std::string(1, c);
+    std::string html = rover::web::kIndexHtml;
+    if (const auto at = html.find("{{STATE}}"); at != std::string::npos) html.replace(at, 9, escaped);
+    res.set_header("Content-Security-Policy",
+                   "default-src 'none'; script-src 'self'; connect-src 'self'; img-src 'self'; "
+                   "style-src 'unsafe-inline'; frame-ancestors 'none'");
+    res.set_content(html, "text/html; charset=utf-8");
+  }
+
+  void Image(const httplib::Request& req, httplib::Response& res) {
+    int width = args_.image_width;
+    if (req.has_param("width")) {
+      try {
+        width = ParsePort(req.get_param_value("width"), "width");
+      } catch (const ConfigError&) {
+        width = -1;
+      }
+      if (width < 32 || width > 1024) return Text(res, 400, "width: expected a number of pixels, 32 to 1024");
+    }
+    std::string why;
+    if (playback_) {
+      const auto at = RequestedTime(req, &why);
+      if (!why.empty()) return Text(res, 400, why);
+      std::string png = playback_->LeftImagePngAt(at, width, &why);
+      if (png.empty()) return Text(res, 404, why);
+      return res.set_content(png, "image/png");
+    }
+    std::string png = state_.LeftImagePng(width, &why);
+    if (png.empty()) return Text(res, 404, why);
+    res.set_content(png, "image/png");
+  }
+
+  // Commands: the secret, then the input, then the bus thread publishes (and signs).
+  void TakeCommands() {
+    server_.Post("/api/submit", [this](const httplib::Request& req, httplib::Response& res) { Submit(req, res); });
+    Control("/api/pause", rover_msgs::sequence_control_t::ACTION_PAUSE, "pause");
+    Control("/api/resume", rover_msgs::sequence_control_t::ACTION_RESUME, "resume");
+    Control("/api/abort", rover_msgs::sequence_control_t::ACTION_ABORT, "abort");
+  }
+
+  bool Authorised(const httplib::Request& req, httplib::Response& res) {
+    if (playback_) {
+      Text(res, 403, "refused: rover_web is playing back " + playback_->path() + ", not on a bus: commands are off");
+      return false;
+    }
+    if (args_.secret.empty()) {
+      Text(res, 403, "refused: rover_web was started without --secret-file or --secret, so commands are off");
+      return false;
+    }
+    if (!req.has_header(kSecretHeader)) {
+      Text(res, 403, std::string("refused: this command needs the operator secret (header ") + kSecretHeader + ")");
+      return false;
+    }
+    if (!SameSecret(req.get_header_value(kSecretHeader), args_.secret)) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(250));  // slows guessing
+      Text(res, 403, "refused: wrong operator secret");
+      std::cerr << "rover_web: refused a command from " << req.remote_addr << ": wrong operator secret\n";
+      return false;
+    }
+    return true;
+  }
+
+  // Hands a command to the bus thread and waits for it to be published.
+  bool Publish(std::shared_ptr<Pending> p, httplib::Response& res) {
+    auto done = commands_.Push(p);
+    if (done.wait_for(std::chrono::seconds(3)) != std::future_status::ready) {
+      Text(res, 503, "the bus did not take the command within 3 s (rover_web is stopping or stalled)");
+      return false;
+    }
+    if (std::string why = done.get(); !why.empty()) {
+      Text(res, 500, "publishing failed: " + why);
+      return false;
+    }
+    return true;
+  }
+
+  // Milliseconds since the epoch, strictly increasing even for two submits in one
+  // millisecond.
+  std::int64_t NextSubmissionId() {
+    std::int64_t id = static_cast<std::int64_t>(
+        std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count() * 1e3);
+    std::int64_t prev = last_submission_.load();
+    while (true) {
+      const std::int64_t next = std::max(id, prev + 1);
+      if (last_submission_.compare_exchange_weak(prev, next)) return next;
+    }
+  }
+
+  void Submit(const httplib::Request& req, httplib::Response& res) {
+    if (!Authorised(req, res)) return;
+    std::string name = req.has_param("name") ? req.get_param_value("name") : "web";
+    if (name.empty() || name.size() > 200) return Text(res, 400, "name: expected 1 to 200 characters");
+    for (unsigned char c : name) {
+      if (c < 0x20 || c == 0x7f) return Text(res, 400, "name: a control character (expected one line of text)");
+    }
+    if (req.body.empty()) return Text(res, 400, "empty body (expected the sequence's text)");
+    const auto check = rover::sequence::ParseSequence(req.body, name);
+    if (!check.ok()) return Text(res, 400, check.errors.front().ToString());
+    auto p = std::make_shared<Pending>();
+    p->kind = Pending::kSubmit;
+    const std::int64_t id = NextSubmissionId();
+    p->submit.submission_id = id;
+    p->submit.name = name;
+    p->submit.text = req.body;
+    if (!Publish(p, res)) return;
+    std::cout << "rover_web: submitted " << name << " as " << id << (options_.signing ? " (signed)" : "") << " for "
+              << req.remote_addr << "\n" << std::flush;
+    res.set_content("{\"submission_id\":" + std::to_string(id) + ",\"signed\":" +
+                        (options_.signing ? "true" : "false") + "}\n",
+                    "application/json");
+  }
+
+  void Control(const char* path, std::int8_t action, const std::string& verb) {
+    server_.Post(path, [this, action, verb](const httplib::Request& req, httplib::Response& res) {
+      if (!Authorised(req, res)) return;
+      std::string reason;
+      if (std::string bad = CheckReason(req.body, &reason); !bad.empty()) return Text(res, 400, bad);
+      auto p = std::make_shared<Pending>();
+      p->kind = Pending::kControl;
+      p->control.action = action;
+      p->control.reason = reason.empty() ? "operator " + verb + " (web console)" : reason;
+      if (!Publish(p, res)) return;
+      std::cout << "rover_web: " << verb << " sent" << (options_.signing ? " (signed)" : "") << ": "
+                << p->control.reason << "\n" << std::flush;
+      res.set_content("{\"sent\":\"" + verb + "\",\"signed\":" + (options_.signing ? "true" : "false") + "}\n",
+                      "application/json");
+    });
+  }
+
+  // On the bus thread (the Bus is not thread-safe): the rover time to the state, and the
+  // pages' commands onto the bus.
+  void PublishPendingCommands() {
+    state_.OnRoverClock(proc_.now());
+    for (auto& p : commands_.Take()) {
+      try {
+        if (p->kind == Pending::kSubmit) {
+          proc_.bus().Publish(rover::channels::kSequenceSubmit, p->submit);
+        } else {
+          proc_.bus().Publish(rover::channels::kSequenceControl, p->control);
+        }
+        p->done.set_value("");
+      } catch (const std::exception& e) {
+        p->done.set_value(e.what());
+      }
+    }
+  }
+
+  // Binds the socket; the port (the one chosen for port 0). The Host names a request may
+  // carry follow from it.
+  int Bind() {
+    const Listen& listen = args_.listen;
+    int port = listen.port;
+    if (!listen.unix_path.empty()) {
+      ClearStaleSocket(listen.unix_path);
+      server_.set_address_family(AF_UNIX);
+      const mode_t old_mask = umask(0177);  // the socket is born 0600: only this user connects
+      const bool bound = server_.bind_to_port(listen.unix_path, 80);
+      umask(old_mask);
+      if (!bound) {
+        throw ConfigError("rover_web: cannot listen on unix:" + listen.unix_path + ": " + std::strerror(errno) +
+                          " (expected a path in a directory this user can write)");
+      }
+    } else if (port == 0) {
+      port = server_.bind_to_any_port(listen.host);
+      if (port < 0) throw std::runtime_error("cannot listen on " + listen.host + " (any port)");
+    } else if (!server_.bind_to_port(listen.host, port)) {
+      throw ConfigError("rover_web: cannot listen on " + listen.host + ":" + std::to_string(port) +
+                        " (in use, or not an address of this host; choose another with --port or --listen)");
+    }
+    for (const std::string& h : {std::string("127.0.0.1"), std::string("localhost"), std::string("[::1]"), listen.host}) {
+      allowed_hosts_.push_back(h + ":" + std::to_string(port));
+      if (port == 80) allowed_hosts_.push_back(h);  // browsers leave the default port out
+    }
+    return port;
+  }
+
+  void Announce(int port) const {
+    const Listen& listen = args_.listen;
+    const std::string where = listen.unix_path.empty() ? "http://" + listen.host + ":" + std::to_string(port) + "/"
+                                                       : "unix:" + listen.unix_path;
+    if (playback_) {
+      std::cout << "rover_web: listening on " << where << " (playback of " << *args_.log_path << "; commands off)\n"
+                << std::flush;
+    } else {
+      std::cout << "rover_web: listening on " << where << " (bus " << proc_.bus().url() << "; commands "
+                << (args_.secret.empty() ? "off: no operator secret" : "need the operator secret")
+                << (options_.signing ? ", signed with the deployment's key" : ", unsigned (no key)") << ")\n"
+                << std::flush;
+    }
+    if (listen.unix_path.empty() && !IsLoopback(listen.host)) {
+      std::cout << "rover_web: warning: listening on " << listen.host
+                << ", not loopback: anyone who reaches this port reads the bus (plain HTTP, no TLS)\n";
+    }
+  }
+
+  rover::bus::Process& proc_;
+  const ConsoleArgs args_;
+  const rover::web::WebStateOptions options_;
+  rover::web::WebState state_;
+  std::unique_ptr<rover::web::LogPlayback> playback_;
+  httplib::Server server_;
+  std::vector<std::string> allowed_hosts_;  // filled once the port is known
+  CommandQueue commands_;
+  std::atomic<bool> stopping_{false};
+  std::atomic<std::int64_t> last_submission_{0};
+};
+
 }  // namespace
 
 int main(int argc_in, char** argv_in) {
@@ -303,331 +697,12 @@ int main(int argc_in, char** argv_in) {
     // in real time: it follows the virtual clock as an observer rather than dropping it and
     // then every message stamped with it. (The tests start it inside the barrier.)
     proc.set_clock_observer(true);
-
-    Listen listen;
-    if (auto l = proc.option("--listen")) listen = ParseListen(*l);
-    if (auto p = proc.option("--port")) {
-      if (proc.option("--listen")) throw ConfigError("rover_web: --port and --listen: expected one of them, not both");
-      listen.port = ParsePort(*p, "--port");
-    }
-    int image_width = 256;
-    if (auto w = proc.option("--image-width")) {
-      image_width = ParsePort(*w, "--image-width");
-      if (image_width < 32 || image_width > 1024) {
-        throw ConfigError("rover_web: argument --image-width: \"" + *w + "\": expected 32 to 1024");
-      }
-    }
-    const std::string secret = LoadSecret(proc.option("--secret-file"), proc.option("--secret"));
-    const std::optional<std::string> log_path = proc.option("--log");
-    if (log_path && !secret.empty()) {
-      throw ConfigError("rover_web: --log and an operator secret: a playback sends no commands (expected one of them)");
-    }
-
+    ConsoleArgs args = ParseConsoleArgs(proc);
     rover::web::WebStateOptions options;
-    options.bus_url = log_path ? "" : proc.bus().url();
-    options.commands_enabled = !secret.empty();
-    options.signing = !log_path && proc.bus().has_auth();
-    rover::web::WebState state(options);
-    std::unique_ptr<rover::web::LogPlayback> playback;
-    if (log_path) {
-      try {
-        playback = std::make_unique<rover::web::LogPlayback>(*log_path, options);
-      } catch (const std::runtime_error& e) {
-        throw ConfigError(std::string("rover_web: argument --log: ") + e.what());
-      }
-      char span[96];
-      std::snprintf(span, sizeof(span), "log time %.3f to %.3f s (%.1f s)", playback->first_utime() * 1e-6,
-                    playback->last_utime() * 1e-6, (playback->last_utime() - playback->first_utime()) * 1e-6);
-      std::cout << "rover_web: playing back " << *log_path << ": " << playback->messages() << " messages, " << span
-                << (playback->rejected() > 0 ? ", " + std::to_string(playback->rejected()) +
-                                                   " left out (they do not decode or fail the bus's checks)"
-                                             : std::string())
-                << "\n" << std::flush;
-    }
-    // The picture a request asks for: the live state, or the playback's at ?at= (else where
-    // it is). "" with `bad` set for a bad ?at=.
-    auto state_json = [&](const httplib::Request& req, std::string* bad) -> std::string {
-      if (!playback) return state.StateJson(Now());
-      const auto at = RequestedTime(req, bad);
-      return bad->empty() ? playback->StateJsonAt(at) : "";
-    };
-
-    namespace ch = rover::channels;
-    auto& bus = proc.bus();
-    auto feed = [&state](const auto& m) { state.On(m, Now()); };
-    bus.Subscribe<rover_msgs::pose_t>(ch::kPose, feed, 100);
-    bus.Subscribe<rover_msgs::sim_truth_t>(ch::kSimTruth, feed, 100);
-    bus.Subscribe<rover_msgs::traversability_map_t>(ch::kTraversabilityMap, feed, 10);
-    bus.Subscribe<rover_msgs::keepout_zones_t>(ch::kKeepOutZones, feed, 10);
-    bus.Subscribe<rover_msgs::sequence_status_t>(ch::kSequenceStatus, feed, 50);
-    bus.Subscribe<rover_msgs::sequence_submit_t>(ch::kSequenceSubmit, feed, 10);
-    bus.Subscribe<rover_msgs::step_report_t>(ch::kStepReport, feed, 50);
-    bus.Subscribe<rover_msgs::vo_update_t>(ch::kVoUpdate, feed, 50);
-    bus.Subscribe<rover_msgs::hazard_status_t>(ch::kHazardStatus, feed, 50);
-    bus.Subscribe<rover_msgs::heartbeat_t>(ch::kHeartbeat, feed, 100);
-    bus.Subscribe<rover_msgs::stereo_frame_t>(ch::kStereoFrame, feed, 4);
-    // Rover time: the Process keeps the clock (ROVER_CLOCK, checked and, with a key, its
-    // signature verified once); each tick hands its newest time to the state. A second
-    // subscription to ROVER_CLOCK here would verify each signed clock message twice, and
-    // the second time drop it as a replay.
-
-    CommandQueue commands;
-    std::atomic<bool> stopping{false};
-    std::atomic<std::int64_t> last_submission{0};
-
-    httplib::Server server;
-    server.set_payload_max_length(rover::config::kMaxSequenceFileBytes);  // larger: 413
-    server.set_read_timeout(5, 0);
-    server.set_write_timeout(5, 0);
-    server.set_keep_alive_timeout(1);
-    std::vector<std::string> allowed_hosts;  // filled once the port is known
-    server.set_pre_routing_handler([&](const httplib::Request& req, httplib::Response& res) {
-      // A page from another site that a DNS name re-pointed at 127.0.0.1 sends its own
-      // name in Host: refuse it, so no other site can read the bus through the browser.
-      if (!listen.unix_path.empty() || IsLoopback(listen.host)) {
-        const std::string host = req.get_header_value("Host");
-        const bool allowed = listen.unix_path.empty()
-                                 ? std::find(allowed_hosts.begin(), allowed_hosts.end(), host) != allowed_hosts.end()
-                                 : IsLoopbackHostHeader(host);
-        if (!allowed) {
-          Text(res, 403, "refused: Host \"" + host + "\" is not this console (expected 127.0.0.1 or localhost with its port)");
-          return httplib::Server::HandlerResponse::Handled;
-        }
-      }
-      res.set_header("Cache-Control", "no-store");
-      res.set_header("X-Content-Type-Options", "nosniff");
-      res.set_header("X-Frame-Options", "DENY");
-      return httplib::Server::HandlerResponse::Unhandled;
-    });
-
-    // httplib's own refusals (no route, no Content-Length, too large) get a line too.
-    server.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
-      if (!res.body.empty()) return;
-      std::string line = "HTTP " + std::to_string(res.status);
-      if (res.status == 404) {
-        line = "not found: " + req.path + " (expected /, /api/state, /api/events, /api/image.png, or a POST to "
-               "/api/submit, /api/pause, /api/resume, /api/abort)";
-      } else if (res.status == 413) {
-        line = "request too large (a sequence is at most " + std::to_string(rover::config::kMaxSequenceFileBytes) + " bytes)";
-      } else if (res.status == 400) {
-        line = "bad request (a POST needs a Content-Length header and a body, which may be empty)";
-      }
-      Text(res, res.status, line);
-    });
-    server.Get("/", [&](const httplib::Request& req, httplib::Response& res) {
-      // The page carries the state it was served with (in a JSON data block, which no
-      // browser runs), so its first picture needs no round trip. '<' never appears in JSON
-      // outside strings, and as \u003c no string can close the block.
-      std::string bad;
-      std::string json = state_json(req, &bad);
-      if (!bad.empty()) return Text(res, 400, bad);
-      std::string escaped;
-      escaped.reserve(json.size());
-      for (char c : json) escaped += c == '<' ? std::string("\\u003c") : std::string(1, c);
-      std::string html = rover::web::kIndexHtml;
-      if (const auto at = html.find("{{STATE}}"); at != std::string::npos) html.replace(at, 9, escaped);
-      res.set_header("Content-Security-Policy",
-                     "default-src 'none'; script-src 'self'; connect-src 'self'; img-src 'self'; "
-                     "style-src 'unsafe-inline'; frame-ancestors 'none'");
-      res.set_content(html, "text/html; charset=utf-8");
-    });
-    server.Get("/app.js", [](const httplib::Request&, httplib::Response& res) {
-      res.set_content(rover::web::kAppJs, "text/javascript; charset=utf-8");
-    });
-    server.Get("/api/state", [&](const httplib::Request& req, httplib::Response& res) {
-      std::string bad;
-      std::string json = state_json(req, &bad);
-      if (!bad.empty()) return Text(res, 400, bad);
-      res.set_content(json, "application/json");
-    });
-    server.Get("/api/events", [&](const httplib::Request&, httplib::Response& res) {
-      res.set_chunked_content_provider("text/event-stream", [&](std::size_t, httplib::DataSink& sink) {
-        // In playback: where the playback is (the page asks /api/state?at= itself).
-        const std::string event =
-            "data: " + (playback ? playback->StateJsonAt(std::nullopt) : state.StateJson(Now())) + "\n\n";
-        if (!sink.write(event.data(), event.size())) return false;
-        for (int i = 0; i < 10 && !stopping; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-        if (stopping) {
-          sink.done();
-          return true;
-        }
-        return true;
-      });
-    });
-    server.Get("/api/image.png", [&](const httplib::Request& req, httplib::Response& res) {
-      int width = image_width;
-      if (req.has_param("width")) {
-        try {
-          width = ParsePort(req.get_param_value("width"), "width");
-        } catch (const ConfigError&) {
-          width = -1;
-        }
-        if (width < 32 || width > 1024) return Text(res, 400, "width: expected a number of pixels, 32 to 1024");
-      }
-      std::string why;
-      if (playback) {
-        const auto at = RequestedTime(req, &why);
-        if (!why.empty()) return Text(res, 400, why);
-        std::string png = playback->LeftImagePngAt(at, width, &why);
-        if (png.empty()) return Text(res, 404, why);
-        return res.set_content(png, "image/png");
-      }
-      std::string png = state.LeftImagePng(width, &why);
-      if (png.empty()) return Text(res, 404, why);
-      res.set_content(png, "image/png");
-    });
-
-    // Commands: the secret, then the input, then the bus thread publishes (and signs).
-    auto authorised = [&](const httplib::Request& req, httplib::Response& res) {
-      if (playback) {
-        Text(res, 403, "refused: rover_web is playing back " + playback->path() + ", not on a bus: commands are off");
-        return false;
-      }
-      if (secret.empty()) {
-        Text(res, 403, "refused: rover_web was started without --secret-file or --secret, so commands are off");
-        return false;
-      }
-      if (!req.has_header(kSecretHeader)) {
-        Text(res, 403, std::string("refused: this command needs the operator secret (header ") + kSecretHeader + ")");
-        return false;
-      }
-      if (!SameSecret(req.get_header_value(kSecretHeader), secret)) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(250));  // slows guessing
-        Text(res, 403, "refused: wrong operator secret");
-        std::cerr << "rover_web: refused a command from " << req.remote_addr << ": wrong operator secret\n";
-        return false;
-      }
-      return true;
-    };
-    auto publish = [&](std::shared_ptr<Pending> p, httplib::Response& res) {
-      auto done = commands.Push(p);
-      if (done.wait_for(std::chrono::seconds(3)) != std::future_status::ready) {
-        Text(res, 503, "the bus did not take the command within 3 s (rover_web is stopping or stalled)");
-        return false;
-      }
-      if (std::string why = done.get(); !why.empty()) {
-        Text(res, 500, "publishing failed: " + why);
-        return false;
-      }
-      return true;
-    };
-    server.Post("/api/submit", [&](const httplib::Request& req, httplib::Response& res) {
-      if (!authorised(req, res)) return;
-      std::string name = req.has_param("name") ? req.get_param_value("name") : "web";
-      if (name.empty() || name.size() > 200) return Text(res, 400, "name: expected 1 to 200 characters");
-      for (unsigned char c : name) {
-        if (c < 0x20 || c == 0x7f) return Text(res, 400, "name: a control character (expected one line of text)");
-      }
-      if (req.body.empty()) return Text(res, 400, "empty body (expected the sequence's text)");
-      const auto check = rover::sequence::ParseSequence(req.body, name);
-      if (!check.ok()) return Text(res, 400, check.errors.front().ToString());
-      auto p = std::make_shared<Pending>();
-      p->kind = Pending::kSubmit;
-      std::int64_t id = static_cast<std::int64_t>(std::chrono::duration<double>(
-                                                      std::chrono::system_clock::now().time_since_epoch()).count() * 1e3);
-      std::int64_t prev = last_submission.load();
-      while (true) {  // strictly increasing even for two submits in one millisecond
-        const std::int64_t next = std::max(id, prev + 1);
-        if (last_submission.compare_exchange_weak(prev, next)) {
-          id = next;
-          break;
-        }
-      }
-      p->submit.submission_id = id;
-      p->submit.name = name;
-      p->submit.text = req.body;
-      if (!publish(p, res)) return;
-      std::cout << "rover_web: submitted " << name << " as " << id << (options.signing ? " (signed)" : "")
-                << " for " << req.remote_addr << "\n" << std::flush;
-      res.set_content("{\"submission_id\":" + std::to_string(id) + ",\"signed\":" +
-                          (options.signing ? "true" : "false") + "}\n",
-                      "application/json");
-    });
-    auto control = [&](const char* path, std::int8_t action, const std::string& verb) {
-      server.Post(path, [&, action, verb](const httplib::Request& req, httplib::Response& res) {
-        if (!authorised(req, res)) return;
-        std::string reason;
-        if (std::string bad = CheckReason(req.body, &reason); !bad.empty()) return Text(res, 400, bad);
-        auto p = std::make_shared<Pending>();
-        p->kind = Pending::kControl;
-        p->control.action = action;
-        p->control.reason = reason.empty() ? "operator " + verb + " (web console)" : reason;
-        if (!publish(p, res)) return;
-        std::cout << "rover_web: " << verb << " sent" << (options.signing ? " (signed)" : "") << ": "
-                  << p->control.reason << "\n" << std::flush;
-        res.set_content("{\"sent\":\"" + verb + "\",\"signed\":" + (options.signing ? "true" : "false") + "}\n",
-                        "application/json");
-      });
-    };
-    control("/api/pause", rover_msgs::sequence_control_t::ACTION_PAUSE, "pause");
-    control("/api/resume", rover_msgs::sequence_control_t::ACTION_RESUME, "resume");
-    control("/api/abort", rover_msgs::sequence_control_t::ACTION_ABORT, "abort");
-
-    int port = listen.port;
-    if (!listen.unix_path.empty()) {
-      ClearStaleSocket(listen.unix_path);
-      server.set_address_family(AF_UNIX);
-      const mode_t old_mask = umask(0177);  // the socket is born 0600: only this user connects
-      const bool bound = server.bind_to_port(listen.unix_path, 80);
-      umask(old_mask);
-      if (!bound) {
-        throw ConfigError("rover_web: cannot listen on unix:" + listen.unix_path + ": " + std::strerror(errno) +
-                          " (expected a path in a directory this user can write)");
-      }
-    } else if (port == 0) {
-      port = server.bind_to_any_port(listen.host);
-      if (port < 0) throw std::runtime_error("cannot listen on " + listen.host + " (any port)");
-    } else if (!server.bind_to_port(listen.host, port)) {
-      throw ConfigError("rover_web: cannot listen on " + listen.host + ":" + std::to_string(port) +
-                        " (in use, or not an address of this host; choose another with --port or --listen)");
-    }
-    for (const std::string& h : {std::string("127.0.0.1"), std::string("localhost"), std::string("[::1]"), listen.host}) {
-      allowed_hosts.push_back(h + ":" + std::to_string(port));
-      if (port == 80) allowed_hosts.push_back(h);  // browsers leave the default port out
-    }
-    std::thread http([&] { server.listen_after_bind(); });
-    const std::string where = listen.unix_path.empty() ? "http://" + listen.host + ":" + std::to_string(port) + "/"
-                                                       : "unix:" + listen.unix_path;
-    if (playback) {
-      std::cout << "rover_web: listening on " << where << " (playback of " << *log_path << "; commands off)\n"
-                << std::flush;
-    } else {
-      std::cout << "rover_web: listening on " << where << " (bus " << bus.url()
-                << "; commands " << (secret.empty() ? "off: no operator secret" : "need the operator secret")
-                << (options.signing ? ", signed with the deployment's key" : ", unsigned (no key)") << ")\n"
-                << std::flush;
-    }
-    if (listen.unix_path.empty() && !IsLoopback(listen.host)) {
-      std::cout << "rover_web: warning: listening on " << listen.host
-                << ", not loopback: anyone who reaches this port reads the bus (plain HTTP, no TLS)\n";
-    }
-
-    if (playback) {
-      // Nothing to hear or send: serve until SIGINT or SIGTERM.
-      while (!proc.stopping()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    } else {
-      proc.Run([&] {
-        state.OnRoverClock(proc.now());
-        for (auto& p : commands.Take()) {
-          try {
-            if (p->kind == Pending::kSubmit) {
-              bus.Publish(ch::kSequenceSubmit, p->submit);
-            } else {
-              bus.Publish(ch::kSequenceControl, p->control);
-            }
-            p->done.set_value("");
-          } catch (const std::exception& e) {
-            p->done.set_value(e.what());
-          }
-        }
-      }, 20);
-    }
-
-    stopping = true;
-    server.stop();
-    http.join();
-    if (!listen.unix_path.empty()) unlink(listen.unix_path.c_str());
-    for (auto& p : commands.Take()) p->done.set_value("rover_web is stopping");
-    return 0;
+    options.bus_url = args.log_path ? "" : proc.bus().url();
+    options.commands_enabled = !args.secret.empty();
+    options.signing = !args.log_path && proc.bus().has_auth();
+    WebConsole console(proc, std::move(args), options);
+    return console.Run();
   });
 }
