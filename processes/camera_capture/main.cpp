@@ -249,6 +249,157 @@ struct CaptureFrames {
   std::string hazcam_error;  // why a configured HAZCAM pair is missing
 };
 
+// The cameras the config names: rendered from the world (sim), GenICam or GStreamer
+// hardware, or a recorded dataset.
+std::unique_ptr<ImageSource> MakeCameras(const bus::Process& proc, const capture::CaptureOptions& options,
+                                         const config::ConfigNode& section) {
+  if (options.source == "sim") {
+    const auto world = proc.option("--world");
+    if (!world) throw config::ConfigError("camera_capture: missing argument --world FILE (expected the world the simulator drives on)");
+    auto navcam_rig = geometry::LoadStereoRigFile(options.rig_path);
+    return std::make_unique<SimulatedCameras>(
+        *world, options.hazcam ? capture::RenderedCameras(std::move(navcam_rig), options.render,
+                                                          geometry::LoadStereoRigFile(options.hazcam->rig_path),
+                                                          options.hazcam->render)
+                               : capture::RenderedCameras(std::move(navcam_rig), options.render));
+  }
+  if (options.source == "genicam" || options.source == "gstreamer") {
+    auto hardware = options.source == "genicam"
+                        ? camera_hw::MakeGenicamSource(camera_hw::GenicamOptions::Load(section["genicam"]))
+                        : camera_hw::MakeGstreamerSource(camera_hw::GstreamerOptions::Load(section["gstreamer"]));
+    return std::make_unique<HardwareCameras>(std::move(hardware), geometry::LoadStereoRigFile(options.rig_path));
+  }
+  const auto dir = proc.option("--dataset");
+  if (!dir) throw config::ConfigError("camera_capture: missing argument --dataset DIR (expected a KITTI-layout directory)");
+  return std::make_unique<DatasetCameras>(*dir);
+}
+
+// One capture, on the worker thread: the pair (and the HAZCAM pair taken with it) as
+// messages stamped with the request and the pose at capture.
+CaptureFrames CaptureFrame(ImageSource& cameras, bool png, const rover_msgs::capture_request_t& request,
+                           const rover_msgs::pose_t& pose, std::int64_t now) {
+  const auto pair = cameras.Capture(request.frame_id);
+  CaptureFrames out;
+  rover_msgs::stereo_frame_t& frame = out.navcam;
+  frame.utime = pair.utime != 0 ? pair.utime : now;
+  frame.left_utime = frame.right_utime = frame.utime;  // one renderer, one dataset pair: at once
+  if (pair.timestamps) {
+    const auto exposed = camera_hw::ExposureUtimes(*pair.timestamps, frame.utime);
+    frame.left_utime = exposed.left_utime;
+    frame.right_utime = exposed.right_utime;
+  }
+  frame.frame_id = request.frame_id;
+  frame.purpose = request.purpose;
+  frame.pose_at_capture = pose;
+  // The HAZCAM frame says the same of its exposure: id, purpose, instants and pose.
+  if (pair.hazcam) {
+    out.hazcam = frame;
+    SetImages(*out.hazcam, pair.hazcam->left, pair.hazcam->right, pair.hazcam->rig, png);
+  }
+  SetImages(frame, pair.left, pair.right, pair.rig, png);
+  out.hazcam_error = pair.hazcam_error;
+  return out;
+}
+
+// Captures on request (and periodically with capture.rate_hz), one at a time on a worker
+// thread (a render takes seconds), so that the loop keeps answering and heartbeating: the
+// executor takes a silent process for a dead one.
+class Capturer {
+ public:
+  Capturer(bus::Process& proc, std::unique_ptr<ImageSource> cameras, bool png, double rate_hz)
+      : proc_(proc), cameras_(std::move(cameras)), png_(png), rate_hz_(rate_hz) {
+    proc_.bus().Subscribe<rover_msgs::pose_t>(channels::kPose, [this](const rover_msgs::pose_t& m) { pose_ = m; }, 100);
+    proc_.bus().Subscribe<rover_msgs::sim_truth_t>(channels::kSimTruth, [this](const rover_msgs::sim_truth_t& m) {
+      proc_.ObserveTime(m.utime);
+      cameras_->OnTruth(m);
+    }, 100);
+    proc_.bus().Subscribe<rover_msgs::capture_request_t>(
+        channels::kCaptureRequest, [this](const rover_msgs::capture_request_t& m) { pending_.push_back(m); });
+    proc_.set_pending_work([this] { return Finish(); });
+  }
+
+  // The loop's tick: a finished capture out, then the next one started.
+  void Tick() {
+    Finish();
+    if (job_.valid()) return;
+    if (!pending_.empty() && cameras_->Ready(pending_.front().utime)) {
+      Start(pending_.front());
+      pending_.pop_front();
+    } else if (pending_.empty() && rate_hz_ > 0 && proc_.now() >= next_auto_utime_ && cameras_->Ready(proc_.now())) {
+      rover_msgs::capture_request_t r{};
+      r.utime = proc_.now();
+      r.frame_id = next_auto_id_++;
+      r.purpose = "periodic";
+      Start(r);
+      next_auto_utime_ = proc_.now() + static_cast<std::int64_t>(1e6 / rate_hz_);
+    }
+  }
+
+  void Drain() {
+    if (job_.valid()) job_.wait();
+  }
+
+ private:
+  // The frame is published when the render is done and, in virtual time, not before the
+  // compute profile's capture time has passed since the request (Process::DueAt); the
+  // HAZCAM frame with it, just before, from the same publisher, so that every reader has it
+  // first: the hazard monitor's map holds it before the executor, woken by the
+  // STEREO_FRAME, asks about the next step.
+  void Start(const rover_msgs::capture_request_t& request) {
+    rover_msgs::pose_t at_capture{};
+    at_capture.orientation[0] = 1.0;
+    if (pose_) at_capture = *pose_;
+    cameras_->Expose();
+    job_ = std::async(std::launch::async, CaptureFrame, std::ref(*cameras_), png_, request, at_capture, proc_.now());
+    job_due_ = proc_.DueAt(proc_.now(), proc_.compute().capture_s);
+  }
+
+  // Publishes a finished frame that is due; true while a frame due by now is unfinished.
+  bool Finish() {
+    if (!job_.valid() || proc_.now() < job_due_) return false;
+    if (job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return true;
+    try {
+      Publish(job_.get());  // get() rethrows a capture error
+    } catch (const std::exception& e) {
+      // No frame for this request: the executor counts a VO failure; the process goes on,
+      // and its heartbeat says DEGRADED with the failure until a capture succeeds again
+      // (the camera contract, docs/HARDWARE.md).
+      std::cerr << "camera_capture: capture failed, no frame sent: " << e.what() << "\n";
+      proc_.SetHealth(rover_msgs::heartbeat_t::STATE_DEGRADED, std::string("capture failed: ") + e.what());
+    }
+    return false;
+  }
+
+  void Publish(CaptureFrames frames) {
+    if (frames.hazcam) {
+      try {
+        proc_.bus().Publish(channels::kHazcamFrame, *frames.hazcam);
+      } catch (const std::exception& e) {
+        frames.hazcam_error = e.what();  // not the NAVCAM frame's failure
+      }
+    }
+    proc_.bus().Publish(channels::kStereoFrame, frames.navcam);
+    if (frames.hazcam_error.empty()) {
+      proc_.SetHealth(rover_msgs::heartbeat_t::STATE_OK, "");
+      return;
+    }
+    // The NAVCAM frame went out (VO needs it); the map misses this near-field view.
+    std::cerr << "camera_capture: HAZCAM capture failed, no HAZCAM_FRAME " << frames.navcam.frame_id << ": "
+              << frames.hazcam_error << "\n";
+    proc_.SetHealth(rover_msgs::heartbeat_t::STATE_DEGRADED, "HAZCAM capture failed: " + frames.hazcam_error);
+  }
+
+  bus::Process& proc_;
+  std::unique_ptr<ImageSource> cameras_;
+  const bool png_;
+  const double rate_hz_;
+  std::optional<rover_msgs::pose_t> pose_;
+  std::deque<rover_msgs::capture_request_t> pending_;
+  std::int64_t next_auto_id_ = 1, next_auto_utime_ = 0;
+  std::future<CaptureFrames> job_;
+  std::int64_t job_due_ = 0;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -264,134 +415,9 @@ int main(int argc, char** argv) {
     const auto options =
         capture::CaptureOptions::Load(section, proc.config_path(), proc.option("--dataset") ? "dataset" : "");
     if (!options.notice.empty()) std::cerr << "camera_capture: " << options.notice << "\n";
-
-    std::unique_ptr<ImageSource> cameras;
-    if (options.source == "sim") {
-      const auto world = proc.option("--world");
-      if (!world) throw config::ConfigError("camera_capture: missing argument --world FILE (expected the world the simulator drives on)");
-      auto navcam_rig = geometry::LoadStereoRigFile(options.rig_path);
-      cameras = std::make_unique<SimulatedCameras>(
-          *world, options.hazcam ? capture::RenderedCameras(std::move(navcam_rig), options.render,
-                                                            geometry::LoadStereoRigFile(options.hazcam->rig_path),
-                                                            options.hazcam->render)
-                                 : capture::RenderedCameras(std::move(navcam_rig), options.render));
-    } else if (options.source == "genicam" || options.source == "gstreamer") {
-      auto hardware = options.source == "genicam"
-                          ? camera_hw::MakeGenicamSource(camera_hw::GenicamOptions::Load(section["genicam"]))
-                          : camera_hw::MakeGstreamerSource(camera_hw::GstreamerOptions::Load(section["gstreamer"]));
-      cameras = std::make_unique<HardwareCameras>(std::move(hardware), geometry::LoadStereoRigFile(options.rig_path));
-    } else {
-      const auto dir = proc.option("--dataset");
-      if (!dir) throw config::ConfigError("camera_capture: missing argument --dataset DIR (expected a KITTI-layout directory)");
-      cameras = std::make_unique<DatasetCameras>(*dir);
-    }
-    const bool png = options.encoding == "png";
-    const double rate_hz = options.rate_hz;
-
-    std::optional<rover_msgs::pose_t> pose;
-    std::deque<rover_msgs::capture_request_t> pending;
-    std::int64_t next_auto_id = 1, next_auto_utime = 0;
-    proc.bus().Subscribe<rover_msgs::pose_t>(channels::kPose, [&](const rover_msgs::pose_t& m) { pose = m; }, 100);
-    proc.bus().Subscribe<rover_msgs::sim_truth_t>(channels::kSimTruth, [&](const rover_msgs::sim_truth_t& m) {
-      proc.ObserveTime(m.utime);
-      cameras->OnTruth(m);
-    }, 100);
-    proc.bus().Subscribe<rover_msgs::capture_request_t>(
-        channels::kCaptureRequest, [&](const rover_msgs::capture_request_t& m) { pending.push_back(m); });
-
-    // A capture (a render takes seconds) runs on a worker thread, so that the loop keeps
-    // answering and heartbeating: the executor takes a silent process for a dead one.
-    std::future<CaptureFrames> job;
-    auto capture_frame = [&cameras, png](rover_msgs::capture_request_t request, rover_msgs::pose_t pose,
-                                         std::int64_t now) {
-      const auto pair = cameras->Capture(request.frame_id);
-      CaptureFrames out;
-      rover_msgs::stereo_frame_t& frame = out.navcam;
-      frame.utime = pair.utime != 0 ? pair.utime : now;
-      frame.left_utime = frame.right_utime = frame.utime;  // one renderer, one dataset pair: at once
-      if (pair.timestamps) {
-        const auto exposed = camera_hw::ExposureUtimes(*pair.timestamps, frame.utime);
-        frame.left_utime = exposed.left_utime;
-        frame.right_utime = exposed.right_utime;
-      }
-      frame.frame_id = request.frame_id;
-      frame.purpose = request.purpose;
-      frame.pose_at_capture = pose;
-      // The HAZCAM frame says the same of its exposure: id, purpose, instants and pose.
-      if (pair.hazcam) {
-        out.hazcam = frame;
-        SetImages(*out.hazcam, pair.hazcam->left, pair.hazcam->right, pair.hazcam->rig, png);
-      }
-      SetImages(frame, pair.left, pair.right, pair.rig, png);
-      out.hazcam_error = pair.hazcam_error;
-      return out;
-    };
-    // The frame is published when the render is done and, in virtual time, not before the
-    // compute profile's capture time has passed since the request (Process::DueAt); the
-    // HAZCAM frame with it, just before, from the same publisher, so that every reader has it
-    // first: the hazard monitor's map holds it before the executor, woken by the
-    // STEREO_FRAME, asks about the next step.
-    std::int64_t job_due = 0;
-    auto start = [&](const rover_msgs::capture_request_t& request) {
-      rover_msgs::pose_t at_capture{};
-      at_capture.orientation[0] = 1.0;
-      if (pose) at_capture = *pose;
-      cameras->Expose();
-      job = std::async(std::launch::async, capture_frame, request, at_capture, proc.now());
-      job_due = proc.DueAt(proc.now(), proc.compute().capture_s);
-    };
-    // Publishes a finished frame that is due; true while a frame due by now is unfinished.
-    auto finish = [&]() -> bool {
-      if (!job.valid() || proc.now() < job_due) return false;
-      if (job.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return true;
-      try {
-        CaptureFrames frames = job.get();  // rethrows a capture error
-        if (frames.hazcam) {
-          try {
-            proc.bus().Publish(channels::kHazcamFrame, *frames.hazcam);
-          } catch (const std::exception& e) {
-            frames.hazcam_error = e.what();  // not the NAVCAM frame's failure
-          }
-        }
-        proc.bus().Publish(channels::kStereoFrame, frames.navcam);
-        if (frames.hazcam_error.empty()) {
-          proc.SetHealth(rover_msgs::heartbeat_t::STATE_OK, "");
-        } else {
-          // The NAVCAM frame went out (VO needs it); the map misses this near-field view.
-          std::cerr << "camera_capture: HAZCAM capture failed, no HAZCAM_FRAME " << frames.navcam.frame_id
-                    << ": " << frames.hazcam_error << "\n";
-          proc.SetHealth(rover_msgs::heartbeat_t::STATE_DEGRADED, "HAZCAM capture failed: " + frames.hazcam_error);
-        }
-      } catch (const std::exception& e) {
-        // No frame for this request: the executor counts a VO failure; the process goes on,
-        // and its heartbeat says DEGRADED with the failure until a capture succeeds again
-        // (the camera contract, docs/HARDWARE.md).
-        std::cerr << "camera_capture: capture failed, no frame sent: " << e.what() << "\n";
-        proc.SetHealth(rover_msgs::heartbeat_t::STATE_DEGRADED, std::string("capture failed: ") + e.what());
-      }
-      return false;
-    };
-    proc.set_pending_work(finish);
-
-    proc.Run(
-        [&] {
-          finish();
-          if (job.valid()) return;
-          if (!pending.empty() && cameras->Ready(pending.front().utime)) {
-            start(pending.front());
-            pending.pop_front();
-          } else if (pending.empty() && rate_hz > 0 && proc.now() >= next_auto_utime &&
-                     cameras->Ready(proc.now())) {
-            rover_msgs::capture_request_t r{};
-            r.utime = proc.now();
-            r.frame_id = next_auto_id++;
-            r.purpose = "periodic";
-            start(r);
-            next_auto_utime = proc.now() + static_cast<std::int64_t>(1e6 / rate_hz);
-          }
-        },
-        5);
-    if (job.valid()) job.wait();
+    Capturer capturer(proc, MakeCameras(proc, options, section), options.encoding == "png", options.rate_hz);
+    proc.Run([&] { capturer.Tick(); }, 5);
+    capturer.Drain();
     return 0;
   });
 }
