@@ -38,6 +38,331 @@
 
 using namespace rover;
 
+namespace {
+
+// The map's checks: hazards.map, with `--map on|off` over its `enabled`. On where the
+// config enables it or the deployment says `--map on`; `--map off` for a deployment without
+// cameras, which never sees the ground (every step would be hazard_unknown).
+hazards::MapCheckOptions LoadMapCheck(const bus::Process& proc, const config::ConfigNode& section) {
+  hazards::MapCheckOptions map_check;
+  map_check.enabled = false;
+  if (section.Has("map")) map_check = hazards::LoadMapCheckOptions(section["map"], {"traversability", "hazcam"});
+  if (const auto arg = proc.option("--map")) {
+    if (*arg != "on" && *arg != "off") {
+      throw config::ConfigError("hazard_monitor: argument --map: \"" + *arg + "\": expected on or off");
+    }
+    if (*arg == "on" && !section.Has("map")) {
+      throw config::ConfigError("hazard_monitor: argument --map on: " + proc.config_path() +
+                                " has no hazards.map section (expected the map's limits there)");
+    }
+    map_check.enabled = *arg == "on";
+  }
+  return map_check;
+}
+
+// The map's worker (none with the map off), and the driven-step limit it sets for the vote.
+std::unique_ptr<MapWorker> MakeMapWorker(const config::ConfigNode& section, const hazards::HazardOptions& options,
+                                         hazards::MapCheckOptions* map_check) {
+  if (!map_check->enabled) return nullptr;
+  const auto map_options = traversability::LoadMapOptions(section["map"]["traversability"]);
+  map_check->max_driven_step_m =
+      map_check->DrivenStepLimit(map_options.max_step_m, map_options.crest_view_range_m > 0.0);
+  if (const std::string note = hazards::MapTiltLimitProblem(map_options.max_tilt_deg, options.tilt); !note.empty()) {
+    std::cerr << "hazard_monitor: warning: " << note << "\n";
+  }
+  // The HAZCAM pair's own stereo options (its disparities, ranges, rectified field) over the map's.
+  const auto hazcam_options = traversability::LoadCameraOptions(section["map"]["hazcam"], map_options);
+  return std::make_unique<MapWorker>(map_options, hazcam_options);
+}
+
+hazards::PoseSnapshot SnapshotFromMsg(const rover_msgs::pose_t& m) {
+  const auto v = geometry::XyzRpyFromPose(bus::PoseFromMsg(m));
+  hazards::PoseSnapshot p;
+  p.utime = m.utime;
+  p.x = v[0];
+  p.y = v[1];
+  p.roll = v[3];
+  p.pitch = v[4];
+  p.yaw = v[5];
+  p.position_sigma_m = hazards::HorizontalSigma(bus::CovarianceFromArray(m.covariance));
+  return p;
+}
+
+// A pair for the map, its images checked and made 8-bit; nothing (with `bad` set) for a
+// frame that does not decode.
+std::optional<MapWorker::Job> JobFromFrame(const rover_msgs::stereo_frame_t& frame, bool hazcam, std::string* bad) {
+  vo::StereoImages images;
+  *bad = bus::ToStereoImages(frame, imaging::ImageLimits{}, images);
+  if (!bad->empty()) return std::nullopt;
+  if (images.left.depth() != CV_8U) {
+    images.left.convertTo(images.left, CV_8U, 1.0 / 256.0);
+    images.right.convertTo(images.right, CV_8U, 1.0 / 256.0);
+  }
+  MapWorker::Job job;
+  job.left = images.left;
+  job.right = images.right;
+  job.rig = images.rig;
+  job.T_site_rover = bus::PoseFromMsg(frame.pose_at_capture);
+  job.covariance = bus::CovarianceFromArray(frame.pose_at_capture.covariance);
+  job.frame_id = frame.frame_id;
+  job.hazcam = hazcam;
+  return job;
+}
+
+rover_msgs::hazard_status_t ToMsg(const hazards::HazardStatus& st) {
+  rover_msgs::hazard_status_t m{};
+  m.utime = st.utime;
+  m.state = static_cast<std::int8_t>(st.state);
+  m.keepout_violated = st.keepout_violated;
+  m.zone_name = st.zone_name;
+  m.min_clearance_m = std::isfinite(st.min_clearance_m) ? st.min_clearance_m : 1e9;
+  m.tilt_violated = st.tilt_violated;
+  m.roll_rad = st.roll_rad;
+  m.pitch_rad = st.pitch_rad;
+  m.roll_limit_rad = st.roll_limit_rad;
+  m.pitch_limit_rad = st.pitch_limit_rad;
+  m.detail = st.detail;
+  return m;
+}
+
+// The hazard monitor on the bus: the pose, attitude and zones into the assessor, the
+// stereo pairs into the map, the executor's queries answered on both, and the status out.
+class HazardNode {
+ public:
+  HazardNode(bus::Process& proc, const hazards::HazardOptions& options, hazards::MapCheckOptions map_check,
+             std::unique_ptr<MapWorker> map)
+      : proc_(proc), options_(options), map_check_(map_check), map_(std::move(map)), assessor_(options),
+        config_zones_(options.zones) {
+    rules_.footprint = hazards::GridFootprint(options.footprint);
+    rules_.blind_margin_m = map_check_.blind_margin_m;
+    rules_.unknown = map_check_.Unknown();
+    rules_.max_driven_step_m = map_check_.max_driven_step_m;
+    if (map_) grid_ = map_->Initial();
+    trail_ = hazards::DrivenTrail(map_ ? grid_.cell_m : 0.2);
+  }
+
+  void Subscribe() {
+    auto& bus = proc_.bus();
+    bus.Subscribe<rover_msgs::pose_t>(channels::kPose, [this](const rover_msgs::pose_t& m) { OnPose(m); });
+    bus.Subscribe<rover_msgs::imu_t>(channels::kImu, [this](const rover_msgs::imu_t& m) {
+      proc_.ObserveTime(m.utime);
+      const auto rpy = geometry::RpyFromRotation(bus::QuaternionFromArray(m.orientation).toRotationMatrix());
+      assessor_.OnAttitude(m.utime, rpy[0], rpy[1]);
+    }, 200);
+    bus.Subscribe<rover_msgs::keepout_zones_t>(channels::kKeepOutZones,
+                                               [this](const rover_msgs::keepout_zones_t& m) { OnZones(m); });
+    if (map_) {
+      bus.Subscribe<rover_msgs::stereo_frame_t>(
+          channels::kStereoFrame, [this](const rover_msgs::stereo_frame_t& frame) { OnFrame(frame, false); }, 4);
+      bus.Subscribe<rover_msgs::stereo_frame_t>(
+          channels::kHazcamFrame, [this](const rover_msgs::stereo_frame_t& frame) { OnFrame(frame, true); }, 4);
+    }
+    bus.Subscribe<rover_msgs::hazard_query_t>(channels::kHazardQuery, [this](const rover_msgs::hazard_query_t& q) {
+      held_.emplace_back(q, !map_ ? 0 : proc_.virtual_time() ? frames_received_ : map_->Added());
+      AnswerHeld();
+    });
+    proc_.set_pending_work([this] { return PendingWork(); });
+  }
+
+  // The steady status, the queries a finished map releases, and now and then the map again.
+  void Tick(double publish_hz) {
+    auto m = ToMsg(assessor_.Assess(proc_.now()));
+    if (!zone_error_.empty()) {
+      m.state = rover_msgs::hazard_status_t::STATE_UNKNOWN;
+      m.detail = "invalid keep-out zones: " + zone_error_;
+    }
+    proc_.bus().Publish(channels::kHazardStatus, m);
+    AnswerHeld();
+    // The map changes only when a pair has been mapped (published then); between pairs it
+    // is sent again this often. Once a second, 249 copies of the 60 kB map made up 15 of
+    // the demo's 23 MB and woke every process of the set each time.
+    constexpr double kMapRefreshS = 5.0;
+    if (++ticks_ % static_cast<int>(std::max(1.0, kMapRefreshS * publish_hz)) == 0) PublishMap();
+  }
+
+ private:
+  void PublishMap() {
+    if (map_) proc_.bus().Publish(channels::kTraversabilityMap, bus::MapToMsg(grid_, rules_, proc_.now(), last_frame_id_));
+  }
+
+  // Takes a grid the worker finished; true when there was one.
+  bool TakeMap() {
+    if (!map_) return false;
+    std::string notes;
+    const bool fresh = map_->Take(&grid_, &last_frame_id_, &notes);
+    if (!notes.empty()) std::cerr << notes;
+    return fresh;
+  }
+
+  // The map holds pairs placed with the poses of their time. When the pose source restarts
+  // (its POSE count goes back: a restarted estimator starts again from its start pose) or a
+  // new site frame begins, those no longer agree with the new poses, and ghost steps would
+  // appear where old and new pairs overlap: the map starts again.
+  void OnPose(const rover_msgs::pose_t& m) {
+    proc_.ObserveTime(m.utime);
+    const hazards::PoseSnapshot p = SnapshotFromMsg(m);
+    assessor_.OnPose(p);
+    const auto count = static_cast<std::uint32_t>(static_cast<std::uint64_t>(m.pub_seq) & 0xffffffffu);
+    if (map_ && have_pose_ && (count < last_pose_count_ || m.site_index != last_site_)) {
+      std::cerr << "hazard_monitor: traversability map cleared: "
+                << (m.site_index != last_site_ ? "a new site frame began"
+                                               : "the pose source restarted (its POSE count went back)")
+                << "\n";
+      map_->Clear();
+      trail_ = hazards::DrivenTrail(grid_.cell_m);
+    }
+    have_pose_ = true;
+    last_pose_count_ = count;
+    last_site_ = m.site_index;
+    if (map_) trail_.Add({p.x, p.y, p.yaw}, options_.footprint);
+  }
+
+  void OnZones(const rover_msgs::keepout_zones_t& m) {
+    auto zones = config_zones_;
+    try {
+      const auto from_msg = bus::ZonesFromMsg(m);
+      zones.insert(zones.end(), from_msg.begin(), from_msg.end());
+      zone_error_ = hazards::ZoneSetProblem(zones);
+    } catch (const std::invalid_argument& e) {
+      zone_error_ = e.what();  // a zone that cannot be built: undecidable, so UNKNOWN
+    }
+    if (!zone_error_.empty()) {
+      std::cerr << "hazard_monitor: KEEPOUT_ZONES: " << zone_error_ << "\n";
+      return;
+    }
+    assessor_.SetZones(zones);
+  }
+
+  // Both pairs take the same path: validated, then mapped in the order they came (the
+  // HAZCAM pair of a capture comes before its NAVCAM pair), each holding back the queries
+  // asked after it. Virtual time: one pair at a time goes to the worker, and its map is
+  // taken when the compute profile's map time has passed since the pair came (never
+  // earlier, whatever this machine's speed), so a query is answered at the same rover time
+  // in every run.
+  void OnFrame(const rover_msgs::stereo_frame_t& frame, bool hazcam) {
+    proc_.ObserveTime(frame.utime);
+    std::string bad;
+    auto job = JobFromFrame(frame, hazcam, &bad);
+    if (!job) {
+      std::cerr << "hazard_monitor: " << (hazcam ? channels::kHazcamFrame : channels::kStereoFrame) << " "
+                << frame.frame_id << ": " << bad << " (not mapped)\n";
+      return;
+    }
+    if (!proc_.virtual_time()) {
+      map_->Add(std::move(*job));
+      return;
+    }
+    ++frames_received_;
+    // One mapper: a pair starts when it has come and the one before it is done.
+    const double compute_s = hazcam ? proc_.compute().hazcam_map_s : proc_.compute().map_s;
+    mapper_free_utime_ = proc_.DueAt(std::max({proc_.now(), frame.utime, mapper_free_utime_}), compute_s);
+    waiting_jobs_.emplace_back(mapper_free_utime_, std::move(*job));
+  }
+
+  // Virtual time: true while a pair due by now is still being mapped.
+  bool PendingWork() {
+    if (!map_ || !proc_.virtual_time()) return false;
+    if (in_work_due_) {
+      if (proc_.now() < *in_work_due_) return false;
+      if (map_->Done() < map_->Added()) return true;
+      if (TakeMap()) PublishMap();
+      in_work_due_.reset();
+      ++frames_mapped_;
+      AnswerHeld();
+    }
+    if (!waiting_jobs_.empty()) {
+      in_work_due_ = std::max(waiting_jobs_.front().first, proc_.now());
+      map_->Add(std::move(waiting_jobs_.front().second));
+      waiting_jobs_.pop_front();
+    }
+    return false;
+  }
+
+  // A query that comes while a pair is being mapped waits for that map (answered on a
+  // later tick): the step is judged on a map holding every pair taken before it. Pairs
+  // that come after the query do not hold it back.
+  void AnswerHeld() {
+    if (!proc_.virtual_time() && TakeMap()) PublishMap();
+    std::erase_if(held_, [&](const auto& h) {
+      if (map_ && (proc_.virtual_time() ? frames_mapped_ < h.second : !map_->Mapped(h.second))) return false;
+      proc_.bus().Publish(channels::kHazardReply, Answer(h.first));
+      return true;
+    });
+  }
+
+  rover_msgs::hazard_reply_t Answer(const rover_msgs::hazard_query_t& q) {
+    rover_msgs::hazard_reply_t r{};
+    r.utime = proc_.now();
+    r.query_id = q.query_id;
+    std::vector<hazards::Pose2> path;
+    bool finite = q.num_poses > 0;
+    for (int i = 0; i < q.num_poses; ++i) {
+      finite = finite && std::isfinite(q.x[i]) && std::isfinite(q.y[i]) && std::isfinite(q.yaw[i]);
+      path.push_back({q.x[i], q.y[i], q.yaw[i]});
+    }
+    if (!finite) {
+      r.verdict = rover_msgs::hazard_reply_t::VERDICT_UNKNOWN;
+      r.detail = "query " + std::to_string(q.query_id) + ": empty or non-finite path";
+      return r;
+    }
+    if (!zone_error_.empty()) {
+      r.verdict = rover_msgs::hazard_reply_t::VERDICT_UNKNOWN;
+      r.detail = "invalid keep-out zones: " + zone_error_;
+      return r;
+    }
+    const auto check = CheckPath(path, q);
+    r.verdict = static_cast<std::int8_t>(check.verdict);
+    r.zone_name = check.zone_name;
+    r.min_clearance_m = std::isfinite(check.min_clearance_m) ? check.min_clearance_m : 1e9;
+    r.detail = check.detail;
+    return r;
+  }
+
+  // The swept path against the zones, tilt and pose age, then against the map.
+  hazards::SweptCheck CheckPath(const std::vector<hazards::Pose2>& path, const rover_msgs::hazard_query_t& q) {
+    // A non-finite or negative margin makes the check UNKNOWN (CheckSweptPath). Pose age
+    // is judged at the time of asking: a query held while a pair was mapped is not refused
+    // for the rover time that ran on meanwhile.
+    const int64_t asked = q.utime > 0 ? std::min(proc_.now(), q.utime) : proc_.now();
+    auto check = assessor_.CheckStep(path, asked, q.margin_m);
+    if (!map_ || check.verdict == hazards::Verdict::kUnsafe) return check;
+    // The map judges the same swept path; an unsafe cell outranks an undecided keep-out
+    // check, and either stops the step. Ground the rover has driven over is known: it
+    // carried the rover.
+    avoidance::Grid judged = grid_;
+    if (judged.Problem().empty()) trail_.MarkDriven(&judged);
+    const auto on_map = hazards::CheckPathOnMap(judged, rules_.footprint, path, map_check_);
+    if (on_map.verdict == hazards::Verdict::kUnsafe ||
+        (on_map.verdict == hazards::Verdict::kUnknown && check.verdict == hazards::Verdict::kSafe)) {
+      check = on_map;
+    }
+    return check;
+  }
+
+  bus::Process& proc_;
+  const hazards::HazardOptions options_;
+  const hazards::MapCheckOptions map_check_;
+  std::unique_ptr<MapWorker> map_;
+  hazards::HazardAssessor assessor_;
+  bus::MapRules rules_;
+  avoidance::Grid grid_;  // the map as the checks see it: the worker's newest
+  int64_t last_frame_id_ = -1;
+  hazards::DrivenTrail trail_;
+  bool have_pose_ = false;
+  std::uint32_t last_pose_count_ = 0;
+  std::int32_t last_site_ = 0;
+  const std::vector<hazards::KeepOutZone> config_zones_;
+  std::deque<std::pair<std::int64_t, MapWorker::Job>> waiting_jobs_;  // due, pair
+  std::optional<std::int64_t> in_work_due_;
+  std::int64_t mapper_free_utime_ = 0;  // when the last pair taken is due
+  std::uint64_t frames_received_ = 0, frames_mapped_ = 0;
+  std::string zone_error_;  // non-empty: the last zone set was invalid -> UNKNOWN
+  std::vector<std::pair<rover_msgs::hazard_query_t, std::uint64_t>> held_;  // and the pairs it waits for
+  int ticks_ = 0;
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
   return bus::RunMain("hazard_monitor", [&]() -> int {
     bus::Process proc("hazard_monitor",
@@ -53,267 +378,12 @@ int main(int argc, char** argv) {
     const auto options = hazards::LoadHazardOptions(section, {"publish_hz"});
     double publish_hz = 10.0;
     section.Get("publish_hz", publish_hz, 1.0, 100.0);
-    // The traversability map: on where the config enables it (configs/rover.yaml does not
-    // yet: see its comment) or the deployment says `--map on`; `--map off` for a deployment
-    // without cameras, which never sees the ground (every step would be hazard_unknown).
-    hazards::MapCheckOptions map_check;
-    map_check.enabled = false;
-    if (section.Has("map")) map_check = hazards::LoadMapCheckOptions(section["map"], {"traversability", "hazcam"});
-    if (const auto arg = proc.option("--map")) {
-      if (*arg != "on" && *arg != "off") {
-        throw config::ConfigError("hazard_monitor: argument --map: \"" + *arg + "\": expected on or off");
-      }
-      if (*arg == "on" && !section.Has("map")) {
-        throw config::ConfigError("hazard_monitor: argument --map on: " + proc.config_path() +
-                                  " has no hazards.map section (expected the map's limits there)");
-      }
-      map_check.enabled = *arg == "on";
-    }
-    std::unique_ptr<MapWorker> map;
-    if (map_check.enabled) {
-      const auto map_options = traversability::LoadMapOptions(section["map"]["traversability"]);
-      map_check.max_driven_step_m =
-          map_check.DrivenStepLimit(map_options.max_step_m, map_options.crest_view_range_m > 0.0);
-      if (const std::string note = hazards::MapTiltLimitProblem(map_options.max_tilt_deg, options.tilt);
-          !note.empty()) {
-        std::cerr << "hazard_monitor: warning: " << note << "\n";
-      }
-      // The HAZCAM pair's own stereo options (its disparities, ranges, rectified field) over the map's.
-      const auto hazcam_options = traversability::LoadCameraOptions(section["map"]["hazcam"], map_options);
-      map = std::make_unique<MapWorker>(map_options, hazcam_options);
-    }
+    auto map_check = LoadMapCheck(proc, section);
+    auto map = MakeMapWorker(section, options, &map_check);
     std::cerr << "hazard_monitor: traversability map " << (map ? "on" : "off") << "\n";
-    bus::MapRules rules;
-    rules.footprint = hazards::GridFootprint(options.footprint);
-    rules.blind_margin_m = map_check.blind_margin_m;
-    rules.unknown = map_check.Unknown();
-    rules.max_driven_step_m = map_check.max_driven_step_m;
-    avoidance::Grid grid;  // the map as the checks see it: the worker's newest
-    int64_t last_frame_id = -1;
-    if (map) grid = map->Initial();
-    auto publish_map = [&] {
-      if (map) proc.bus().Publish(channels::kTraversabilityMap, bus::MapToMsg(grid, rules, proc.now(), last_frame_id));
-    };
-    // Takes a grid the worker finished; true when there was one.
-    auto take_map = [&] {
-      if (!map) return false;
-      std::string notes;
-      const bool fresh = map->Take(&grid, &last_frame_id, &notes);
-      if (!notes.empty()) std::cerr << notes;
-      return fresh;
-    };
-    hazards::HazardAssessor assessor(options);
-    hazards::DrivenTrail trail(map ? grid.cell_m : 0.2);
-    // The map holds pairs placed with the poses of their time. When the pose source
-    // restarts (its POSE count goes back: a restarted estimator starts again from its
-    // start pose) or a new site frame begins, those no longer agree with the new poses,
-    // and ghost steps would appear where old and new pairs overlap: the map starts again.
-    bool have_pose = false;
-    std::uint32_t last_pose_count = 0;
-    std::int32_t last_site = 0;
-    const std::vector<hazards::KeepOutZone> config_zones = options.zones;
-    // Virtual time: one pair at a time goes to the worker, and its map is taken when the
-    // compute profile's map time has passed since the pair came (never earlier, whatever
-    // this machine's speed), so a query is answered at the same rover time in every run.
-    std::deque<std::pair<std::int64_t, MapWorker::Job>> waiting_jobs;  // due, pair
-    std::optional<std::int64_t> in_work_due;
-    std::int64_t mapper_free_utime = 0;  // when the last pair taken is due
-    std::uint64_t frames_received = 0, frames_mapped = 0;
-    std::string zone_error;  // non-empty: the last zone set was invalid -> UNKNOWN
-
-    proc.bus().Subscribe<rover_msgs::pose_t>(channels::kPose, [&](const rover_msgs::pose_t& m) {
-      proc.ObserveTime(m.utime);
-      const auto T = bus::PoseFromMsg(m);
-      const auto v = geometry::XyzRpyFromPose(T);
-      hazards::PoseSnapshot p;
-      p.utime = m.utime;
-      p.x = v[0];
-      p.y = v[1];
-      p.roll = v[3];
-      p.pitch = v[4];
-      p.yaw = v[5];
-      p.position_sigma_m = hazards::HorizontalSigma(bus::CovarianceFromArray(m.covariance));
-      assessor.OnPose(p);
-      const auto count = static_cast<std::uint32_t>(static_cast<std::uint64_t>(m.pub_seq) & 0xffffffffu);
-      if (map && have_pose && (count < last_pose_count || m.site_index != last_site)) {
-        std::cerr << "hazard_monitor: traversability map cleared: "
-                  << (m.site_index != last_site ? "a new site frame began"
-                                                : "the pose source restarted (its POSE count went back)")
-                  << "\n";
-        map->Clear();
-        trail = hazards::DrivenTrail(grid.cell_m);
-      }
-      have_pose = true;
-      last_pose_count = count;
-      last_site = m.site_index;
-      if (map) trail.Add({p.x, p.y, p.yaw}, options.footprint);
-    });
-    proc.bus().Subscribe<rover_msgs::imu_t>(channels::kImu, [&](const rover_msgs::imu_t& m) {
-      proc.ObserveTime(m.utime);
-      const auto rpy = geometry::RpyFromRotation(bus::QuaternionFromArray(m.orientation).toRotationMatrix());
-      assessor.OnAttitude(m.utime, rpy[0], rpy[1]);
-    }, 200);
-    proc.bus().Subscribe<rover_msgs::keepout_zones_t>(
-        channels::kKeepOutZones, [&](const rover_msgs::keepout_zones_t& m) {
-          auto zones = config_zones;
-          try {
-            const auto from_msg = bus::ZonesFromMsg(m);
-            zones.insert(zones.end(), from_msg.begin(), from_msg.end());
-            zone_error = hazards::ZoneSetProblem(zones);
-          } catch (const std::invalid_argument& e) {
-            zone_error = e.what();  // a zone that cannot be built: undecidable, so UNKNOWN
-          }
-          if (!zone_error.empty()) {
-            std::cerr << "hazard_monitor: KEEPOUT_ZONES: " << zone_error << "\n";
-            return;
-          }
-          assessor.SetZones(zones);
-        });
-    // Both pairs take the same path: validated, then mapped in the order they came (the
-    // HAZCAM pair of a capture comes before its NAVCAM pair), each holding back the queries
-    // asked after it.
-    auto on_frame = [&](const rover_msgs::stereo_frame_t& frame, bool hazcam) {
-      proc.ObserveTime(frame.utime);
-      const char* channel = hazcam ? channels::kHazcamFrame : channels::kStereoFrame;
-      vo::StereoImages images;
-      if (const std::string bad = bus::ToStereoImages(frame, imaging::ImageLimits{}, images); !bad.empty()) {
-        std::cerr << "hazard_monitor: " << channel << " " << frame.frame_id << ": " << bad << " (not mapped)\n";
-        return;
-      }
-      if (images.left.depth() != CV_8U) {
-        images.left.convertTo(images.left, CV_8U, 1.0 / 256.0);
-        images.right.convertTo(images.right, CV_8U, 1.0 / 256.0);
-      }
-      MapWorker::Job job;
-      job.left = images.left;
-      job.right = images.right;
-      job.rig = images.rig;
-      job.T_site_rover = bus::PoseFromMsg(frame.pose_at_capture);
-      job.covariance = bus::CovarianceFromArray(frame.pose_at_capture.covariance);
-      job.frame_id = frame.frame_id;
-      job.hazcam = hazcam;
-      if (proc.virtual_time()) {
-        ++frames_received;
-        // One mapper: a pair starts when it has come and the one before it is done.
-        const double compute_s = hazcam ? proc.compute().hazcam_map_s : proc.compute().map_s;
-        mapper_free_utime = proc.DueAt(std::max({proc.now(), frame.utime, mapper_free_utime}), compute_s);
-        waiting_jobs.emplace_back(mapper_free_utime, std::move(job));
-      } else {
-        map->Add(std::move(job));
-      }
-    };
-    if (map) {
-      proc.bus().Subscribe<rover_msgs::stereo_frame_t>(
-          channels::kStereoFrame, [&](const rover_msgs::stereo_frame_t& frame) { on_frame(frame, false); }, 4);
-      proc.bus().Subscribe<rover_msgs::stereo_frame_t>(
-          channels::kHazcamFrame, [&](const rover_msgs::stereo_frame_t& frame) { on_frame(frame, true); }, 4);
-    }
-    // A query that comes while a pair is being mapped waits for that map (answered on a
-    // later tick): the step is judged on a map holding every pair taken before it. Pairs
-    // that come after the query do not hold it back.
-    std::vector<std::pair<rover_msgs::hazard_query_t, std::uint64_t>> held;  // and the pairs it waits for
-    auto answer = [&](const rover_msgs::hazard_query_t& q) {
-      rover_msgs::hazard_reply_t r{};
-      r.utime = proc.now();
-      r.query_id = q.query_id;
-      std::vector<hazards::Pose2> path;
-      bool finite = q.num_poses > 0;
-      for (int i = 0; i < q.num_poses; ++i) {
-        finite = finite && std::isfinite(q.x[i]) && std::isfinite(q.y[i]) && std::isfinite(q.yaw[i]);
-        path.push_back({q.x[i], q.y[i], q.yaw[i]});
-      }
-      if (!finite) {
-        r.verdict = rover_msgs::hazard_reply_t::VERDICT_UNKNOWN;
-        r.detail = "query " + std::to_string(q.query_id) + ": empty or non-finite path";
-      } else if (!zone_error.empty()) {
-        r.verdict = rover_msgs::hazard_reply_t::VERDICT_UNKNOWN;
-        r.detail = "invalid keep-out zones: " + zone_error;
-      } else {
-        // A non-finite or negative margin makes the check UNKNOWN (CheckSweptPath).
-        // Pose age is judged at the time of asking: a query held while a pair was mapped
-        // is not refused for the rover time that ran on meanwhile.
-        const int64_t asked = q.utime > 0 ? std::min(proc.now(), q.utime) : proc.now();
-        auto check = assessor.CheckStep(path, asked, q.margin_m);
-        if (map && check.verdict != hazards::Verdict::kUnsafe) {
-          // The map judges the same swept path; an unsafe cell outranks an undecided
-          // keep-out check, and either stops the step.
-          // Ground the rover has driven over is known: it carried the rover.
-          avoidance::Grid judged = grid;
-          if (judged.Problem().empty()) trail.MarkDriven(&judged);
-          const auto on_map = hazards::CheckPathOnMap(judged, rules.footprint, path, map_check);
-          if (on_map.verdict == hazards::Verdict::kUnsafe ||
-              (on_map.verdict == hazards::Verdict::kUnknown && check.verdict == hazards::Verdict::kSafe)) {
-            check = on_map;
-          }
-        }
-        r.verdict = static_cast<std::int8_t>(check.verdict);
-        r.zone_name = check.zone_name;
-        r.min_clearance_m = std::isfinite(check.min_clearance_m) ? check.min_clearance_m : 1e9;
-        r.detail = check.detail;
-      }
-      proc.bus().Publish(channels::kHazardReply, r);
-    };
-    auto answer_held = [&] {
-      if (!proc.virtual_time() && take_map()) publish_map();
-      std::erase_if(held, [&](const auto& h) {
-        if (map && (proc.virtual_time() ? frames_mapped < h.second : !map->Mapped(h.second))) return false;
-        answer(h.first);
-        return true;
-      });
-    };
-    proc.bus().Subscribe<rover_msgs::hazard_query_t>(
-        channels::kHazardQuery, [&](const rover_msgs::hazard_query_t& q) {
-          held.emplace_back(q, !map ? 0 : proc.virtual_time() ? frames_received : map->Added());
-          answer_held();
-        });
-    // Virtual time: true while a pair due by now is still being mapped.
-    proc.set_pending_work([&]() -> bool {
-      if (!map || !proc.virtual_time()) return false;
-      if (in_work_due) {
-        if (proc.now() < *in_work_due) return false;
-        if (map->Done() < map->Added()) return true;
-        if (take_map()) publish_map();
-        in_work_due.reset();
-        ++frames_mapped;
-        answer_held();
-      }
-      if (!waiting_jobs.empty()) {
-        in_work_due = std::max(waiting_jobs.front().first, proc.now());
-        map->Add(std::move(waiting_jobs.front().second));
-        waiting_jobs.pop_front();
-      }
-      return false;
-    });
-
-    // The map changes only when a pair has been mapped (published then); between pairs it
-    // is sent again this often. Once a second, 249 copies of the 60 kB map made up 15 of the
-    // demo's 23 MB and woke every process of the set each time.
-    constexpr double kMapRefreshS = 5.0;
-    int ticks = 0;
-    proc.Run(
-        [&] {
-          const auto st = assessor.Assess(proc.now());
-          rover_msgs::hazard_status_t m{};
-          m.utime = st.utime;
-          m.state = static_cast<std::int8_t>(st.state);
-          m.keepout_violated = st.keepout_violated;
-          m.zone_name = st.zone_name;
-          m.min_clearance_m = std::isfinite(st.min_clearance_m) ? st.min_clearance_m : 1e9;
-          m.tilt_violated = st.tilt_violated;
-          m.roll_rad = st.roll_rad;
-          m.pitch_rad = st.pitch_rad;
-          m.roll_limit_rad = st.roll_limit_rad;
-          m.pitch_limit_rad = st.pitch_limit_rad;
-          m.detail = st.detail;
-          if (!zone_error.empty()) {
-            m.state = rover_msgs::hazard_status_t::STATE_UNKNOWN;
-            m.detail = "invalid keep-out zones: " + zone_error;
-          }
-          proc.bus().Publish(channels::kHazardStatus, m);
-          answer_held();
-          if (++ticks % static_cast<int>(std::max(1.0, kMapRefreshS * publish_hz)) == 0) publish_map();
-        },
-        static_cast<int>(1000.0 / publish_hz));
+    HazardNode node(proc, options, map_check, std::move(map));
+    node.Subscribe();
+    proc.Run([&] { node.Tick(publish_hz); }, static_cast<int>(1000.0 / publish_hz));
     return 0;
   });
 }
