@@ -109,6 +109,56 @@ int Grid::MarkKnown(const Footprint& footprint, const Pose2& pose, double grow_m
   return changed;
 }
 
+int Grid::MarkFlanksOfHiddenGround(double patch_m, double min_step_m) {
+  if (patch_m <= 0.0) return 0;
+  const double r = 0.5 * patch_m / cell_m;  // disc radius in cells, as HiddenGround's
+  const int n = static_cast<int>(std::floor(r));
+  std::vector<std::pair<int, int>> disc;
+  for (int di = -n; di <= n; ++di)
+    for (int dj = -n; dj <= n; ++dj)
+      if (di * di + dj * dj <= r * r + 1e-9) disc.push_back({di, dj});
+  auto unknown = [&](int i, int j) {
+    return i >= 0 && j >= 0 && i < rows && j < cols &&
+           state[static_cast<std::size_t>(i) * cols + j] == CellClass::kUnknown;
+  };
+  // deep: the disc centred on the cell is all unknown; hidden: some deep disc covers it.
+  std::vector<char> deep(state.size(), 0), hidden(state.size(), 0);
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < cols; ++j) {
+      bool all = true;
+      for (const auto& [di, dj] : disc)
+        if (!unknown(i + di, j + dj)) {
+          all = false;
+          break;
+        }
+      deep[static_cast<std::size_t>(i) * cols + j] = all;
+    }
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < cols; ++j) {
+      if (!deep[static_cast<std::size_t>(i) * cols + j]) continue;
+      for (const auto& [di, dj] : disc)
+        if (i + di >= 0 && j + dj >= 0 && i + di < rows && j + dj < cols)
+          hidden[static_cast<std::size_t>(i + di) * cols + (j + dj)] = 1;
+    }
+  std::vector<std::size_t> flank;
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < cols; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * cols + j;
+      if ((state[k] != CellClass::kSafe && state[k] != CellClass::kCaution) || step_m[k] < min_step_m) continue;
+      bool beside = false;
+      for (int di = -1; di <= 1 && !beside; ++di)
+        for (int dj = -1; dj <= 1 && !beside; ++dj)
+          beside = i + di >= 0 && j + dj >= 0 && i + di < rows && j + dj < cols &&
+                   hidden[static_cast<std::size_t>(i + di) * cols + (j + dj)];
+      if (beside) flank.push_back(k);
+    }
+  for (std::size_t k : flank) {
+    state[k] = CellClass::kUnsafe;
+    goodness[k] = 0.0f;
+  }
+  return static_cast<int>(flank.size());
+}
+
 void Grid::Paint(double x, double y, double radius_m, CellClass s, float g, float step) {
   for (int i = 0; i < rows; ++i)
     for (int j = 0; j < cols; ++j)

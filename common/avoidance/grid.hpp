@@ -63,6 +63,17 @@ struct Grid {
   // over carried it, and the ground round the rover where a drive begins is the operators'
   // (see arc_voting.hpp). Known cells keep their rating. Returns how many changed.
   int MarkKnown(const Footprint& footprint, const Pose2& pose, double grow_m);
+  // The flanks of rocks whose tops the cameras never saw: every safe or caution cell whose
+  // step reads min_step_m or more and that has an 8-neighbour in unknown ground patch_m
+  // across (a disc of that diameter all unknown, as SweepFootprint's hidden ground; off the
+  // grid is not unknown here) becomes unsafe (goodness 0, its step kept). A rock's top that
+  // took no points (out of the NAVCAM's frame, above the HAZCAM's lowest ray) leaves such
+  // unknown ground inside the rock, and the cells round it, rated from patches without their
+  // highest part, read its flank far low: navbench's rock_2180, 0.43 m tall and 1 m across,
+  // read 0.11 to 0.20 m round its unseen top, and a body corner swept one of those cells
+  // into it. Such a cell is not a cobble's flank until the ground beside it is seen: once a
+  // pair fills the patch, its rating stands. Returns how many cells changed.
+  int MarkFlanksOfHiddenGround(double patch_m, double min_step_m);
   // Sets the cells whose centre lies within radius_m of (x, y). With heights, a cell painted
   // unknown loses its height and any other stands step_m above the level (a rock that tall).
   void Paint(double x, double y, double radius_m, CellClass state, float goodness, float step_m);

@@ -129,6 +129,9 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   site_map_.MarkDrivenOn(&grid);
   if (strict && options_.avoid_start_ring_known && goto_start_pose_)
     grid.MarkKnown(map_->footprint, *goto_start_pose_, map_->blind_margin_m);
+  // A rock's flank round its unseen top reads far low: unsafe until that ground is seen.
+  if (options_.avoid_hidden_flank_step_m > 0.0)
+    grid.MarkFlanksOfHiddenGround(map_->unknown.hidden_patch_m, options_.avoid_hidden_flank_step_m);
   if (!zones_.empty()) {
     const auto cells = planner::ZoneCells(grid, HazardZones(zones_), zone_grow + grid.cell_m);
     for (std::size_t k = 0; k < cells.size(); ++k)

@@ -126,6 +126,11 @@ struct ExecutorOptions {
   // monitor's blind margin) counts as known: the drive begins where the last one ended,
   // whose end-of-drive images saw it, or where the operators put the rover.
   bool avoid_start_ring_known = true;
+  // The vote rates unsafe every safe or caution cell whose step reads this high or more
+  // beside unknown ground the monitor's hidden_patch_m across (avoidance::Grid::
+  // MarkFlanksOfHiddenGround): the flank of a rock whose top no pair saw reads far under the
+  // rock (navbench k0.20_r18: 0.11 to 0.20 m round a 0.43 m rock's unseen top). 0: off.
+  double avoid_hidden_flank_step_m = 0.0;
   // The global planner (common/planner): a cost-to-go over the site map the executor
   // accumulates from the monitor's maps; arc voting's goal vote scores progress along it.
   // false: the vote's local field over the monitor's latest map only.

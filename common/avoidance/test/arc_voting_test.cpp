@@ -105,6 +105,59 @@ TEST(Grid, DistrustEdgesKeepsTheInsideOfARock) {
   EXPECT_EQ(g.state[g.IndexAt(2.1, 0.9)], CellClass::kUnknown);
 }
 
+// A rock whose top took no points: unknown ground 0.6 m across (a 3 x 3 block of cells)
+// inside it, and its flank round that seen but read far low (0.14 m, safe: a patch without
+// its highest part). Every flank cell beside the block reading half the 0.25 m limit or more
+// becomes unsafe; the same reading beside a speck of unknown (no room for a rock's top),
+// a lower one (0.10 m) beside such a block, and one a cell further out keep their rating.
+TEST(Grid, MarkFlanksOfHiddenGroundMakesTheFlankRoundAnUnseenTopUnsafe) {
+  Grid g = Open();
+  auto set = [&](double x, double y, CellClass s, float step) {
+    const std::size_t k = static_cast<std::size_t>(g.IndexAt(x, y));
+    g.state[k] = s;
+    g.step_m[k] = step;
+    g.goodness[k] = s == CellClass::kUnknown ? 0.0f : 1.0f - step / 0.25f;
+  };
+  // The rock at (1.9, 1.3): its flank (the 5 x 5 block round it, less its corners), its top.
+  for (int di = -2; di <= 2; ++di)
+    for (int dj = -2; dj <= 2; ++dj)
+      if (std::abs(di) + std::abs(dj) < 4) set(1.9 + 0.2 * di, 1.3 + 0.2 * dj, CellClass::kSafe, 0.14f);
+  for (int di = -1; di <= 1; ++di)
+    for (int dj = -1; dj <= 1; ++dj) set(1.9 + 0.2 * di, 1.3 + 0.2 * dj, CellClass::kUnknown, 0.0f);
+  set(1.9, 1.3 + 0.6, CellClass::kCaution, 0.20f);  // beside the flank, not the top
+  // A speck of unknown amid 0.14 m cells (sand the matcher missed beside a cobble).
+  for (int di = -1; di <= 1; ++di)
+    for (int dj = -1; dj <= 1; ++dj) set(-2.1 + 0.2 * di, -1.9 + 0.2 * dj, CellClass::kSafe, 0.14f);
+  set(-2.1, -1.9, CellClass::kUnknown, 0.0f);
+  // Unknown ground as wide, with low cells beside it (a hollow, or ground out of view).
+  for (int di = -2; di <= 2; ++di)
+    for (int dj = -2; dj <= 2; ++dj) set(-2.1 + 0.2 * di, 2.5 + 0.2 * dj, CellClass::kSafe, 0.10f);
+  for (int di = -1; di <= 1; ++di)
+    for (int dj = -1; dj <= 1; ++dj) set(-2.1 + 0.2 * di, 2.5 + 0.2 * dj, CellClass::kUnknown, 0.0f);
+
+  // A step whose body corner sweeps the flank: clear before, into the rock after.
+  const Footprint fp;
+  const Pose2 here{0.4, 0.15, 0.0};  // its right front corner ends at (1.8, 0.85), by the flank
+  const auto path = SamplePath(here, 0.0, 0.6, 0.0);
+  const Sweep before = SweepFootprint(g, fp, path, here, 0.0);
+  EXPECT_EQ(before.unsafe, 0);
+
+  EXPECT_EQ(g.MarkFlanksOfHiddenGround(0.6, 0.125), 12);  // the 16 round the top, less its 4 corners
+  EXPECT_EQ(g.state[g.IndexAt(1.9 + 0.4, 1.3)], CellClass::kUnsafe);
+  EXPECT_EQ(g.state[g.IndexAt(1.9 - 0.2, 1.3 - 0.4)], CellClass::kUnsafe);
+  EXPECT_FLOAT_EQ(g.goodness[g.IndexAt(1.9 + 0.4, 1.3)], 0.0f);
+  EXPECT_FLOAT_EQ(g.step_m[g.IndexAt(1.9 + 0.4, 1.3)], 0.14f);  // its reading kept
+  EXPECT_EQ(g.state[g.IndexAt(1.9, 1.3)], CellClass::kUnknown);  // the top stays unknown
+  EXPECT_EQ(g.state[g.IndexAt(1.9, 1.3 + 0.6)], CellClass::kCaution);
+  EXPECT_EQ(g.state[g.IndexAt(-2.1 + 0.2, -1.9)], CellClass::kSafe);
+  EXPECT_EQ(g.state[g.IndexAt(-2.1 + 0.4, 2.5)], CellClass::kSafe);
+  EXPECT_EQ(g.MarkFlanksOfHiddenGround(0.6, 0.125), 0);  // nothing left to mark
+  EXPECT_EQ(g.MarkFlanksOfHiddenGround(0.0, 0.125), 0);  // off
+
+  const Sweep after = SweepFootprint(g, fp, path, here, 0.0);
+  EXPECT_GT(after.unsafe, 0);
+}
+
 TEST(ArcVoting, OpenGroundDrivesStraightAtTheGoal) {
   const Choice c = VoteArcs(Open(), {0, 0, 0}, 4.0, 0.0, VoteOptions{});
   ASSERT_TRUE(c.found);

@@ -791,6 +791,12 @@ TEST(ExecutorOptions, LoadsTheExampleAndRejectsBadValues) {
   }
   EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  recent_steps: 0\n", "x.yaml")), ConfigError);
   EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  blind_slope_deg: 60\n", "x.yaml")), ConfigError);
+  EXPECT_DOUBLE_EQ(o.avoid_hidden_flank_step_m, 0.0);  // off in the example
+  EXPECT_DOUBLE_EQ(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_hidden_flank_step_m: 0.125\n", "x.yaml"))
+                       .avoid_hidden_flank_step_m,
+                   0.125);
+  EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_hidden_flank_step_m: -0.1\n", "x.yaml")),
+               ConfigError);
   const ExecutorOptions d = LoadExecutorOptions(ConfigNode::FromString("other: 1\n", "x.yaml"));
   EXPECT_DOUBLE_EQ(d.vo_wait_s, ExecutorOptions{}.vo_wait_s);
   ExecutorOptions bad;
