@@ -126,6 +126,11 @@ struct ExecutorOptions {
   // monitor's blind margin) counts as known: the drive begins where the last one ended,
   // whose end-of-drive images saw it, or where the operators put the rover.
   bool avoid_start_ring_known = true;
+  // A rock the map once rated unsafe stays unsafe to the vote and the planner when a later
+  // map reads it caution (a view from beside it sees less of it; a safe rating or driving
+  // over it still replaces it): planner::SiteMap::set_keep_unsafe, common/avoidance/README.md
+  // "A rock read lower from beside it". false: the newest rating alone.
+  bool avoid_keep_unsafe = false;
   // The global planner (common/planner): a cost-to-go over the site map the executor
   // accumulates from the monitor's maps; arc voting's goal vote scores progress along it.
   // false: the vote's local field over the monitor's latest map only.
