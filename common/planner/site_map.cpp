@@ -70,6 +70,12 @@ void SiteMap::Merge(const avoidance::Grid& local) {
       const std::size_t k = static_cast<std::size_t>(a) * local.cols + b;
       if (local.state[k] == CellClass::kUnknown) continue;
       Cell* c = At(IndexOf(local.CellCentreX(a)), IndexOf(local.CellCentreY(b)));
+      // A rock once rated unsafe is not made caution by a view that saw less of it
+      // (set_keep_unsafe).
+      if (keep_unsafe_ && c->state == CellClass::kUnsafe && !c->driven && local.state[k] == CellClass::kCaution) {
+        c->step_m = std::max(c->step_m, local.step_m[k]);
+        continue;
+      }
       c->state = local.state[k];
       c->goodness = local.goodness[k];
       c->step_m = local.step_m[k];
@@ -111,6 +117,23 @@ int SiteMap::MarkDrivenOn(avoidance::Grid* grid) const {
       if (grid->state[k] != CellClass::kUnknown || !Driven(grid->CellCentreX(i), grid->CellCentreY(j))) continue;
       grid->state[k] = CellClass::kSafe;
       grid->goodness[k] = 1.0f;
+      ++changed;
+    }
+  return changed;
+}
+
+int SiteMap::KeepUnsafeOn(avoidance::Grid* grid) const {
+  if (Empty() || !keep_unsafe_) return 0;
+  int changed = 0;
+  for (int i = 0; i < grid->rows; ++i)
+    for (int j = 0; j < grid->cols; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * grid->cols + j;
+      if (grid->state[k] != CellClass::kCaution) continue;
+      const Cell* c = At(IndexOf(grid->CellCentreX(i)), IndexOf(grid->CellCentreY(j)));
+      if (!c || c->driven || c->state != CellClass::kUnsafe) continue;
+      grid->state[k] = CellClass::kUnsafe;
+      grid->goodness[k] = 0.0f;
+      grid->step_m[k] = std::max(grid->step_m[k], c->step_m);
       ++changed;
     }
   return changed;

@@ -23,7 +23,24 @@ class SiteMap {
   // rating of that ground: it has seen it from closer or more often); unknown cells leave
   // the site map as it was. Cells are placed by their centre. A map whose cell size differs
   // from the site map's starts it again. Throws std::invalid_argument for a broken grid.
+  // With keep_unsafe (set_keep_unsafe), a cell once rated unsafe keeps that rating when a
+  // later map rates it caution: see KeepUnsafeOn.
   void Merge(const avoidance::Grid& local);
+  // Whether a rock the monitor once rated unsafe stays unsafe when a later view reads it
+  // lower but not low (caution). A later view can see less of a rock than an earlier one:
+  // from beside it, the top out of the frame and the flank's points averaged into its
+  // cells (common/traversability/README.md, "Crests out of frame"), so the newest rating
+  // is not always the best. navbench (seed 7, k0.15_r15): a 0.30 m rock rated unsafe at
+  // 0.25 to 0.29 m by nine maps running was read 0.22 to 0.24 m, caution, by the tenth,
+  // taken from beside it, and the next two steps drove the body onto it. A safe rating
+  // (a view that found the ground low) or the rover's body having driven there still
+  // replaces it. Off by default (the newest rating replaces the old, as before).
+  void set_keep_unsafe(bool keep) { keep_unsafe_ = keep; }
+  bool keep_unsafe() const { return keep_unsafe_; }
+  // With keep_unsafe: the caution cells of `grid` (any grid in the site frame, such as the
+  // monitor's latest map) that the site map holds unsafe (not driven over) read unsafe, at
+  // the larger of the two steps. Returns how many changed (0 without keep_unsafe).
+  int KeepUnsafeOn(avoidance::Grid* grid) const;
   // The ground under `footprint` at `pose` carried the rover: it is marked driven.
   void MarkDriven(const avoidance::Pose2& pose, const avoidance::Footprint& footprint);
   void Clear();
@@ -57,6 +74,7 @@ class SiteMap {
   const Cell* At(int i, int j) const;
 
   double max_extent_m_;
+  bool keep_unsafe_ = false;
   double cell_m_ = 0.0;
   int i0_ = 0, j0_ = 0, rows_ = 0, cols_ = 0;  // global index of cell (0, 0) and the block size
   std::vector<Cell> cells_;

@@ -46,6 +46,7 @@ void SequenceExecutor::OnTraversabilityMap(const TraversabilityMap& map) {
     refused_ways_.Reset();
     map_site_ = site;
   }
+  site_map_.set_keep_unsafe(options_.avoid_keep_unsafe);
   try {
     site_map_.Merge(map.grid);
   } catch (const std::invalid_argument& e) {
@@ -127,6 +128,9 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   // Ground known without the cameras: what the rover has driven over, and the ring round
   // where the goto began (avoid_start_ring_known).
   site_map_.MarkDrivenOn(&grid);
+  // A rock rated unsafe before and caution now stays unsafe (avoid_keep_unsafe).
+  if (const int kept = site_map_.KeepUnsafeOn(&grid); kept > 0)
+    avoid_note_ += std::to_string(kept) + " cells rated unsafe before and caution now kept unsafe; ";
   if (strict && options_.avoid_start_ring_known && goto_start_pose_)
     grid.MarkKnown(map_->footprint, *goto_start_pose_, map_->blind_margin_m);
   // A rock's flank round its unseen top reads far low: unsafe until that ground is seen.

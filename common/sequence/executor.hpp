@@ -131,6 +131,11 @@ struct ExecutorOptions {
   // MarkFlanksOfHiddenGround): the flank of a rock whose top no pair saw reads far under the
   // rock (navbench k0.20_r18: 0.11 to 0.20 m round a 0.43 m rock's unseen top). 0: off.
   double avoid_hidden_flank_step_m = 0.0;
+  // A rock the map once rated unsafe stays unsafe to the vote and the planner when a later
+  // map reads it caution (a view from beside it sees less of it; a safe rating or driving
+  // over it still replaces it): planner::SiteMap::set_keep_unsafe, common/avoidance/README.md
+  // "A rock read lower from beside it". false: the newest rating alone.
+  bool avoid_keep_unsafe = false;
   // The global planner (common/planner): a cost-to-go over the site map the executor
   // accumulates from the monitor's maps; arc voting's goal vote scores progress along it.
   // false: the vote's local field over the monitor's latest map only.

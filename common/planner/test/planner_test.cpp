@@ -1,6 +1,7 @@
 // Known answers for the global planner on synthetic grids: open ground, a wall with a gap,
 // a gap narrower than the rover, a cul-de-sac, an unreachable goal, a prior cost map that
 // steers the path, keep-out zones as obstacles; and the site map that accumulates maps.
+#include "avoidance/arc_voting.hpp"
 #include "planner/global_planner.hpp"
 #include "planner/prior_map.hpp"
 #include "planner/site_map.hpp"
@@ -345,6 +346,82 @@ TEST(SiteMap, RemembersWhatLeftTheMonitorsWindow) {
   const Grid w2 = map.Window(-5, -5, 15, 5);
   EXPECT_EQ(w2.state[static_cast<std::size_t>(w2.IndexAt(3.1, -0.9))], CellClass::kSafe);
   EXPECT_EQ(w2.state[static_cast<std::size_t>(w2.IndexAt(3.5, 0.5))], CellClass::kUnsafe);
+}
+
+// A rock rated unsafe by one map and caution by a later one taken from beside it (its top out
+// of the frame; navbench seed 7 k0.15_r15): with keep_unsafe the site map, and the latest
+// map as the vote sees it (KeepUnsafeOn), hold it unsafe; a safe rating, or the rover's body
+// having driven there, replaces it; without keep_unsafe the newest rating replaces it.
+TEST(SiteMap, ARockOnceRatedUnsafeIsNotMadeCautionByALaterView) {
+  auto rated = [](CellClass rock, float goodness, float step) {
+    Grid g = Local(0, 0, CellClass::kSafe);
+    g.step_m.assign(g.step_m.size(), 0.02f);
+    for (int i = 0; i < g.rows; ++i)
+      for (int j = 0; j < g.cols; ++j)
+        if (std::abs(g.CellCentreX(i) - 1.5) < 0.25 && std::abs(g.CellCentreY(j)) < 0.25) {
+          const std::size_t k = static_cast<std::size_t>(i) * g.cols + j;
+          g.state[k] = rock, g.goodness[k] = goodness, g.step_m[k] = step;
+        }
+    return g;
+  };
+  const Grid unsafe = rated(CellClass::kUnsafe, 0.0f, 0.28f);
+  const Grid caution = rated(CellClass::kCaution, 0.04f, 0.24f);
+  const Grid safe = rated(CellClass::kSafe, 0.9f, 0.05f);
+  auto at = [](const Grid& g, double x, double y) { return static_cast<std::size_t>(g.IndexAt(x, y)); };
+  SiteMap kept;
+  kept.set_keep_unsafe(true);
+  kept.Merge(unsafe);
+  kept.Merge(caution);
+  const Grid w = kept.Window(-2, -2, 4, 2);
+  EXPECT_EQ(w.state[at(w, 1.5, 0.1)], CellClass::kUnsafe);
+  EXPECT_EQ(w.state[at(w, 1.0, 0.1)], CellClass::kSafe);  // the ground round it as rated
+  Grid latest = caution;
+  EXPECT_EQ(kept.KeepUnsafeOn(&latest), 6);  // the rock's 3 x 2 cells
+  EXPECT_EQ(latest.state[at(latest, 1.5, 0.1)], CellClass::kUnsafe);
+  EXPECT_EQ(latest.goodness[at(latest, 1.5, 0.1)], 0.0f);
+  EXPECT_FLOAT_EQ(latest.step_m[at(latest, 1.5, 0.1)], 0.28f);
+  EXPECT_EQ(latest.state[at(latest, 1.0, 0.1)], CellClass::kSafe);
+  // Arc voting on the latest map: the straight arc at the goal drives over the caution
+  // cells as they were read, and is vetoed by the rock's step once they are held unsafe.
+  rover::avoidance::VoteOptions vo;
+  vo.goal_around_hazards = false;
+  const auto straight = [](const rover::avoidance::Choice& c) {
+    for (const auto& k : c.candidates)
+      if (k.kind == rover::avoidance::Candidate::Kind::kArc && k.curvature_per_m == 0.0) return k;
+    ADD_FAILURE() << "no straight arc";
+    return rover::avoidance::Candidate{};
+  };
+  const auto as_read = straight(rover::avoidance::VoteArcs(caution, {0, 0, 0}, 6.0, 0.0, vo));
+  EXPECT_FALSE(as_read.vetoed);
+  EXPECT_GT(as_read.step_sweep.max_step_m, 0.23);  // the step crosses the caution cells
+  const auto held = straight(rover::avoidance::VoteArcs(latest, {0, 0, 0}, 6.0, 0.0, vo));
+  EXPECT_TRUE(held.vetoed);
+  EXPECT_NE(held.why.find("step 0.28 m"), std::string::npos) << held.why;
+  // A safe rating replaces it.
+  SiteMap cleared = kept;
+  cleared.Merge(safe);
+  const Grid w2 = cleared.Window(-2, -2, 4, 2);
+  EXPECT_EQ(w2.state[at(w2, 1.5, 0.1)], CellClass::kSafe);
+  // So does the rover's body having driven there.
+  SiteMap driven;
+  driven.set_keep_unsafe(true);
+  driven.Merge(unsafe);
+  driven.MarkDriven({1.5, 0.0, 0.0}, rover::avoidance::Footprint{});
+  driven.Merge(caution);
+  const Grid w3 = driven.Window(-2, -2, 4, 2);
+  EXPECT_EQ(w3.state[at(w3, 1.5, 0.1)], CellClass::kCaution);
+  Grid latest3 = caution;
+  EXPECT_EQ(driven.KeepUnsafeOn(&latest3), 0);
+  // Off (the default): the newest rating replaces the old.
+  SiteMap newest;
+  EXPECT_FALSE(newest.keep_unsafe());
+  newest.Merge(unsafe);
+  newest.Merge(caution);
+  const Grid w4 = newest.Window(-2, -2, 4, 2);
+  EXPECT_EQ(w4.state[at(w4, 1.5, 0.1)], CellClass::kCaution);
+  Grid latest4 = caution;
+  EXPECT_EQ(newest.KeepUnsafeOn(&latest4), 0);
+  EXPECT_EQ(latest4.state[at(latest4, 1.5, 0.1)], CellClass::kCaution);
 }
 
 TEST(SiteMap, RemembersWhereTheRoverHasBeen) {

@@ -797,6 +797,9 @@ TEST(ExecutorOptions, LoadsTheExampleAndRejectsBadValues) {
                    0.125);
   EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_hidden_flank_step_m: -0.1\n", "x.yaml")),
                ConfigError);
+  EXPECT_FALSE(o.avoid_keep_unsafe);
+  EXPECT_TRUE(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_keep_unsafe: true\n", "x.yaml")).avoid_keep_unsafe);
+  EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_keep_unsafe: 3\n", "x.yaml")), ConfigError);
   const ExecutorOptions d = LoadExecutorOptions(ConfigNode::FromString("other: 1\n", "x.yaml"));
   EXPECT_DOUBLE_EQ(d.vo_wait_s, ExecutorOptions{}.vo_wait_s);
   ExecutorOptions bad;
