@@ -165,7 +165,8 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("avoid_zone_sigma_multiplier", o.avoid_zone_sigma_multiplier, 0.0, 10.0);
   n.Get("avoid_unseen_ground_strict", o.avoid_unseen_ground_strict);
   n.Get("avoid_start_ring_known", o.avoid_start_ring_known);
-  n.Get("avoid_hidden_flank_step_m", "avoid_keep_unsafe", o.avoid_hidden_flank_step_m, 0.0, 1.0);
+  n.Get("avoid_hidden_flank_step_m", o.avoid_hidden_flank_step_m, 0.0, 1.0);
+  n.Get("avoid_keep_unsafe", o.avoid_keep_unsafe);
   n.Get("planner_enabled", o.planner_enabled);
   n.Get("planner_unknown_cost", o.planner_unknown_cost, 1.0, 100.0);
   n.Get("planner_caution_cost", o.planner_caution_cost, 1.0, 100.0);
