@@ -46,7 +46,6 @@ void SequenceExecutor::OnTraversabilityMap(const TraversabilityMap& map) {
     refused_ways_.Reset();
     map_site_ = site;
   }
-  site_map_.set_keep_unsafe(options_.avoid_keep_unsafe);
   try {
     site_map_.Merge(map.grid);
   } catch (const std::invalid_argument& e) {

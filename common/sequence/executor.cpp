@@ -16,6 +16,7 @@ using internal::kDeg;
 SequenceExecutor::SequenceExecutor(ExecutorOptions options, int64_t first_id)
     : options_(std::move(options)), next_id_(first_id) {
   ValidateExecutorOptions(options_);
+  site_map_.set_keep_unsafe(options_.avoid_keep_unsafe);
   planner::BlockOptions blocks;
   blocks.stall_steps = options_.planner_block_after_steps;
   blocks.min_gain_m = options_.planner_block_min_gain_m;

@@ -132,13 +132,12 @@ class HazardNode {
   HazardNode(bus::Process& proc, const hazards::HazardOptions& options, hazards::MapCheckOptions map_check,
              std::unique_ptr<MapWorker> map)
       : proc_(proc), options_(options), map_check_(map_check), map_(std::move(map)), assessor_(options),
+        grid_(map_ ? map_->Initial() : avoidance::Grid{}), trail_(map_ ? grid_.cell_m : 0.2),
         config_zones_(options.zones) {
     rules_.footprint = hazards::GridFootprint(options.footprint);
     rules_.blind_margin_m = map_check_.blind_margin_m;
     rules_.unknown = map_check_.Unknown();
     rules_.max_driven_step_m = map_check_.max_driven_step_m;
-    if (map_) grid_ = map_->Initial();
-    trail_ = hazards::DrivenTrail(map_ ? grid_.cell_m : 0.2);
   }
 
   void Subscribe() {
