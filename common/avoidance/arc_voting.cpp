@@ -215,6 +215,8 @@ void VoteOptions::Validate() const {
   if (!(max_driven_step_m >= 0.0) || !std::isfinite(max_driven_step_m))
     throw std::invalid_argument("avoidance: max_driven_step_m " + std::to_string(max_driven_step_m) +
                                 " must be finite and >= 0 (0: off)");
+  if (!(previous_arc_m >= 0.0) || !std::isfinite(previous_arc_m) || !std::isfinite(previous_arc_curvature_per_m))
+    throw std::invalid_argument("avoidance: previous_arc_m must be finite and >= 0, its curvature finite");
   if (!std::isfinite(previous_turn_rad)) throw std::invalid_argument("avoidance: previous_turn_rad must be finite");
   if (num_arcs < 1 || num_arcs > 101) throw std::invalid_argument("avoidance: num_arcs must be 1 to 101");
   const auto fraction = [](double f) { return f >= 0.0 && f <= 1.0; };
@@ -312,27 +314,37 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   // and not into a rock beside the way it turned from.
   VoteOptions behind = o;
   behind.blind_margin_m = 0.0;
-  auto backup = [&] {
+  auto backup = [&](double distance_m, double curvature_per_m) {
     Candidate c;
     c.kind = Candidate::Kind::kBackup;
-    c.distance_m = -o.backup_m;
-    const auto step = SamplePath(pose, 0.0, -o.backup_m, 0.0);
+    c.distance_m = -distance_m;
+    c.curvature_per_m = curvature_per_m;
+    const auto step = SamplePath(pose, 0.0, -distance_m, curvature_per_m);
     Judge(grid, heights, field, pose, gx, gy, behind, step, step, &c);
     choice.candidates.push_back(c);
   };
-  if (way_behind && o.backup_m > 0.0) backup();
+  if (way_behind && o.backup_m > 0.0) backup(o.backup_m, 0.0);
   const Candidate* best = pick(false, false);
-  bool backed = false;  // a last-resort backup was judged (the last candidate)
+  // The last-resort backups judged, by their index in choice.candidates: straight back,
+  // then, if that is not allowed, back along the arc just driven.
+  std::vector<std::size_t> last_resort;
   if (!best && o.backup_m > 0.0 && !way_behind) {
-    backup();
-    backed = true;
-    const Candidate& b = choice.candidates.back();
-    if (!b.vetoed && !b.near_limit) best = &b;
+    backup(o.backup_m, 0.0);
+    last_resort.push_back(choice.candidates.size() - 1);
+    const double retrace_m = std::min(o.backup_m, o.previous_arc_m);
+    const Candidate& straight = choice.candidates.back();
+    if ((straight.vetoed || straight.near_limit) && retrace_m > 0.0 && o.previous_arc_curvature_per_m != 0.0) {
+      backup(retrace_m, o.previous_arc_curvature_per_m);
+      last_resort.push_back(choice.candidates.size() - 1);
+    }
+    for (std::size_t k : last_resort)
+      if (!best && !choice.candidates[k].vetoed && !choice.candidates[k].near_limit) best = &choice.candidates[k];
   }
   if (!best) best = pick(true, false);
   // Only steps over ground near the step limit are left: taken in the same order.
   if (!best) best = pick(false, true);
-  if (!best && backed && !choice.candidates.back().vetoed) best = &choice.candidates.back();
+  for (std::size_t k : last_resort)
+    if (!best && !choice.candidates[k].vetoed) best = &choice.candidates[k];
   if (!best) best = pick(true, true);
   if (best) {
     choice.found = true;

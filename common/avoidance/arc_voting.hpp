@@ -19,6 +19,10 @@
 // part: arcs that run further through open ground win before the rover is close to an
 // obstacle.
 //
+// Backing up is the last resort (or a candidate like the others when the global plan's
+// way lies behind): straight back by backup_m, or, when that is not allowed, back along the
+// arc the previous step drove (VoteOptions::previous_arc_m).
+//
 // A turn in place after which the rover could not drive even one step straight ahead
 // leads nowhere: it is chosen only when neither an arc, another turn nor backing up is
 // allowed, so that a rover whose nose is at a rock backs away from it rather than turning
@@ -66,6 +70,13 @@ struct VoteOptions {
   double goal_weight = 1.0;
   double turn_penalty = 0.05;          // a turn in place makes no progress by itself
   double backup_m = 0.3;               // 0: never back up
+  // The arc the previous step drove forward: its length (0: the previous step drove no arc
+  // forward) and curvature. The cameras face ahead, so backing up straight can sweep a body
+  // corner over ground beside the way that they never saw; backing up along this arc
+  // retraces the ground just driven. When the straight backup is not allowed, that one is
+  // judged next (up to backup_m, and no further than the arc ran).
+  double previous_arc_m = 0.0;
+  double previous_arc_curvature_per_m = 0.0;
   // The goal vote counts progress along the path round the hazards the map knows
   // (goal_field.hpp), not in a straight line; the rover's centre keeps half the footprint's
   // width from an unsafe cell's centre there. false: straight-line progress only.

@@ -119,6 +119,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.suspension = map_->suspension;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
   o.previous_turn_rad = last_turn_rad_;
+  o.previous_arc_m = last_arc_m_;
+  o.previous_arc_curvature_per_m = last_arc_curvature_per_m_;
   // Keep-out zones are obstacles: their cells, grown by the position uncertainty as the
   // hazard monitor grows them (and a cell, since a cell counts when its centre is under the
   // footprint grown by half a cell), are unsafe to the vote.

@@ -633,6 +633,10 @@ class SequenceExecutor {
   bool map_images_taken_ = false;  // ImagesForMap took its pair for the step in hand
   bool avoid_refused_ = false;
   double last_turn_rad_ = 0.0;    // the last commanded step's turn in place (0: not a turn)
+  // The last commanded step's arc when it drove forward (length 0: it did not), which the
+  // vote may back up along (avoidance::VoteOptions::previous_arc_m).
+  double last_arc_m_ = 0.0;
+  double last_arc_curvature_per_m_ = 0.0;
   // The site map merged from every map the monitor sends, and where the rover has been
   // (common/planner), in the site frame of map_site_; it starts again with a new site.
   planner::SiteMap site_map_;

@@ -43,6 +43,7 @@ void SequenceExecutor::PlanMotion(const Command& c) {
     blocked_ways_.Reset();
     refused_ways_.Reset();
     last_turn_rad_ = 0.0;
+    last_arc_m_ = 0.0;
     goto_start_utime_ = now_utime_;
     goto_start_pose_.reset();
     if (PoseFinite()) {

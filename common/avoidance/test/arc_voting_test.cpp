@@ -473,6 +473,61 @@ TEST(ArcVoting, ARoverWhoseEveryWayOnIsBlockedBacksAwayRatherThanTurning) {
   EXPECT_EQ(c.best.kind, Candidate::Kind::kBackup) << ToString(c.best.kind) << " " << c.best.turn_rad;
 }
 
+// The rover has just driven a sharp arc forward and meets rock all round: every step ahead
+// and every turn is refused, and backing up straight would swing the body's rear over
+// ground beside the way it came (rock here; on a rover, as often ground the cameras facing
+// ahead never saw). Backing up along the arc just driven retraces the ground it drove.
+TEST(ArcVoting, BoxedInAfterAnArcBacksUpAlongTheArcItDrove) {
+  const double k = 1.0, arc = 0.6;
+  const Pose2 here{0, 0, 0};
+  const auto came = SamplePath(here, 0.0, -arc, k);  // back along the arc: where it was
+  ASSERT_GT(std::abs(came.back().yaw), 20.0 * kDeg);
+  auto under_body = [](const Pose2& p, double x, double y, double margin) {
+    const double dx = x - p.x, dy = y - p.y;
+    const double along = dx * std::cos(p.yaw) + dy * std::sin(p.yaw);
+    const double across = -dx * std::sin(p.yaw) + dy * std::cos(p.yaw);
+    return std::abs(along) <= 0.8 + margin && std::abs(across) <= 0.7 + margin;
+  };
+  Grid g = Open();
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j) {
+      const double x = g.CellCentreX(i), y = g.CellCentreY(j);
+      bool driven = false;
+      for (const Pose2& p : came) driven = driven || under_body(p, x, y, 0.1);
+      if (!driven) {
+        const std::size_t c = static_cast<std::size_t>(i) * g.cols + j;
+        g.state[c] = CellClass::kUnsafe;
+        g.goodness[c] = 0.0f;
+        g.step_m[c] = 0.4f;
+      }
+    }
+  VoteOptions o;
+  const Choice stuck = VoteArcs(g, here, 5.0, 0.0, o);
+  EXPECT_FALSE(stuck.found) << ToString(stuck.best.kind) << " " << stuck.best.distance_m;
+  o.previous_arc_m = arc;
+  o.previous_arc_curvature_per_m = k;
+  const Choice c = VoteArcs(g, here, 5.0, 0.0, o);
+  ASSERT_TRUE(c.found) << c.detail;
+  EXPECT_EQ(c.best.kind, Candidate::Kind::kBackup);
+  EXPECT_NEAR(c.best.distance_m, -o.backup_m, 1e-9);
+  EXPECT_NEAR(c.best.curvature_per_m, k, 1e-9);
+  // The straight backup was judged first, and refused.
+  int straight = 0;
+  for (const Candidate& b : c.candidates)
+    if (b.kind == Candidate::Kind::kBackup && b.curvature_per_m == 0.0) {
+      ++straight;
+      EXPECT_TRUE(b.vetoed);
+    }
+  EXPECT_EQ(straight, 1);
+  // A previous arc shorter than backup_m is retraced no further than it ran.
+  o.previous_arc_m = 0.2;
+  const Choice shorter = VoteArcs(g, here, 5.0, 0.0, o);
+  ASSERT_TRUE(shorter.found);
+  EXPECT_NEAR(shorter.best.distance_m, -0.2, 1e-9);
+  o.previous_arc_m = -0.1;
+  EXPECT_THROW(VoteArcs(g, here, 5.0, 0.0, o), std::invalid_argument);
+}
+
 // With the rover's suspension, ACE's clearance bounds from the grid's heights, not the
 // cells' ratings, decide what is safe (common/clearance).
 Grid OpenWithHeights() {
