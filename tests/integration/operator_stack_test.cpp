@@ -20,6 +20,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -72,6 +73,22 @@ TEST(OperatorStack, StartHeightAndZonesOverTwoSequences) {
   const std::string log_path = dir + "/session.lcm";
   launch::ProcessSet recorder(std::string(ROVER_BINARY_DIR) + "/bin", dir, false);
   recorder.Start({"rover_recorder", "rover_recorder", {"--lcm-url", url, log_path}}, {});
+  // Nothing is sent until the recorder hears the bus. Sent while it was still starting, the
+  // first sequence reached the executor unrecorded, and the executor's first message in
+  // the log was its answer, KEEPOUT_ZONES count 0: logcheck took it for a process started
+  // after the recording and called its earlier heartbeats and statuses lost (1 run in 10
+  // beside a burner). The recorder heartbeats once it has subscribed, and this test's one
+  // socket hears in order what is sent after that: once every process of the stack has
+  // been heard again, the log holds a message of each sent before any sequence.
+  const auto recorder_start = Clock::now();
+  while (!alive.count("rover_recorder") && Seconds(recorder_start) < 10) bus.Handle(50);
+  ASSERT_TRUE(alive.count("rover_recorder")) << "rover_recorder sent no heartbeat within 10 s";
+  alive.clear();
+  auto all_heard = [&] {
+    return std::all_of(expected.begin(), expected.end(), [&](const std::string& n) { return alive.count(n) > 0; });
+  };
+  while (!all_heard() && Seconds(recorder_start) < 20) bus.Handle(50);
+  ASSERT_TRUE(all_heard()) << "the stack went quiet after the recorder started";
 
   // The operator's tools, as separate processes, while this test keeps the bus drained.
   auto run = [&](const std::string& command) {
