@@ -81,6 +81,8 @@ class RoverClock {
                           WallClock::time_point wall);
   // The newest ROVER_CLOCK taken (0 before any).
   std::int64_t clock_utime() const { return clock_utime_; }
+  // Rover seconds per wall second, from the newest ROVER_CLOCK taken (1 before any).
+  double rate() const { return rate_; }
   // Virtual time: rover time moves only with the clock's messages, so nothing is judged
   // against the wall clock.
   void set_virtual(bool on) { virtual_ = on; }

@@ -180,6 +180,13 @@ void HazardAssessor::SetTiltLimits(const TiltLimits& limits) {
   options_.tilt = limits;
 }
 
+void HazardAssessor::set_clock_rate(double rover_s_per_guard_s) {
+  if (!std::isfinite(rover_s_per_guard_s) || rover_s_per_guard_s <= 0.0)
+    throw std::invalid_argument("HazardAssessor: clock rate " + std::to_string(rover_s_per_guard_s) +
+                                ": expected a finite value > 0");
+  clock_rate_ = rover_s_per_guard_s;
+}
+
 void HazardAssessor::OnPose(const PoseSnapshot& pose) {
   pose_ = pose;
   if (!has_attitude_ || pose.utime >= attitude_utime_) {
@@ -200,11 +207,13 @@ void HazardAssessor::OnAttitude(int64_t utime, double roll_rad, double pitch_rad
 
 std::string HazardAssessor::Staleness(int64_t now_utime) const {
   if (!pose_) return "no pose received yet: cannot decide (treated as unsafe)";
-  const double age_s = static_cast<double>(now_utime - pose_->utime) * 1e-6;
+  const double rover_age_s = static_cast<double>(now_utime - pose_->utime) * 1e-6;
+  const double age_s = rover_age_s / clock_rate_;
   if (age_s > options_.max_pose_age_s) {
     std::ostringstream os;
-    os << "pose is " << age_s << " s old (limit " << options_.max_pose_age_s
-       << " s): cannot decide (treated as unsafe)";
+    os << "pose is " << age_s << " s old";
+    if (clock_rate_ != 1.0) os << " in wall time (" << rover_age_s << " s of rover time at " << clock_rate_ << "x)";
+    os << " (limit " << options_.max_pose_age_s << " s): cannot decide (treated as unsafe)";
     return os.str();
   }
   const bool finite = std::isfinite(pose_->x) && std::isfinite(pose_->y) &&
@@ -224,7 +233,7 @@ HazardStatus HazardAssessor::Assess(int64_t now_utime) const {
   std::vector<std::string> parts;
   // Tilt needs only a fresh attitude (the IMU may outlive the estimator): a known tilt
   // violation is reported as such even when keep-out cannot be decided.
-  const double attitude_age_s = static_cast<double>(now_utime - attitude_utime_) * 1e-6;
+  const double attitude_age_s = static_cast<double>(now_utime - attitude_utime_) * 1e-6 / clock_rate_;
   if (has_attitude_ && attitude_age_s <= options_.max_pose_age_s) {
     const TiltCheck tilt = CheckTilt(roll_, pitch_, options_.tilt);
     s.tilt_violated = tilt.violated;

@@ -2,7 +2,9 @@
 // position uncertainty, and tilt limits (MER's reactive tilt check), from the latest pose.
 //
 // A safety check that cannot decide must stop the rover: with no pose, or a pose older than
-// max_pose_age_s of rover time, the state is UNKNOWN, which callers treat as unsafe.
+// max_pose_age_s, the state is UNKNOWN, which callers treat as unsafe. The age is read on
+// the clock every guard reads (bus::Process::guard_seconds): rover seconds in virtual time,
+// wall seconds on a real clock (set_clock_rate).
 #pragma once
 
 #include <cstdint>
@@ -39,7 +41,8 @@ struct HazardOptions {
   // Keep-out uses the footprint grown by sigma_multiplier * horizontal position sigma.
   double sigma_multiplier = 3.0;
   TiltLimits tilt;
-  // A pose older than this (rover time, against the `now` passed to Assess) is stale.
+  // A pose older than this (against the `now` passed to Assess, in guard seconds: see
+  // HazardAssessor::set_clock_rate) is stale.
   double max_pose_age_s = 2.0;
   // Zones in force from the start (e.g. rocks of a world marked keep-out).
   std::vector<KeepOutZone> zones;
@@ -111,6 +114,13 @@ class HazardAssessor {
   // Fresher roll and pitch (e.g. from the IMU) for the tilt check between poses.
   void OnAttitude(int64_t utime, double roll_rad, double pitch_rad);
 
+  // Rover seconds per second of the guards' clock: 1 in virtual time (the guards read
+  // rover time) and on a rover (rate 1); a real clock running a simulation at rate r reads
+  // its guards in wall seconds, so a pose r * max_pose_age_s of rover time old is stale
+  // there, as the executor's heartbeat and dead-man limits are wall seconds. Throws
+  // std::invalid_argument unless finite and > 0.
+  void set_clock_rate(double rover_s_per_guard_s);
+
   // The status at rover time `now_utime`.
   HazardStatus Assess(int64_t now_utime) const;
 
@@ -129,6 +139,7 @@ class HazardAssessor {
   std::string Staleness(int64_t now_utime) const;
 
   HazardOptions options_;
+  double clock_rate_ = 1.0;  // set_clock_rate
   std::vector<KeepOutZone> zones_;
   std::optional<PoseSnapshot> pose_;
   int64_t attitude_utime_ = 0;

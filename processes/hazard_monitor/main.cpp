@@ -165,6 +165,7 @@ class HazardNode {
 
   // The steady status, the queries a finished map releases, and now and then the map again.
   void Tick(double publish_hz) {
+    FollowClockRate();
     auto m = ToMsg(assessor_.Assess(proc_.now()));
     if (!zone_error_.empty()) {
       m.state = rover_msgs::hazard_status_t::STATE_UNKNOWN;
@@ -317,12 +318,22 @@ class HazardNode {
     return r;
   }
 
+  // Pose age is judged on the clock every guard reads (bus::Process::guard_seconds): rover
+  // seconds in virtual time, wall seconds on a real clock, whose rover time runs at the
+  // rate the time source's ROVER_CLOCK carries (1 on a rover). At 50x on a real clock, 2 s
+  // of rover time was 40 ms of wall time: a busy machine's scheduling delay stopped drives.
+  void FollowClockRate() {
+    const double rate = proc_.bus().clock().rate();
+    assessor_.set_clock_rate(proc_.virtual_time() || !std::isfinite(rate) || rate <= 0.0 ? 1.0 : rate);
+  }
+
   // The swept path against the zones, tilt and pose age, then against the map.
   hazards::SweptCheck CheckPath(const std::vector<hazards::Pose2>& path, const rover_msgs::hazard_query_t& q) {
     // A non-finite or negative margin makes the check UNKNOWN (CheckSweptPath). Pose age
     // is judged at the time of asking: a query held while a pair was mapped is not refused
     // for the rover time that ran on meanwhile.
     const int64_t asked = q.utime > 0 ? std::min(proc_.now(), q.utime) : proc_.now();
+    FollowClockRate();
     auto check = assessor_.CheckStep(path, asked, q.margin_m);
     if (!map_ || check.verdict == hazards::Verdict::kUnsafe) return check;
     // The map judges the same swept path; an unsafe cell outranks an undecided keep-out

@@ -13,6 +13,7 @@
 #include "launch/process_set.hpp"
 
 #include <lcm/lcm-cpp.hpp>
+#include <rover_msgs/hazard_status_t.hpp>
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/mobility_status_t.hpp>
 #include <rover_msgs/rover_clock_t.hpp>
@@ -172,6 +173,15 @@ class FaultRig {
       if (hb.decode(it->second.data(), 0, static_cast<int>(it->second.size())) < 0) return false;
       return now_utime_ > 0 && hb.utime >= now_utime_ - 2000000;
     });
+  }
+
+  // Until the hazard monitor, heard after this call, can decide a step again (SAFE: it holds
+  // a fresh pose). A restarted process is back once its heartbeat is heard, but a restarted
+  // estimator's first pose reaches the monitor only later: a sequence sent in between meets
+  // "pose is 3.3 s old" and aborts hazard_unknown, as it should (seen beside a CPU burner).
+  bool WaitHazardSafe(double seconds) {
+    const auto start = Clock::now();
+    return PumpUntil(seconds, [&] { return hazard_safe_at_ > start; });
   }
 
   std::int64_t Submit(const std::string& text) {
@@ -403,6 +413,10 @@ class FaultRig {
                                                   [this](const rover_msgs::mobility_status_t& s) {
                                                     if (From(s.pub_seq, "rover_sim")) status_ = s;
                                                   }, 1000);
+    bus_.Subscribe<rover_msgs::hazard_status_t>(channels::kHazardStatus, [this](const rover_msgs::hazard_status_t& h) {
+      if (From(h.pub_seq, "hazard_monitor") && h.state == rover_msgs::hazard_status_t::STATE_SAFE)
+        hazard_safe_at_ = Clock::now();
+    }, 100);
     bus_.Subscribe<rover_msgs::step_report_t>(channels::kStepReport, [this](const rover_msgs::step_report_t& r) {
       if (From(r.pub_seq, "sequence_executor")) ++steps_[r.submission_id];
     }, 100);
@@ -437,6 +451,7 @@ class FaultRig {
   std::map<std::int64_t, rover_msgs::sequence_status_t> final_;
   std::optional<rover_msgs::sim_truth_t> truth_;
   std::optional<rover_msgs::mobility_status_t> status_;
+  Clock::time_point hazard_safe_at_{};  // the last SAFE hazard status heard
   Clock::time_point last_advance_{};
   std::int64_t now_utime_ = 0;
   bool virtual_ = false;

@@ -172,6 +172,8 @@ void RunKill(const std::string& process) {
     ExpectNewSequenceCompletes(rig, "drive 1 m");
   } else {
     ASSERT_TRUE(rig.Restart(process)) << process << " did not come back";
+    ASSERT_TRUE(rig.WaitHazardSafe(30)) << "the hazard monitor could not decide a step within 30 s after " << process
+                                        << " came back";
     if (executor) {
       const auto final = rig.WaitFinal(drive, 10);
       EXPECT_TRUE(final && final->state == kAborted && final->abort_reason == "interrupted")

@@ -77,6 +77,23 @@ TEST(HazardAssessor, UnknownWhenThePoseIsStale) {
   EXPECT_EQ(a.CheckStep({{0, 0, 0}}, 13 * kSecond).verdict, Verdict::kUnknown);
 }
 
+// A real clock running a simulation at 50x reads its guards in wall seconds: 2 s of wall
+// time is 100 s of rover time. Virtual time and a rover (rate 1) read rover seconds.
+TEST(HazardAssessor, PoseAgeIsReadOnTheGuardsClock) {
+  HazardAssessor a(RockAhead());  // max age 2 s
+  a.OnPose(At(10 * kSecond));
+  a.set_clock_rate(50.0);
+  EXPECT_EQ(a.Assess(13 * kSecond).state, HazardState::kSafe);    // 3 s of rover time, 0.06 s of wall
+  EXPECT_EQ(a.Assess(109 * kSecond).state, HazardState::kSafe);   // 1.98 s of wall
+  const HazardStatus s = a.Assess(111 * kSecond);                  // 2.02 s of wall
+  EXPECT_EQ(s.state, HazardState::kUnknown);
+  EXPECT_NE(s.detail.find("in wall time (101 s of rover time at 50x)"), std::string::npos) << s.detail;
+  a.set_clock_rate(1.0);
+  EXPECT_EQ(a.Assess(13 * kSecond).state, HazardState::kUnknown);
+  EXPECT_THROW(a.set_clock_rate(0.0), std::invalid_argument);
+  EXPECT_THROW(a.set_clock_rate(NAN), std::invalid_argument);
+}
+
 TEST(HazardAssessor, SafeReportsNearestZoneAndClearance) {
   HazardAssessor a(RockAhead());
   a.OnPose(At(0, 0.1));
