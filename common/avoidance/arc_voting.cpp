@@ -165,7 +165,8 @@ void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalDist
     c->why = Fixed(100.0 * s.UnknownFraction(), 0) + " % of the cells crossed are unknown";
   } else if (c->kind == Candidate::Kind::kTurn && c->turn_rad * o.previous_turn_rad < 0.0) {
     c->vetoed = true;
-    c->why = "it would undo the last turn";
+    c->why = kUndoWhy;
+    c->undoes_last_turn = true;
   }
   // Ground the map rates caution but near its step limit, which it may under-read
   // (VoteOptions::max_driven_step_m): judged on what is driven now (a turn's first part),
@@ -195,6 +196,44 @@ void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalDist
 }
 
 }  // namespace
+
+// Why each kind of step was refused, counted: the worst rock alone does not say what boxed
+// the rover in (navbench seed 11 k0.20_r06 named a rock ahead; the turn and the backup that
+// were left were refused for ground never seen beside and behind the start, and for undoing
+// the last turn).
+std::string VetoSummary(const std::vector<Candidate>& candidates) {
+  std::string out;
+  for (const Candidate::Kind kind : {Candidate::Kind::kArc, Candidate::Kind::kTurn, Candidate::Kind::kBackup}) {
+    int total = 0, unsafe = 0, unseen = 0, undo = 0, other = 0;
+    const Candidate* last = nullptr;
+    for (const Candidate& c : candidates) {
+      if (c.kind != kind) continue;
+      ++total;
+      last = &c;
+      if (!c.vetoed) ++other;  // allowed, but a dead end or near the step limit
+      else if (c.hazard) ++unsafe;
+      else if (c.why == kUndoWhy) ++undo;
+      else ++unseen;
+    }
+    if (total == 0) continue;
+    if (!out.empty()) out += "; ";
+    if (kind == Candidate::Kind::kBackup && total == 1) {
+      out += "backup: " + (last->vetoed ? last->why : std::string("allowed but not taken"));
+      continue;
+    }
+    out += std::to_string(total) + ' ' + ToString(kind) + "s:";
+    std::string parts;
+    auto add = [&](int n, const char* what) {
+      if (n > 0) parts += (parts.empty() ? " " : ", ") + std::to_string(n) + ' ' + what;
+    };
+    add(unsafe, "over unsafe ground");
+    add(unseen, "over unknown ground");
+    add(undo, "undoing the last turn");
+    add(other, "dead ends or near the step limit");
+    out += parts;
+  }
+  return out;
+}
 
 void VoteOptions::Validate() const {
   auto positive = [](double v, const char* name) {
@@ -308,6 +347,19 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     }
     return best;
   };
+  // A turn vetoed only because it undoes the last turn (its sweep safe and seen), the best
+  // by vote; one whose step is near the step limit only when no other is left.
+  auto pick_undo = [&] {
+    const Candidate* best = nullptr;
+    for (const bool near_ok : {false, true}) {
+      for (const Candidate& c : choice.candidates) {
+        if (!c.undoes_last_turn || (c.near_limit && !near_ok)) continue;
+        if (!best || c.vote > best->vote + 1e-9) best = &c;
+      }
+      if (best) break;
+    }
+    return best;
+  };
   // Backing up goes where the cameras, on the mast and facing ahead, have not looked since
   // the rover turned: the blind ring is no excuse behind it. Unknown ground there counts as
   // anywhere else, so the rover backs out along ground it has seen (the way it came)
@@ -346,6 +398,12 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   for (std::size_t k : last_resort)
     if (!best && !choice.candidates[k].vetoed) best = &choice.candidates[k];
   if (!best) best = pick(true, true);
+  // Boxed in, with only the turn back left: the rule against undoing a turn keeps the rover
+  // from turning to and fro while other steps are allowed; it is no safety rule, and an
+  // abort would end the drive. Turned back, the rover stands at a heading it stood at, and
+  // the next vote may allow a backup along its tracks or another turn (navbench seed 11
+  // k0.20_r06: aborted 1.2 m from its start, completes with it).
+  if (!best) best = pick_undo();
   if (best) {
     choice.found = true;
     choice.best = *best;
@@ -356,7 +414,8 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   for (const Candidate& c : choice.candidates)
     if (c.hazard && (!worst || c.severity > worst->severity)) worst = &c;
   choice.detail = "no safe step among " + std::to_string(choice.candidates.size()) + " candidates" +
-                  (worst ? ": " + worst->why : ": " + choice.candidates.front().why);
+                  (worst ? ": " + worst->why : ": " + choice.candidates.front().why) + " (" +
+                  VetoSummary(choice.candidates) + ")";
   return choice;
 }
 

@@ -27,7 +27,8 @@
 // leads nowhere: it is chosen only when neither an arc, another turn nor backing up is
 // allowed, so that a rover whose nose is at a rock backs away from it rather than turning
 // to and fro. A turn that undoes the previous step's turn is vetoed (VoteOptions::
-// previous_turn_rad).
+// previous_turn_rad), unless nothing else is allowed: then the best such turn is taken
+// rather than no step (Candidate::undoes_last_turn).
 #pragma once
 
 #include "avoidance/goal_field.hpp"
@@ -92,7 +93,8 @@ struct VoteOptions {
   double way_heading_rad = std::numeric_limits<double>::quiet_NaN();
   // The turn in place the previous step made (0: it was no turn). A turn the other way
   // would only undo it: it is vetoed, so that two turns cannot take turns for ever in
-  // front of an obstacle that blocks both headings.
+  // front of an obstacle that blocks both headings (taken only when no other step is
+  // allowed: Candidate::undoes_last_turn).
   double previous_turn_rad = 0.0;
   // The rover's suspension (common/clearance): when set, a path is safe when ACE's bounds
   // on its belly clearance, rocker and bogie angles and tilt, from the grid's heights, stay
@@ -135,13 +137,26 @@ struct Candidate {
   // more: chosen only when no other candidate is allowed. `near_limit_why` names the cell.
   bool near_limit = false;
   std::string near_limit_why;
+  // Vetoed for undoing the previous step's turn alone (its sweep safe and seen): taken
+  // only when no other candidate is allowed, in place of finding no step.
+  bool undoes_last_turn = false;
 };
+
+// The veto reason of a turn that would undo the previous step's turn.
+inline constexpr const char* kUndoWhy = "it would undo the last turn";
+
+// When nothing is allowed: how many of each kind of step (arcs, turns, the backup) were
+// refused over unsafe ground, over unknown ground, for undoing the last turn, or allowed but
+// left (dead ends, near the step limit), e.g. "21 arcs: 21 over unsafe ground; 12 turns: 10
+// over unsafe ground, 1 over unknown ground, 1 undoing the last turn; backup: unknown ground
+// 0.60 m across at 1.30,-0.30 could hide a rock". Choice::detail ends with it in brackets.
+std::string VetoSummary(const std::vector<Candidate>& candidates);
 
 struct Choice {
   bool found = false;
   Candidate best;
   std::vector<Candidate> candidates;
-  std::string detail;  // when !found: why nothing is allowed (the worst unsafe cell met)
+  std::string detail;  // when !found: why nothing is allowed (the worst unsafe cell met, then VetoSummary)
 };
 
 // The next step from `pose` toward (goal_x, goal_y). The caller checks arrival first.

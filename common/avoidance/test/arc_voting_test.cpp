@@ -13,6 +13,12 @@ constexpr double kDeg = M_PI / 180.0;
 // A 12 m x 12 m grid of safe cells (goodness 0.9) centred on the origin, 0.2 m cells.
 Grid Open() { return Grid::Filled(-6.0, -6.0, 0.2, 60, 60, CellClass::kSafe, 0.9f); }
 
+// Cells whose centres lie in [x0, x1] x [y0, y1] unknown (never seen).
+void MarkUnknown(Grid* g, double x0, double x1, double y0, double y1) {
+  for (double x = x0 + 0.1; x < x1; x += 0.2)
+    for (double y = y0 + 0.1; y < y1; y += 0.2) g->state[g->IndexAt(x, y)] = CellClass::kUnknown;
+}
+
 // A wall of unsafe cells across x = wall_x, from y = y0 to y1.
 void Wall(Grid* g, double wall_x, double y0, double y1) {
   for (double y = y0; y <= y1; y += 0.1) g->Paint(wall_x, y, 0.25, CellClass::kUnsafe, 0.0f, 0.4f);
@@ -452,6 +458,62 @@ TEST(ArcVoting, ATurnThatWouldUndoTheLastIsVetoed) {
   EXPECT_GE(undo, 5);
   ASSERT_TRUE(c.found);
   EXPECT_FALSE(c.best.kind == Candidate::Kind::kTurn && c.best.turn_rad < 0);
+}
+
+// Boxed in, as navbench seed 11 k0.20_r06 was near its start: rock across the nose (every
+// arc, and every turn beyond one step's 18 deg, swings into it), ground never seen ahead on
+// the right (a turn right's front corner sweeps it) and behind (the backup).
+Grid BoxedNearTheStart() {
+  Grid g = Open();
+  Wall(&g, 1.3, -3.0, 3.0);
+  MarkUnknown(&g, 0.2, 1.0, 0.8, 2.0);     // ahead on the right, beside the body
+  MarkUnknown(&g, -2.0, -1.0, -2.0, 2.0);  // behind
+  return g;
+}
+
+// The executor's strict rule for unseen ground: no blind ring excused.
+VoteOptions Strict() {
+  VoteOptions o;
+  o.blind_margin_m = 0.0;
+  o.unknown.hidden_patch_m = 0.6;
+  o.unknown.hidden_at_any_share = true;
+  return o;
+}
+
+// The last step a turn right: the turn left, the one step whose sweep is safe and seen,
+// would undo it. It is taken rather than no step (without that: no step, an abort).
+TEST(ArcVoting, BoxedInTheTurnBackIsTakenRatherThanNoStep) {
+  VoteOptions o = Strict();
+  o.previous_turn_rad = 18.0 * kDeg;
+  const Choice c = VoteArcs(BoxedNearTheStart(), {0, 0, 0}, 5.0, 0.0, o);
+  ASSERT_TRUE(c.found) << c.detail;
+  EXPECT_EQ(c.best.kind, Candidate::Kind::kTurn);
+  EXPECT_NEAR(c.best.turn_rad, -18.0 * kDeg, 1e-9);
+  EXPECT_TRUE(c.best.undoes_last_turn);
+  EXPECT_EQ(c.best.why, kUndoWhy);
+  // Every other candidate is vetoed for the ground it crosses.
+  for (const auto& k : c.candidates) {
+    if (!k.undoes_last_turn) {
+      EXPECT_TRUE(k.vetoed) << ToString(k.kind) << " " << k.curvature_per_m << " " << k.turn_rad;
+    }
+  }
+}
+
+// With the left front unseen as well, nothing is allowed, and the detail says why of every
+// kind of step, not only the worst rock.
+TEST(ArcVoting, WhenNothingIsAllowedTheDetailCountsEveryKindOfVeto) {
+  Grid g = BoxedNearTheStart();
+  MarkUnknown(&g, 0.2, 1.0, -2.0, -0.8);
+  VoteOptions o = Strict();
+  o.previous_turn_rad = 18.0 * kDeg;
+  const Choice c = VoteArcs(g, {0, 0, 0}, 5.0, 0.0, o);
+  ASSERT_FALSE(c.found) << ToString(c.best.kind) << " " << c.best.turn_rad;
+  EXPECT_EQ(c.detail.rfind("no safe step among 32 candidates: step 0.40 m at ", 0), 0u) << c.detail;
+  EXPECT_NE(c.detail.find("(21 arcs: 21 over unsafe ground; 10 turns: 8 over unsafe ground, 2 over unknown ground; "
+                          "backup: unknown ground 0.60 m across at "),
+            std::string::npos)
+      << c.detail;
+  EXPECT_EQ(VetoSummary({}), "");
 }
 
 TEST(ArcVoting, ARoverWhoseEveryWayOnIsBlockedBacksAwayRatherThanTurning) {
