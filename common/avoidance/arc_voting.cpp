@@ -212,7 +212,7 @@ std::string VetoSummary(const std::vector<Candidate>& candidates) {
       last = &c;
       if (!c.vetoed) ++other;  // allowed, but a dead end or near the step limit
       else if (c.hazard) ++unsafe;
-      else if (c.why == kUndoWhy) ++undo;
+      else if (c.undoes_last_turn) ++undo;
       else ++unseen;
     }
     if (total == 0) continue;
