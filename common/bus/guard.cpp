@@ -87,24 +87,53 @@ void RoverClock::Observe(std::int64_t utime, WallClock::time_point wall) {
   if (utime > extrapolated) Anchor(utime, wall);
 }
 
+double RoverClock::AheadLimit(WallClock::time_point wall) const {
+  const double since_anchor_s = std::chrono::duration<double>(wall - anchor_wall_).count();
+  return anchor_utime_ + since_anchor_s * rate_ * 1e6 +
+         (window_.max_ahead_wall_s * rate_ + window_.max_ahead_rover_s) * 1e6;
+}
+
+bool RoverClock::Confirms(std::int64_t utime, std::int64_t count, double rate, bool virtual_mode,
+                          WallClock::time_point wall) const {
+  if (!candidate_ || count != candidate_->count + 1 || utime < candidate_->utime) return false;
+  const double step = static_cast<double>(utime - candidate_->utime);
+  if (virtual_mode) return step <= window_.max_clock_step_s * 1e6;
+  // Real time: the step from the candidate fits the candidate's own clock extrapolated at
+  // its rate, with the same margin Judge allows.
+  const double r = rate > 0 && std::isfinite(rate) ? rate : rate_;
+  const double since_s = std::chrono::duration<double>(wall - candidate_->wall).count();
+  return step <= (since_s * r + window_.max_ahead_wall_s * r + window_.max_ahead_rover_s) * 1e6;
+}
+
 std::string RoverClock::AcceptClock(std::int64_t utime, std::int64_t count, double rate,
                                     bool virtual_mode, WallClock::time_point wall) {
   if (clock_taken_ && utime < clock_utime_) {
     return "utime " + std::to_string(utime) + " is " + Seconds((clock_utime_ - utime) * 1e-6) +
            " behind the rover clock (a clock never goes back)";
   }
-  if (virtual_mode && clock_taken_ && utime - clock_utime_ > window_.max_clock_step_s * 1e6) {
-    const bool confirmed = candidate_ && count == candidate_->second + 1 && utime >= candidate_->first &&
-                           utime - candidate_->first <= window_.max_clock_step_s * 1e6;
-    if (!confirmed) {
-      candidate_ = std::make_pair(utime, count);
-      return "utime " + std::to_string(utime) + " is " + Seconds((utime - clock_utime_) * 1e-6) +
-             " ahead of the rover clock (expected at most " + Seconds(window_.max_clock_step_s) +
-             " a clock message, unless the next one confirms it)";
-    }
+  // A clock message too far ahead is held as a candidate and taken only when the source's
+  // next clock message (`count` + 1, consistent with it) confirms it. In virtual time the
+  // clock's step is too large after a stall in which clock messages were lost. In real
+  // time the receiver extrapolates from when it took the last message: one taken late (the
+  // process starved, its socket overflowing) and the next on time puts every later message
+  // ahead of the extrapolation by the difference, and without this the clock would stay
+  // wedged behind for good. A forged future clock stands alone and is never confirmed.
+  std::string why;
+  if (clock_taken_ && virtual_mode && utime - clock_utime_ > window_.max_clock_step_s * 1e6) {
+    why = "utime " + std::to_string(utime) + " is " + Seconds((utime - clock_utime_) * 1e-6) +
+          " ahead of the rover clock (expected at most " + Seconds(window_.max_clock_step_s) +
+          " a clock message, unless the next one confirms it)";
+  } else if (clock_taken_ && !virtual_mode) {
+    why = Judge(utime, wall);
+    if (!why.empty() && utime > AheadLimit(wall)) why += ", unless the next clock message confirms it";
   }
-  if (!virtual_mode && clock_taken_) {
-    if (std::string p = Judge(utime, wall); !p.empty()) return p;
+  if (!why.empty()) {
+    const bool ahead = virtual_mode || utime > AheadLimit(wall);
+    if (!ahead) return why;
+    if (!Confirms(utime, count, rate, virtual_mode, wall)) {
+      candidate_ = Candidate{utime, count, wall};
+      return why;
+    }
   }
   candidate_.reset();
   clock_taken_ = true;
@@ -132,8 +161,7 @@ std::string RoverClock::Judge(std::int64_t utime, WallClock::time_point wall) {
     return "";
   }
   const double since_anchor_s = std::chrono::duration<double>(wall - anchor_wall_).count();
-  const double ahead_limit = anchor_utime_ + since_anchor_s * rate_ * 1e6 +
-                             (window_.max_ahead_wall_s * rate_ + window_.max_ahead_rover_s) * 1e6;
+  const double ahead_limit = AheadLimit(wall);
   const double behind_limit =
       newest_ - (window_.max_behind_wall_s * rate_ + window_.max_behind_rover_s) * 1e6;
   if (t > ahead_limit) {

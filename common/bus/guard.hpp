@@ -75,8 +75,9 @@ class RoverClock {
   // goes back. In virtual time it moves at most max_clock_step_s a message, unless the
   // next message of the source (`count` + 1, at the same instant or later) confirms a
   // longer step (after a stall, when clock messages were lost: rover_sim announces the
-  // instant again while such a process holds it); in real time a message ahead of the clock extrapolated at
-  // its rate is refused as Judge refuses any other.
+  // instant again while such a process holds it). In real time a message Judge refuses is
+  // refused, except that one ahead of the clock extrapolated at its rate is taken when the
+  // source's next clock message confirms it (the receiver took the last one late).
   std::string AcceptClock(std::int64_t utime, std::int64_t count, double rate, bool virtual_mode,
                           WallClock::time_point wall);
   // The newest ROVER_CLOCK taken (0 before any).
@@ -100,6 +101,12 @@ class RoverClock {
 
  private:
   void Anchor(std::int64_t utime, WallClock::time_point wall);
+  // The latest utime Judge takes in real time: the anchor extrapolated at the rate, plus
+  // the window's margin.
+  double AheadLimit(WallClock::time_point wall) const;
+  // Whether this clock message is the source's next after the candidate and fits it.
+  bool Confirms(std::int64_t utime, std::int64_t count, double rate, bool virtual_mode,
+                WallClock::time_point wall) const;
 
   TimeWindow window_;
   bool anchored_ = false;
@@ -112,7 +119,13 @@ class RoverClock {
   bool virtual_ = false;
   bool clock_taken_ = false;
   std::int64_t clock_utime_ = 0;
-  std::optional<std::pair<std::int64_t, std::int64_t>> candidate_;  // utime, count
+  // A clock message refused as too far ahead, kept until the source's next one.
+  struct Candidate {
+    std::int64_t utime = 0;
+    std::int64_t count = 0;
+    WallClock::time_point wall{};
+  };
+  std::optional<Candidate> candidate_;
 };
 
 // Prints one line per problem, rate-limited per channel: the first few, then one every

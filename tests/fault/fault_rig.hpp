@@ -11,6 +11,7 @@
 #include "fault_inject/packets.hpp"
 #include "integration/run_support.hpp"
 #include "launch/process_set.hpp"
+#include "scenario/scenario_overrides.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/hazard_status_t.hpp>
@@ -317,8 +318,10 @@ class FaultRig {
                                                    (key_.empty() ? "sim_vo.yaml" : "sim_vo_auth.yaml"));
     for (auto spec : deployment.processes) {
       if (spec.name != process) continue;
-      for (auto& a : spec.args)
+      for (auto& a : spec.args) {
         if (a == "build/keys/rover.key") a = key_;  // the key this rig made
+        if (a == "configs/rover.yaml" && !virtual_) a = RealClockConfig();
+      }
       if (process == "sequence_executor") {
         // A restarted executor reports the sequence it was running as interrupted.
         spec.args.push_back("--state-file");
@@ -327,6 +330,26 @@ class FaultRig {
       return spec;
     }
     throw std::runtime_error("sim_vo.yaml has no process " + process);
+  }
+
+  // On a real clock the executor's waits for the hazard monitor's reply and status are
+  // wall time (a rover's limit), and the monitor answers a step only once it has mapped
+  // the pair. At 50x rover time on a machine this suite may share with other work (4
+  // burners and -j2: load 14), that mapping has taken more than the 5 s default, and a
+  // new sequence aborted `hazard_unknown` though nothing was wrong. Those waits are not
+  // what these tests prove (a dead or hung monitor is caught by its heartbeat, within
+  // heartbeat_timeout_s), so this rig gives them 30 s: a copy of configs/rover.yaml with
+  // only those two keys changed. In virtual time the waits are rover time and the
+  // monitor's mapping is charged from the compute profile, so the original is used.
+  std::string RealClockConfig() const {
+    const std::string copy = out_ + "/rover.yaml";
+    if (!std::filesystem::exists(copy)) {
+      std::vector<tools::ConfigOverride> waits = {{"executor.hazard_reply_wait_s", YAML::Node(30.0)},
+                                                  {"executor.hazard_status_wait_s", YAML::Node(30.0)}};
+      tools::PrepareRunConfigs(SourceDir() + "/configs/rover.yaml", waits,
+                               SourceDir() + "/configs/worlds/flat_rock_course.yaml", {}, out_);
+    }
+    return copy;
   }
 
   void Start(launch::ProcessSpec spec) {

@@ -276,6 +276,43 @@ TEST(RoverClock, APoisonedFirstAnchorIsForgottenWhenEverythingElseIsOlder) {
   EXPECT_FALSE(clock.anchored() && clock.now() > 1'000'000'000'000);
 }
 
+// Real time at 50x: a process starved for 10 s took one clock message late, and the
+// messages between were lost (its socket overflowed). The next one, on time, is then 500 s
+// ahead of the extrapolated clock and refused; the one after it confirms it (the source's
+// next count, consistent with it), so the clock catches up instead of staying wedged behind
+// for good. A forged future clock standing alone is still never taken.
+TEST(RoverClock, ARealClockTakenLateCatchesUpAtTheSourcesNextMessage) {
+  using namespace std::chrono_literals;
+  rover::bus::RoverClock clock;
+  const auto sent0 = rover::bus::RoverClock::WallClock::now();
+  constexpr double kRate = 50;
+  constexpr std::int64_t kBase = 1'000'000'000;
+  // Rover time of a message the source sent `s` wall seconds after the first.
+  auto utime_at = [&](double s) { return kBase + static_cast<std::int64_t>(s * kRate * 1e6); };
+  ASSERT_EQ(clock.AcceptClock(kBase, 0, kRate, false, sent0 + 10s), "");
+  const auto taken = [&](double s) { return sent0 + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                        std::chrono::duration<double>(s)); };
+  const std::string refused = clock.AcceptClock(utime_at(10.0), 100, kRate, false, taken(10.0));
+  EXPECT_NE(refused.find("ahead of the rover clock"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("unless the next clock message confirms it"), std::string::npos) << refused;
+  EXPECT_EQ(clock.AcceptClock(utime_at(10.1), 101, kRate, false, taken(10.1)), "");
+  EXPECT_EQ(clock.clock_utime(), utime_at(10.1));
+  EXPECT_EQ(clock.Judge(utime_at(10.15), taken(10.15)), "") << "a message of the present is taken again";
+  EXPECT_EQ(clock.AcceptClock(utime_at(10.2), 102, kRate, false, taken(10.2)), "");
+
+  // Forged: 600 s ahead, counts far from the source's, one at a time.
+  for (std::int64_t forged_count : {1000, 2000, 3000}) {
+    EXPECT_NE(clock.AcceptClock(utime_at(10.2) + 600'000'000, forged_count, kRate, false, taken(10.25)), "");
+  }
+  EXPECT_EQ(clock.AcceptClock(utime_at(10.3), 103, kRate, false, taken(10.3)), "");
+  EXPECT_EQ(clock.clock_utime(), utime_at(10.3));
+  // A forgery with the source's next count is not confirmed by the source's message after
+  // it, which it does not fit (that one is taken on its own, within the window).
+  EXPECT_NE(clock.AcceptClock(utime_at(10.4) + 600'000'000, 103, kRate, false, taken(10.35)), "");
+  EXPECT_EQ(clock.AcceptClock(utime_at(10.4), 104, kRate, false, taken(10.4)), "");
+  EXPECT_EQ(clock.clock_utime(), utime_at(10.4));
+}
+
 TEST(Bus, CommandsNeedAValidTagWhenAKeyIsRequired) {
   // A stand-in MAC (the real one is HMAC-SHA256 in common/auth): the sum of the bytes.
   auto mac = [](const std::vector<std::uint8_t>& bytes) {
