@@ -175,6 +175,30 @@ std::shared_ptr<const RectifiedRig> CachedRectification(const geometry::StereoRi
 
 }  // namespace
 
+cv::Mat TextureSnr2(const cv::Mat& rect_left, double texture_noise_gain, int block_size) {
+  if (rect_left.empty() || rect_left.type() != CV_8UC1) Bad("TextureSnr2: expected an 8-bit grey image");
+  if (!(texture_noise_gain > 0) || block_size < 1) Bad("TextureSnr2: expected a positive noise gain and block");
+  cv::Mat f, gx, e;
+  rect_left.convertTo(f, CV_32F);
+  cv::Sobel(f, gx, CV_32F, 1, 0, 3, 1.0, 0.0, cv::BORDER_REFLECT_101);
+  cv::boxFilter(gx.mul(gx), e, CV_32F, cv::Size(block_size, block_size));
+  const double sigma = ImageNoiseSigma(f, rect_left);
+  return e / static_cast<float>(texture_noise_gain * sigma * sigma);
+}
+
+double DisparitySigmaPx(double snr2, const MapOptions& o) {
+  if (o.texture_sigma_px <= 0) return o.disparity_sigma_px;
+  // The block-matching error model (e.g. Matthies 1992; Kanade & Okutomi 1994): matching a
+  // block of N pixels whose horizontal gradients are I_x, with noise sigma_n in both
+  // images, misplaces it by a disparity of variance 2 sigma_n^2 / sum(I_x^2). The Sobel
+  // energy over the block holds the noise's own (snr2 = 1 for noise alone), so the
+  // texture's is snr2 - 1 times the noise's; texture_sigma_px is the sigma where the two
+  // are equal. It adds to the matching error textured ground has anyway
+  // (disparity_sigma_px: sub-pixel interpolation, calibration).
+  const double rho = std::max(std::isfinite(snr2) ? snr2 - 1.0 : 0.0, 0.01);
+  return std::sqrt(o.disparity_sigma_px * o.disparity_sigma_px + o.texture_sigma_px * o.texture_sigma_px / rho);
+}
+
 double SourceStretch(const RectifiedRig& r, int u, int v) {
   const int u0 = std::max(0, u - 1), u1 = std::min(r.width - 1, u + 1);
   if (u1 <= u0) return 1.0;
@@ -368,14 +392,10 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
   // change, and in a dark shadow the ground's texture sinks under the read noise; on both
   // SGBM's disparity is noise. A pixel is kept where the mean squared horizontal gradient
   // (Sobel) over its block stands min_texture_snr^2 times above what noise alone gives.
+  // The same measure sets each point's disparity sigma (texture_sigma_px, below).
   cv::Mat snr2;
+  if (o.min_texture_snr > 0 || o.texture_sigma_px > 0) snr2 = TextureSnr2(rectL, r.texture_noise_gain, bs);
   if (o.min_texture_snr > 0) {
-    cv::Mat f, gx, e;
-    rectL.convertTo(f, CV_32F);
-    cv::Sobel(f, gx, CV_32F, 1, 0, 3, 1.0, 0.0, cv::BORDER_REFLECT_101);
-    cv::boxFilter(gx.mul(gx), e, CV_32F, cv::Size(bs, bs));
-    const double sigma = ImageNoiseSigma(f, rectL);
-    snr2 = e / static_cast<float>(r.texture_noise_gain * sigma * sigma);
     cv::Mat low = snr2 < static_cast<float>(o.min_texture_snr * o.min_texture_snr);
     blank = blank.empty() ? low : (blank | low);
   }
@@ -426,6 +446,7 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
     const float* mrx = r.map_rx.ptr<float>(v);
     const std::uint8_t* ep = edge.empty() ? nullptr : edge.ptr<std::uint8_t>(v);
     const std::uint8_t* bp = blank.empty() ? nullptr : blank.ptr<std::uint8_t>(v);
+    const float* sp = o.texture_sigma_px > 0 ? snr2.ptr<float>(v) : nullptr;
     const int margin = min_column.empty() ? 0 : bs / 2 + 1;
     if (v < margin || v >= r.height - margin) continue;
     const int u_first = min_column.empty() ? 0 : std::max(margin, min_column[v]);
@@ -442,7 +463,10 @@ StereoPoints DenseStereo(const cv::Mat& left, const cv::Mat& right,
       const double range2 = (z * dir).squaredNorm();
       if (range2 > max_range2 || range2 < min_range2) continue;
       if (p.x() < o.min_x_m) continue;  // hidden from this camera by the rover's own body
-      const double sigma_z = z * z / fB * o.disparity_sigma_px * SourceStretch(r, u, v);
+      // The matching error on the source image (bland texture matches worse), in rectified
+      // pixels where the pinhole stretches the source's.
+      const double sigma_d = sp ? DisparitySigmaPx(sp[u], o) : o.disparity_sigma_px;
+      const double sigma_z = z * z / fB * sigma_d * SourceStretch(r, u, v);
       out.points_rover.push_back(p);
       out.error_rover.push_back(sigma_z * dir);
     }

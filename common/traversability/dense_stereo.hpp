@@ -25,8 +25,9 @@ namespace rover::traversability {
 struct StereoPoints {
   std::vector<Eigen::Vector3d> points_rover;  // rover frame (X forward, Y right, Z down)
   // One standard deviation of each point's stereo error, along its ray (rover frame): the
-  // range error of a disparity_sigma_px matching error (on the source image), which the
-  // map turns into a height sigma in the site frame at the capture attitude.
+  // range error of its matching error (DisparitySigmaPx, on the source image, times
+  // SourceStretch), which the map turns into a height sigma in the site frame at the
+  // capture attitude.
   std::vector<Eigen::Vector3d> error_rover;
 };
 
@@ -68,6 +69,20 @@ double SourceStretch(const RectifiedRig& r, int u, int v);
 // > 0, also the right image against the left (cv::ximgproc's right matcher), and a left
 // pixel whose match's right-view disparity differs by more than that is unmatched.
 cv::Mat MatchDisparity(const cv::Mat& rectL, const cv::Mat& rectR, const MapOptions& options);
+
+// Texture along the rows against the image's noise, per pixel of a rectified left image
+// (8-bit grey): the mean squared horizontal Sobel gradient over the block_size block around
+// it, over what read noise alone gives there (`texture_noise_gain`, RectifiedRig's, times
+// the image's own noise variance, estimated from the image). CV_32F: the texture SNR
+// squared, 1 for noise alone. min_texture_snr drops pixels under its square;
+// texture_sigma_px reads it for each point's disparity sigma.
+cv::Mat TextureSnr2(const cv::Mat& rect_left, double texture_noise_gain, int block_size);
+
+// A match's disparity sigma (px on the source image at the matching scale) for a block of
+// texture SNR squared `snr2` (TextureSnr2): disparity_sigma_px, and with texture_sigma_px
+// the image noise's share, sqrt(disparity_sigma_px^2 + texture_sigma_px^2 / rho) with
+// rho = max(snr2 - 1, 0.01), the texture's own gradient energy over the noise's.
+double DisparitySigmaPx(double snr2, const MapOptions& options);
 
 // Rectifies, matches and triangulates one pair. Throws std::invalid_argument with a
 // one-line message when an image is empty, not 8-bit grey, or not the models' size.

@@ -74,6 +74,8 @@ void CheckMapOptions(const MapOptions& o) {
   if (o.speckle_window < 0 || o.speckle_range < 0) Bad("speckle_window and speckle_range must be >= 0");
   if (!positive(o.disparity_sigma_px)) Bad("disparity_sigma_px must be > 0");
   if (!std::isfinite(o.min_texture) || o.min_texture < 0) Bad("min_texture must be >= 0");
+  if (!std::isfinite(o.texture_sigma_px) || o.texture_sigma_px < 0 || o.texture_sigma_px > 10)
+    Bad("texture_sigma_px must be in [0, 10]");
   if (!std::isfinite(o.tilt_margin_sigmas) || o.tilt_margin_sigmas < 0 || o.tilt_margin_sigmas > 10)
     Bad("tilt_margin_sigmas must be in [0, 10]");
   if (!std::isfinite(o.dip_margin_sigmas) || o.dip_margin_sigmas < 0 || o.dip_margin_sigmas > 10)
@@ -709,6 +711,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("speckle_window", o.speckle_window, 0, 10000);
   node.Get("speckle_range", o.speckle_range, 0, 100);
   node.Get("disparity_sigma_px", o.disparity_sigma_px, 1e-3, 10.0);
+  node.Get("texture_sigma_px", o.texture_sigma_px, 0.0, 10.0);
   node.Get("subsample", o.subsample, 1, 16);
   node.Get("min_range_m", o.min_range_m, 0.0, 100.0);
   node.Get("max_disparity_jump", o.max_disparity_jump, 0.0, 10.0);
@@ -746,7 +749,7 @@ const std::vector<std::string> kMapOnlyKeys = {
 const std::vector<std::string>& CameraOptionKeys() {
   static const std::vector<std::string> keys = {
       "max_range_m", "min_range_m", "stereo_width_px", "num_disparities", "block_size", "uniqueness_ratio",
-      "speckle_window", "speckle_range", "disparity_sigma_px", "subsample", "max_disparity_jump", "min_texture",
+      "speckle_window", "speckle_range", "disparity_sigma_px", "texture_sigma_px", "subsample", "max_disparity_jump", "min_texture",
       "min_texture_snr", "drop_unseen_border", "lr_max_diff_px", "rectified_fov_deg", "min_x_m", "min_depression_deg"};
   return keys;
 }

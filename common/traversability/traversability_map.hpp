@@ -147,6 +147,19 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   int speckle_window = 100;     // 0 disables the speckle filter
   int speckle_range = 2;
   double disparity_sigma_px = 0.3;  // matching error, in source pixels at the matching scale
+  // The matching error's share from image noise, which grows as the block's texture along
+  // the rows falls toward the noise (the block-matching error model: a block's disparity
+  // variance is twice the noise variance over the sum of its squared horizontal intensity
+  // gradients). A point's disparity sigma is
+  //   sqrt(disparity_sigma_px^2 + texture_sigma_px^2 / rho),
+  // rho the block's gradient energy beyond what noise alone gives, over noise's (the
+  // texture SNR^2 of min_texture_snr, less 1; at least 0.01, so a block at or under the
+  // noise claims 10 x texture_sigma_px): texture_sigma_px is the noise term where the
+  // texture's gradient energy equals the noise's. For white noise and a 5 px block the
+  // model gives 0.65 px. Bland sand then claims honest, larger height errors (a patch's
+  // dip margin discounts it), well-textured ground keeps about disparity_sigma_px.
+  // 0: every point disparity_sigma_px.
+  double texture_sigma_px = 0.0;
   int subsample = 1;            // triangulate every n-th pixel (row and column) of the match
   double min_range_m = 0.5;     // points nearer than this are ignored
   // Mixed pixels: a pixel whose 5x5 neighbourhood spans a disparity range over this

@@ -129,7 +129,11 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
       s << "hazard-eval: pose " << k + 1 << " (" << ep.x << ", " << ep.y << ") is off the world's map";
       throw std::invalid_argument(s.str());
     }
-    const Eigen::Isometry3d T = PoseOnGround(world, ep.x, ep.y, ep.yaw_deg * M_PI / 180.0);
+    const Eigen::Isometry3d T =
+        options.fixed_attitude
+            ? geometry::PoseFromXyzRpy(ep.x, ep.y, -world.Elevation(ep.x, ep.y), options.roll_deg * M_PI / 180.0,
+                                       options.pitch_deg * M_PI / 180.0, ep.yaw_deg * M_PI / 180.0)
+            : PoseOnGround(world, ep.x, ep.y, ep.yaw_deg * M_PI / 180.0);
     const render::StereoImages images =
         renderer.RenderPair(world, rig_full, T, options.first_frame_seed + static_cast<std::int64_t>(k));
     map.Recentre(ep.x, ep.y);

@@ -49,6 +49,9 @@ struct EvalOptions {
   double rock_limit_m = 0.3;       // rocks taller than this must be found
   double pose_sigma_m = 0.02;      // the pose covariance handed to the map
   double pose_sigma_deg = 0.5;
+  // The rover's roll and pitch (deg) at every pose, instead of the ground's normal's.
+  bool fixed_attitude = false;
+  double roll_deg = 0, pitch_deg = 0;
   std::vector<EvalPose> poses;
   int image_size = 512;            // rendered width in pixels
   // The pose handed to the map is the true one moved by these (metres, degrees): an

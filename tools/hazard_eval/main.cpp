@@ -11,6 +11,11 @@
 // --poses items may add that pair's own pose error: x,y,yaw,ex,ey,ez,eroll,epitch,eyaw.
 // --pose-error x,y,z,roll,pitch,yaw: the map gets each pair at the true pose moved by these
 // (metres, degrees), as an estimate's error at capture.
+// --attitude roll,pitch: the rover stands at this roll and pitch (deg) at every pose, not at
+// the ground's normal (rover_sim settles the rover on its wheels: -0.70, 0.26 at
+// flat_rock_course's start).
+// --pose-sigma m,deg: the pose covariance handed to the map (0.02 m, 0.5 deg; the state
+// estimator's at the start: 0, 0.2).
 // --frame-seed S: the first pose's pair is rendered with noise seed S (then S + 1, ...; 1).
 // --map-options: a YAML of traversability::MapOptions keys, bare, under `traversability:`,
 // or a rover config's hazards.map.traversability (configs/rover.yaml: hazard_monitor's map).
@@ -30,6 +35,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -51,6 +57,7 @@ int main(int argc, char** argv) {
          frame_seed = 1;
   bool verbose = false;
   std::array<double, 6> pose_error = {0, 0, 0, 0, 0, 0};
+  std::optional<std::array<double, 2>> attitude, pose_sigma;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has = i + 1 < argc;
@@ -59,7 +66,8 @@ int main(int argc, char** argv) {
                    "       [--map-options FILE] [--poses \"x,y,yaw;...\"] [--steps N] [--step-m M]\n"
                    "       [--min-detection F] [--max-false-unsafe F] [--verbose]\n"
                    "       [--hazcam HAZCAM_RIG.yaml] [--dump-cells R] [--frame-seed S]\n"
-                   "       [--pose-error x,y,z,roll,pitch,yaw]\n";
+                   "       [--pose-error x,y,z,roll,pitch,yaw] [--attitude roll,pitch]\n"
+                   "       [--pose-sigma m,deg]\n";
       return 0;
     } else if (a == "--rig") {
       if (!has) return Usage("--rig: expected a stereo rig YAML file");
@@ -96,6 +104,17 @@ int main(int argc, char** argv) {
       if (!has || !config::ParseNumberList(argv[++i], &v) || v.size() != 6)
         return Usage("--pose-error: expected \"x,y,z,roll,pitch,yaw\" (metres, degrees)");
       std::copy(v.begin(), v.end(), pose_error.begin());
+    } else if (a == "--attitude") {
+      std::vector<double> v;
+      if (!has || !config::ParseNumberList(argv[++i], &v) || v.size() != 2 || std::abs(v[0]) > 45 || std::abs(v[1]) > 45)
+        return Usage("--attitude: expected \"roll,pitch\" (degrees, each within 45)");
+      attitude = {v[0], v[1]};
+    } else if (a == "--pose-sigma") {
+      std::vector<double> v;
+      if (!has || !config::ParseNumberList(argv[++i], &v) || v.size() != 2 || !(v[0] >= 0 && v[0] <= 10) ||
+          !(v[1] >= 0 && v[1] <= 45))
+        return Usage("--pose-sigma: expected \"m,deg\" (position sigma in [0, 10] m, attitude sigma in [0, 45] deg)");
+      pose_sigma = {v[0], v[1]};
     } else if (a == "--frame-seed") {
       if (!has || !config::ParseNumberInRange(argv[++i], 1, 1e9, &frame_seed) || frame_seed != std::floor(frame_seed))
         return Usage("--frame-seed: expected the first pair's noise seed, an integer in [1, 1e9]");
@@ -173,6 +192,15 @@ int main(int argc, char** argv) {
     options.dump_range_m = dump_m;
     options.first_frame_seed = static_cast<std::int64_t>(frame_seed);
     options.pose_error = pose_error;
+    if (attitude) {
+      options.fixed_attitude = true;
+      options.roll_deg = (*attitude)[0];
+      options.pitch_deg = (*attitude)[1];
+    }
+    if (pose_sigma) {
+      options.pose_sigma_m = (*pose_sigma)[0];
+      options.pose_sigma_deg = (*pose_sigma)[1];
+    }
     const geometry::StereoRig rig = geometry::LoadStereoRigFile(rig_path);
     const terrain::World world(world_options);
     cv::setNumThreads(1);  // one core, as on the rover computer
