@@ -307,6 +307,15 @@ RunFigures ReadRun(const RunPlan& p, RunTrack* track) {
   r.off_map_samples = WheelsOffMap(t.truth, SixWheels(wheelbase_m, track_m), t.map).samples;
   r.driven_m = PathLength(t.truth);
   r.path_ratio = PathRatio(r.driven_m, Eigen::Vector2d(spec.start_x, spec.start_y), Eigen::Vector2d(p.goal_x, p.goal_y));
+  // What the path ratio could at best be: the shortest way round the rocks over the
+  // collision height, the rover's centre half its width off them.
+  {
+    const ShortestPath best =
+        ShortestSafePath(t.rocks_over_limit, 0.5 * footprint.width_m, Eigen::Vector2d(spec.start_x, spec.start_y),
+                         Eigen::Vector2d(p.goal_x, p.goal_y), p.goal_radius_m, t.map);
+    r.shortest_m = best.length_m;
+    t.shortest = best.path;
+  }
   if (!t.truth.empty()) {
     r.final_truth = Eigen::Vector2d(t.truth.back().x, t.truth.back().y);
     r.in_goal_disc = (*r.final_truth - Eigen::Vector2d(p.goal_x, p.goal_y)).norm() <= p.goal_radius_m;
