@@ -325,8 +325,8 @@ std::string TableText(const std::vector<GroupFigures>& groups) {
   bool any_shortest = false;
   for (const auto& g : groups) any_shortest |= g.median_shortest_ratio.has_value();
   if (any_shortest) {
-    os << "\nshortest safe way on the true world (rocks over the collision height, the centre half the body's\n"
-          "width off them; medians over the successful runs):\n";
+    os << "\nshortest safe way on the true world (round every rock over the map's step limit, the centre half\n"
+          "the body's width off it; medians over the successful runs):\n";
     os << std::left << std::setw(11) << "world" << std::setw(16) << "shortest ratio" << "driven / shortest\n";
     for (const auto& g : groups) {
       os << std::left << std::setw(11) << g.group << std::setw(16)

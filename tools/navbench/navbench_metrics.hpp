@@ -55,9 +55,9 @@ OffMapReport WheelsOffMap(const std::vector<hazards::Pose2>& track, const std::v
                           const MapBounds& map);
 
 // The shortest way the rover could have driven: from `start` to within goal_radius_m of
-// `goal`, its centre keeping `clearance_m` off every obstacle disc (rocks over the collision
-// height; clearance half the body's width: a lower bound, since the body is longer than it
-// is wide and must turn), inside `map`. The global planner (common/planner) on the true
+// `goal`, its centre keeping `clearance_m` off every obstacle disc (navbench: the rocks over
+// the map's step limit, which the stack refuses; clearance half the body's width: a lower
+// bound, since the body is longer than it is wide and must turn), inside `map`. The global planner (common/planner) on the true
 // world, every cell of cell_m whose centre lies in a disc an obstacle and the rest seen
 // safe ground at one cost, gives the 8-connected way; it is then pulled taut (each corner
 // cut where the straight line keeps the clearance from every disc, by exact geometry), so

@@ -108,7 +108,7 @@ std::string PlotRun(const RunPlan& plan, const RunFigures& figures, const RunTra
      << "     'zone_circles.dat' using 1:2:3 with circles fs transparent solid 0.3 lc rgb '#e69f00' title 'keep-out zones', \\\n"
      << "     'zone_polygons.dat' using 1:2 with lines lw 2 lc rgb '#e69f00' notitle, \\\n"
      << "     'goal.dat' using 1:2:3 with circles fs transparent solid 0.25 border lc rgb '#009e73' title 'goal disc', \\\n"
-     << "     'shortest.dat' using 1:2 with lines lw 1.5 dt 2 lc rgb '#555555' title 'shortest safe way', \\\n"
+     << "     'shortest.dat' using 1:2 with lines lw 1.5 dt 2 lc rgb '#555555' title 'shortest way round the rocks over the map step limit', \\\n"
      << "     'path.dat' using 1:2 with lines lw 2.5 lc rgb '#0072b2' title 'path (truth)', \\\n"
      << "     'start.dat' using 1:2 with points pt 5 ps 1.5 lc rgb '#009e73' title 'start'";
   if (!track.truth.empty()) {
