@@ -32,10 +32,9 @@ bool BackWhereItWas(const std::vector<Visit>& history, const Pose2& here, const 
   // Back to the end: has the rover been beyond leave_m since visit i, and was visit i here?
   // Not a pose it reached by backing up: backing out along its tracks it passes those
   // poses, and driving forward again over the same tracks passes them once more; each of
-  // them counted as a cycle, one retreat of 1.5 m and the drive back over it made three
-  // or four (navbench seed 11 k0.20_r01), each a refused way costing the planner more, and
-  // the plan went 6 m round. Where the retreat began (reached forward, or by a turn) still
-  // closes a cycle.
+  // them counted as a cycle, and so as a refused way (navbench seed 11 k0.20_r01: three of
+  // its five refusals, and the plan went 6 m round). Where the retreat began (reached
+  // forward, or by a turn) still closes a cycle.
   bool left = false;
   for (std::size_t i = n; i-- > first;) {
     const bool reached_backing = i > 0 && history[i - 1].chosen.kind == Candidate::Kind::kBackup;
