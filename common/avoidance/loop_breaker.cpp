@@ -30,9 +30,15 @@ bool BackWhereItWas(const std::vector<Visit>& history, const Pose2& here, const 
   if (from_here(history.back()) <= options.radius_m) return false;
   const std::size_t first = n > static_cast<std::size_t>(options.window_steps) ? n - options.window_steps : 0;
   // Back to the end: has the rover been beyond leave_m since visit i, and was visit i here?
+  // Not a pose it reached by backing up: backing out along its tracks it passes those
+  // poses, and driving forward again over the same tracks passes them once more; each of
+  // them counted as a cycle, and so as a refused way (navbench seed 11 k0.20_r01: three of
+  // its five refusals, and the plan went 6 m round). Where the retreat began (reached
+  // forward, or by a turn) still closes a cycle.
   bool left = false;
   for (std::size_t i = n; i-- > first;) {
-    if (left && from_here(history[i]) <= options.radius_m) return true;
+    const bool reached_backing = i > 0 && history[i - 1].chosen.kind == Candidate::Kind::kBackup;
+    if (left && !reached_backing && from_here(history[i]) <= options.radius_m) return true;
     left = left || from_here(history[i]) > options.leave_m;
   }
   return false;

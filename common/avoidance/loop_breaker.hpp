@@ -32,7 +32,9 @@ struct LoopOptions {
 // Once, by the step that arrives there (turning in place there afterwards closes nothing);
 // and unless it got there by backing up: a rover backing out along its own tracks comes back
 // where it stood on purpose (the vote backs up only when the way on is refused, or lies
-// behind).
+// behind). Nor is a pose it reached by backing up one it stood at: it passed it backing out
+// along its tracks, and passes it again driving forward over them; only where the backing
+// began (or where the rover turned after it) can a cycle close.
 struct CycleOptions {
   double radius_m = 0.2;
   double leave_m = 0.25;

@@ -262,6 +262,7 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
   po.SetRadiiFrom(footprint, 0.0);
   po.unknown_cost = options_.planner_unknown_cost;
   po.caution_cost = options_.planner_caution_cost;
+  po.near_cost = options_.planner_near_cost;
   po.margin_m = options_.planner_margin_m;
   planner::PlanRequest r;
   r.start_x = p.x, r.start_y = p.y;

@@ -142,6 +142,7 @@ struct ExecutorOptions {
   bool planner_enabled = true;
   double planner_unknown_cost = 1.25;   // per metre of ground never seen (safe ground: 1)
   double planner_caution_cost = 3.0;    // per metre of caution
+  double planner_near_cost = 3.0;       // per metre within the circumscribed radius of a rock (planner::PlannerOptions::near_cost)
   double planner_margin_m = 10.0;       // the plan's window: map, rover and goal, plus this
   // A goal the plan finds unreachable this many steps running aborts the goto (the map
   // changes as the rover looks again; one unlucky map is not the end).

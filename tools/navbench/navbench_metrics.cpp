@@ -1,11 +1,14 @@
 #include "navbench/navbench_metrics.hpp"
 
+#include "planner/global_planner.hpp"
 #include "report/json_writer.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
+#include <limits>
+#include <stdexcept>
 #include <unordered_map>
 
 namespace rover::navbench {
@@ -137,6 +140,120 @@ std::optional<double> PathRatio(double driven_m, const Eigen::Vector2d& start, c
   return driven_m / straight;
 }
 
+namespace {
+
+// How far `a`..`b` keeps from every obstacle (negative: it crosses one): circles exactly,
+// polygons by points along the segment every `spacing_m`.
+double SegmentClearance(const std::vector<hazards::KeepOutZone>& obstacles, const Eigen::Vector2d& a,
+                        const Eigen::Vector2d& b, double spacing_m) {
+  hazards::Footprint point;
+  point.length_m = point.width_m = 1e-4;
+  const Eigen::Vector2d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  double out = std::numeric_limits<double>::infinity();
+  for (const auto& z : obstacles) {
+    if (z.shape == hazards::KeepOutZone::Shape::kCircle) {
+      const double t = len2 > 0 ? std::clamp((z.center - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+      out = std::min(out, (a + t * ab - z.center).norm() - z.radius_m);
+      continue;
+    }
+    const int n = std::max(1, static_cast<int>(std::ceil(std::sqrt(len2) / spacing_m)));
+    for (int k = 0; k <= n; ++k) {
+      const Eigen::Vector2d p = a + (static_cast<double>(k) / n) * ab;
+      out = std::min(out, hazards::Clearance(z, point, p.x(), p.y(), 0.0));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+ShortestPath ShortestSafePath(const std::vector<hazards::KeepOutZone>& obstacles, double clearance_m,
+                              const Eigen::Vector2d& start, const Eigen::Vector2d& goal, double goal_radius_m,
+                              const MapBounds& map, double cell_m) {
+  if (!(clearance_m >= 0) || !(cell_m > 0) || !(goal_radius_m >= 0) || !(map.max_x > map.min_x) ||
+      !(map.max_y > map.min_y))
+    throw std::invalid_argument("navbench: the shortest path needs clearance >= 0, a cell > 0 and a map");
+  const int rows = static_cast<int>(std::ceil((map.max_x - map.min_x) / cell_m));
+  const int cols = static_cast<int>(std::ceil((map.max_y - map.min_y) / cell_m));
+  const avoidance::Grid grid =
+      avoidance::Grid::Filled(map.min_x, map.min_y, cell_m, rows, cols, avoidance::CellClass::kSafe, 1.0f);
+  planner::PlanRequest request;
+  request.start_x = start.x(), request.start_y = start.y();
+  request.goal_x = goal.x(), request.goal_y = goal.y();
+  request.goal_radius_m = goal_radius_m;
+  request.zones = obstacles;  // cells whose centre lies in one: obstacles
+  planner::PlannerOptions options;
+  // Only the distance counts: the centre keeps clearance_m off every obstacle cell, and
+  // nothing costs more than open ground.
+  options.inscribed_radius_m = options.circumscribed_radius_m = clearance_m;
+  options.near_cost = 1.0;
+  options.max_cells = std::max(options.max_cells, rows * cols + 1);
+  const planner::GlobalPlan plan = planner::PlanOnGrid(grid, request, options);
+  ShortestPath out;
+  if (!plan.reachable()) return out;
+  // The grid's way, cut where it first enters the goal disc (a run ends there too).
+  std::vector<Eigen::Vector2d> way;
+  for (const auto& p : plan.path()) {
+    way.push_back(p);
+    if ((p - goal).norm() <= goal_radius_m) break;
+  }
+  // Pulled taut: from each kept point, straight to the farthest point of the way before the
+  // first one the straight line cannot reach with the clearance (a cell-centre way may pass
+  // a disc up to half a cell's diagonal closer than clearance_m: that much is allowed, and
+  // the next point is always reachable). The grid's way bends where Dijkstra's ties fell,
+  // not on the taut line, so the taut way is cut into cell-long pieces and pulled again,
+  // until it shortens by less than a millimetre.
+  const double allowance = clearance_m - 0.75 * cell_m;
+  auto taut = [&](const std::vector<Eigen::Vector2d>& in) {
+    std::vector<Eigen::Vector2d> pulled{in.front()};
+    std::size_t a = 0;
+    while (a + 1 < in.size()) {
+      std::size_t next = a + 1;
+      for (std::size_t j = a + 2; j < in.size(); ++j) {
+        if (SegmentClearance(obstacles, in[a], in[j], 0.5 * cell_m) < allowance) break;
+        next = j;
+      }
+      pulled.push_back(in[next]);
+      a = next;
+    }
+    return pulled;
+  };
+  auto polyline = [](const std::vector<Eigen::Vector2d>& v) {
+    double l = 0;
+    for (std::size_t k = 1; k < v.size(); ++k) l += (v[k] - v[k - 1]).norm();
+    return l;
+  };
+  out.path = taut(way);
+  for (int pass = 0; pass < 20; ++pass) {
+    std::vector<Eigen::Vector2d> dense{out.path.front()};
+    for (std::size_t k = 1; k < out.path.size(); ++k) {
+      const int n = std::max(1, static_cast<int>(std::ceil((out.path[k] - out.path[k - 1]).norm() / cell_m)));
+      for (int m = 1; m <= n; ++m) dense.push_back(out.path[k - 1] + (static_cast<double>(m) / n) * (out.path[k] - out.path[k - 1]));
+    }
+    std::vector<Eigen::Vector2d> again = taut(dense);
+    const bool done = polyline(again) > polyline(out.path) - 1e-3;
+    out.path = std::move(again);
+    if (done) break;
+  }
+  double length = 0;
+  for (std::size_t k = 1; k < out.path.size(); ++k) length += (out.path[k] - out.path[k - 1]).norm();
+  // The last leg ends where it meets the disc, not at the cell inside it.
+  if (out.path.size() >= 2) {
+    const Eigen::Vector2d p = out.path[out.path.size() - 2], q = out.path.back();
+    if ((p - goal).norm() > goal_radius_m && (q - goal).norm() < goal_radius_m) {
+      // The point of p..q on the disc's edge.
+      const Eigen::Vector2d d = q - p, f = p - goal;
+      const double A = d.squaredNorm(), B = 2 * f.dot(d), C = f.squaredNorm() - goal_radius_m * goal_radius_m;
+      const double t = (-B - std::sqrt(std::max(0.0, B * B - 4 * A * C))) / (2 * A);
+      length -= (1 - t) * d.norm();
+      out.path.back() = p + t * d;
+    }
+  }
+  out.length_m = length;
+  return out;
+}
+
 std::optional<double> Median(std::vector<double> values) {
   if (values.empty()) return std::nullopt;
   std::sort(values.begin(), values.end());
@@ -147,7 +264,7 @@ std::optional<double> Median(std::vector<double> values) {
 GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& runs) {
   GroupFigures g;
   g.group = group;
-  std::vector<double> ratios;
+  std::vector<double> ratios, shortest, over_shortest;
   for (const auto& r : runs) {
     if (r.group != group) continue;
     ++g.runs;
@@ -160,7 +277,13 @@ GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& 
       if (r.outcome == "aborted") ++g.safe_aborts[r.abort_reason.empty() ? "unknown" : r.abort_reason];
       if (r.outcome == "incomplete") ++g.safe_aborts["incomplete"];
     }
-    if (r.success() && r.path_ratio) ratios.push_back(*r.path_ratio);
+    if (r.success() && r.path_ratio) {
+      ratios.push_back(*r.path_ratio);
+      if (const auto best = r.shortest_ratio()) {
+        shortest.push_back(*best);
+        over_shortest.push_back(r.driven_m / *r.shortest_m);
+      }
+    }
     if (!r.ran) continue;
     g.driven_m += r.driven_m;
     g.rover_time_s += r.rover_time_s;
@@ -174,6 +297,8 @@ GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& 
     g.vo_false += r.vo_false;
   }
   g.median_path_ratio = Median(ratios);
+  g.median_shortest_ratio = Median(shortest);
+  g.median_over_shortest = Median(over_shortest);
   if (g.rover_time_s > 0) g.drive_rate_m_per_h = g.driven_m / g.rover_time_s * 3600.0;
   return g;
 }
@@ -196,6 +321,18 @@ std::string TableText(const std::vector<GroupFigures>& groups) {
        << (g.drive_rate_m_per_h ? Fixed(*g.drive_rate_m_per_h, 1) : "-") << std::setw(18)
        << (std::to_string(g.vo_false) + "/" + std::to_string(g.vo_accepted) + " (" + Pct(g.vo_false, g.vo_accepted) + ")")
        << (aborts.empty() ? "-" : aborts) << "\n";
+  }
+  bool any_shortest = false;
+  for (const auto& g : groups) any_shortest |= g.median_shortest_ratio.has_value();
+  if (any_shortest) {
+    os << "\nshortest safe way on the true world (round every rock over the map's step limit, the centre half\n"
+          "the body's width off it; medians over the successful runs):\n";
+    os << std::left << std::setw(11) << "world" << std::setw(16) << "shortest ratio" << "driven / shortest\n";
+    for (const auto& g : groups) {
+      os << std::left << std::setw(11) << g.group << std::setw(16)
+         << (g.median_shortest_ratio ? Fixed(*g.median_shortest_ratio, 2) : "-")
+         << (g.median_over_shortest ? Fixed(*g.median_over_shortest, 2) : "-") << "\n";
+    }
   }
   os << "\nrover time (share of the sequences' span; VO and mapping overlap):\n";
   os << std::left << std::setw(11) << "world" << std::setw(10) << "hours" << std::setw(10) << "driving"
@@ -234,6 +371,8 @@ std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vect
     for (const auto& [reason, n] : g.safe_aborts) j.Field(reason, n);
     j.EndObject();
     optional("median_path_ratio", g.median_path_ratio);
+    optional("median_shortest_ratio", g.median_shortest_ratio);
+    optional("median_driven_over_shortest", g.median_over_shortest);
     j.Field("driven_m", g.driven_m).Field("rover_time_s", g.rover_time_s);
     optional("drive_rate_m_per_h", g.drive_rate_m_per_h);
     j.Key("rover_time_breakdown").BeginObject();
@@ -260,6 +399,8 @@ std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vect
     }
     j.Field("straight_m", r.straight_m).Field("driven_m", r.driven_m);
     optional("path_ratio", r.path_ratio);
+    optional("shortest_m", r.shortest_m);
+    optional("shortest_ratio", r.shortest_ratio());
     j.Field("rover_time_s", r.rover_time_s).Field("vo_updates_accepted", r.vo_accepted).Field("false_updates", r.vo_false);
     j.EndObject();
   }

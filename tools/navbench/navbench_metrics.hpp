@@ -54,6 +54,23 @@ struct OffMapReport {
 OffMapReport WheelsOffMap(const std::vector<hazards::Pose2>& track, const std::vector<Eigen::Vector2d>& wheels,
                           const MapBounds& map);
 
+// The shortest way the rover could have driven: from `start` to within goal_radius_m of
+// `goal`, its centre keeping `clearance_m` off every obstacle disc (navbench: the rocks over
+// the map's step limit, which the stack refuses; clearance half the body's width: a lower
+// bound, since the body is longer than it is wide and must turn), inside `map`. The global planner (common/planner) on the true
+// world, every cell of cell_m whose centre lies in a disc an obstacle and the rest seen
+// safe ground at one cost, gives the 8-connected way; it is then pulled taut (each corner
+// cut where the straight line keeps the clearance from every disc, by exact geometry), so
+// the length is the grid's way less its 8-connected excess (up to 8 %). What a path ratio
+// can at best be, and whether a long path was forced by the rocks. Empty length: no way.
+struct ShortestPath {
+  std::optional<double> length_m;
+  std::vector<Eigen::Vector2d> path;  // start .. goal disc, taut
+};
+ShortestPath ShortestSafePath(const std::vector<hazards::KeepOutZone>& obstacles, double clearance_m,
+                              const Eigen::Vector2d& start, const Eigen::Vector2d& goal, double goal_radius_m,
+                              const MapBounds& map, double cell_m = 0.1);
+
 // Length of the polyline through the track's positions.
 double PathLength(const std::vector<hazards::Pose2>& track);
 // Driven distance over the straight line from start to goal; empty when the line is 0.
@@ -77,6 +94,11 @@ struct RunFigures {
   double straight_m = 0;             // start to goal
   double driven_m = 0;               // the true path's length
   std::optional<double> path_ratio;  // driven / straight
+  // The shortest safe way on the true world (ShortestSafePath), when one was measured.
+  std::optional<double> shortest_m;
+  std::optional<double> shortest_ratio() const {
+    return shortest_m && straight_m > 0 ? std::optional<double>(*shortest_m / straight_m) : std::nullopt;
+  }
   double rover_time_s = 0;           // span of the sequence (rover_time_breakdown.span_s)
   // Planning counts only where the stack charges it (summary.json's planning_s; 0 when null).
   double driving_s = 0, imaging_s = 0, vo_s = 0, mapping_s = 0, planning_s = 0, waiting_s = 0;
@@ -95,6 +117,9 @@ struct GroupFigures {
   // (no summary, or the wall-clock limit) under "incomplete".
   std::map<std::string, int> safe_aborts;
   std::optional<double> median_path_ratio;  // over the successful runs
+  // Over the same runs: the shortest safe way's ratio (what the path ratio could at best
+  // be), and the driven length over that shortest way.
+  std::optional<double> median_shortest_ratio, median_over_shortest;
   double driven_m = 0, rover_time_s = 0;    // sums over every run that ran
   std::optional<double> drive_rate_m_per_h; // driven_m / rover_time_s
   double driving_s = 0, imaging_s = 0, vo_s = 0, mapping_s = 0, planning_s = 0, waiting_s = 0;

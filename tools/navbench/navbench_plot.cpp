@@ -71,6 +71,11 @@ std::string PlotRun(const RunPlan& plan, const RunFigures& figures, const RunTra
       out << "\n\n";
     }
   }
+  {
+    std::ofstream out(dir + "/shortest.dat");
+    out << "# east_m north_m (the shortest safe way on the true world)\n";
+    for (const auto& p : track.shortest) out << Num(p.y()) << " " << Num(p.x()) << "\n";
+  }
   std::ofstream(dir + "/goal.dat") << Num(plan.goal_y) << " " << Num(plan.goal_x) << " " << Num(plan.goal_radius_m)
                                    << "\n";
   std::ofstream(dir + "/start.dat") << "0 0\n";
@@ -103,6 +108,7 @@ std::string PlotRun(const RunPlan& plan, const RunFigures& figures, const RunTra
      << "     'zone_circles.dat' using 1:2:3 with circles fs transparent solid 0.3 lc rgb '#e69f00' title 'keep-out zones', \\\n"
      << "     'zone_polygons.dat' using 1:2 with lines lw 2 lc rgb '#e69f00' notitle, \\\n"
      << "     'goal.dat' using 1:2:3 with circles fs transparent solid 0.25 border lc rgb '#009e73' title 'goal disc', \\\n"
+     << "     'shortest.dat' using 1:2 with lines lw 1.5 dt 2 lc rgb '#555555' title 'shortest way round the rocks over the map step limit', \\\n"
      << "     'path.dat' using 1:2 with lines lw 2.5 lc rgb '#0072b2' title 'path (truth)', \\\n"
      << "     'start.dat' using 1:2 with points pt 5 ps 1.5 lc rgb '#009e73' title 'start'";
   if (!track.truth.empty()) {

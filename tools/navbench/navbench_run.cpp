@@ -307,6 +307,23 @@ RunFigures ReadRun(const RunPlan& p, RunTrack* track) {
   r.off_map_samples = WheelsOffMap(t.truth, SixWheels(wheelbase_m, track_m), t.map).samples;
   r.driven_m = PathLength(t.truth);
   r.path_ratio = PathRatio(r.driven_m, Eigen::Vector2d(spec.start_x, spec.start_y), Eigen::Vector2d(p.goal_x, p.goal_y));
+  // What the path ratio could at best be: the shortest way round every rock the map must
+  // rate unsafe (taller than its step limit, hazards.map.traversability.max_step_m: the
+  // stack refuses them, not only those over the collision height), the rover's centre half
+  // its width off their discs.
+  {
+    double max_step_m = max_height_m;
+    rover_config["hazards"]["map"]["traversability"].Get("max_step_m", max_step_m);
+    std::vector<hazards::KeepOutZone> refused;
+    for (const auto& rock : world.rocks())
+      if (rock.height_m > max_step_m)
+        refused.push_back(hazards::KeepOutZone::Circle("rock", rock.position.x(), rock.position.y(), 0.5 * rock.diameter_m));
+    const ShortestPath best =
+        ShortestSafePath(refused, 0.5 * footprint.width_m, Eigen::Vector2d(spec.start_x, spec.start_y),
+                         Eigen::Vector2d(p.goal_x, p.goal_y), p.goal_radius_m, t.map);
+    r.shortest_m = best.length_m;
+    t.shortest = best.path;
+  }
   if (!t.truth.empty()) {
     r.final_truth = Eigen::Vector2d(t.truth.back().x, t.truth.back().y);
     r.in_goal_disc = (*r.final_truth - Eigen::Vector2d(p.goal_x, p.goal_y)).norm() <= p.goal_radius_m;

@@ -64,6 +64,7 @@ struct RunTrack {
   MapBounds map;
   hazards::Footprint footprint;
   std::vector<hazards::Pose2> contact_poses;  // where each collision began
+  std::vector<Eigen::Vector2d> shortest;       // the shortest safe way (ShortestSafePath)
 };
 
 // Reads a finished run: its summary.json, the truth track and keep-out zones in its log,

@@ -110,6 +110,43 @@ TEST(LoopBreaker, APositionCycleIsFoundWhateverTheMovesAndHeadings) {
   EXPECT_TRUE(BackWhereItWas(history, a_again, narrow));
 }
 
+// navbench seed 11 k0.20_r01: at A the rover backs up five times, 1.5 m along its tracks
+// (B1 .. B5), then drives forward over them again. Passing B3 and B1 closes no cycle (it
+// only ever passed them, backing); arriving at A, where the backing began, closes one. Each
+// cycle is a refused way for the planner: before, this retreat counted three.
+TEST(LoopBreaker, DrivingBackOverItsRetreatClosesOneCycleWhereTheRetreatBegan) {
+  const double yaw = 2.1;
+  const double cx = std::cos(yaw), cy = std::sin(yaw);
+  auto along = [&](double s) { return Pose2{3.0 + s * cx, -1.0 + s * cy, yaw}; };
+  std::vector<Visit> history = {{along(-1.2), Arc(0.6, 0.0, 0.5)}, {along(-0.6), Arc(0.6, 0.0, 0.5)}};
+  for (int k = 0; k < 5; ++k) history.push_back({along(-0.3 * k), Arc(-0.3, 0.0, 0.5)});  // A, B1 .. B4
+  // At B5 (1.5 m back): forward 0.6 m to B3, 0.6 m to B1, 0.3 m to A.
+  int cycles = 0;
+  history.push_back({along(-1.5), Arc(0.6, 0.1, 0.5)});
+  const Pose2 b3{along(-0.9).x + 0.03, along(-0.9).y, yaw + 0.05};
+  EXPECT_FALSE(BackWhereItWas(history, b3));
+  cycles += BackWhereItWas(history, b3);
+  history.push_back({b3, Arc(0.6, -0.1, 0.5)});
+  const Pose2 b1{along(-0.3).x, along(-0.3).y + 0.04, yaw};
+  EXPECT_FALSE(BackWhereItWas(history, b1));
+  cycles += BackWhereItWas(history, b1);
+  history.push_back({b1, Arc(0.3, 0.0, 0.5)});
+  const Pose2 a{along(0.0).x + 0.02, along(0.0).y, yaw};
+  EXPECT_TRUE(BackWhereItWas(history, a));
+  cycles += BackWhereItWas(history, a);
+  EXPECT_EQ(cycles, 1);
+  // A pose reached backing where the rover then turned is one it stood at: the visit after
+  // the turn was reached by the turn. At B3 (reached backing) it turns, drives 0.6 m off
+  // and comes back to B3: a cycle.
+  std::vector<Visit> turned(history.begin(), history.begin() + 5);  // .. A, B1, B2, each then backing
+  const Pose2 b3_turned{along(-0.9).x, along(-0.9).y, yaw + 0.3};
+  turned.push_back({along(-0.9), Turn(0.3, 0.5, 3.0)});
+  turned.push_back({b3_turned, Arc(0.6, 0.0, 0.5)});
+  turned.push_back({{b3_turned.x + 0.6 * std::cos(yaw + 0.3), b3_turned.y + 0.6 * std::sin(yaw + 0.3), yaw + 0.3},
+                    Arc(0.6, 1.0, 0.5)});
+  EXPECT_TRUE(BackWhereItWas(turned, {along(-0.9).x + 0.05, along(-0.9).y, yaw + 3.0}));
+}
+
 // A rover turning round in place in a pocket (many steps at one position) has left nowhere.
 TEST(LoopBreaker, TurningInPlaceIsNoPositionCycle) {
   std::vector<Visit> history;

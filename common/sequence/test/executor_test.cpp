@@ -800,6 +800,10 @@ TEST(ExecutorOptions, LoadsTheExampleAndRejectsBadValues) {
   EXPECT_FALSE(o.avoid_keep_unsafe);
   EXPECT_TRUE(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_keep_unsafe: true\n", "x.yaml")).avoid_keep_unsafe);
   EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_keep_unsafe: 3\n", "x.yaml")), ConfigError);
+  EXPECT_DOUBLE_EQ(o.planner_near_cost, 3.0);
+  EXPECT_DOUBLE_EQ(
+      LoadExecutorOptions(ConfigNode::FromString("executor:\n  planner_near_cost: 1.5\n", "x.yaml")).planner_near_cost, 1.5);
+  EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  planner_near_cost: 0.5\n", "x.yaml")), ConfigError);
   const ExecutorOptions d = LoadExecutorOptions(ConfigNode::FromString("other: 1\n", "x.yaml"));
   EXPECT_DOUBLE_EQ(d.vo_wait_s, ExecutorOptions{}.vo_wait_s);
   ExecutorOptions bad;

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -135,6 +136,42 @@ TEST(NavbenchPath, LengthRatioAndMedian) {
   EXPECT_EQ(*nb::Median({3, 1, 2}), 2.0);
   EXPECT_EQ(*nb::Median({4, 1, 3, 2}), 2.5);
   EXPECT_FALSE(nb::Median({}));
+}
+
+// Round one rock from (0, 0) to (10, 0): the centre keeps 0.5 m off a 1 m disc at (5, 0),
+// so the shortest way is the two tangents to the 1.5 m circle and the arc between them,
+// less the last 0.3 m (the goal disc): 2 sqrt(5^2 - 1.5^2) + 1.5 (pi - 2 acos(1.5 / 5)) - 0.3.
+TEST(NavbenchShortest, RoundOneRockIsTangentsAndArc) {
+  const std::vector<KeepOutZone> rocks = {KeepOutZone::Circle("rock", 5.0, 0.0, 1.0)};
+  const nb::MapBounds map{-3, 13, -6, 6};
+  const double expected = 2 * std::sqrt(25.0 - 2.25) + 1.5 * (kPi - 2 * std::acos(0.3)) - 0.3;
+  const nb::ShortestPath best = nb::ShortestSafePath(rocks, 0.5, {0, 0}, {10, 0}, 0.3, map);
+  ASSERT_TRUE(best.length_m);
+  EXPECT_NEAR(*best.length_m, expected, 0.05);  // 10.15 m: the grid's 8-connected way is longer
+  EXPECT_GT(*best.length_m, 9.7 + 0.3);
+  // Every leg keeps (nearly: a cell's allowance) 0.5 m off the rock.
+  for (std::size_t k = 1; k < best.path.size(); ++k) {
+    const Eigen::Vector2d a = best.path[k - 1], b = best.path[k], c(5, 0);
+    const double t = std::clamp((c - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+    EXPECT_GT((a + t * (b - a) - c).norm(), 1.5 - 0.08);
+  }
+  // No rock: the straight line, to the disc's edge.
+  const nb::ShortestPath open = nb::ShortestSafePath({}, 0.5, {0, 0}, {10, 0}, 0.3, map);
+  ASSERT_TRUE(open.length_m);
+  EXPECT_NEAR(*open.length_m, 9.7, 0.02);
+  // A wall of rocks from edge to edge of the map: no way.
+  std::vector<KeepOutZone> wall;
+  for (double y = -6; y <= 6; y += 0.5) wall.push_back(KeepOutZone::Circle("w", 5.0, y, 0.4));
+  EXPECT_FALSE(nb::ShortestSafePath(wall, 0.5, {0, 0}, {10, 0}, 0.3, map).length_m);
+  // A 1.2 m gap in it (between the rocks at y 1 and 3): a centre kept 0.5 m off passes
+  // 1.9 to 2.1 m east, by the nearer edge; one kept 0.7 m off cannot.
+  std::vector<KeepOutZone> gap;
+  for (const auto& z : wall)
+    if (std::abs(z.center.y() - 2.0) > 0.9) gap.push_back(z);
+  const nb::ShortestPath through = nb::ShortestSafePath(gap, 0.5, {0, 0}, {10, 0}, 0.3, map);
+  ASSERT_TRUE(through.length_m);
+  EXPECT_NEAR(*through.length_m, 2 * std::hypot(5.0, 1.9) - 0.3, 0.1);
+  EXPECT_FALSE(nb::ShortestSafePath(gap, 0.7, {0, 0}, {10, 0}, 0.3, map).length_m);
 }
 
 TEST(NavbenchTable, RowsCountWhatTheRunsSay) {

@@ -69,6 +69,12 @@ TEST(NavbenchQuick, TheTableIsTheLogs) {
     EXPECT_FALSE(touched);
     EXPECT_TRUE(run["in_goal_disc"].as<bool>());
     EXPECT_NEAR(group["median_path_ratio"].as<double>(), run["path_ratio"].as<double>(), 1e-9);
+    // The shortest safe way on the true world is no longer than what the rover drove into
+    // the disc (a lower bound: its legs may pass 0.075 m inside the clearance).
+    ASSERT_TRUE(run["shortest_m"].IsScalar()) << result.output;
+    EXPECT_LE(run["shortest_m"].as<double>(), run["driven_m"].as<double>() + 0.1);
+    EXPECT_GE(run["shortest_m"].as<double>(), straight - run["goal_radius_m"].as<double>() - 1e-6);
+    EXPECT_NEAR(group["median_shortest_ratio"].as<double>(), run["shortest_m"].as<double>() / straight, 1e-5);  // JSON: 6 digits
   }
 
   // VO and rover time: the same counts as the summary's.
