@@ -190,6 +190,8 @@ void WriteRun(const RunPlan& p) {
     << "navbench: goto " + Fixed(p.straight_m(), 1) + " m with avoidance, VO and the map on";
   y << YAML::Key << "world" << YAML::Value << world;
   y << YAML::Key << "sequence" << YAML::Value << p.dir + "/goto.seq";
+  // Named without the output folder, so that a run's log digest is the same wherever --out is.
+  y << YAML::Key << "sequence_name" << YAML::Value << "navbench/" + p.id + "/goto.seq";
   y << YAML::Key << "deployment" << YAML::Value << "configs/deploy/sim_vo.yaml";
   y << YAML::Key << "start" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "x" << YAML::Value << 0
     << YAML::Key << "y" << YAML::Value << 0 << YAML::Key << "yaw_deg" << YAML::Value << p.start_yaw_deg

@@ -30,7 +30,7 @@ namespace rover::tools {
 
 ScenarioSpec LoadScenario(const std::string& path) {
   const auto root = config::ConfigNode::LoadFile(path);
-  root.CheckKeys({"name", "description", "world", "sequence", "then_sequences", "deployment", "rover_config",
+  root.CheckKeys({"name", "description", "world", "sequence", "sequence_name", "then_sequences", "deployment", "rover_config",
                   "start", "sim_rate", "timeout_s", "inject", "expect", "seeds", "dragged_wheel",
                   "overrides", "world_overrides", "campaign"});
   ScenarioSpec s;
@@ -40,6 +40,11 @@ ScenarioSpec LoadScenario(const std::string& path) {
   root.Get("description", s.description);
   s.world = root.RequireString("world");
   s.sequence = root.RequireString("sequence");
+  s.sequence_name = s.sequence;
+  if (root.Has("sequence_name")) {
+    s.sequence_name = root.RequireString("sequence_name");
+    if (s.sequence_name.empty()) root["sequence_name"].Fail("expected a name, not an empty string");
+  }
   if (root.Has("then_sequences")) {
     const auto list = root["then_sequences"];
     if (!list.IsSequence()) list.Fail("expected a list of sequence files");

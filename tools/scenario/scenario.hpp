@@ -22,6 +22,11 @@ struct ScenarioSpec {
   std::string description;
   std::string world;          // configs/worlds/*.yaml
   std::string sequence;       // configs/sequences/*.seq
+  // The name the sequence is submitted under (the executor, its status and so the log call
+  // it by it): `sequence_name`, else the `sequence` path as written. A tool that writes
+  // scenarios into an output folder of the user's choosing names them, so that the log and
+  // its digest do not depend on where the folder is.
+  std::string sequence_name;
   // Submitted one after another on the same running stack, each when the one before has
   // completed (summary.json reports the last).
   std::vector<std::string> then_sequences;

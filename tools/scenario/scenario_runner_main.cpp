@@ -449,7 +449,7 @@ class Run {
   void Submit() {
     rover_msgs::sequence_submit_t submit{};
     submit.submission_id = 1;
-    submit.name = spec_.sequence;
+    submit.name = spec_.sequence_name;
     submit.text = plan_.sequence_text;
     bus_.Publish(rover::channels::kSequenceSubmit, submit);
     // The run's limit. On a real clock it is timeout_s of wall time. In virtual time it is

@@ -87,6 +87,11 @@ TEST(NavbenchPlan, WrittenFilesLoad) {
     nb::WriteRun(run);
     const auto spec = rover::tools::LoadScenario(run.scenario_path());
     EXPECT_EQ(spec.expect_outcome, "completed");
+    // Submitted under a name without the output folder: the log (and its digest) is the
+    // same wherever --out points.
+    EXPECT_EQ(spec.sequence_name, "navbench/" + run.id + "/goto.seq");
+    EXPECT_EQ(spec.sequence_name.find(out), std::string::npos) << spec.sequence_name;
+    EXPECT_NE(spec.sequence.find(out), std::string::npos) << spec.sequence;
     // The world: the rock field as drawn, with the start and goal kept clear.
     const auto world_options = rover::terrain::WorldOptions::LoadFile(spec.world);
     if (run.abundance_k) {

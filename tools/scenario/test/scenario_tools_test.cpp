@@ -125,6 +125,25 @@ TEST(ScenarioOverrides, ScenarioSeedsDraggedWheelAndOverridesBecomeCopies) {
   fs::remove_all(dir);
 }
 
+// The sequence is submitted under `sequence_name` when the scenario gives one (navbench
+// names its runs so that their logs do not carry the output folder), else under its path.
+TEST(ScenarioFile, TheSequenceIsSubmittedUnderItsNameOrItsPath) {
+  const std::string dir = TempDir("names");
+  const std::string base = "world: w.yaml\nsequence: /any/folder/goto.seq\ndeployment: d.yaml\n";
+  EXPECT_EQ(LoadScenario(Write(dir, "plain.yaml", base)).sequence_name, "/any/folder/goto.seq");
+  const ScenarioSpec named = LoadScenario(Write(dir, "named.yaml", base + "sequence_name: navbench/r01/goto.seq\n"));
+  EXPECT_EQ(named.sequence, "/any/folder/goto.seq");
+  EXPECT_EQ(named.sequence_name, "navbench/r01/goto.seq");
+  try {
+    LoadScenario(Write(dir, "empty.yaml", base + "sequence_name: \"\"\n"));
+    ADD_FAILURE() << "an empty sequence_name was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("sequence_name"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("expected a name"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
 TEST(VoTruth, TruthIsInterpolatedBetweenSamples) {
   const std::vector<rover_msgs::sim_truth_t> truth = {Truth(1000, 0, 0, 0), Truth(2000, 1, 2, 0.2)};
   const auto mid = TruthPoseAt(truth, 1250);
