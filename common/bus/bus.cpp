@@ -67,13 +67,20 @@ std::string LcmUrlProblem(const std::string& url) {
   return "";
 }
 
-Bus::Bus(const std::string& url) : url_(url), lcm_(CheckedUrl(url)) {
-  if (!lcm_.good()) {
-    throw std::runtime_error("cannot open the LCM bus at " + url +
+void RequireBus(lcm::LCM& lcm, const std::string& url, const std::string& what) {
+  if (!lcm.good()) {
+    throw std::runtime_error("cannot open the " + what + " at " + url +
                              " (expected a working udpm:// URL; is there a multicast route? "
                              "see README, \"Operating\")");
   }
+  if (url.rfind("udpm://", 0) == 0 && lcm.getFileno() < 0) {
+    throw std::runtime_error("cannot receive on the " + what + " at " + url +
+                             ": its UDP port is held by a socket that does not share it "
+                             "(expected a port no other program has bound; choose another in the URL)");
+  }
 }
+
+Bus::Bus(const std::string& url) : url_(url), lcm_(CheckedUrl(url)) { RequireBus(lcm_, url, "LCM bus"); }
 
 void Bus::set_publisher(const std::string& name) {
   publisher_ = name;

@@ -46,6 +46,14 @@ inline constexpr const char* kDefaultLcmUrl =
 // same process publishes the same bytes in every run (replays compare byte for byte).
 std::uint32_t PublisherId(const std::string& name);
 
+// Throws a one-line error unless `lcm` (opened on `url`, named `what` in the error) can
+// both send and receive. LCM 1.3.1 binds its udpm receive socket only at the first
+// subscribe; when that bind fails (the port is held by a socket that does not share it,
+// e.g. another program's ephemeral port) LCM prints "bind: Address already in use" and
+// hands back a subscription with nothing under it, which crashes on first use. Asking for
+// the file descriptor binds now, so the process can say so and stop instead.
+void RequireBus(lcm::LCM& lcm, const std::string& url, const std::string& what);
+
 // Who published a message and its count on the channel: pub_seq, or a heartbeat's process
 // and seq. Virtual time counts messages in flight with these (simtime/barrier.hpp).
 template <class Msg>

@@ -301,7 +301,7 @@ class VirtualClock {
         barrier_(WithSelf(std::move(members)), options_.barrier_timeout_s, "rover_sim"),
         sync_bus_(bus::SyncUrl(proc_.bus().url())), listener_{&barrier_, &proc_},
         tick_us_(static_cast<std::int64_t>(std::llround(options_.tick_s * 1e6))) {
-    if (!sync_bus_.good()) throw std::runtime_error("cannot open the sync bus " + bus::SyncUrl(proc_.bus().url()));
+    bus::RequireBus(sync_bus_, bus::SyncUrl(proc_.bus().url()), "sync bus");
     sync_bus_.subscribe(bus::kSimSyncChannel, &SyncListener::OnMessage, &listener_)->setQueueCapacity(10000);
   }
 

@@ -14,6 +14,11 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 #include <sstream>
 
 namespace rover::test {
@@ -153,6 +158,32 @@ TEST(ProcessCli, HugeWorldBadLcmUrlAndADirectoryStateFileAreOneLine) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_EQ(r.output, "sequence_executor: argument --state-file: " + dir +
                           ": is a directory (expected the path of a file the executor keeps its running sequence in)\n");
+}
+
+// A bus port already bound by a socket that does not share it (CI once met another
+// program's outgoing socket there): every process says so in a line and exits 1, where
+// LCM 1.3.1 alone leaves a subscription with no socket under it, and all six crashed.
+TEST(ProcessCli, ABusPortHeldByAnotherSocketIsOneLineNotACrash) {
+  const std::string url = PrivateUrl(57);
+  const int port = std::stoi(url.substr(url.rfind(':') + 1));
+  const int holder = socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(holder, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  addr.sin_addr.s_addr = htonl(INADDR_ANY);
+  ASSERT_EQ(bind(holder, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0) << "port " << port;
+  for (const char* p : kProcesses) {
+    const auto r = RunCommand("ROVER_LCM_URL='" + url + "' timeout 20 " + Bin(p) + " --config configs/rover.yaml");
+    EXPECT_EQ(r.exit_code, 1) << p << ": " << r.output;
+    EXPECT_NE(r.output.find(std::string(p) + ": error: cannot receive on the LCM bus at " + url +
+                            ": its UDP port is held by a socket that does not share it"),
+              std::string::npos) << p << ": " << r.output;
+  }
+  const auto r = RunCommand("timeout 20 " + Bin("rover_recorder") + " " + OutDir("held_port") + "/x.lcm --lcm-url '" + url + "'");
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cannot receive on the LCM bus at " + url), std::string::npos) << r.output;
+  close(holder);
 }
 
 TEST(SeqCheck, FifoDeviceDirectoryAndHugeFileAreErrorsAtOnce) {

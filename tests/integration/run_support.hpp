@@ -42,7 +42,9 @@ inline CommandResult RunCommand(const std::string& command) {
 // A private LCM URL for one test: two buses on LCM 1.3.1 must differ by port. Even ports:
 // virtual time's sync reports use port + 1 (bus/virtual_time.hpp).
 inline std::string PrivateUrl(int offset) {
-  const int port = 40000 + 2 * static_cast<int>((getpid() * 7 + offset) % 10000);
+  // Below Linux's ephemeral range (32768 up), where an outgoing socket could hold the
+  // port, and below scenario_runner's own 20000-31999.
+  const int port = 10000 + 2 * static_cast<int>((getpid() * 7 + offset) % 5000);
   return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=8388608";
 }
 

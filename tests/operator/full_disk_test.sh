@@ -27,7 +27,7 @@ mount -t tmpfs -o size=192k tmpfs "$disk" || { echo "FAIL: cannot mount a tmpfs"
 
 # 1. The recorder: 64 KiB free, a publisher sending ~150 KB/s for 2 s.
 head -c 131072 /dev/zero >"$disk/filler"
-url="udpm://239.255.76.72:$((50000 + $$ % 10000))?ttl=0"
+url="udpm://239.255.76.72:$((32000 + $$ % 380 * 2))?ttl=0"
 "$build/bin/rover_recorder" --lcm-url "$url" "$disk/log.lcm" 2>"$out/recorder.txt" &
 rec=$!
 sleep 0.5

@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
 
     const char* env_url = std::getenv("ROVER_LCM_URL");
     const std::string url = env_url && *env_url ? env_url
-        : "udpm://239.255.76.67:" + std::to_string(30000 + getpid() % 20000) + "?ttl=0&recv_buf_size=8388608";
+        : "udpm://239.255.76.67:" + std::to_string(20000 + 2 * (getpid() % 6000)) + "?ttl=0&recv_buf_size=8388608";
     rover::bus::Bus bus(url);
     bool alive = false;
     std::int64_t got_id = -1;

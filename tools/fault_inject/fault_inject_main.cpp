@@ -144,7 +144,11 @@ int main(int argc, char** argv) {
     std::unique_ptr<lcm::LCM> lcm;
     if (!list) {
       lcm = std::make_unique<lcm::LCM>(url);
-      if (!lcm->good()) throw ConfigError("fault_inject: cannot open the LCM bus " + url);
+      try {
+        rover::bus::RequireBus(*lcm, url, "LCM bus");
+      } catch (const std::runtime_error& e) {
+        throw ConfigError(std::string("fault_inject: ") + e.what());
+      }
     }
     if (now_utime) {
       options.now_utime = *now_utime;

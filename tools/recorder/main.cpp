@@ -462,7 +462,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     lcm::LCM lcm(args->url);
-    if (!lcm.good()) throw std::runtime_error("cannot open the LCM bus " + args->url);
+    rover::bus::RequireBus(lcm, args->url, "LCM bus");
     EventQueue queue;
     Writer writer(args->output, queue);
     const char* time_env = std::getenv("ROVER_TIME");

@@ -73,9 +73,10 @@ std::string Num(double v) {
   return os.str();
 }
 
-// Two buses on LCM 1.3.1 must differ by port: each run picks its own from its pid.
+// Two buses on LCM 1.3.1 must differ by port: each run picks its own from its pid, below
+// Linux's ephemeral range (32768 up), where another program's socket could hold it.
 std::string PrivateUrl() {
-  const int port = 20000 + 2 * static_cast<int>(getpid() % 10000);  // even: the sync reports use port + 1
+  const int port = 20000 + 2 * static_cast<int>(getpid() % 6000);  // even: the sync reports use port + 1
   return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=8388608";
 }
 
@@ -159,7 +160,7 @@ void RunPlot(const std::string& out_dir) {
 class SyncWatch {
  public:
   explicit SyncWatch(const std::string& url) : lcm_(rover::bus::SyncUrl(url)) {
-    if (!lcm_.good()) throw std::runtime_error("cannot open the sync bus " + rover::bus::SyncUrl(url));
+    rover::bus::RequireBus(lcm_, rover::bus::SyncUrl(url), "sync bus");
     lcm_.subscribe(rover::bus::kSimSyncChannel, &SyncWatch::OnMessage, this)->setQueueCapacity(10000);
   }
   // Waits up to `limit_s` of wall time for `process` to report `utime` finished, with no

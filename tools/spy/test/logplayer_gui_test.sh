@@ -36,8 +36,8 @@ for _ in $(seq 300); do [ -s "$OUT/display" ] && break; sleep 0.1; done
 display=":$(tr -d '[:space:]' <"$OUT/display")"
 
 # 1. A log: the publisher's messages for 2 s.
-url1="udpm://239.255.76.70:$((50000 + $$ % 10000))?ttl=0"
-url2="udpm://239.255.76.71:$((50000 + $$ % 10000))?ttl=0"
+url1="udpm://239.255.76.70:$((32000 + $$ % 380 * 2))?ttl=0"
+url2="udpm://239.255.76.71:$((32000 + $$ % 380 * 2))?ttl=0"
 "$recorder" --lcm-url "$url1" "$OUT/in.lcm" 2>"$OUT/recorder_in.log" &
 rec=$!
 sleep 0.5

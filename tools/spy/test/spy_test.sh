@@ -63,7 +63,7 @@ display=":$(tr -d '[:space:]' <"$OUT/display")"
 stamp "Xvfb on display $display"
 
 # A bus of this test's own (group and port no other test uses), loopback only.
-url="udpm://239.255.76.69:$((50000 + $$ % 10000))?ttl=0"
+url="udpm://239.255.76.69:$((32000 + $$ % 380 * 2))?ttl=0"
 "$SPY_PUBLISHER" --lcm-url "$url" --seconds 120 --period-ms 50 >"$OUT/publisher.log" 2>&1 &
 pub_pid=$!
 
