@@ -91,7 +91,7 @@ class SimulatedCameras : public ImageSource {
     std::lock_guard<std::mutex> lock(mutex_);
     exposed_ = truth_;
   }
-  CapturedPair Capture(std::int64_t frame_id) override {
+  CapturedPair Capture(std::int64_t /*frame_id*/) override {
     rover_msgs::sim_truth_t truth;
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -100,7 +100,11 @@ class SimulatedCameras : public ImageSource {
     geometry::Pose T = geometry::Pose::Identity();
     T.linear() = bus::QuaternionFromArray(truth.orientation).toRotationMatrix();
     T.translation() = Eigen::Vector3d(truth.position[0], truth.position[1], truth.position[2]);
-    auto exposure = cameras_.Expose(world_, T, frame_id);
+    // The read noise is seeded by this pair's place in the process's renders (1 for the
+    // first) and capture.render.noise_seed, not by its frame id: on a real clock the
+    // executor's ids come from the wall clock, and every run drew other noise for the same
+    // first view (the fault suite's first step past a cobble was refused now and then).
+    auto exposure = cameras_.Expose(world_, T, ++rendered_);
     const auto& navcam = exposure.navcam;
     CapturedPair pair{navcam.left, navcam.right, navcam.rig, {}, exposure.hazcam_error, truth.utime, std::nullopt};
     if (exposure.hazcam) pair.hazcam = HazcamPair{exposure.hazcam->left, exposure.hazcam->right, exposure.hazcam->rig};
@@ -112,6 +116,7 @@ class SimulatedCameras : public ImageSource {
   capture::RenderedCameras cameras_;
   mutable std::mutex mutex_;  // truth arrives on the bus thread while a render runs
   std::optional<rover_msgs::sim_truth_t> truth_, exposed_;
+  std::int64_t rendered_ = 0;  // pairs rendered so far: the noise's frame seed
 };
 
 // What a dataset image's PNG header says; throws ConfigError naming the file when it is
