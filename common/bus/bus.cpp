@@ -6,6 +6,8 @@
 #include <optional>
 
 #include <arpa/inet.h>
+#include <sys/socket.h>
+#include <unistd.h>
 #include <netinet/in.h>
 #include <cerrno>
 #include <iostream>
@@ -78,6 +80,20 @@ void RequireBus(lcm::LCM& lcm, const std::string& url, const std::string& what) 
                              ": its UDP port is held by a socket that does not share it "
                              "(expected a port no other program has bound; choose another in the URL)");
   }
+}
+
+bool UdpPortReceivable(int port) {
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  if (fd < 0) return true;  // cannot tell: LCM will say so itself
+  const int one = 1;
+  setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  a.sin_addr.s_addr = htonl(INADDR_ANY);
+  const bool ok = bind(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a) == 0;
+  close(fd);
+  return ok;
 }
 
 Bus::Bus(const std::string& url) : url_(url), lcm_(CheckedUrl(url)) { RequireBus(lcm_, url, "LCM bus"); }

@@ -54,6 +54,10 @@ std::uint32_t PublisherId(const std::string& name);
 // the file descriptor binds now, so the process can say so and stop instead.
 void RequireBus(lcm::LCM& lcm, const std::string& url, const std::string& what);
 
+// Whether LCM could bind UDP `port` to receive: a probe socket binds it as LCM does (with
+// SO_REUSEADDR), so it fails only where another program holds the port without sharing it.
+bool UdpPortReceivable(int port);
+
 // Who published a message and its count on the channel: pub_seq, or a heartbeat's process
 // and seq. Virtual time counts messages in flight with these (simtime/barrier.hpp).
 template <class Msg>

@@ -74,9 +74,14 @@ std::string Num(double v) {
 }
 
 // Two buses on LCM 1.3.1 must differ by port: each run picks its own from its pid, below
-// Linux's ephemeral range (32768 up), where another program's socket could hold it.
+// Linux's ephemeral range (32768 up), where another program's socket could hold it, and
+// passes over a pair another program holds (the sync reports use port + 1).
 std::string PrivateUrl() {
-  const int port = 20000 + 2 * static_cast<int>(getpid() % 6000);  // even: the sync reports use port + 1
+  int port = 20000 + 2 * static_cast<int>(getpid() % 6000);
+  for (int tries = 0; tries < 6000; ++tries) {
+    if (rover::bus::UdpPortReceivable(port) && rover::bus::UdpPortReceivable(port + 1)) break;
+    port = port + 2 >= 32000 ? 20000 : port + 2;
+  }
   return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0&recv_buf_size=8388608";
 }
 

@@ -13,6 +13,11 @@
 #include <rover_msgs/imu_t.hpp>
 #include <rover_msgs/rover_clock_t.hpp>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -500,4 +505,31 @@ TEST(Bus, TheClocksCutDecidesTheBatchNotTheArrival) {
   std::string missing;
   EXPECT_TRUE(bus.SealWhenReady(true, &missing));
   EXPECT_EQ(missing, "3 on IMU from publisher id " + std::to_string(sim));
+}
+
+// A port another program holds without sharing it (CI met an outgoing socket on a test
+// bus's port) is told apart from one LCM programs share: LCM binds with SO_REUSEADDR.
+TEST(Bus, AHeldUdpPortIsToldApartFromAFreeOrSharedOne) {
+  auto open_on = [](int port, bool share) {
+    const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+    const int one = 1;
+    if (share) setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_ANY);
+    EXPECT_EQ(bind(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a), 0) << "port " << port;
+    return fd;
+  };
+  const int held = open_on(0, false);  // the kernel picks a free port, as for an outgoing socket
+  sockaddr_in got{};
+  socklen_t len = sizeof got;
+  ASSERT_EQ(getsockname(held, reinterpret_cast<sockaddr*>(&got), &len), 0);
+  const int port = ntohs(got.sin_port);
+  EXPECT_FALSE(rover::bus::UdpPortReceivable(port));
+  close(held);
+  EXPECT_TRUE(rover::bus::UdpPortReceivable(port));
+  const int shared = open_on(port, true);
+  EXPECT_TRUE(rover::bus::UdpPortReceivable(port));
+  close(shared);
 }
