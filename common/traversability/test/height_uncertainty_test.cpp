@@ -6,6 +6,7 @@
 // and pairs that disagree by a plausible pose error.
 #include "traversability/dense_stereo.hpp"
 #include "traversability/traversability_map.hpp"
+#include "rating_options.hpp"
 
 #include "geometry/camera_io.hpp"
 #include "geometry/pose.hpp"
@@ -147,16 +148,9 @@ TraversabilityMap RockBesideASparseCell(double top_m, const MapOptions& o, bool 
   return map;
 }
 
+// The monitor's rating with one relief counted (relief_sigmas, off in configs/rover.yaml).
 MapOptions HazardMonitorRating() {
-  MapOptions o;
-  o.footprint_radius_m = 0.3;
-  o.tilt_radius_m = 0.75;
-  o.max_step_m = 0.25;
-  o.max_tilt_deg = 32.0;
-  o.max_roughness_m = 0.08;
-  o.tilt_margin_sigmas = 1.0;
-  o.dip_margin_sigmas = 2.0;
-  o.roughness_margin_sigmas = 2.0;
+  MapOptions o = test::MonitorRatingOptions();
   o.relief_sigmas = 1.0;
   return o;
 }

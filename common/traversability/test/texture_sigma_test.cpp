@@ -7,6 +7,7 @@
 // disparity sigma".)
 #include "traversability/dense_stereo.hpp"
 #include "traversability/traversability_map.hpp"
+#include "rating_options.hpp"
 
 #include "geometry/camera_io.hpp"
 
@@ -176,15 +177,7 @@ TEST(TextureSigma, DenseStereoGivesBlandGroundLargerErrors) {
 // claim 4 times the error, the dip margin discounts them, and the cobble reads under the
 // limit. The texture model off, both are holes.
 double StepBesideACobble(double dip_cell_sigma_m) {
-  MapOptions o;
-  o.footprint_radius_m = 0.3;
-  o.tilt_radius_m = 0.75;
-  o.max_step_m = 0.25;
-  o.max_tilt_deg = 32.0;
-  o.max_roughness_m = 0.08;
-  o.tilt_margin_sigmas = 1.0;
-  o.dip_margin_sigmas = 2.0;
-  o.roughness_margin_sigmas = 2.0;
+  const MapOptions o = test::MonitorRatingOptions();
   TraversabilityMap map(o);
   std::vector<Eigen::Vector3d> pts;
   std::vector<double> sig;
