@@ -26,6 +26,8 @@ void EstimatorOptions::Validate() const {
   RequireRange("cross_track_sigma_fraction", cross_track_sigma_fraction, 0.0, 1.0);
   RequireRange("vertical_sigma_fraction", vertical_sigma_fraction, 0.0, 1.0);
   RequireRange("gyro_drift_rad_per_s", gyro_drift_rad_per_s, 0.0, 1.0);
+  RequireRange("gyro_random_walk_rad_per_sqrt_s", gyro_random_walk_rad_per_sqrt_s, 0.0, 1.0);
+  RequireRange("gyro_bias_walk_rad_per_s_per_sqrt_s", gyro_bias_walk_rad_per_s_per_sqrt_s, 0.0, 1.0);
   RequireRange("gyro_scale_sigma_fraction", gyro_scale_sigma_fraction, 0.0, 1.0);
   RequireRange("attitude_sigma_rad", attitude_sigma_rad, 0.0, M_PI);
   RequireRange("initial_position_sigma_m", initial_position_sigma_m, 0.0, 1e6);
@@ -44,6 +46,8 @@ EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
                                    "vertical_sigma_pct",
                                    "gyro_drift_deg_per_hour",
                                    "gyro_scale_sigma_pct",
+                                   "gyro_random_walk_deg_per_sqrt_hour",
+                                   "gyro_bias_walk_deg_per_hour_per_sqrt_hour",
                                    "attitude_sigma_deg",
                                    "initial_position_sigma_m",
                                    "initial_yaw_sigma_deg",
@@ -68,6 +72,15 @@ EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
   double drift_deg_h = o.gyro_drift_rad_per_s / kDeg * 3600.0;
   section.Get("gyro_drift_deg_per_hour", drift_deg_h, 0.0, 3600.0);
   o.gyro_drift_rad_per_s = drift_deg_h * kDeg / 3600.0;
+
+  // deg/sqrt(h) -> rad/sqrt(s): sqrt(3600 s) = 60.
+  double arw = o.gyro_random_walk_rad_per_sqrt_s / kDeg * 60.0;
+  section.Get("gyro_random_walk_deg_per_sqrt_hour", arw, 0.0, 3600.0);
+  o.gyro_random_walk_rad_per_sqrt_s = arw * kDeg / 60.0;
+  // deg/h/sqrt(h) -> rad/s/sqrt(s).
+  double bias_walk = o.gyro_bias_walk_rad_per_s_per_sqrt_s / kDeg * 3600.0 * 60.0;
+  section.Get("gyro_bias_walk_deg_per_hour_per_sqrt_hour", bias_walk, 0.0, 3600.0);
+  o.gyro_bias_walk_rad_per_s_per_sqrt_s = bias_walk * kDeg / 3600.0 / 60.0;
 
   double att_deg = o.attitude_sigma_rad / kDeg;
   section.Get("attitude_sigma_deg", att_deg, 0.0, 180.0);

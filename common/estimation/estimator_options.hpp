@@ -28,8 +28,15 @@ struct EstimatorOptions {
   // Along the rover's up axis (elevation): the IMU knows pitch well, so smaller.
   double vertical_sigma_fraction = 0.01;
 
-  // Gyro drift (a bias: heading sigma grows linearly with time). MER's LN-200: < 3 deg/h.
+  // Gyro drift: the 1-sigma of the gyro's bias about the vertical before any VO (heading
+  // sigma grows linearly with time until VO has measured the bias). MER's LN-200: < 3 deg/h.
   double gyro_drift_rad_per_s = 3.0 * 3.14159265358979323846 / 180.0 / 3600.0;
+  // Angle random walk: white gyro noise, heading variance grows by arw^2 per second.
+  double gyro_random_walk_rad_per_sqrt_s = 0.15 * 3.14159265358979323846 / 180.0 / 60.0;
+  // Bias instability as a random walk of the bias: its variance grows by this^2 per second,
+  // so a bias VO has measured is never believed to better than this allows.
+  double gyro_bias_walk_rad_per_s_per_sqrt_s =
+      0.5 * 3.14159265358979323846 / 180.0 / 3600.0 / 60.0;
   // Gyro scale-factor error: heading sigma grows by this fraction of each yaw change.
   double gyro_scale_sigma_fraction = 0.001;
   // Roll and pitch 1-sigma: the IMU levels itself on gravity, so this does not grow.
@@ -60,7 +67,8 @@ struct EstimatorOptions {
 
 // Reads the `estimator:` section. Keys (all optional; defaults above):
 //   along_track_sigma_pct, cross_track_sigma_pct, vertical_sigma_pct   (percent)
-//   gyro_drift_deg_per_hour, gyro_scale_sigma_pct, attitude_sigma_deg
+//   gyro_drift_deg_per_hour, gyro_scale_sigma_pct, attitude_sigma_deg,
+//   gyro_random_walk_deg_per_sqrt_hour, gyro_bias_walk_deg_per_hour_per_sqrt_hour
 //   initial_position_sigma_m, initial_yaw_sigma_deg
 //   history_s, history_max_samples
 //   vo_heading: fuse | replace | ignore

@@ -21,10 +21,11 @@ Eigen::Matrix3d Rz(double yaw) {
 
 // Differences of covariances are symmetric but may be slightly indefinite after a VO
 // update lowered one end; project onto the PSD cone.
-Eigen::Matrix3d NearestPsd(const Eigen::Matrix3d& A) {
-  const Eigen::Matrix3d S = 0.5 * (A + A.transpose());
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(S);
-  const Eigen::Vector3d ev = es.eigenvalues().cwiseMax(0.0);
+template <typename Matrix>
+Matrix NearestPsd(const Matrix& A) {
+  const Matrix S = 0.5 * (A + A.transpose());
+  Eigen::SelfAdjointEigenSolver<Matrix> es(S);
+  const auto ev = es.eigenvalues().cwiseMax(0.0);
   return es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
 }
 
@@ -53,9 +54,35 @@ const char* ToString(VoUpdateStatus status) {
 
 PoseEstimator::PoseEstimator(const EstimatorOptions& options) : options_(options) {
   options_.Validate();
-  P_pos_ = Eigen::Matrix3d::Identity() * options_.initial_position_sigma_m *
-           options_.initial_position_sigma_m;
-  yaw_sigma_ = options_.initial_yaw_sigma_rad;
+  P_ = InitialCovariance();
+}
+
+PoseEstimator::Matrix5d PoseEstimator::InitialCovariance() const {
+  Matrix5d P = Matrix5d::Zero();
+  const double s0 = options_.initial_position_sigma_m;
+  P.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() * s0 * s0;
+  P(kHeading, kHeading) = options_.initial_yaw_sigma_rad * options_.initial_yaw_sigma_rad;
+  P(kBias, kBias) = options_.gyro_drift_rad_per_s * options_.gyro_drift_rad_per_s;
+  return P;
+}
+
+double PoseEstimator::gyro_bias_sigma_rad_per_s() const {
+  return std::sqrt(std::max(0.0, P_(kBias, kBias)));
+}
+
+void PoseEstimator::PropagateHeading(double dt, double abs_dyaw) {
+  // The heading error grows by the bias error over dt: F = I + dt e_heading e_bias^T.
+  Matrix5d F = Matrix5d::Identity();
+  F(kHeading, kBias) = dt;
+  P_ = F * P_ * F.transpose();
+  const double arw = options_.gyro_random_walk_rad_per_sqrt_s;
+  P_(kHeading, kHeading) += arw * arw * dt;
+  // The scale-factor error is systematic over a turn: its sigma adds linearly.
+  const double s = std::sqrt(std::max(0.0, P_(kHeading, kHeading)));
+  const double g = options_.gyro_scale_sigma_fraction * abs_dyaw;
+  P_(kHeading, kHeading) += 2.0 * s * g + g * g;
+  const double walk = options_.gyro_bias_walk_rad_per_s_per_sqrt_s;
+  P_(kBias, kBias) += walk * walk * dt;
 }
 
 bool PoseEstimator::AdvanceTime(int64_t utime) {
@@ -90,8 +117,10 @@ InputResult PoseEstimator::OnImu(const ImuSample& imu) {
   if (has_imu_) {
     const double dt = static_cast<double>(imu.utime - last_imu_utime_) * 1e-6;
     const double dyaw = WrapAngle(yaw_imu - YawOf(q_imu_.toRotationMatrix()));
-    yaw_sigma_ += options_.gyro_drift_rad_per_s * dt +
-                  options_.gyro_scale_sigma_fraction * std::abs(dyaw);
+    // The IMU's heading drifts by the gyro's bias: take off the bias VO has measured.
+    yaw_offset_ = WrapAngle(yaw_offset_ - gyro_bias_ * dt);
+    turned_rad_ += std::abs(dyaw);
+    PropagateHeading(dt, std::abs(dyaw));
   } else if (pending_reset_yaw_) {
     yaw_offset_ = WrapAngle(*pending_reset_yaw_ - yaw_imu);
     pending_reset_yaw_.reset();
@@ -144,30 +173,39 @@ InputResult PoseEstimator::OnWheelOdometry(const WheelOdometrySample& odo) {
     forward.normalize();
     T_site_rover_.translation() += forward * delta;
     odometer_m_ += std::abs(delta);
-    GrowPositionCovariance(forward, std::abs(delta));
+    GrowPositionCovariance(forward * delta);
   }
   R_at_last_odometry_ = R_now;
   Record();
   return InputResult::kAccepted;
 }
 
-void PoseEstimator::GrowPositionCovariance(const Eigen::Vector3d& forward, double distance) {
+void PoseEstimator::GrowPositionCovariance(const Eigen::Vector3d& displacement) {
+  const double distance = displacement.norm();
+  if (distance <= 0.0) return;
+  // A heading error swings the displacement about the vertical: dp = (z x d) dpsi.
+  Matrix5d F = Matrix5d::Identity();
+  F.block<3, 1>(0, kHeading) = Eigen::Vector3d::UnitZ().cross(displacement);
+  P_ = F * P_ * F.transpose();
+
+  const Eigen::Vector3d forward = displacement / distance;
   Eigen::Vector3d cross = Eigen::Vector3d::UnitZ().cross(forward);
   if (cross.norm() < 1e-6) cross = T_site_rover_.linear().col(1);
   cross.normalize();
   const Eigen::Vector3d up = forward.cross(cross).normalized();
 
-  // Sigma along each axis grows by (fraction * distance), so that it stays proportional to
-  // the distance driven: P += ((s + g)^2 - s^2) e e^T with s the current sigma along e.
-  // A heading error of yaw_sigma adds yaw_sigma * distance across track.
+  // Wheel odometry's own error: sigma along each axis grows by (fraction * distance), so
+  // that it stays proportional to the distance driven (slip and wheel radius are mostly
+  // systematic): P += ((s + g)^2 - s^2) e e^T with s the current sigma along e.
   const Eigen::Vector3d axes[3] = {forward, cross, up};
   const double growth[3] = {options_.along_track_sigma_fraction * distance,
-                            (options_.cross_track_sigma_fraction + yaw_sigma_) * distance,
+                            options_.cross_track_sigma_fraction * distance,
                             options_.vertical_sigma_fraction * distance};
+  auto P_pos = P_.topLeftCorner<3, 3>();
   for (int i = 0; i < 3; ++i) {
-    const double s = std::sqrt(std::max(0.0, axes[i].dot(P_pos_ * axes[i])));
+    const double s = std::sqrt(std::max(0.0, axes[i].dot(P_pos * axes[i])));
     const double g = growth[i];
-    P_pos_ += (2.0 * s * g + g * g) * axes[i] * axes[i].transpose();
+    P_pos += (2.0 * s * g + g * g) * axes[i] * axes[i].transpose();
   }
 }
 
@@ -176,18 +214,18 @@ PoseEstimator::Sample PoseEstimator::Current() const {
   s.utime = utime_;
   s.p = T_site_rover_.translation();
   s.q = Eigen::Quaterniond(T_site_rover_.linear()).normalized();
-  s.P_pos = P_pos_;
-  s.yaw_sigma = yaw_sigma_;
+  s.P = P_;
   s.odometer = odometer_m_;
+  s.turned = turned_rad_;
   return s;
 }
 
 void PoseEstimator::SetCurrent(const Sample& s) {
   T_site_rover_.translation() = s.p;
   T_site_rover_.linear() = s.q.toRotationMatrix();
-  P_pos_ = s.P_pos;
-  yaw_sigma_ = s.yaw_sigma;
+  P_ = s.P;
   odometer_m_ = s.odometer;
+  turned_rad_ = s.turned;
 }
 
 void PoseEstimator::Record() {
@@ -221,9 +259,9 @@ PoseEstimator::Sample PoseEstimator::Interpolate(int64_t utime) const {
   s.utime = utime;
   s.p = a.p + f * (b.p - a.p);
   s.q = a.q.slerp(f, b.q).normalized();
-  s.P_pos = a.P_pos + f * (b.P_pos - a.P_pos);
-  s.yaw_sigma = a.yaw_sigma + f * (b.yaw_sigma - a.yaw_sigma);
+  s.P = a.P + f * (b.P - a.P);
   s.odometer = a.odometer + f * (b.odometer - a.odometer);
+  s.turned = a.turned + f * (b.turned - a.turned);
   return s;
 }
 
@@ -236,6 +274,68 @@ std::optional<geometry::Pose> PoseEstimator::PoseAt(int64_t utime) const {
   T.linear() = s.q.toRotationMatrix();
   T.translation() = s.p;
   return T;
+}
+
+PoseEstimator::VoCloneModel PoseEstimator::CloneToVoEnd(const Sample& from, const Sample& to,
+                                                        const Eigen::Vector3d& t_site,
+                                                        const geometry::Matrix6d& vo_covariance) const {
+  // Inputs: the errors at `from` [x y z heading bias], the gyro's white noise w over the
+  // interval, the bias walk v, and VO's noise on its translation (rover frame at `from`) and
+  // on its yaw change.
+  enum { kW = 5, kV = 6, kVoT = 7, kVoYaw = 10, kInputs = 11 };
+  const double dt = static_cast<double>(to.utime - from.utime) * 1e-6;
+  const double arw = options_.gyro_random_walk_rad_per_sqrt_s;
+  const double scale = options_.gyro_scale_sigma_fraction * std::max(0.0, to.turned - from.turned);
+  const double walk = options_.gyro_bias_walk_rad_per_s_per_sqrt_s;
+  Eigen::Matrix<double, kInputs, kInputs> S = Eigen::Matrix<double, kInputs, kInputs>::Zero();
+  S.topLeftCorner<5, 5>() = from.P;
+  S(kW, kW) = arw * arw * dt + scale * scale;
+  S(kV, kV) = walk * walk * dt;
+  const int vo_index[4] = {0, 1, 2, 5};  // x y z yaw of VO's x y z roll pitch yaw
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) S(kVoT + i, kVoT + j) = vo_covariance(vo_index[i], vo_index[j]);
+  }
+
+  // Outputs: the errors at `to` [x y z heading bias] and the gyro check.
+  enum { kCheck = 5, kOutputs = 6 };
+  Eigen::Matrix<double, kOutputs, kInputs> A = Eigen::Matrix<double, kOutputs, kInputs>::Zero();
+  A.block<3, 3>(0, 0).setIdentity();                                   // p(from)
+  A.block<3, 1>(0, kHeading) = Eigen::Vector3d::UnitZ().cross(t_site);  // heading swings t
+  A.block<3, 3>(0, kVoT) = from.q.toRotationMatrix();                  // VO's translation
+  A(kHeading, kHeading) = 1.0;
+  if (options_.vo_heading == VoHeadingMode::kReplace) {
+    A(kHeading, kVoYaw) = 1.0;  // heading(to) = heading(from) + VO's yaw change
+  } else {
+    A(kHeading, kBias) = dt;    // heading(to) = heading(from) + the gyro's
+    A(kHeading, kW) = 1.0;
+  }
+  A(kBias, kBias) = 1.0;
+  A(kBias, kV) = 1.0;
+  // check = VO's yaw change - the gyro's = VO's yaw error - (bias * dt + w).
+  A(kCheck, kVoYaw) = 1.0;
+  A(kCheck, kBias) = -dt;
+  A(kCheck, kW) = -1.0;
+
+  const Eigen::Matrix<double, kOutputs, kOutputs> C = A * S * A.transpose();
+  VoCloneModel m;
+  m.P_to = C.topLeftCorner<5, 5>();
+  m.cov_to_check = C.block<5, 1>(0, kCheck);
+  m.check_variance = C(kCheck, kCheck);
+  return m;
+}
+
+PoseEstimator::Vector5d PoseEstimator::FuseGyroCheck(const VoCloneModel& m, double check,
+                                                     Matrix5d& P_to) const {
+  if (!(m.check_variance > 0.0)) {
+    // Neither VO nor the gyro claims any error: take the mean of the two yaw changes.
+    Vector5d e = Vector5d::Zero();
+    e(kHeading) = -0.5 * check;
+    return e;
+  }
+  const Vector5d K = m.cov_to_check / m.check_variance;
+  P_to -= K * m.cov_to_check.transpose();
+  P_to = NearestPsd(Matrix5d(0.5 * (P_to + P_to.transpose())));
+  return K * check;
 }
 
 VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
@@ -305,56 +405,49 @@ VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
   const Sample from = Interpolate(from_utime);
   const Sample to_old = Interpolate(to_utime);
   const Sample now_old = Current();
-  const Eigen::Matrix3d R_from = from.q.toRotationMatrix();
 
-  // Heading at `to`: the VO yaw change and the gyro's, per vo_heading.
+  const Eigen::Matrix3d R_from = from.q.toRotationMatrix();
+  const Eigen::Vector3d t_site = R_from * t_vo;
+
+  // The yaw changes over [from, to] as VO and as the gyro (bias already taken off) saw them.
   const double yaw_from = YawOf(R_from);
   const double yaw_to_old = YawOf(to_old.q.toRotationMatrix());
   const double dyaw_gyro = WrapAngle(yaw_to_old - yaw_from);
   const double dyaw_vo = WrapAngle(YawOf(R_from * R_vo) - yaw_from);
-  const double var_vo = u.covariance(5, 5);
-  const double gyro_sigma = std::max(0.0, to_old.yaw_sigma - from.yaw_sigma);
-  const double var_gyro = gyro_sigma * gyro_sigma;
-  double dyaw = dyaw_gyro;
-  double yaw_sigma_to = to_old.yaw_sigma;
+
+  // The errors at `to` as a linear map of the errors at `from` and the new noises.
+  const VoCloneModel model = CloneToVoEnd(from, to_old, t_site, u.covariance);
+  Sample to_new;
+  to_new.utime = to_utime;
+  to_new.p = from.p + t_site;
+  to_new.P = model.P_to;
+  to_new.odometer = from.odometer + t_vo.norm();
+  to_new.turned = to_old.turned;
+  double yaw_to = yaw_from + dyaw_gyro;
   switch (options_.vo_heading) {
     case VoHeadingMode::kReplace:
-      dyaw = dyaw_vo;
-      yaw_sigma_to = std::sqrt(from.yaw_sigma * from.yaw_sigma + var_vo);
+      yaw_to = yaw_from + dyaw_vo;
       break;
     case VoHeadingMode::kFuse: {
-      const double sum = var_vo + var_gyro;
-      const double w_vo = sum > 0.0 ? var_gyro / sum : 0.5;
-      const double var_rel = sum > 0.0 ? var_vo * var_gyro / sum : 0.0;
-      dyaw = dyaw_gyro + w_vo * WrapAngle(dyaw_vo - dyaw_gyro);
-      yaw_sigma_to = std::sqrt(from.yaw_sigma * from.yaw_sigma + var_rel);
+      // VO's yaw change minus the gyro's measures the gyro's error over the interval.
+      const Vector5d e = FuseGyroCheck(model, WrapAngle(dyaw_vo - dyaw_gyro), to_new.P);
+      to_new.p -= e.head<3>();
+      yaw_to -= e(kHeading);
+      gyro_bias_ += e(kBias);
       break;
     }
     case VoHeadingMode::kIgnore:
       break;
   }
-  const double dpsi = WrapAngle(yaw_from + dyaw - yaw_to_old);
+  const double dpsi = WrapAngle(yaw_to - yaw_to_old);
   const Eigen::Matrix3d Rz_dpsi = Rz(dpsi);
-
-  Sample to_new;
-  to_new.utime = to_utime;
-  to_new.p = from.p + R_from * t_vo;
   to_new.q = Eigen::Quaterniond(Rz_dpsi * to_old.q.toRotationMatrix()).normalized();
-  // Position covariance: the VO translation covariance in the site frame, plus the heading
-  // uncertainty at `from` swinging the VO translation about the vertical.
-  const Eigen::Vector3d swing = Eigen::Vector3d::UnitZ().cross(R_from * t_vo);
-  to_new.P_pos = from.P_pos + R_from * u.covariance.topLeftCorner<3, 3>() * R_from.transpose() +
-                 swing * swing.transpose() * from.yaw_sigma * from.yaw_sigma;
-  to_new.P_pos = 0.5 * (to_new.P_pos + to_new.P_pos.transpose());
-  to_new.yaw_sigma = yaw_sigma_to;
-  to_new.odometer = from.odometer + t_vo.norm();
 
   auto reapply = [&](const Sample& old) {
     Sample s = old;
     s.p = to_new.p + Rz_dpsi * (old.p - to_old.p);
     s.q = Eigen::Quaterniond(Rz_dpsi * old.q.toRotationMatrix()).normalized();
-    s.P_pos = to_new.P_pos + NearestPsd(old.P_pos - to_old.P_pos);
-    s.yaw_sigma = to_new.yaw_sigma + std::max(0.0, old.yaw_sigma - to_old.yaw_sigma);
+    s.P = to_new.P + NearestPsd(Matrix5d(old.P - to_old.P));
     s.odometer = to_new.odometer + (old.odometer - to_old.odometer);
     return s;
   };
@@ -397,9 +490,10 @@ void PoseEstimator::Reset(const geometry::Pose& T_site_rover, int64_t utime) {
   } else {
     pending_reset_yaw_ = yaw;
   }
-  P_pos_ = Eigen::Matrix3d::Identity() * options_.initial_position_sigma_m *
-           options_.initial_position_sigma_m;
-  yaw_sigma_ = options_.initial_yaw_sigma_rad;
+  // The gyro's bias belongs to the gyro, not to the pose: its estimate and sigma are kept.
+  const double bias_variance = P_(kBias, kBias);
+  P_ = InitialCovariance();
+  P_(kBias, kBias) = bias_variance;
   R_at_last_odometry_ = T_site_rover.linear();
   source_ = PoseSource::kWheelImu;
   utime_ = utime;
@@ -410,31 +504,39 @@ void PoseEstimator::Reset(const geometry::Pose& T_site_rover, int64_t utime) {
 
 void PoseEstimator::NewSite(std::optional<int32_t> site_index) {
   const Eigen::Vector3d origin = T_site_rover_.translation();
-  const Eigen::Matrix3d P0 = Eigen::Matrix3d::Identity() * options_.initial_position_sigma_m *
-                             options_.initial_position_sigma_m;
+  const Eigen::Matrix3d P0 = InitialCovariance().topLeftCorner<3, 3>();
   // Past positions relative to the new origin are uncertain by the growth between them and
-  // now; that keeps a VO update spanning the new site meaningful.
+  // now; that keeps a VO update spanning the new site meaningful. At the origin the position
+  // error is P0 and no longer tied to the heading or the bias.
+  auto restart = [&](Matrix5d& P, const Eigen::Matrix3d& P_pos) {
+    P.topLeftCorner<3, 3>() = P_pos;
+    P.topRightCorner<3, 2>().setZero();
+    P.bottomLeftCorner<2, 3>().setZero();
+  };
+  const Eigen::Matrix3d P_now = P_.topLeftCorner<3, 3>();
   for (Sample& s : history_) {
     s.p -= origin;
-    s.P_pos = P0 + NearestPsd(P_pos_ - s.P_pos);
+    restart(s.P, P0 + NearestPsd(Eigen::Matrix3d(P_now - s.P.topLeftCorner<3, 3>())));
   }
   T_site_rover_.translation().setZero();
-  P_pos_ = P0;
+  restart(P_, P0);
   site_index_ = site_index ? *site_index : site_index_ + 1;
   if (!history_.empty()) {
     history_.back().p.setZero();
-    history_.back().P_pos = P0;
+    history_.back().P = P_;
   }
 }
 
 geometry::Matrix6d PoseEstimator::covariance() const {
   geometry::Matrix6d P = geometry::Matrix6d::Zero();
-  P.topLeftCorner<3, 3>() = P_pos_;
+  P.topLeftCorner<3, 3>() = P_.topLeftCorner<3, 3>();
   P(3, 3) = P(4, 4) = options_.attitude_sigma_rad * options_.attitude_sigma_rad;
-  P(5, 5) = yaw_sigma_ * yaw_sigma_;
+  P(5, 5) = P_(kHeading, kHeading);
+  // A heading error and the position error it caused are correlated.
+  P.block<3, 1>(0, 5) = P_.block<3, 1>(0, kHeading);
+  P.block<1, 3>(5, 0) = P_.block<1, 3>(kHeading, 0);
   return P;
 }
-
 PoseEstimate PoseEstimator::Estimate() const {
   PoseEstimate e;
   e.utime = utime_;

@@ -20,9 +20,21 @@
 //      correction: p(t) = p_new(to) + Rz(dyaw) * (p_old(t) - p_old(to)),
 //   4. drops the history samples strictly between from and to (the VO motion replaced
 //      them; later look-ups there interpolate between the corrected ends).
-// Covariance: the position covariance at `to` becomes P(from) + R Sigma_vo R^T plus the
-// effect of the heading uncertainty at `from` on the VO translation; the growth that wheel
-// odometry added after `to` is added back on top. The wheel growth over [from, to] is gone.
+// Covariance. The estimator carries one 5x5 covariance over the errors of
+// [x, y, z, heading, gyro bias] (site frame), so a heading error and the position error it
+// causes stay correlated, and a gyro bias makes the heading error grow in proportion to time,
+// not to its square root:
+//   - IMU: the heading error grows by bias error * dt, plus angle random walk and the
+//     gyro's scale-factor error on each yaw change; the bias wanders (bias walk).
+//   - Wheel odometry: the position error grows by the heading error swinging each
+//     displacement about the vertical (the Jacobian), plus the along/cross/vertical growth.
+//   - VO update: the state at `from` is cloned to `to` twice, along the VO motion (position)
+//     and along the gyro (heading, bias). The VO yaw change minus the gyro's is then a
+//     measurement of the gyro's error over [from, to] (its bias times the interval plus its
+//     noise); with vo_heading: fuse, one Kalman update on it corrects the heading at `to`,
+//     the position, and the gyro bias estimate, which the IMU path subtracts from then on.
+//     The wheel growth over [from, to] is gone; the growth added after `to` is added back on
+//     top (an approximation: the later growth keeps its earlier correlations).
 //
 // New site (NewSite). The pose becomes the origin of a new site frame: x = y = z = 0,
 // attitude kept (a site frame is still north-east-down), site_index + 1, position
@@ -147,6 +159,10 @@ class PoseEstimator {
   int32_t site_index() const { return site_index_; }
   int64_t last_vo_to_frame() const { return last_vo_to_frame_; }
   double yaw_offset_rad() const { return yaw_offset_; }
+  // The gyro's bias about the vertical as VO has measured it (rad/s, subtracted from the
+  // IMU's heading), and its 1-sigma.
+  double gyro_bias_rad_per_s() const { return gyro_bias_; }
+  double gyro_bias_sigma_rad_per_s() const;
   bool has_attitude() const { return has_imu_; }
   // Has any input been received (is pose() meaningful)?
   bool initialized() const { return has_imu_ || has_odometry_; }
@@ -158,20 +174,41 @@ class PoseEstimator {
   const EstimatorOptions& options() const { return options_; }
 
  private:
+  // Error covariance over [x, y, z, heading, gyro bias].
+  using Matrix5d = Eigen::Matrix<double, 5, 5>;
+  static constexpr int kHeading = 3;
+  static constexpr int kBias = 4;
+
   struct Sample {
     int64_t utime = 0;
     Eigen::Vector3d p = Eigen::Vector3d::Zero();
     Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-    Eigen::Matrix3d P_pos = Eigen::Matrix3d::Zero();
-    double yaw_sigma = 0.0;
+    Matrix5d P = Matrix5d::Zero();
     double odometer = 0.0;
+    double turned = 0.0;  // cumulative |yaw change| the gyro measured (rad)
   };
 
   Sample Current() const;
   Sample Interpolate(int64_t utime) const;  // requires utime within the history
   void SetCurrent(const Sample& s);
   void Record();  // appends the current state and prunes
-  void GrowPositionCovariance(const Eigen::Vector3d& forward, double distance);
+  using Vector5d = Eigen::Matrix<double, 5, 1>;
+  // The errors at a VO update's `to`, cloned from `from` along the VO motion and the gyro
+  // (see the file comment): their covariance, and how they covary with the gyro check (the
+  // VO yaw change minus the gyro's), whose variance is check_variance.
+  struct VoCloneModel {
+    Matrix5d P_to = Matrix5d::Zero();
+    Vector5d cov_to_check = Vector5d::Zero();
+    double check_variance = 0.0;
+  };
+  VoCloneModel CloneToVoEnd(const Sample& from, const Sample& to, const Eigen::Vector3d& t_site,
+                            const geometry::Matrix6d& vo_covariance) const;
+  // The Kalman update on the gyro check `check`: returns the estimated errors at `to`
+  // (estimate minus truth; the bias entry is the bias still left in the gyro) and lowers P_to.
+  Vector5d FuseGyroCheck(const VoCloneModel& model, double check, Matrix5d& P_to) const;
+  void PropagateHeading(double dt, double abs_dyaw);
+  void GrowPositionCovariance(const Eigen::Vector3d& displacement);
+  Matrix5d InitialCovariance() const;
   bool AdvanceTime(int64_t utime);
 
   EstimatorOptions options_;
@@ -179,10 +216,11 @@ class PoseEstimator {
   int64_t utime_ = 0;
   bool has_time_ = false;
   geometry::Pose T_site_rover_ = geometry::Pose::Identity();
-  Eigen::Matrix3d P_pos_ = Eigen::Matrix3d::Zero();
-  double yaw_sigma_ = 0.0;
+  Matrix5d P_ = Matrix5d::Zero();
   double odometer_m_ = 0.0;
+  double turned_rad_ = 0.0;
   double yaw_offset_ = 0.0;
+  double gyro_bias_ = 0.0;
   std::optional<double> pending_reset_yaw_;  // Reset() before the first IMU sample
 
   bool has_imu_ = false;

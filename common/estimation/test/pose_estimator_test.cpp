@@ -23,6 +23,8 @@ Eigen::Quaterniond Q(double roll, double pitch, double yaw) {
 EstimatorOptions Exact() {
   EstimatorOptions o;
   o.gyro_drift_rad_per_s = 0.0;
+  o.gyro_random_walk_rad_per_sqrt_s = 0.0;
+  o.gyro_bias_walk_rad_per_s_per_sqrt_s = 0.0;
   o.gyro_scale_sigma_fraction = 0.0;
   return o;
 }

@@ -1,0 +1,209 @@
+// The gyro bias: heading sigma that grows in proportion to time until VO measures the bias,
+// a heading error that swings every later step the same way, and a bias learnt from VO.
+#include "estimation/pose_estimator.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+using namespace rover::estimation;
+using rover::geometry::Matrix6d;
+using rover::geometry::Pose;
+using rover::geometry::PoseFromXyzRpy;
+using rover::geometry::RotationFromRpy;
+using rover::geometry::RpyFromRotation;
+
+namespace {
+
+constexpr int64_t kSecond = 1000000;
+constexpr double kDegPerHour = M_PI / 180.0 / 3600.0;
+
+Eigen::Quaterniond YawQ(double yaw) { return Eigen::Quaterniond(RotationFromRpy(0, 0, yaw)); }
+
+double Yaw(const Pose& T) { return RpyFromRotation(T.linear()).z(); }
+
+// Only what a test names: no wheel error, no gyro noise, no bias walk.
+EstimatorOptions Quiet() {
+  EstimatorOptions o;
+  o.along_track_sigma_fraction = 0.0;
+  o.cross_track_sigma_fraction = 0.0;
+  o.vertical_sigma_fraction = 0.0;
+  o.gyro_drift_rad_per_s = 0.0;
+  o.gyro_random_walk_rad_per_sqrt_s = 0.0;
+  o.gyro_bias_walk_rad_per_s_per_sqrt_s = 0.0;
+  o.gyro_scale_sigma_fraction = 0.0;
+  return o;
+}
+
+VoUpdate Vo(int64_t from, int64_t to, const Pose& T, double xyz_sigma, double yaw_sigma) {
+  VoUpdate u;
+  u.from_utime = from;
+  u.to_utime = to;
+  u.T_from_to = T;
+  u.covariance = Matrix6d::Identity() * xyz_sigma * xyz_sigma;
+  u.covariance(3, 3) = u.covariance(4, 4) = yaw_sigma * yaw_sigma;
+  u.covariance(5, 5) = yaw_sigma * yaw_sigma;
+  return u;
+}
+
+// A rover driving north at 0.05 m/s whose gyro drifts by `bias` (plus white noise of
+// `arw`): the IMU's yaw is bias * t off the truth. Every `step_s` VO reports the true
+// motion with its yaw change off by N(0, vo_yaw_sigma).
+struct DriftingDrive {
+  double bias = 0.0;
+  double arw = 0.0;
+  double vo_yaw_sigma = 0.0;
+  double step_s = 20.0;
+  std::mt19937 rng{1};
+  double imu_yaw_error = 0.0;
+  int64_t t = 0;
+  int64_t last_capture = 0;
+
+  void Start(PoseEstimator& est) {
+    est.OnImu(0, YawQ(0.0), Eigen::Vector3d::Zero());
+    est.OnWheelOdometry(0, 0.0);
+  }
+  // Drives one step at 10 Hz, then applies VO over it.
+  void Step(PoseEstimator& est) {
+    std::normal_distribution<double> normal;
+    const int ticks = static_cast<int>(step_s * 10);
+    for (int i = 0; i < ticks; ++i) {
+      t += kSecond / 10;
+      imu_yaw_error += bias * 0.1 + arw * std::sqrt(0.1) * normal(rng);
+      ASSERT_EQ(est.OnImu(t, YawQ(imu_yaw_error), Eigen::Vector3d::Zero()), InputResult::kAccepted);
+      ASSERT_EQ(est.OnWheelOdometry(t, 0.05 * static_cast<double>(t) * 1e-6), InputResult::kAccepted);
+    }
+    const double yaw_noise = vo_yaw_sigma * normal(rng);
+    const Pose T = PoseFromXyzRpy(0.05 * step_s, 0, 0, 0, 0, yaw_noise);
+    const VoUpdateResult r = est.ApplyVoUpdate(Vo(last_capture, t, T, 0.001, std::max(vo_yaw_sigma, 1e-9)));
+    ASSERT_TRUE(r.applied()) << r.reason;
+    last_capture = t;
+  }
+  double HeadingError(const PoseEstimator& est) const { return Yaw(est.pose()); }
+};
+
+}  // namespace
+
+// The defect this model mends: with fuse, each VO update used to add the gyro's error over
+// its step in quadrature, so the heading sigma grew as the square root of the steps while a
+// bias grows in proportion to time. With VO blind to yaw, the heading sigma must be exactly
+// the bias sigma times the time.
+TEST(GyroBias, HeadingSigmaGrowsInProportionToTimeAcrossVoUpdates) {
+  EstimatorOptions o = Quiet();
+  o.gyro_drift_rad_per_s = 3.0 * kDegPerHour;
+  PoseEstimator est(o);
+  DriftingDrive drive;
+  drive.vo_yaw_sigma = 1.0;  // VO says nothing useful about yaw
+  drive.Start(est);
+  for (int i = 0; i < 10; ++i) drive.Step(est);  // 200 s
+  EXPECT_NEAR(std::sqrt(est.covariance()(5, 5)), 3.0 * kDegPerHour * 200.0,
+              1e-3 * 3.0 * kDegPerHour * 200.0);
+}
+
+// A heading error at the start swings every later step the same way, so the cross-track
+// sigma after D metres is sigma_heading * D, whether wheel odometry or VO steps carried the
+// rover (not sigma * D / sqrt(steps)).
+TEST(GyroBias, AHeadingErrorSwingsChainedStepsCoherently) {
+  EstimatorOptions o = Quiet();
+  o.initial_yaw_sigma_rad = 0.01;
+  o.vo_heading = VoHeadingMode::kIgnore;
+  for (bool with_vo : {false, true}) {
+    PoseEstimator est(o);
+    DriftingDrive drive;
+    drive.Start(est);
+    for (int i = 0; i < 20; ++i) {
+      if (with_vo) {
+        drive.Step(est);
+      } else {
+        drive.vo_yaw_sigma = 0.0;
+        const int64_t t = (i + 1) * 20 * kSecond;
+        est.OnImu(t, YawQ(0.0), Eigen::Vector3d::Zero());
+        est.OnWheelOdometry(t, 0.05 * 20.0 * (i + 1));
+      }
+    }
+    const Matrix6d P = est.covariance();
+    EXPECT_NEAR(std::sqrt(P(1, 1)), 0.01 * 20.0, with_vo ? 0.002 : 1e-9) << "with_vo " << with_vo;
+    // Heading and the east error it caused are fully correlated.
+    EXPECT_NEAR(P(1, 5) / std::sqrt(P(1, 1) * P(5, 5)), 1.0, 0.02) << "with_vo " << with_vo;
+  }
+}
+
+// VO's yaw changes measure the gyro's drift; the estimator learns the bias and takes it off
+// the IMU's heading, so the heading error stops growing with it.
+TEST(GyroBias, VoTeachesTheBiasAndTheHeadingStopsDrifting) {
+  EstimatorOptions o = Quiet();
+  o.gyro_drift_rad_per_s = 3.0 * kDegPerHour;
+  o.gyro_random_walk_rad_per_sqrt_s = 0.15 * M_PI / 180.0 / 60.0;
+  PoseEstimator est(o);
+  DriftingDrive drive;
+  drive.bias = 3.0 * kDegPerHour;
+  drive.arw = o.gyro_random_walk_rad_per_sqrt_s;
+  drive.vo_yaw_sigma = 0.0005;  // about 0.03 deg per step
+  drive.Start(est);
+  for (int i = 0; i < 180; ++i) drive.Step(est);  // one hour
+  const double bias_sigma = est.gyro_bias_sigma_rad_per_s();
+  EXPECT_LT(bias_sigma, 0.5 * kDegPerHour);
+  EXPECT_NEAR(est.gyro_bias_rad_per_s(), drive.bias, 3.0 * bias_sigma);
+  // Uncorrected, the bias alone would put the heading 3 deg off after an hour; what is left
+  // is VO's yaw noise summed over 180 steps (0.0005 rad * sqrt(180) = 0.4 deg, 1 sigma).
+  EXPECT_LT(std::abs(drive.HeadingError(est)), 1.0 * M_PI / 180.0);
+  EXPECT_LT(std::abs(drive.HeadingError(est)), 3.0 * std::sqrt(est.covariance()(5, 5)));
+}
+
+// The claimed sigma is honest: over many seeded drives with a bias drawn from its prior,
+// the heading error's normalized squared error averages about 1, at the end and midway.
+TEST(GyroBias, HeadingSigmaIsConsistentOverSeededDrives) {
+  EstimatorOptions o = Quiet();
+  o.gyro_drift_rad_per_s = 3.0 * kDegPerHour;
+  o.gyro_random_walk_rad_per_sqrt_s = 0.15 * M_PI / 180.0 / 60.0;
+  std::mt19937 bias_rng(7);
+  std::normal_distribution<double> normal;
+  const int kDrives = 200;
+  double nees_mid = 0.0, nees_end = 0.0;
+  for (int k = 0; k < kDrives; ++k) {
+    PoseEstimator est(o);
+    DriftingDrive drive;
+    drive.rng.seed(100 + k);
+    drive.bias = o.gyro_drift_rad_per_s * normal(bias_rng);
+    drive.arw = o.gyro_random_walk_rad_per_sqrt_s;
+    drive.vo_yaw_sigma = 0.002;
+    drive.Start(est);
+    for (int i = 0; i < 60; ++i) {
+      drive.Step(est);
+      if (i == 29 || i == 59) {
+        const double e = drive.HeadingError(est);
+        (i == 29 ? nees_mid : nees_end) += e * e / est.covariance()(5, 5);
+      }
+    }
+  }
+  nees_mid /= kDrives;
+  nees_end /= kDrives;
+  std::printf("heading NEES over %d drives: %.3f after 10 min, %.3f after 20 min\n", kDrives,
+              nees_mid, nees_end);
+  // The mean of 200 chi-square(1) draws lies within 0.6 and 1.4 with odds far beyond 99 %.
+  EXPECT_GT(nees_mid, 0.6);
+  EXPECT_LT(nees_mid, 1.4);
+  EXPECT_GT(nees_end, 0.6);
+  EXPECT_LT(nees_end, 1.4);
+}
+
+// Reset moves the pose, not the gyro: the bias learnt so far is kept.
+TEST(GyroBias, ResetKeepsTheBiasLearnt) {
+  EstimatorOptions o = Quiet();
+  o.gyro_drift_rad_per_s = 3.0 * kDegPerHour;
+  PoseEstimator est(o);
+  DriftingDrive drive;
+  drive.bias = 2.0 * kDegPerHour;
+  drive.vo_yaw_sigma = 0.0005;
+  drive.Start(est);
+  for (int i = 0; i < 60; ++i) drive.Step(est);
+  const double bias = est.gyro_bias_rad_per_s();
+  const double sigma = est.gyro_bias_sigma_rad_per_s();
+  EXPECT_GT(bias, 1.0 * kDegPerHour);
+  est.Reset(Pose::Identity(), drive.t);
+  EXPECT_EQ(est.gyro_bias_rad_per_s(), bias);
+  EXPECT_EQ(est.gyro_bias_sigma_rad_per_s(), sigma);
+  EXPECT_EQ(est.covariance()(5, 5), 0.0);
+}
