@@ -599,11 +599,16 @@ void TraversabilityMap::Rate() const {
       }
   }
   const double crest_rise = o.crest_rise_fraction * o.max_step_m;
+  const bool open_unknown = crests && o.open_cells_unknown;
   std::vector<std::size_t> xi;
   std::vector<float> st;
   for (int i = 0; i < n_; ++i) {
     for (int j = 0; j < n_; ++j) {
       if (!rate[static_cast<std::size_t>(i) * n_ + j]) continue;
+      // Open, or rated from its patch alone beside an open cell: unknown (open_cells_unknown).
+      if (open_unknown && (framed_[static_cast<std::size_t>(i) * n_ + j] == kCut ||
+                           (!known[static_cast<std::size_t>(i) * n_ + j] && open_side[static_cast<std::size_t>(i) * n_ + j])))
+        continue;
       gather(patch, i, j, xs, &ss, &se, &sr, &xi);
       if (xs.size() < min_known) continue;
       Eigen::Vector3d c_fit;  // roughness: the scatter about the plane fitted
@@ -724,6 +729,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("crest_view_range_m", o.crest_view_range_m, 0.0, 100.0);
   node.Get("crest_view_height_m", o.crest_view_height_m, 1e-3, 10.0);
   node.Get("crest_rise_fraction", o.crest_rise_fraction, 1e-3, 1.0);
+  node.Get("open_cells_unknown", o.open_cells_unknown);
   node.Get("drop_unseen_border", o.drop_unseen_border);
   node.Get("lr_max_diff_px", o.lr_max_diff_px, 0.0, 64.0);
   node.Get("ground_band_fraction", o.ground_band_fraction, 0.0, 0.5);
@@ -742,7 +748,7 @@ const std::vector<std::string> kMapOnlyKeys = {
     "cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
     "max_roughness_m", "min_points", "caution_fraction", "min_patch_fraction", "tilt_margin_sigmas", "dip_margin_sigmas",
     "roughness_margin_sigmas", "relief_sigmas", "ground_band_fraction", "crest_view_range_m", "crest_view_height_m",
-    "crest_rise_fraction"};
+    "crest_rise_fraction", "open_cells_unknown"};
 
 }  // namespace
 

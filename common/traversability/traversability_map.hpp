@@ -123,6 +123,15 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   double crest_view_range_m = 0.0;
   double crest_view_height_m = 0.3;
   double crest_rise_fraction = 0.5;
+  // With crest_view_range_m: an open cell (cut by pairs, framed by none within range) is
+  // left unknown, whatever its points read, and so is a cell with no points of its own
+  // beside one (else rated from its patch alone): its top was never in view, so its rating
+  // is a guess. A rock kept beside the view (navbench seed 11 k0.15_r03: orbited 45 deg right of
+  // the heading, past the NAVCAM's field and at the HAZCAM's edge) showed only its foot and
+  // read 0.03 to 0.05 m for 0.30 m, under every rise rule. Unknown, the vote's unseen-ground
+  // rule keeps the body off it until a pair frames it (the rover turns toward it, as it
+  // must to drive there). Open cells are the bands at the sides of a view; a turn frames them.
+  bool open_cells_unknown = false;
   double max_roughness_m = 0.05;
   // The roughness counts each cell's residual about the fitted plane only beyond this many
   // standard errors of its height (as dip_margin_sigmas does below the ground for the step):

@@ -229,10 +229,11 @@ int main(int argc, char** argv) {
                     f.truth.roughness_m, traversability::CellStateName(f.truth.state));
     }
     for (const auto& d : r.dumped)
-      std::printf("  cell from pose %d at %.1f m (%.1f, %.1f): map %s step %.2f tilt %.1f rough %.3f sigma %.3f; "
+      std::printf("  cell from pose %d at %.1f m (%.1f, %.1f): map %s step %.2f tilt %.1f rough %.3f sigma %.3f%s; "
                   "truth %s step %.2f tilt %.1f rough %.3f\n",
                   d.pose, d.range_m, d.x, d.y, d.map.crest_unseen ? "unknown (crest unseen)" : traversability::CellStateName(d.map.state), d.map.step_m,
                   d.map.tilt_rad * 180 / M_PI, d.map.roughness_m, d.map.sigma_m,
+                  d.map.height_sigma_m < 0 ? " (no points of its own)" : "",
                   traversability::CellStateName(d.truth.state), d.truth.step_m, d.truth.tilt_rad * 180 / M_PI,
                   d.truth.roughness_m);
     const hazard_eval::BandCounts near = r.Within4m();

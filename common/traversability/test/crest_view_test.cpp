@@ -31,6 +31,7 @@ ShippedOptions Shipped(double range_m) {
   ShippedOptions o;
   o.map = LoadMapOptions(map["traversability"]);
   o.map.crest_view_range_m = range_m;
+  o.map.open_cells_unknown = false;  // its own tests below
   o.hazcam = LoadCameraOptions(map["hazcam"], o.map);
   return o;
 }
@@ -113,8 +114,10 @@ Census CellsNear(const TraversabilityMap& map, double x, double y, double radius
 // Synthetic: level ground of known cells (x, y in [0, 2) m) and one cell at (1.1, 0.1)
 // standing `rise_m` over it. Every cell is framed except, when `flank_open`, that one,
 // which a pair saw without its top (cut).
-TraversabilityMap Flank(double rise_m, bool flank_open, double range_m) {
+TraversabilityMap Flank(double rise_m, bool flank_open, double range_m, bool open_unknown = false,
+                        bool gap_beside = false) {
   MapOptions o;
+  o.open_cells_unknown = open_unknown;
   o.cell_size_m = 0.2;
   o.extent_m = 6.0;
   o.footprint_radius_m = 0.3;
@@ -125,6 +128,8 @@ TraversabilityMap Flank(double rise_m, bool flank_open, double range_m) {
   std::vector<Eigen::Vector3d> pts;
   for (double x = 0.1; x < 2.0; x += 0.2)
     for (double y = -0.9; y < 1.0; y += 0.2) {
+      // gap_beside: the cell next to the flank cell (1.3, 0.1) holds no points of its own.
+      if (gap_beside && std::hypot(x - 1.3, y - 0.1) < 0.05) continue;
       const double h = std::hypot(x - 1.1, y - 0.1) < 0.05 ? rise_m : 0.0;
       for (int k = 0; k < 4; ++k) pts.emplace_back(x + 0.02 * (k % 2), y + 0.02 * (k / 2), -h);
     }
@@ -230,6 +235,56 @@ TEST(CrestView, ARockSeenWholeReadsAsBefore) {
   }
   EXPECT_GT(rated, 200);
   EXPECT_GE(CellsNear(on, 1.7, 0.0, 0.5).unsafe, 8);
+}
+
+// open_cells_unknown: an open cell is unknown however low it reads (a rock's foot seen
+// without its top read 0.03 to 0.05 m), and so is a cell with no points of its own beside
+// it, which would be rated from its patch; every other cell reads as without the option,
+// and once framed the open cell is rated again.
+TEST(OpenCells, AnOpenCellAndAnUnseenNeighbourAreUnknownUntilFramed) {
+  const TraversabilityMap off = Flank(0.05, true, 3.0, false, true);
+  const TraversabilityMap on = Flank(0.05, true, 3.0, true, true);
+  EXPECT_EQ(off.At(1.1, 0.1).state, CellState::kSafe);  // the foot of a rock reads low
+  EXPECT_EQ(off.At(1.3, 0.1).state, CellState::kSafe);  // rated from its patch alone
+  EXPECT_LT(off.At(1.3, 0.1).height_sigma_m, 0.0f);
+  EXPECT_EQ(on.At(1.1, 0.1).state, CellState::kUnknown);
+  EXPECT_EQ(on.At(1.3, 0.1).state, CellState::kUnknown);
+  int same = 0, changed = 0;
+  for (std::size_t k = 0; k < off.cells().size(); ++k) {
+    const bool eq = off.cells()[k].state == on.cells()[k].state && off.cells()[k].step_m == on.cells()[k].step_m;
+    (eq ? same : changed) += 1;
+  }
+  EXPECT_EQ(changed, 2);
+  EXPECT_GT(same, 80);
+  // Framed, the same cells are rated as without the option.
+  const TraversabilityMap framed = Flank(0.05, false, 3.0, true, true);
+  EXPECT_EQ(framed.At(1.1, 0.1).state, CellState::kSafe);
+  EXPECT_EQ(framed.At(1.3, 0.1).state, CellState::kSafe);
+  // Without the crest view (range 0) there are no open cells: the option does nothing.
+  EXPECT_EQ(Flank(0.05, true, 0.0, true, true).At(1.1, 0.1).state, CellState::kSafe);
+}
+
+// A rendered rock kept beside the view, 45 deg to the right and 1.6 m out (navbench seed 11
+// k0.15_r03's orbit): the HAZCAM sees its foot at the edge of its field, the NAVCAM not at
+// all. Without the option some of its cells read safe; with it none within 0.3 m of its
+// centre is rated safe or caution under the limit; turned toward it, it is unsafe.
+TEST(OpenCells, ARockBesideTheViewIsNotRatedSafeUntilFramed) {
+  const double x = 1.15, y = 1.15;
+  const terrain::World world = OneRock(x, y);
+  ShippedOptions with = Shipped(6.0);
+  with.map.open_cells_unknown = true;
+  with.hazcam.open_cells_unknown = true;
+  TraversabilityMap off(Shipped(6.0).map), on(with.map);
+  MapFrom(off, Shipped(6.0), world, {{0, 0, 0}});
+  MapFrom(on, with, world, {{0, 0, 0}});
+  const Census before = CellsNear(off, x, y, 0.3), after = CellsNear(on, x, y, 0.3);
+  EXPECT_GE(before.with_points, 1);  // its foot was seen
+  EXPECT_GE(before.safe + before.good_caution, 1) << "the class this option is for";
+  EXPECT_EQ(after.safe + after.good_caution, 0);
+  EXPECT_GE(after.unknown, before.unknown + 1);
+  TraversabilityMap looked(with.map);
+  MapFrom(looked, with, world, {{0, 0, 45.0}});
+  EXPECT_GE(CellsNear(looked, x, y, 0.3).unsafe, 4);
 }
 
 }  // namespace
