@@ -605,10 +605,6 @@ void TraversabilityMap::Rate() const {
   for (int i = 0; i < n_; ++i) {
     for (int j = 0; j < n_; ++j) {
       if (!rate[static_cast<std::size_t>(i) * n_ + j]) continue;
-      // Open, or rated from its patch alone beside an open cell: unknown (open_cells_unknown).
-      if (open_unknown && (framed_[static_cast<std::size_t>(i) * n_ + j] == kCut ||
-                           (!known[static_cast<std::size_t>(i) * n_ + j] && open_side[static_cast<std::size_t>(i) * n_ + j])))
-        continue;
       gather(patch, i, j, xs, &ss, &se, &sr, &xi);
       if (xs.size() < min_known) continue;
       Eigen::Vector3d c_fit;  // roughness: the scatter about the plane fitted
@@ -684,6 +680,16 @@ void TraversabilityMap::Rate() const {
         out.goodness = std::min(out.goodness, static_cast<float>(1.0 - o.caution_fraction));
         out.step_m = static_cast<float>(o.max_step_m);
         out.crest_unseen = true;
+      }
+      // Open, or rated from its patch alone beside an open cell: its top was never in view,
+      // so short of unsafe its rating is a guess: unknown (open_cells_unknown). Never better:
+      // unsafe stays unsafe. Its own height stays, for the clearance model.
+      if (open_unknown && out.state != CellState::kUnsafe &&
+          (framed_[centre] == kCut || (!known[centre] && open_side[centre]))) {
+        const float elevation = out.elevation_m, height_sigma = out.height_sigma_m;
+        out = Cell{};
+        out.elevation_m = elevation;
+        out.height_sigma_m = height_sigma;
       }
     }
   }
