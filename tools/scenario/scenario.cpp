@@ -193,6 +193,11 @@ void ExplainMissing(ScenarioSummary& s, bool zones_defined) {
                          : "no SIM_TRUTH sample while a keep-out zone was in force" +
                                LostNote(s.log, channels::kSimTruth);
   }
+  if (!s.pose_honesty) {
+    s.missing["pose_honesty"] = !s.final_estimate ? s.missing["final_estimate"]
+                                : !s.final_truth  ? no_truth
+                                                  : "no POSE of site 0 with a heading sigma at a time truth covers";
+  }
   if (!s.nees_mean) {
     s.missing["nees_mean"] = s.vo_updates_accepted == 0
                                  ? "no accepted VO update" + LostNote(s.log, channels::kVoUpdate)
@@ -211,6 +216,7 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
   std::vector<rover_msgs::step_report_t> reports;
   std::vector<rover_msgs::vo_update_t> vo_updates;
   std::optional<rover_msgs::pose_t> last_pose;
+  std::vector<rover_msgs::pose_t> poses;
   std::optional<rover_msgs::sequence_status_t> final_status;
   std::map<int, std::pair<int, std::string>> command_text;  // index -> line, text
   std::int64_t latest_submission = -1;  // the summary judges the last sequence submitted
@@ -231,7 +237,7 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
       if (m.decode(ev->data, 0, ev->datalen) >= 0) reports.push_back(m);
     } else if (ch == channels::kPose) {
       rover_msgs::pose_t m;
-      if (m.decode(ev->data, 0, ev->datalen) >= 0) last_pose = m;
+      if (m.decode(ev->data, 0, ev->datalen) >= 0) last_pose = m, poses.push_back(m);
     } else if (ch == channels::kKeepOutZones) {
       rover_msgs::keepout_zones_t m;
       if (m.decode(ev->data, 0, ev->datalen) < 0) continue;
@@ -354,6 +360,7 @@ ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footpri
   }
 
   if (last_pose) s.final_estimate = FromPose(*last_pose);
+  s.pose_honesty = JudgePoses(poses, truth);
   if (!truth.empty()) {
     s.final_truth = FromTruth(truth.back());
     s.distance_travelled_m = truth.back().odometer_m - truth.front().odometer_m;
@@ -605,6 +612,18 @@ std::string SummaryJson(const ScenarioSummary& s) {
     j.Null();
   }
   WriteReason(j, s, "nees_mean");
+  j.Key("pose_honesty");
+  if (const auto& h = s.pose_honesty) {
+    j.BeginObject();
+    j.Field("poses", h->poses).Field("heading_nees_mean", h->heading_nees_mean);
+    j.Field("heading_beyond_3_sigma_pct", h->heading_beyond_pct);
+    j.Field("horizontal_poses", h->horizontal_poses).Field("horizontal_nees_mean", h->horizontal_nees_mean);
+    j.Field("horizontal_beyond_3_sigma_pct", h->horizontal_beyond_pct);
+    j.EndObject();
+  } else {
+    j.Null();
+  }
+  WriteReason(j, s, "pose_honesty");
   WriteFigure(j, s, "rover_time_s", s.rover_time_s);
   j.Field("wall_time_s", s.wall_time_s);
   WriteLogCheck(j, s.log);
@@ -670,6 +689,13 @@ std::string SummaryText(const ScenarioSummary& s) {
        << ", false (NEES > " << kChi2Dof6ThreeSigma << ") " << s.false_updates;
     if (s.nees_mean) os << ", NEES mean " << std::setprecision(2) << *s.nees_mean << std::setprecision(3);
     os << "\n";
+  }
+  if (const auto& h = s.pose_honesty) {
+    os << std::setprecision(2) << "  pose honesty (POSE against truth, " << h->poses << " poses): heading NEES mean "
+       << h->heading_nees_mean << " (1 is honest), " << std::setprecision(1) << h->heading_beyond_pct
+       << " % beyond 3 sigma; horizontal NEES mean " << std::setprecision(2) << h->horizontal_nees_mean
+       << " (2 is honest), " << std::setprecision(1) << h->horizontal_beyond_pct << " % beyond its 99.7 % bound\n"
+       << std::setprecision(3);
   }
   for (const auto& e : s.process_events) os << "  " << e << "\n";
   os << "  log: " << s.log.messages << " messages, " << s.log.lost << " lost; complete: "

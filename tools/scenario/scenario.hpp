@@ -6,6 +6,7 @@
 #include "logcheck/log_check.hpp"
 #include "scenario/rover_time.hpp"
 #include "scenario/scenario_overrides.hpp"
+#include "scenario/pose_truth.hpp"
 #include "scenario/vo_truth.hpp"
 
 #include <cstdint>
@@ -109,6 +110,8 @@ struct ScenarioSummary {
   int vo_updates_accepted = 0;
   int false_updates = 0;
   std::optional<double> nees_mean;
+  // The state estimator's POSE against truth: is its claimed sigma honest (pose_truth.hpp)?
+  std::optional<PoseHonesty> pose_honesty;
   double rover_time_s = 0;
   double wall_time_s = 0;
   std::vector<std::string> process_events;
