@@ -134,7 +134,11 @@ CellState WorstNear(const TraversabilityMap& map, double x, double y, int reach)
 // Two suns: ahead of the rover, and behind it, where the body's shadow covers the ground
 // in front (the renderer casts it; blank, dark ground there must not read as hazards).
 TEST(Hazcam, SeesTheRocksBesideTheFrontWheelAndAheadOfTheBody) {
-  const ShippedOptions o = Shipped();
+  // What the HAZCAM's stereo reads, not what the map may then hold back: with
+  // open_cells_unknown the band at the view's sides whose tops one pair did not frame is
+  // unknown until a later pair frames it (OpenCells tests); the rocks stay unsafe.
+  ShippedOptions o = Shipped();
+  o.map.open_cells_unknown = o.hazcam.open_cells_unknown = false;
   for (const std::string sun : {"{azimuth_deg: 30, elevation_deg: 55}", "{azimuth_deg: 190, elevation_deg: 40}"}) {
     SCOPED_TRACE(sun);
     const Scene s = NearRocks(sun);
@@ -189,6 +193,12 @@ TEST(Hazcam, SeesTheRocksBesideTheFrontWheelAndAheadOfTheBody) {
       EXPECT_EQ(mast.At(x, y).height_sigma_m, -1.0f) << name;
       EXPECT_NE(WorstNear(mast, x, y, 1), CellState::kUnsafe) << name;
     }
+    // With open cells unknown: never better, both rocks are still unsafe.
+    ShippedOptions open = Shipped();
+    open.map.open_cells_unknown = open.hazcam.open_cells_unknown = true;
+    TraversabilityMap held(open.map);
+    held.AddStereoPair(hazcam.left, hazcam.right, hazcam.rig, s.T, s.cov, &open.hazcam);
+    for (const auto& [name, x, y] : kRocks) EXPECT_EQ(WorstNear(held, x, y, 1), CellState::kUnsafe) << name;
   }
 }
 
