@@ -681,11 +681,11 @@ void TraversabilityMap::Rate() const {
         out.step_m = static_cast<float>(o.max_step_m);
         out.crest_unseen = true;
       }
-      // Open, or rated from its patch alone beside an open cell: its top was never in view,
-      // so short of unsafe its rating is a guess: unknown (open_cells_unknown). Never better:
-      // unsafe stays unsafe. Its own height stays, for the clearance model.
-      if (open_unknown && out.state != CellState::kUnsafe &&
-          (framed_[centre] == kCut || (!known[centre] && open_side[centre]))) {
+      // Open: its top was never in view, so short of unsafe its rating is a guess: unknown
+      // (open_cells_unknown). Never better: unsafe stays unsafe. Its own height stays, for
+      // the clearance model. Not the cells with no points of their own beside it: most are
+      // the ground hidden behind a rock, and unknown they box a rover in among rocks.
+      if (open_unknown && out.state != CellState::kUnsafe && framed_[centre] == kCut) {
         const float elevation = out.elevation_m, height_sigma = out.height_sigma_m;
         out = Cell{};
         out.elevation_m = elevation;

@@ -124,9 +124,8 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   double crest_view_height_m = 0.3;
   double crest_rise_fraction = 0.5;
   // With crest_view_range_m: an open cell (cut by pairs, framed by none within range) is
-  // unknown unless it reads unsafe (never better), and so is a cell with no points of its
-  // own beside one (else rated from its patch alone): its top was never in view, so its
-  // rating is a guess. A rock kept beside the view (navbench seed 11 k0.15_r03: orbited 45 deg right of
+  // unknown unless it reads unsafe (never better): its top was never in view, so its rating
+  // is a guess. A rock kept beside the view (navbench seed 11 k0.15_r03: orbited 45 deg right of
   // the heading, past the NAVCAM's field and at the HAZCAM's edge) showed only its foot and
   // read 0.03 to 0.05 m for 0.30 m, under every rise rule. Unknown, the vote's unseen-ground
   // rule keeps the body off it until a pair frames it (the rover turns toward it, as it
