@@ -147,7 +147,7 @@ void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalDist
            const std::vector<Pose2>& step, const std::vector<Pose2>& look, Candidate* c,
            const std::vector<Pose2>* driven = nullptr) {
   c->step_sweep = SweepFootprint(grid, o.footprint, driven ? *driven : step, pose, o.blind_margin_m,
-                                 o.unknown.hidden_patch_m);
+                                 o.unknown.hidden_patch_m, o.unknown.hidden_reach_m);
   const UnknownVerdict unknown = JudgeUnknown(c->step_sweep, o.unknown);
   const Sweep& s = c->step_sweep;
   const Safety step_safety = JudgeSafety(grid, heights, o, pose, step);

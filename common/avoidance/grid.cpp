@@ -279,8 +279,32 @@ double UnknownLimit(const UnknownLimits& l) {
   return l.hidden_patch_m > 0.0 ? std::max(l.max_fraction, l.max_scattered_fraction) : l.max_fraction;
 }
 
+// The hidden ground within `reach` beyond the footprint along `path` (SweepFootprint's
+// hidden_reach_m), except where the rover stands: calls note(i, j, x, y) once per cell.
+template <typename Note>
+void NoteHiddenBeside(const Grid& grid, const Footprint& fp, const std::vector<Pose2>& path,
+                      const Pose2& standing, double reach, Note note) {
+  const double cell = grid.cell_m;
+  const double grow = 0.5 * cell;
+  const double extent = std::hypot(0.5 * fp.length_m + std::abs(fp.center_forward_m), 0.5 * fp.width_m) + cell + reach;
+  std::set<std::pair<long, long>> seen;
+  for (const Pose2& p : path) {
+    const long i0 = static_cast<long>(std::floor((p.x - extent - grid.origin_x) / cell));
+    const long i1 = static_cast<long>(std::floor((p.x + extent - grid.origin_x) / cell));
+    const long j0 = static_cast<long>(std::floor((p.y - extent - grid.origin_y) / cell));
+    const long j1 = static_cast<long>(std::floor((p.y + extent - grid.origin_y) / cell));
+    for (long i = i0; i <= i1; ++i)
+      for (long j = j0; j <= j1; ++j) {
+        const double x = grid.origin_x + (i + 0.5) * cell, y = grid.origin_y + (j + 0.5) * cell;
+        if (fp.Contains(p, x, y, grow) || !fp.Contains(p, x, y, grow + reach)) continue;
+        if (fp.Contains(standing, x, y, grow + reach)) continue;  // as near where it stands
+        if (seen.insert({i, j}).second) note(i, j, x, y);
+      }
+  }
+}
+
 Sweep SweepFootprint(const Grid& grid, const Footprint& fp, const std::vector<Pose2>& path,
-                     const Pose2& standing, double blind_margin_m, double hidden_patch_m) {
+                     const Pose2& standing, double blind_margin_m, double hidden_patch_m, double hidden_reach_m) {
   Sweep sw;
   const bool find_hidden = hidden_patch_m > 0.0;
   const HiddenGround hidden(grid, fp, standing, blind_margin_m, find_hidden ? hidden_patch_m : 0.0);
@@ -390,6 +414,16 @@ Sweep SweepFootprint(const Grid& grid, const Footprint& fp, const std::vector<Po
         }
       }
     }
+  }
+  if (find_hidden && hidden_reach_m > 0.0) {
+    NoteHiddenBeside(grid, fp, path, standing, hidden_reach_m, [&](long i, long j, double x, double y) {
+      const bool inside = i >= 0 && i < grid.rows && j >= 0 && j < grid.cols;
+      const std::size_t k = inside ? static_cast<std::size_t>(i) * grid.cols + j : 0;
+      if (inside ? seen[k] != 0 : seen_outside.count({i, j}) != 0) return;  // under the footprint: judged above
+      if (inside && grid.state[k] != CellClass::kUnknown) return;
+      if (fp.Contains(standing, x, y, blind_margin_m)) return;  // the blind ring is excused, as above
+      note_hidden(i, j, x, y);
+    });
   }
   return sw;
 }

@@ -144,8 +144,17 @@ struct Sweep {
 // ring. Unknown cells in thin bands or specks (bland sand between textured grains, the
 // near edge of the view) cannot hold a rock that wide, whose visible flank the map would
 // rate; a patch that wide could.
+//
+// hidden_reach_m > 0 (with hidden_patch_m): hidden ground counts this much farther out
+// than the footprint (grown by half a cell) reaches, wherever the path brings the footprint
+// nearer to it than where the rover stands. A known cell beside unseen ground may hold the
+// rim of a rock whose rest lies in it: a cell is rated from the points it took, and those
+// may all lie on its far side, so the rock's edge is known only to within a cell (navbench
+// seed 11 k0.20_r19: a side swept a safe cell at a 0.33 m rock's rim, the rock itself
+// unseen beside the view). Such cells add to `hidden` only, not to the unknown share.
 Sweep SweepFootprint(const Grid& grid, const Footprint& footprint, const std::vector<Pose2>& path,
-                     const Pose2& standing, double blind_margin_m, double hidden_patch_m = 0.0);
+                     const Pose2& standing, double blind_margin_m, double hidden_patch_m = 0.0,
+                     double hidden_reach_m = 0.0);
 
 // How much unknown ground a step may cross. More than max_fraction of its counted cells
 // unknown is too much when hidden_patch_m is 0, or when some of it lies in unknown ground
@@ -159,6 +168,9 @@ struct UnknownLimits {
   // however small a share of its cells that is (a body corner swept into unseen ground
   // beside the view is a few cells of a step). false: only over max_fraction.
   bool hidden_at_any_share = false;
+  // With hidden_patch_m: how much farther out than the footprint hidden ground counts
+  // (SweepFootprint's hidden_reach_m). 0: only under the footprint.
+  double hidden_reach_m = 0.0;
 };
 enum class UnknownVerdict { kAcceptable, kHidden, kTooMuch };
 // `s` was swept with limits.hidden_patch_m.

@@ -116,6 +116,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   o.max_driven_step_m = map_->max_driven_step_m;
   // Strict: ground that could hide a rock is not swept at all, not even by a corner.
   o.unknown.hidden_at_any_share = strict;
+  // And not swept near either: a known cell beside it may hold a hidden rock's rim.
+  o.unknown.hidden_reach_m = strict ? options_.avoid_hidden_reach_m : 0.0;
   o.suspension = map_->suspension;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
   o.previous_turn_rad = last_turn_rad_;
@@ -168,7 +170,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     const double bearing = std::atan2(goto_.target.y() - p.y, goto_.target.x() - p.x);
     const auto line = avoidance::SamplePath(here, geometry::WrapAngle(bearing - p.yaw), remaining, 0.0);
     const auto s =
-        avoidance::SweepFootprint(grid, o.footprint, step_path, here, o.blind_margin_m, o.unknown.hidden_patch_m);
+        avoidance::SweepFootprint(grid, o.footprint, step_path, here, o.blind_margin_m, o.unknown.hidden_patch_m,
+                                  o.unknown.hidden_reach_m);
     const auto l = avoidance::SweepFootprint(grid, o.footprint, line, here, o.blind_margin_m);
     const bool drivable = o.max_driven_step_m <= 0.0 || s.max_step_m < o.max_driven_step_m;
     if (s.unsafe == 0 && drivable && avoidance::JudgeUnknown(s, o.unknown) == avoidance::UnknownVerdict::kAcceptable &&

@@ -90,6 +90,12 @@ struct ExecutorOptions {
   double blind_slip_pct = 20.0;
   int recent_steps = 3;                 // also the drift history of the predictive check
   double lost_min_step_m = 0.15;        // `vo lost shorten` halves steps down to this
+  // VO switched off by `then continue` comes back on (a baseline pair first, its failures
+  // counted afresh) once the rover has driven this far without it (estimated m): the view
+  // that failed (a rock filling it, a shadow) is left behind, and a goto that works round a
+  // pocket for long on wheel odometry alone misplaces what it mapped (navbench seed 11
+  // k0.20_r05 drove 146 steps blind, 0.3 m of drift, into a rock). 0: never (Mars's meaning).
+  double vo_retry_after_m = 0.0;
 
   // Predictive keep-out margin (hazard_query_t.margin_m), on top of the monitor's k sigma:
   // the spread of the drift VO measured over the recent steps, and the position sigma the
@@ -131,6 +137,11 @@ struct ExecutorOptions {
   // MarkFlanksOfHiddenGround): the flank of a rock whose top no pair saw reads far under the
   // rock (navbench k0.20_r18: 0.11 to 0.20 m round a 0.43 m rock's unseen top). 0: off.
   double avoid_hidden_flank_step_m = 0.0;
+  // With avoid_unseen_ground_strict: ground that could hide a rock (UnknownLimits) is not
+  // swept within this much beyond the vote's footprint either, wherever the step brings the
+  // body nearer to it (avoidance::SweepFootprint's hidden_reach_m): a known cell beside
+  // unseen ground may hold the rim of a rock that lies in it. 0: off.
+  double avoid_hidden_reach_m = 0.0;
   // A rock the map once rated unsafe stays unsafe to the vote and the planner when a later
   // map reads it caution (a view from beside it sees less of it; a safe rating or driving
   // over it still replaces it): planner::SiteMap::set_keep_unsafe, common/avoidance/README.md
@@ -584,6 +595,7 @@ class SequenceExecutor {
   double blind_slope_rad_;
   double blind_slip_pct_;
   bool vo_off_by_failures_ = false;  // `then continue` switched VO off (not the operator)
+  double vo_off_at_m_ = 0.0;         // distance_m_ when it did
   // The last recent_steps steps: the largest of slip and sideways drift VO measured (0 when
   // VO did not measure the step); and the drift of the last recent_steps measured arc steps.
   std::deque<double> recent_slip_pct_;

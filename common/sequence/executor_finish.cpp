@@ -173,7 +173,10 @@ bool SequenceExecutor::ApplyVoFailurePolicy(const StepEnd& end) {
     } else {
       vo_enabled_ = false;
       vo_off_by_failures_ = true;
-      detail_ = "VO off after " + std::to_string(vo_policy_failures_) + " failures; continuing on wheel odometry";
+      vo_off_at_m_ = distance_m_;
+      detail_ = "VO off after " + std::to_string(vo_policy_failures_) + " failures; continuing on wheel odometry" +
+                (options_.vo_retry_after_m > 0.0 ? " (VO tried again after " + Fixed(options_.vo_retry_after_m) + " m)"
+                                                 : std::string());
     }
   }
   return true;

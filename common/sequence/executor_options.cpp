@@ -103,10 +103,10 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "goto_default_distance_factor", "goto_default_distance_margin_m",
                "predictive_hazard_check", "reactive_hazard_abort", "path_sample_spacing_m",
                "path_sample_turn_deg", "slip_min_step_m", "status_period_s", "blind_slope_deg",
-               "blind_slip_pct", "recent_steps", "lost_min_step_m", "step_sigma_growth_pct",
+               "blind_slip_pct", "recent_steps", "lost_min_step_m", "vo_retry_after_m", "step_sigma_growth_pct",
                "margin_sigma_multiplier", "state_file", "map_wait_s", "avoid_lookahead_m",
                "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m",
-               "avoid_zone_sigma_multiplier", "avoid_unseen_ground_strict", "avoid_start_ring_known", "avoid_hidden_flank_step_m", "avoid_keep_unsafe", "planner_enabled", "planner_unknown_cost", "planner_caution_cost", "planner_near_cost",
+               "avoid_zone_sigma_multiplier", "avoid_unseen_ground_strict", "avoid_start_ring_known", "avoid_hidden_flank_step_m", "avoid_hidden_reach_m", "avoid_keep_unsafe", "planner_enabled", "planner_unknown_cost", "planner_caution_cost", "planner_near_cost",
                "planner_margin_m", "planner_unreachable_plans", "planner_block_after_steps", "planner_block_min_gain_m",
                "planner_block_ahead_m", "planner_block_radius_m", "planner_refusal_cost", "planner_refusal_ahead_m",
                "planner_refusal_radius_m", "planner_prior_map", "goto_arrival_sigmas",
@@ -153,6 +153,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("blind_slip_pct", o.blind_slip_pct, 0.1, 100.0);
   n.Get("recent_steps", o.recent_steps, 1, 100);
   n.Get("lost_min_step_m", o.lost_min_step_m, 0.01, 0.75);
+  n.Get("vo_retry_after_m", o.vo_retry_after_m, 0.0, 1000.0);
   n.Get("step_sigma_growth_pct", o.step_sigma_growth_pct, 0.0, 100.0);
   n.Get("margin_sigma_multiplier", o.margin_sigma_multiplier, 0.1, 10.0);
   n.Get("state_file", o.state_file);
@@ -166,6 +167,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("avoid_unseen_ground_strict", o.avoid_unseen_ground_strict);
   n.Get("avoid_start_ring_known", o.avoid_start_ring_known);
   n.Get("avoid_hidden_flank_step_m", o.avoid_hidden_flank_step_m, 0.0, 1.0);
+  n.Get("avoid_hidden_reach_m", o.avoid_hidden_reach_m, 0.0, 1.0);
   n.Get("avoid_keep_unsafe", o.avoid_keep_unsafe);
   n.Get("planner_enabled", o.planner_enabled);
   n.Get("planner_unknown_cost", o.planner_unknown_cost, 1.0, 100.0);

@@ -51,6 +51,12 @@ bool SequenceExecutor::NextStepOfCommand() {
       vo_enabled_ = true;
       vo_off_by_failures_ = false;
       detail_ = "VO back on: slip is likely here (" + why + ")";
+    } else if (options_.vo_retry_after_m > 0.0 && distance_m_ - vo_off_at_m_ >= options_.vo_retry_after_m) {
+      // Tried again away from the view that failed, with its failures counted afresh.
+      vo_enabled_ = true;
+      vo_off_by_failures_ = false;
+      vo_policy_failures_ = 0;
+      detail_ = "VO back on after " + Fixed(distance_m_ - vo_off_at_m_) + " m on wheel odometry";
     }
   }
   // MER took a baseline pair before the first step so that the first step has a VO answer.

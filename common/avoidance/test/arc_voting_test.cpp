@@ -39,6 +39,38 @@ TEST(Sweep, CountsCellsOutsideTheStandingFootprint) {
   EXPECT_NEAR(s.min_goodness, 0.9, 1e-6);
 }
 
+TEST(Sweep, HiddenGroundWithinTheReachCountsWhereTheBodyComesNearer) {
+  // Unseen ground 1 m across whose near edge (y = 0.8) lies 0.1 m beside the body's left
+  // side (y = 0.7), ahead of it (x from 1.0; cell centres at odd tenths): a rock there
+  // could reach into the safe cells beside it.
+  Grid g = Open();
+  MarkUnknown(&g, 1.0, 2.0, 0.8, 1.8);
+  Footprint fp;  // 1.6 x 1.4
+  const Pose2 p{0, 0, 0};
+  const auto ahead = SamplePath(p, 0.0, 0.6, 0.0);  // the front reaches x = 1.4, the side stays at y = 0.7
+  // Under the footprint grown by half a cell (to y = 0.8) nothing is unknown.
+  const Sweep plain = SweepFootprint(g, fp, ahead, p, 0.0, 0.6);
+  EXPECT_EQ(plain.unknown, 0);
+  EXPECT_EQ(plain.hidden, 0);
+  // 0.05 m more (to y = 0.85) reaches no cell centre either.
+  EXPECT_EQ(SweepFootprint(g, fp, ahead, p, 0.0, 0.6, 0.05).hidden, 0);
+  // 0.25 m more (to y = 1.05, reached by 0.35 m growth in all): the first row counts where
+  // the front comes nearer to it than where the rover stands (x = 1.3, 1.5, 1.7; the cell at
+  // x = 1.1 lies within that growth of the standing body already), and only as hidden
+  // ground, not as unknown.
+  const Sweep near = SweepFootprint(g, fp, ahead, p, 0.0, 0.6, 0.25);
+  EXPECT_EQ(near.hidden, 3);
+  EXPECT_EQ(near.unknown, 0);
+  EXPECT_NEAR(near.hidden_y, 0.9, 1e-9);
+  // Driving straight away from the same ground (backing up) brings the body nearer to none
+  // of it.
+  EXPECT_EQ(SweepFootprint(g, fp, SamplePath(p, 0.0, -0.3, 0.0), p, 0.0, 0.6, 0.25).hidden, 0);
+  // Ground too narrow to hide a rock (one row of cells) counts at no reach.
+  Grid strip = Open();
+  MarkUnknown(&strip, 1.0, 2.0, 0.8, 1.0);
+  EXPECT_EQ(SweepFootprint(strip, fp, ahead, p, 0.0, 0.6, 0.25).hidden, 0);
+}
+
 TEST(Sweep, FindsTheWorstUnsafeCellAndTheBlindRing) {
   Grid g = Open();
   g.Paint(1.2, 0.0, 0.15, CellClass::kUnsafe, 0.0f, 0.35f);

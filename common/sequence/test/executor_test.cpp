@@ -534,6 +534,34 @@ TEST(SequenceExecutor, VoFailuresPastTheLimitCanContinueOnWheelOdometry) {
   EXPECT_EQ(w.Final().vo_failures, 2);
 }
 
+TEST(SequenceExecutor, VoSwitchedOffByFailuresIsTriedAgainAfterVoRetryAfterM) {
+  ExecutorOptions o = FastOptions();
+  o.vo_retry_after_m = 1.0;
+  SequenceExecutor ex(o);
+  FakeWorld w(ex);
+  w.vo_fail_next = 2;  // the pairs after steps 1 and 2 fail; VO measures again from then on
+  SubmitText(ex, "vo on step 50 cm failures 1 then continue\ndrive 4 m\n");
+  w.Run();
+  ASSERT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().detail;
+  ASSERT_EQ(w.steps.size(), 8u);
+  // Off after step 2 (1 m); steps 3 and 4 blind (1 m more); back on before step 5 with a
+  // baseline pair, and every step after it measured.
+  for (std::size_t i = 2; i < 4; ++i) EXPECT_EQ(w.steps[i].vo_status, -1) << i;
+  for (std::size_t i = 4; i < 8; ++i) EXPECT_EQ(w.steps[i].vo_status, VoUpdate::kStatusOk) << i;
+  int baselines = 0;
+  for (const auto& c : w.captures) baselines += c.purpose == "vo_baseline";
+  EXPECT_EQ(baselines, 2);
+  // Without the option (Mars's meaning), VO stays off to the end.
+  SequenceExecutor ex2(FastOptions());
+  FakeWorld w2(ex2);
+  w2.vo_fail_next = 2;
+  SubmitText(ex2, "vo on step 50 cm failures 1 then continue\ndrive 4 m\n");
+  w2.Run();
+  ASSERT_EQ(w2.steps.size(), 8u);
+  EXPECT_EQ(w2.steps.back().vo_status, -1);
+  EXPECT_EQ(w2.captures.size(), 3u);
+}
+
 TEST(SequenceExecutor, SilentVoCountsFailuresAfterTheWait) {
   ExecutorOptions o = FastOptions();
   o.vo_processes_required = false;
