@@ -109,6 +109,30 @@ int Grid::MarkKnown(const Footprint& footprint, const Pose2& pose, double grow_m
   return changed;
 }
 
+int Grid::MarkTurnKnown(const Footprint& footprint, const Pose2& pose) {
+  // The swept area is the disc out to the footprint's farthest corner (grown by half a
+  // cell): the rectangle holds the centre of turning and so the segment from it to that
+  // corner, a point at every radius out to it, which a whole turn carries all round.
+  const double grow = 0.5 * cell_m;
+  const double hx = 0.5 * footprint.length_m + grow, hy = 0.5 * footprint.width_m + grow;
+  const double cf = footprint.center_forward_m;
+  const double radius = std::max(std::hypot(cf + hx, hy), std::hypot(cf - hx, hy));
+  int changed = 0;
+  for (int i = std::max(0, static_cast<int>(std::floor((pose.x - radius - origin_x) / cell_m)));
+       i < rows && CellCentreX(i) <= pose.x + radius; ++i)
+    for (int j = std::max(0, static_cast<int>(std::floor((pose.y - radius - origin_y) / cell_m)));
+         j < cols && CellCentreY(j) <= pose.y + radius; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * cols + j;
+      if (state[k] != CellClass::kUnknown) continue;
+      if (std::hypot(CellCentreX(i) - pose.x, CellCentreY(j) - pose.y) > radius) continue;
+      state[k] = CellClass::kSafe;
+      goodness[k] = 1.0f;
+      step_m[k] = 0.0f;
+      ++changed;
+    }
+  return changed;
+}
+
 int Grid::MarkFlanksOfHiddenGround(double patch_m, double min_step_m) {
   if (patch_m <= 0.0) return 0;
   const double r = 0.5 * patch_m / cell_m;  // disc radius in cells, as HiddenGround's

@@ -63,6 +63,10 @@ struct Grid {
   // over carried it, and the ground round the rover where a drive begins is the operators'
   // (see arc_voting.hpp). Known cells keep their rating. Returns how many changed.
   int MarkKnown(const Footprint& footprint, const Pose2& pose, double grow_m);
+  // The same for the ground a whole turn in place of `footprint` at `pose` sweeps: every
+  // unknown cell SweepFootprint would count for it (its centre within half a cell of the
+  // footprint at some heading) reads safe. Returns how many changed.
+  int MarkTurnKnown(const Footprint& footprint, const Pose2& pose);
   // The flanks of rocks whose tops the cameras never saw: every safe or caution cell whose
   // step reads min_step_m or more and that has an 8-neighbour in unknown ground patch_m
   // across (a disc of that diameter all unknown, as SweepFootprint's hidden ground; off the

@@ -134,8 +134,12 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   // A rock rated unsafe before and caution now stays unsafe (avoid_keep_unsafe).
   if (const int kept = site_map_.KeepUnsafeOn(&grid); kept > 0)
     avoid_note_ += std::to_string(kept) + " cells rated unsafe before and caution now kept unsafe; ";
-  if (strict && options_.avoid_start_ring_known && goto_start_pose_)
+  if (strict && options_.avoid_start_ring_known && goto_start_pose_) {
     grid.MarkKnown(map_->footprint, *goto_start_pose_, map_->blind_margin_m);
+    // And the rover can turn round where it began: the ground a whole turn in place of the
+    // vote's footprint sweeps there.
+    grid.MarkTurnKnown(o.footprint, *goto_start_pose_);
+  }
   // A rock's flank round its unseen top reads far low: unsafe until that ground is seen.
   if (options_.avoid_hidden_flank_step_m > 0.0)
     grid.MarkFlanksOfHiddenGround(map_->unknown.hidden_patch_m, options_.avoid_hidden_flank_step_m);

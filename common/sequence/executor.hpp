@@ -130,7 +130,9 @@ struct ExecutorOptions {
   bool avoid_unseen_ground_strict = false;
   // With avoid_unseen_ground_strict: where a goto begins, the ring round the rover (the
   // monitor's blind margin) counts as known: the drive begins where the last one ended,
-  // whose end-of-drive images saw it, or where the operators put the rover.
+  // whose end-of-drive images saw it, or where the operators put the rover; and so does the
+  // ground a whole turn in place of the vote's footprint sweeps there (the rover can turn
+  // round where it began).
   bool avoid_start_ring_known = true;
   // The vote rates unsafe every safe or caution cell whose step reads this high or more
   // beside unknown ground the monitor's hidden_patch_m across (avoidance::Grid::

@@ -71,6 +71,38 @@ TEST(Sweep, HiddenGroundWithinTheReachCountsWhereTheBodyComesNearer) {
   EXPECT_EQ(SweepFootprint(strip, fp, ahead, p, 0.0, 0.6, 0.25).hidden, 0);
 }
 
+TEST(Grid, MarkTurnKnownLetsAWholeTurnInPlaceSweepOnlyKnownGround) {
+  Grid none = Grid::Filled(-6.0, -6.0, 0.2, 60, 60, CellClass::kUnknown, 0.0f);
+  Footprint body;  // 1.6 x 1.4
+  Footprint vote = body;
+  vote.length_m += 0.2;  // 0.1 m larger all round, as the executor's vote
+  vote.width_m += 0.2;
+  const Pose2 p{0.05, -0.03, 0.3};
+  std::vector<Pose2> turn;
+  for (int a = 0; a <= 72; ++a) turn.push_back({p.x, p.y, p.yaw + a * (2.0 * M_PI / 72.0)});
+  // The ring round the body (0.5 m) leaves the corners of the larger footprint's turn unseen.
+  Grid ring = none;
+  ring.MarkKnown(body, p, 0.5);
+  EXPECT_GT(SweepFootprint(ring, vote, turn, p, 0.0).unknown, 0);
+  // The whole turn's ground known: nothing the turn sweeps is unknown ...
+  Grid turned = none;
+  EXPECT_GT(turned.MarkTurnKnown(vote, p), 0);
+  EXPECT_EQ(SweepFootprint(turned, vote, turn, p, 0.0).unknown, 0);
+  // ... and nothing beyond it is known: the disc out to the corner, 1.345 m, grown by half a cell.
+  const double r = std::hypot(1.0, 0.9);
+  for (int i = 0; i < turned.rows; ++i)
+    for (int j = 0; j < turned.cols; ++j) {
+      const double d = std::hypot(turned.CellCentreX(i) - p.x, turned.CellCentreY(j) - p.y);
+      const bool known = turned.state[static_cast<std::size_t>(i) * turned.cols + j] != CellClass::kUnknown;
+      if (d > r + 0.1 + 1e-9) {
+        EXPECT_FALSE(known) << i << "," << j;
+      }
+      if (d < r) {
+        EXPECT_TRUE(known) << i << "," << j;
+      }
+    }
+}
+
 TEST(Sweep, FindsTheWorstUnsafeCellAndTheBlindRing) {
   Grid g = Open();
   g.Paint(1.2, 0.0, 0.15, CellClass::kUnsafe, 0.0f, 0.35f);
