@@ -337,6 +337,37 @@ const std::vector<Cell>& TraversabilityMap::cells() const {
   return cells_;
 }
 
+std::vector<char> TraversabilityMap::CellsInHoles(const std::vector<char>& has_points, double diameter_cells) const {
+  if (!(diameter_cells > 0.0)) return {};
+  // The disc's offsets, as avoidance's hidden ground: radius half the width, in cells.
+  const double r = 0.5 * diameter_cells;
+  const int n = static_cast<int>(std::floor(r));
+  std::vector<std::pair<int, int>> disc;
+  for (int di = -n; di <= n; ++di)
+    for (int dj = -n; dj <= n; ++dj)
+      if (di * di + dj * dj <= r * r + 1e-9) disc.emplace_back(di, dj);
+  auto empty = [&](int i, int j) {  // off the grid counts as without points
+    return i < 0 || j < 0 || i >= n_ || j >= n_ || !has_points[static_cast<std::size_t>(i) * n_ + j];
+  };
+  // Centres of all-empty discs, then every cell of such a disc.
+  std::vector<char> deep(has_points.size(), 0), hole(has_points.size(), 0);
+  for (int i = 0; i < n_; ++i)
+    for (int j = 0; j < n_; ++j) {
+      bool all = true;
+      for (const auto& [di, dj] : disc) all = all && empty(i + di, j + dj);
+      deep[static_cast<std::size_t>(i) * n_ + j] = all;
+    }
+  for (int i = 0; i < n_; ++i)
+    for (int j = 0; j < n_; ++j) {
+      if (!deep[static_cast<std::size_t>(i) * n_ + j]) continue;
+      for (const auto& [di, dj] : disc) {
+        const int a = i + di, b = j + dj;
+        if (a >= 0 && b >= 0 && a < n_ && b < n_) hole[static_cast<std::size_t>(a) * n_ + b] = 1;
+      }
+    }
+  return hole;
+}
+
 void TraversabilityMap::Rate() const {
   const MapOptions& o = options_;
   const std::size_t count = static_cast<std::size_t>(n_) * n_;
@@ -600,6 +631,7 @@ void TraversabilityMap::Rate() const {
   }
   const double crest_rise = o.crest_rise_fraction * o.max_step_m;
   const bool open_unknown = crests && o.open_cells_unknown;
+  const std::vector<char> in_hole = CellsInHoles(known, o.hole_unknown_m / o.cell_size_m);
   std::vector<std::size_t> xi;
   std::vector<float> st;
   for (int i = 0; i < n_; ++i) {
@@ -691,6 +723,9 @@ void TraversabilityMap::Rate() const {
         out.elevation_m = elevation;
         out.height_sigma_m = height_sigma;
       }
+      // In a hole in the points wide enough to hold a rock, with none of its own: its
+      // rating is the ground round the hole (hole_unknown_m).
+      if (!in_hole.empty() && in_hole[centre] && out.state != CellState::kUnsafe) out = Cell{};
     }
   }
   dirty_ = false;
@@ -736,6 +771,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("crest_view_height_m", o.crest_view_height_m, 1e-3, 10.0);
   node.Get("crest_rise_fraction", o.crest_rise_fraction, 1e-3, 1.0);
   node.Get("open_cells_unknown", o.open_cells_unknown);
+  node.Get("hole_unknown_m", o.hole_unknown_m, 0.0, 10.0);
   node.Get("drop_unseen_border", o.drop_unseen_border);
   node.Get("lr_max_diff_px", o.lr_max_diff_px, 0.0, 64.0);
   node.Get("ground_band_fraction", o.ground_band_fraction, 0.0, 0.5);
@@ -754,7 +790,7 @@ const std::vector<std::string> kMapOnlyKeys = {
     "cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
     "max_roughness_m", "min_points", "caution_fraction", "min_patch_fraction", "tilt_margin_sigmas", "dip_margin_sigmas",
     "roughness_margin_sigmas", "relief_sigmas", "ground_band_fraction", "crest_view_range_m", "crest_view_height_m",
-    "crest_rise_fraction", "open_cells_unknown"};
+    "crest_rise_fraction", "open_cells_unknown", "hole_unknown_m"};
 
 }  // namespace
 

@@ -131,6 +131,13 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // rule keeps the body off it until a pair frames it (the rover turns toward it, as it
   // must to drive there). Open cells are the bands at the sides of a view; a turn frames them.
   bool open_cells_unknown = false;
+  // > 0: a cell with no points of its own, rated from its patch's, is unknown unless it
+  // reads unsafe (never better) when it lies in a disc this wide (m) of cells without
+  // points: a hole in the data wide enough to hold a rock (hazards.map.hidden_patch_m), its
+  // rating the ground round it. Navbench seed 11 k0.20_r19: cells 0.14 and 0.24 m from a
+  // 0.33 m rock's centre, never seen, read safe so. 0: off (a speck of bland sand between
+  // points is rated from them, as before).
+  double hole_unknown_m = 0.0;
   double max_roughness_m = 0.05;
   // The roughness counts each cell's residual about the fitted plane only beyond this many
   // standard errors of its height (as dip_margin_sigmas does below the ground for the step):
@@ -292,6 +299,9 @@ class TraversabilityMap {
   // moments changed since the last rating (changed_), and those at the grid's edge after a
   // shift; the rest keep their ratings, which depend on nothing else.
   void Rate() const;
+  // The cells without points (has_points 0) lying in a disc diameter_cells wide of such
+  // cells (off the grid counts as without); empty when diameter_cells is 0 (hole_unknown_m).
+  std::vector<char> CellsInHoles(const std::vector<char>& has_points, double diameter_cells) const;
   void MarkAllStale() const;
 
   MapOptions options_;

@@ -291,5 +291,52 @@ TEST(OpenCells, ARockSeenWholeReadsAsBefore) {
   EXPECT_GT(CellsNear(on, 0.0, 0.0, 6.0).unknown, CellsNear(off, 0.0, 0.0, 6.0).unknown);
 }
 
+// Level ground with points in every 0.2 m cell but a hole: the 3 x 3 cells round (1.1, 0.1)
+// (`hole` true) or that one cell alone (a speck of bland sand).
+TraversabilityMap Holed(bool hole, double hole_unknown_m) {
+  MapOptions o;
+  o.hole_unknown_m = hole_unknown_m;
+  o.cell_size_m = 0.2;
+  o.extent_m = 6.0;
+  o.footprint_radius_m = 0.3;
+  o.max_step_m = 0.25;
+  TraversabilityMap map(o);
+  std::vector<Eigen::Vector3d> pts;
+  for (double x = 0.1; x < 2.6; x += 0.2)
+    for (double y = -1.1; y < 1.4; y += 0.2) {
+      const double d = std::max(std::abs(x - 1.1), std::abs(y - 0.1));
+      if (d < (hole ? 0.25 : 0.05)) continue;
+      for (int k = 0; k < 4; ++k) pts.emplace_back(x + 0.02 * (k % 2), y + 0.02 * (k / 2), 0.0);
+    }
+  map.AddPoints(pts, std::vector<double>(pts.size(), 0.01));
+  return map;
+}
+
+TEST(HoleCells, ACellWithoutPointsInAHoleWideEnoughForARockIsUnknown) {
+  const TraversabilityMap off = Holed(true, 0.0), on = Holed(true, 0.6);
+  // Without the option the hole's edge cells are rated from the ground round them.
+  int rated_off = 0, rated_on = 0, hole_cells = 0;
+  for (double x = 0.9; x < 1.4; x += 0.2)
+    for (double y = -0.1; y < 0.4; y += 0.2) {
+      ++hole_cells;
+      EXPECT_LT(off.At(x, y).height_sigma_m, 0.0f) << x << ", " << y;  // no points of its own
+      rated_off += off.At(x, y).state != CellState::kUnknown;
+      rated_on += on.At(x, y).state != CellState::kUnknown;
+    }
+  EXPECT_EQ(hole_cells, 9);
+  EXPECT_GE(rated_off, 8);  // all but the centre, whose patch holds no points at all
+  EXPECT_EQ(rated_on, 0);
+  // The ground round it, with points, reads as before.
+  for (double x = 0.5; x < 1.8; x += 0.2)
+    for (double y = -0.5; y < 0.8; y += 0.2) {
+      if (std::max(std::abs(x - 1.1), std::abs(y - 0.1)) < 0.25) continue;
+      EXPECT_EQ(on.At(x, y).state, off.At(x, y).state) << x << ", " << y;
+      EXPECT_EQ(on.At(x, y).state, CellState::kSafe) << x << ", " << y;
+    }
+  // A speck (one cell without points) is no hole: rated from its patch, with or without.
+  EXPECT_EQ(Holed(false, 0.6).At(1.1, 0.1).state, CellState::kSafe);
+  EXPECT_LT(Holed(false, 0.6).At(1.1, 0.1).height_sigma_m, 0.0f);
+}
+
 }  // namespace
 }  // namespace rover::traversability
