@@ -94,7 +94,8 @@ struct ExecutorOptions {
   // counted afresh) once the rover has driven this far without it (estimated m): the view
   // that failed (a rock filling it, a shadow) is left behind, and a goto that works round a
   // pocket for long on wheel odometry alone misplaces what it mapped (navbench seed 11
-  // k0.20_r05 drove 146 steps blind, 0.3 m of drift, into a rock). 0: never (Mars's meaning).
+  // k0.20_r05 drove 146 steps blind, its map about 0.3 m off by then, into a rock). 0: never
+  // (Mars's meaning).
   double vo_retry_after_m = 0.0;
 
   // Predictive keep-out margin (hazard_query_t.margin_m), on top of the monitor's k sigma:
