@@ -91,22 +91,34 @@ int Grid::DistrustEdges() {
   return static_cast<int>(edge.size());
 }
 
-int Grid::MarkKnown(const Footprint& footprint, const Pose2& pose, double grow_m) {
-  const double reach = std::hypot(0.5 * footprint.length_m + std::abs(footprint.center_forward_m),
-                                  0.5 * footprint.width_m) + grow_m + cell_m;
+namespace {
+
+// Every unknown cell within `reach` of (x, y) whose centre `inside(cx, cy)` holds reads safe
+// (goodness 1, no step); returns how many changed. What MarkKnown and MarkTurnKnown share.
+template <typename Inside>
+int MarkSafeWhere(Grid* g, double x, double y, double reach, Inside inside) {
   int changed = 0;
-  for (int i = std::max(0, static_cast<int>(std::floor((pose.x - reach - origin_x) / cell_m)));
-       i < rows && CellCentreX(i) <= pose.x + reach; ++i)
-    for (int j = std::max(0, static_cast<int>(std::floor((pose.y - reach - origin_y) / cell_m)));
-         j < cols && CellCentreY(j) <= pose.y + reach; ++j) {
-      const std::size_t k = static_cast<std::size_t>(i) * cols + j;
-      if (state[k] != CellClass::kUnknown || !footprint.Contains(pose, CellCentreX(i), CellCentreY(j), grow_m)) continue;
-      state[k] = CellClass::kSafe;
-      goodness[k] = 1.0f;
-      step_m[k] = 0.0f;
+  for (int i = std::max(0, static_cast<int>(std::floor((x - reach - g->origin_x) / g->cell_m)));
+       i < g->rows && g->CellCentreX(i) <= x + reach; ++i)
+    for (int j = std::max(0, static_cast<int>(std::floor((y - reach - g->origin_y) / g->cell_m)));
+         j < g->cols && g->CellCentreY(j) <= y + reach; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * g->cols + j;
+      if (g->state[k] != CellClass::kUnknown || !inside(g->CellCentreX(i), g->CellCentreY(j))) continue;
+      g->state[k] = CellClass::kSafe;
+      g->goodness[k] = 1.0f;
+      g->step_m[k] = 0.0f;
       ++changed;
     }
   return changed;
+}
+
+}  // namespace
+
+int Grid::MarkKnown(const Footprint& footprint, const Pose2& pose, double grow_m) {
+  const double reach = std::hypot(0.5 * footprint.length_m + std::abs(footprint.center_forward_m),
+                                  0.5 * footprint.width_m) + grow_m + cell_m;
+  return MarkSafeWhere(this, pose.x, pose.y, reach,
+                       [&](double cx, double cy) { return footprint.Contains(pose, cx, cy, grow_m); });
 }
 
 int Grid::MarkTurnKnown(const Footprint& footprint, const Pose2& pose) {
@@ -117,20 +129,8 @@ int Grid::MarkTurnKnown(const Footprint& footprint, const Pose2& pose) {
   const double hx = 0.5 * footprint.length_m + grow, hy = 0.5 * footprint.width_m + grow;
   const double cf = footprint.center_forward_m;
   const double radius = std::max(std::hypot(cf + hx, hy), std::hypot(cf - hx, hy));
-  int changed = 0;
-  for (int i = std::max(0, static_cast<int>(std::floor((pose.x - radius - origin_x) / cell_m)));
-       i < rows && CellCentreX(i) <= pose.x + radius; ++i)
-    for (int j = std::max(0, static_cast<int>(std::floor((pose.y - radius - origin_y) / cell_m)));
-         j < cols && CellCentreY(j) <= pose.y + radius; ++j) {
-      const std::size_t k = static_cast<std::size_t>(i) * cols + j;
-      if (state[k] != CellClass::kUnknown) continue;
-      if (std::hypot(CellCentreX(i) - pose.x, CellCentreY(j) - pose.y) > radius) continue;
-      state[k] = CellClass::kSafe;
-      goodness[k] = 1.0f;
-      step_m[k] = 0.0f;
-      ++changed;
-    }
-  return changed;
+  return MarkSafeWhere(this, pose.x, pose.y, radius,
+                       [&](double cx, double cy) { return std::hypot(cx - pose.x, cy - pose.y) <= radius; });
 }
 
 int Grid::MarkFlanksOfHiddenGround(double patch_m, double min_step_m) {

@@ -111,17 +111,23 @@ Census CellsNear(const TraversabilityMap& map, double x, double y, double radius
   return c;
 }
 
+// The synthetic maps' options: 0.2 m cells over 6 m, a 0.3 m patch, the 0.25 m step limit.
+MapOptions SyntheticOptions() {
+  MapOptions o;
+  o.cell_size_m = 0.2;
+  o.extent_m = 6.0;
+  o.footprint_radius_m = 0.3;
+  o.max_step_m = 0.25;
+  return o;
+}
+
 // Synthetic: level ground of known cells (x, y in [0, 2) m) and one cell at (1.1, 0.1)
 // standing `rise_m` over it. Every cell is framed except, when `flank_open`, that one,
 // which a pair saw without its top (cut).
 TraversabilityMap Flank(double rise_m, bool flank_open, double range_m, bool open_unknown = false,
                         bool gap_beside = false) {
-  MapOptions o;
+  MapOptions o = SyntheticOptions();
   o.open_cells_unknown = open_unknown;
-  o.cell_size_m = 0.2;
-  o.extent_m = 6.0;
-  o.footprint_radius_m = 0.3;
-  o.max_step_m = 0.25;
   o.max_roughness_m = 0.2;  // the step alone rates these patches
   o.crest_view_range_m = range_m;
   TraversabilityMap map(o);
@@ -294,12 +300,8 @@ TEST(OpenCells, ARockSeenWholeReadsAsBefore) {
 // Level ground with points in every 0.2 m cell but a hole: the 3 x 3 cells round (1.1, 0.1)
 // (`hole` true) or that one cell alone (a speck of bland sand).
 TraversabilityMap Holed(bool hole, double hole_unknown_m) {
-  MapOptions o;
+  MapOptions o = SyntheticOptions();
   o.hole_unknown_m = hole_unknown_m;
-  o.cell_size_m = 0.2;
-  o.extent_m = 6.0;
-  o.footprint_radius_m = 0.3;
-  o.max_step_m = 0.25;
   TraversabilityMap map(o);
   std::vector<Eigen::Vector3d> pts;
   for (double x = 0.1; x < 2.6; x += 0.2)
