@@ -631,6 +631,7 @@ void TraversabilityMap::Rate() const {
   }
   const double crest_rise = o.crest_rise_fraction * o.max_step_m;
   const bool open_unknown = crests && o.open_cells_unknown;
+  const bool unframed_unknown = crests && o.unframed_unknown;
   const std::vector<char> in_hole = CellsInHoles(known, o.hole_unknown_m / o.cell_size_m);
   std::vector<std::size_t> xi;
   std::vector<float> st;
@@ -726,6 +727,9 @@ void TraversabilityMap::Rate() const {
       // In a hole in the points wide enough to hold a rock, with none of its own: its
       // rating is the ground round the hole (hole_unknown_m).
       if (!in_hole.empty() && in_hole[centre] && out.state != CellState::kUnsafe) out = Cell{};
+      // Without points of its own and never framed: nothing looked at it (unframed_unknown).
+      if (unframed_unknown && !known[centre] && !(framed_[centre] & kFramed) && out.state != CellState::kUnsafe)
+        out = Cell{};
     }
   }
   dirty_ = false;
@@ -772,6 +776,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("crest_rise_fraction", o.crest_rise_fraction, 1e-3, 1.0);
   node.Get("open_cells_unknown", o.open_cells_unknown);
   node.Get("hole_unknown_m", o.hole_unknown_m, 0.0, 10.0);
+  node.Get("unframed_unknown", o.unframed_unknown);
   node.Get("drop_unseen_border", o.drop_unseen_border);
   node.Get("lr_max_diff_px", o.lr_max_diff_px, 0.0, 64.0);
   node.Get("ground_band_fraction", o.ground_band_fraction, 0.0, 0.5);
@@ -790,7 +795,7 @@ const std::vector<std::string> kMapOnlyKeys = {
     "cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
     "max_roughness_m", "min_points", "caution_fraction", "min_patch_fraction", "tilt_margin_sigmas", "dip_margin_sigmas",
     "roughness_margin_sigmas", "relief_sigmas", "ground_band_fraction", "crest_view_range_m", "crest_view_height_m",
-    "crest_rise_fraction", "open_cells_unknown", "hole_unknown_m"};
+    "crest_rise_fraction", "open_cells_unknown", "hole_unknown_m", "unframed_unknown"};
 
 }  // namespace
 

@@ -138,6 +138,14 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // 0.33 m rock's centre, never seen, read safe so. 0: off (a speck of bland sand between
   // points is rated from them, as before).
   double hole_unknown_m = 0.0;
+  // With crest_view_range_m: a cell with no points of its own that no pair has framed is
+  // unknown unless it reads unsafe (never better). Its patch rating came from the ground
+  // beside it, and nothing ever looked at it: a rock standing wholly beside the view reads
+  // as the ground round it (navbench seed 11 k0.20_r19: cells 0.14 and 0.24 m from a
+  // 0.33 m rock's centre read safe so). A cell a pair framed but put no points in (the
+  // ground hidden behind a rock, bland sand) keeps its patch rating: a rock's top standing
+  // there would have been in view. false: rated from the patch, as before.
+  bool unframed_unknown = false;
   double max_roughness_m = 0.05;
   // The roughness counts each cell's residual about the fitted plane only beyond this many
   // standard errors of its height (as dip_margin_sigmas does below the ground for the step):

@@ -299,10 +299,18 @@ TEST(OpenCells, ARockSeenWholeReadsAsBefore) {
 
 // Level ground with points in every 0.2 m cell but a hole: the 3 x 3 cells round (1.1, 0.1)
 // (`hole` true) or that one cell alone (a speck of bland sand).
-TraversabilityMap Holed(bool hole, double hole_unknown_m) {
+// `framed` (unframed_unknown on, with the crest rule): every cell within 3 m of the origin
+// framed (a pair looked at it), or none.
+enum class View { kNone, kUnframed, kFramed };
+TraversabilityMap Holed(bool hole, double hole_unknown_m, View view = View::kNone) {
   MapOptions o = SyntheticOptions();
   o.hole_unknown_m = hole_unknown_m;
+  if (view != View::kNone) {
+    o.crest_view_range_m = 6.0;
+    o.unframed_unknown = true;
+  }
   TraversabilityMap map(o);
+  if (view == View::kFramed) map.MarkView(0.0, 0.0, 3.0, true);
   std::vector<Eigen::Vector3d> pts;
   for (double x = 0.1; x < 2.6; x += 0.2)
     for (double y = -1.1; y < 1.4; y += 0.2) {
@@ -338,6 +346,35 @@ TEST(HoleCells, ACellWithoutPointsInAHoleWideEnoughForARockIsUnknown) {
   // A speck (one cell without points) is no hole: rated from its patch, with or without.
   EXPECT_EQ(Holed(false, 0.6).At(1.1, 0.1).state, CellState::kSafe);
   EXPECT_LT(Holed(false, 0.6).At(1.1, 0.1).height_sigma_m, 0.0f);
+}
+
+
+// unframed_unknown: the same hole, never framed, is unknown; framed (a pair looked at it and
+// found no points: the ground hidden behind a rock, bland sand), it keeps its patch rating.
+TEST(UnframedCells, ACellWithoutPointsThatNoPairFramedIsUnknown) {
+  const TraversabilityMap off = Holed(true, 0.0), unframed = Holed(true, 0.0, View::kUnframed),
+                          framed = Holed(true, 0.0, View::kFramed);
+  int rated_off = 0, rated_unframed = 0, rated_framed = 0;
+  for (double x = 0.9; x < 1.4; x += 0.2)
+    for (double y = -0.1; y < 0.4; y += 0.2) {
+      ASSERT_LT(off.At(x, y).height_sigma_m, 0.0f) << x << ", " << y;  // no points of its own
+      rated_off += off.At(x, y).state != CellState::kUnknown;
+      rated_unframed += unframed.At(x, y).state != CellState::kUnknown;
+      rated_framed += framed.At(x, y).state != CellState::kUnknown;
+      EXPECT_EQ(framed.At(x, y).state, off.At(x, y).state) << x << ", " << y;
+    }
+  EXPECT_GE(rated_off, 8);
+  EXPECT_EQ(rated_framed, rated_off);
+  EXPECT_EQ(rated_unframed, 0);
+  // Cells with points of their own read as before, framed or not; so does a lone speck
+  // without points once framed, and unframed it is unknown too (nothing looked at it).
+  for (double x = 0.5; x < 1.8; x += 0.2)
+    for (double y = -0.5; y < 0.8; y += 0.2) {
+      if (std::max(std::abs(x - 1.1), std::abs(y - 0.1)) < 0.25) continue;
+      EXPECT_EQ(unframed.At(x, y).state, CellState::kSafe) << x << ", " << y;
+    }
+  EXPECT_EQ(Holed(false, 0.0, View::kFramed).At(1.1, 0.1).state, CellState::kSafe);
+  EXPECT_EQ(Holed(false, 0.0, View::kUnframed).At(1.1, 0.1).state, CellState::kUnknown);
 }
 
 }  // namespace
