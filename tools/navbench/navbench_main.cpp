@@ -34,7 +34,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: navbench [--runs N] [--jobs J] [--densities K,...|none] [--worlds NAME,...|none] [--seed S]\n"
     "                [--out DIR] [--quick] [--min-goal M] [--max-goal M] [--no-plot] [--prepare | --report]\n"
-    "                [--resume]\n\n"
+    "                [--resume] [--set KEY=VALUE]...\n\n"
     "The navigation benchmark: N runs (default 20) per Golombek rock field k (default\n"
     "0.05,0.10,0.15,0.20; rocks 0.1 to 1.5 m) and per fixed world (default gap_wall,cul_de_sac),\n"
     "each one `goto ... avoid on` with VO and the map on: 20 to 50 m (--min-goal, --max-goal) in\n"
@@ -47,7 +47,11 @@ constexpr const char* kUsage =
     "DIR/results.json and DIR/plots/ID.png. --seed S (default 1) draws every run.\n"
     "--quick: 1 run at k = 0.10, 8 to 10 m, no fixed world (a smoke run). --prepare writes the\n"
     "runs and runs none; --report tables runs already in DIR; --resume runs only those without\n"
-    "a summary.json (an interrupted benchmark, or more --runs on the same seed).\n";
+    "a summary.json (an interrupted benchmark, or more --runs on the same seed).\n"
+    "--set KEY=VALUE (repeatable): a rover-config setting tried on every run, by its dotted key\n"
+    "(hazards.map.traversability.unframed_unknown=true, executor.avoid_margin_m=0.2), written\n"
+    "to each run's scenario overrides; a misspelt key fails every run with the process's\n"
+    "\"unknown key\" error (runs/ID/*.log).\n";
 
 std::vector<std::string> SplitCommas(const std::string& text) {
   std::vector<std::string> parts;
@@ -157,6 +161,8 @@ Args ParseArgs(int argc, char** argv) {
       a.plot = false;
     } else if (arg == "--prepare") {
       a.prepare_only = true;
+    } else if (arg == "--set") {
+      options.overrides.push_back(nb::ParseSetting(value(i, arg)));
     } else if (arg == "--report") {
       a.report_only = true;
     } else if (arg == "--resume") {
@@ -187,7 +193,7 @@ std::string PrepareRuns(const std::vector<nb::RunPlan>& plans, const nb::BenchOp
   int written = 0;
   for (const auto& p : plans) {
     if (resume && fs::exists(p.dir + "/summary.json")) continue;
-    nb::WriteRun(p);
+    nb::WriteRun(p, options.overrides);
     out << p.scenario_path() << "\n";
     ++written;
   }

@@ -178,7 +178,27 @@ std::string SequenceText(const RunPlan& p) {
   return os.str();
 }
 
-void WriteRun(const RunPlan& p) {
+tools::ConfigOverride ParseSetting(const std::string& text) {
+  const std::size_t eq = text.find('=');
+  const std::string key = text.substr(0, eq);
+  auto bad = [&text](const std::string& why) {
+    return config::ConfigError("navbench: --set \"" + text + "\": " + why);
+  };
+  if (eq == std::string::npos) throw bad("expected KEY=VALUE (a dotted rover-config key, e.g. executor.avoid_margin_m=0.2)");
+  if (key.empty() || key.front() == '.' || key.back() == '.' || key.find("..") != std::string::npos)
+    throw bad("expected a dotted key before '=' with no empty part");
+  tools::ConfigOverride o;
+  o.key = key;
+  try {
+    o.value = YAML::Load(text.substr(eq + 1));
+  } catch (const YAML::Exception& e) {
+    throw bad("the value is not YAML (" + e.msg + ")");
+  }
+  if (!o.value.IsDefined() || o.value.IsNull()) throw bad("expected a value after '='");
+  return o;
+}
+
+void WriteRun(const RunPlan& p, const std::vector<tools::ConfigOverride>& overrides) {
   fs::create_directories(p.dir);
   std::string world = p.world_file.empty() ? p.dir + "/field.yaml" : fs::absolute(p.world_file).string();
   if (p.world_file.empty()) WriteFile(world, RockFieldYaml(p));
@@ -205,8 +225,13 @@ void WriteRun(const RunPlan& p) {
   y << YAML::Key << "world" << YAML::Value << p.world_seed;
   y << YAML::Key << "mobility" << YAML::Value << p.mobility_seed << YAML::Key << "render" << YAML::Value
     << p.render_seed << YAML::EndMap;
-  y << YAML::Key << "overrides" << YAML::Value << YAML::BeginMap << YAML::Key << "hazards.map.enabled"
-    << YAML::Value << true << YAML::EndMap;
+  y << YAML::Key << "overrides" << YAML::Value << YAML::BeginMap;
+  // The map on, unless a setting says otherwise.
+  bool map_set = false;
+  for (const auto& o : overrides) map_set = map_set || o.key == "hazards.map.enabled";
+  if (!map_set) y << YAML::Key << "hazards.map.enabled" << YAML::Value << true;
+  for (const auto& o : overrides) y << YAML::Key << o.key << YAML::Value << o.value;
+  y << YAML::EndMap;
   y << YAML::Key << "expect" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "outcome"
     << YAML::Value << "completed" << YAML::EndMap;
   y << YAML::EndMap;

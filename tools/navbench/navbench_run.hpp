@@ -5,6 +5,7 @@
 #pragma once
 
 #include "navbench/navbench_metrics.hpp"
+#include "scenario/scenario_overrides.hpp"
 
 #include <cstdint>
 #include <optional>
@@ -20,7 +21,15 @@ struct BenchOptions {
   std::uint64_t seed = 1;
   double min_goal_m = 20, max_goal_m = 50;  // goto length on the rock fields
   std::string out_dir = "out/navbench";
+  // Rover-config settings tried on every run (--set KEY=VALUE), after the map's own
+  // (hazards.map.enabled: true), in each run's scenario `overrides:`.
+  std::vector<tools::ConfigOverride> overrides;
 };
+
+// "KEY=VALUE" as a rover-config override: the dotted key and the value as YAML (a number,
+// true, a list [1, 2]). Throws config::ConfigError "navbench: --set ...: expected ..." on a
+// missing '=', an empty key or key component, or a value that is not YAML.
+tools::ConfigOverride ParseSetting(const std::string& text);
 
 // A world with a fixed layout: its file, and the goal its runs drive to from (0, 0).
 struct FixedWorld {
@@ -54,7 +63,7 @@ std::string RockFieldYaml(const RunPlan& plan);
 // The run's sequence: VO on, the limits, one `goto ... avoid on`.
 std::string SequenceText(const RunPlan& plan);
 // Writes the world (rock fields), the sequence and the scenario into plan.dir.
-void WriteRun(const RunPlan& plan);
+void WriteRun(const RunPlan& plan, const std::vector<tools::ConfigOverride>& overrides = {});
 
 // What a plot of the run needs besides its figures.
 struct RunTrack {

@@ -117,3 +117,61 @@ TEST(NavbenchPlan, WrittenFilesLoad) {
   }
   fs::remove_all(out);
 }
+
+// --set KEY=VALUE: each setting lands in every run's scenario overrides, after the map's own,
+// with its YAML type; and a setting of the map's own key replaces it.
+TEST(NavbenchPlan, SettingsGoIntoEveryRunsOverrides) {
+  fs::current_path(ROVER_SOURCE_DIR);
+  const std::string out = (fs::temp_directory_path() / "navbench_set_test").string();
+  fs::remove_all(out);
+  auto options = Options(out);
+  options.runs = 1;
+  options.overrides = {nb::ParseSetting("hazards.map.traversability.unframed_unknown=true"),
+                       nb::ParseSetting("executor.avoid_margin_m=0.2")};
+  const auto runs = nb::PlanRuns(options);
+  ASSERT_FALSE(runs.empty());
+  for (const auto& run : runs) {
+    nb::WriteRun(run, options.overrides);
+    const auto spec = rover::tools::LoadScenario(run.scenario_path());
+    // Found by key: the scenario's seeds become overrides of their own.
+    auto find = [&spec](const std::string& key) -> const rover::tools::ConfigOverride* {
+      for (const auto& o : spec.overrides)
+        if (o.key == key) return &o;
+      return nullptr;
+    };
+    const auto* map = find("hazards.map.enabled");
+    const auto* unframed = find("hazards.map.traversability.unframed_unknown");
+    const auto* margin = find("executor.avoid_margin_m");
+    ASSERT_TRUE(map && unframed && margin) << run.id;
+    EXPECT_TRUE(map->value.as<bool>());
+    EXPECT_TRUE(unframed->value.as<bool>());
+    EXPECT_DOUBLE_EQ(margin->value.as<double>(), 0.2);
+    EXPECT_LT(map, unframed);  // in order: the map's own, then the settings
+    EXPECT_LT(unframed, margin);
+  }
+  const auto off = nb::ParseSetting("hazards.map.enabled=false");
+  nb::WriteRun(runs.front(), {off});
+  const auto spec = rover::tools::LoadScenario(runs.front().scenario_path());
+  int map_keys = 0;
+  for (const auto& o : spec.overrides)
+    if (o.key == "hazards.map.enabled") {
+      ++map_keys;
+      EXPECT_FALSE(o.value.as<bool>());
+    }
+  EXPECT_EQ(map_keys, 1);
+  fs::remove_all(out);
+}
+
+TEST(NavbenchPlan, ABadSettingIsAOneLineErrorNamingIt) {
+  for (const std::string bad : {"executor.avoid_margin_m", "=0.2", "executor..x=1", "executor.x=", "a.b=[1, 2"}) {
+    try {
+      nb::ParseSetting(bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const rover::config::ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("--set \"" + bad + "\""), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  }
+  EXPECT_EQ(nb::ParseSetting("a.b=[1, 2]").value.size(), 2u);
+}
