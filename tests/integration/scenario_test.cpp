@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 namespace rover::test {
 namespace {
@@ -119,6 +120,33 @@ TEST(Scenario, RejectedSequenceNeverMoves) {
   EXPECT_EQ(s["steps"].size(), 0u);
   EXPECT_LT(s["distance_travelled_m"].as<double>(), 0.01);
   for (const auto& c : s["commands"]) EXPECT_EQ(c["outcome"].as<std::string>(), "not_run");
+}
+
+// A process that exits at start (here the executor, on a misspelt key of the scenario's
+// overrides) ends the run at once, with that process's one-line error: in virtual time the
+// clock could never start, and the runner no longer waits 90 s of wall time to say so.
+TEST(Scenario, AProcessThatExitsAtStartEndsTheRunWithItsError) {
+  const std::string out = OutDir("scenario_exits_at_start");
+  const std::string file = out + "/bad_key.yaml";
+  std::ofstream(file) << "name: bad_key\n"
+                         "world: configs/worlds/flat_rock_course.yaml\n"
+                         "sequence: configs/sequences/demo.seq\n"
+                         "deployment: configs/deploy/sim_vo.yaml\n"
+                         "start: {x: 0, y: 0, yaw_deg: 0}\n"
+                         "sim_rate: 50\n"
+                         "timeout_s: 300\n"
+                         "overrides:\n"
+                         "  executor.avoid_margin_mm: 0.2\n"
+                         "expect: {outcome: completed}\n";
+  const auto result = RunCommand(Bin("scenario_runner") + " " + file + " --out " + out + "/run --no-plot");
+  EXPECT_EQ(result.exit_code, 1) << result.output;
+  EXPECT_NE(result.output.find("sequence_executor exited with code 2 at start: "), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("executor.avoid_margin_mm: unknown key"), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("the sequence was not submitted"), std::string::npos) << result.output;
+  // Not the 30 s start limit and the 60 s clock-stall limit it used to wait out.
+  EXPECT_EQ(result.output.find("the clock did not start"), std::string::npos) << result.output;
+  EXPECT_EQ(result.output.find("the clock stood still"), std::string::npos) << result.output;
+  EXPECT_EQ(YAML::LoadFile(out + "/run/summary.json")["outcome"].as<std::string>(), "incomplete");
 }
 
 }  // namespace

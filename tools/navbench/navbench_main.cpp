@@ -50,8 +50,8 @@ constexpr const char* kUsage =
     "a summary.json (an interrupted benchmark, or more --runs on the same seed).\n"
     "--set KEY=VALUE (repeatable): a rover-config setting tried on every run, by its dotted key\n"
     "(hazards.map.traversability.unframed_unknown=true, executor.avoid_margin_m=0.2), written\n"
-    "to each run's scenario overrides; a misspelt key fails every run with the process's\n"
-    "\"unknown key\" error (runs/ID/*.log).\n";
+    "to each run's scenario overrides; a misspelt key ends every run at once with the\n"
+    "process's \"unknown key\" error (runs/ID/runner.log).\n";
 
 std::vector<std::string> SplitCommas(const std::string& text) {
   std::vector<std::string> parts;

@@ -343,6 +343,12 @@ class Run {
               << args_.url << "; output in " << args_.out_dir << "/\n"
               << std::flush;
     WaitUntilReady();
+    if (died_at_start_) {
+      // The set is incomplete and, in virtual time, its clock can never start: nothing to
+      // wait for (a misspelt config key ends a run here, with its process's error).
+      Note("the sequence was not submitted: a process of the set exited at start");
+      return StopEverything();
+    }
     Submit();
     Follow();
     NoteWhyUnfinished();
@@ -439,17 +445,32 @@ class Run {
         last_hello = wall();
       }
       bus_.Handle(20);
-      for (const auto& [name, how] : set_.Poll(0)) Note(name + " " + how + " at start");
+      NoteDeathsAtStart();
+      if (died_at_start_) return;
     }
     if (virtual_time_ && clock_seen_ < 0) Note("the clock did not start within 30 s (see rover_sim.log)");
     if (virtual_time_) ready = true;
     while (!virtual_time_ && !ready && !g_stop && wall() < 30) {
       bus_.Handle(50);
-      for (const auto& [name, how] : set_.Poll(0)) Note(name + " " + how + " at start");
+      NoteDeathsAtStart();
+      if (died_at_start_) return;
       ready = true;
       for (const auto& p : plan_.deployment.processes) ready = ready && alive_.count(p.name) > 0;
     }
     if (!ready) Note("not every process sent a heartbeat within 30 s");
+  }
+
+  // A process that exited before the set was ready, with the last line of its log (its
+  // one-line error: a bad config key, a bad argument).
+  void NoteDeathsAtStart() {
+    for (const auto& [name, how] : set_.Poll(0)) {
+      const std::string log = args_.out_dir + "/" + name + ".log";
+      std::string line, last;
+      for (std::ifstream in(log); std::getline(in, line);)
+        if (!line.empty()) last = line;
+      Note(name + " " + how + " at start" + (last.empty() ? "" : ": " + last) + " (see " + log + ")");
+      died_at_start_ = true;
+    }
   }
 
   void Submit() {
@@ -601,6 +622,7 @@ class Run {
   std::int64_t submitted_at_ = 0, rover_limit_us_ = 0, clock_moved_ = -1;
   double clock_moved_wall_ = 0;
   std::optional<std::int64_t> final_utime_;
+  bool died_at_start_ = false;
   bool killed_ = false;
   std::optional<SyncWatch> sync_watch_;
 };
