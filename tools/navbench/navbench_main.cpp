@@ -162,7 +162,10 @@ Args ParseArgs(int argc, char** argv) {
     } else if (arg == "--prepare") {
       a.prepare_only = true;
     } else if (arg == "--set") {
-      options.overrides.push_back(nb::ParseSetting(value(i, arg)));
+      const auto setting = nb::ParseSetting(value(i, arg));
+      for (const auto& o : options.overrides)
+        if (o.key == setting.key) throw ConfigError("navbench: --set " + setting.key + ": given twice (expected each key once)");
+      options.overrides.push_back(setting);
     } else if (arg == "--report") {
       a.report_only = true;
     } else if (arg == "--resume") {
