@@ -24,18 +24,22 @@ BlockedWays::BlockedWays(const BlockOptions& options) : options_(options) { opti
 void BlockedWays::Reset() {
   best_ = std::numeric_limits<double>::infinity();
   stalled_ = 0;
+  refusals_ = 0;
   zones_.clear();
 }
 
-bool BlockedWays::Update(const GlobalPlan& plan) {
+bool BlockedWays::Update(const GlobalPlan& plan, std::size_t refusals) {
+  const bool refused = refusals > refusals_;
+  refusals_ = refusals;
   if (options_.stall_steps == 0 || !plan.reachable()) return false;
   const double cost = plan.cost_at_start();
   if (!std::isfinite(cost)) return false;
-  if (cost < best_ - options_.min_gain_m || cost > best_ + options_.new_way_m) {
+  if (cost < best_ - options_.min_gain_m || (!refused && cost > best_ + options_.new_way_m)) {
     best_ = cost;
     stalled_ = 0;
     return false;
   }
+  if (refused) best_ = cost;  // no progress, and no new way: counted on from the dearer plan
   if (++stalled_ < options_.stall_steps || static_cast<int>(zones_.size()) >= options_.max_blocks) return false;
   // The point ahead_m down the path (the goal itself when the path is shorter).
   const auto& path = plan.path();

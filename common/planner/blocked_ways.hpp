@@ -14,6 +14,7 @@
 #include "hazards/keepout.hpp"
 #include "planner/global_planner.hpp"
 
+#include <cstddef>
 #include <limits>
 #include <vector>
 
@@ -38,9 +39,14 @@ class BlockedWays {
   explicit BlockedWays(const BlockOptions& options = {});
   // A new goto: nothing blocked.
   void Reset();
-  // After each plan from the rover's position: its cost to go there (plan.cost_at_start()).
-  // Returns true when the way was blocked now (zones() has a new disc: plan again).
-  bool Update(const GlobalPlan& plan);
+  // After each plan from the rover's position: its cost to go there (plan.cost_at_start()),
+  // and how many refused ways (refused_ways.hpp) the goto has so far. A refusal makes the
+  // way it refused dearer, and that rise is neither progress nor a new way: the count goes
+  // on, measured from the dearer plan. Counted as a new way, each refusal restarted it
+  // (keepout_avoid's variants: the cost crept from 9.9 to 42 over 60 steps of dithering,
+  // and 10 steps never passed without such a rise). Returns true when the way was blocked
+  // now (zones() has a new disc: plan again).
+  bool Update(const GlobalPlan& plan, std::size_t refusals = 0);
   // The blocked ways, as obstacles for the planner (PlanRequest::zones).
   const std::vector<hazards::KeepOutZone>& zones() const { return zones_; }
   int stalled_steps() const { return stalled_; }
@@ -49,6 +55,7 @@ class BlockedWays {
   BlockOptions options_;
   double best_ = std::numeric_limits<double>::infinity();
   int stalled_ = 0;
+  std::size_t refusals_ = 0;
   std::vector<hazards::KeepOutZone> zones_;
 };
 

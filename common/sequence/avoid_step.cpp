@@ -296,7 +296,7 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
         plan_once();
       }
     }
-    if (blocked_ways_.Update(**plan)) {
+    if (blocked_ways_.Update(**plan, refused_ways_.discs().size())) {
       const hazards::KeepOutZone& z = blocked_ways_.zones().back();
       avoid_note_ += "no progress along the plan in " + std::to_string(options_.planner_block_after_steps) +
                     " steps: its way at " + Fixed(z.center.x()) + "," + Fixed(z.center.y()) +

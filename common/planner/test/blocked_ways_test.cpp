@@ -76,5 +76,52 @@ TEST(BlockedWays, ProgressAndANewWayAreNotStalls) {
   EXPECT_THROW(BlockedWays{bad}, std::invalid_argument);
 }
 
+// A way the local check keeps refusing: each refusal makes the way dearer (a costly disc on
+// it, 10 per metre as the executor adds), which read as a new way and restarted the count.
+// Told of the refusals, the count goes on, and the way is blocked after stall_steps plans.
+TEST(BlockedWays, RefusalsOnTheWayDoNotRestartTheCount) {
+  const Grid g = WallWithAGap();
+  PlannerOptions po;
+  BlockOptions bo;
+  bo.stall_steps = 5;
+  BlockedWays told(bo), untold(bo);
+  std::vector<CostlyDisc> refused;
+  bool blocked = false;
+  double first_cost = 0, last_cost = 0;
+  for (int k = 0; k <= bo.stall_steps; ++k) {
+    PlanRequest r = At(3.0, 0.0);
+    r.costly = refused;
+    const GlobalPlan plan = PlanOnGrid(g, r, po);
+    ASSERT_TRUE(plan.reachable());
+    (k == 0 ? first_cost : last_cost) = plan.cost_at_start();
+    blocked = told.Update(plan, refused.size());
+    untold.Update(plan);
+    if (k < bo.stall_steps) {
+      EXPECT_FALSE(blocked) << k;
+      EXPECT_EQ(told.stalled_steps(), k) << k;
+    }
+    refused.push_back({Eigen::Vector2d(4.0, 0.0), 0.6, 10.0});  // refused again, in the gap
+  }
+  // Each refusal raised the cost by more than new_way_m.
+  EXPECT_GT(last_cost - first_cost, bo.stall_steps * bo.new_way_m);
+  EXPECT_TRUE(blocked);
+  ASSERT_EQ(told.zones().size(), 1u);
+  EXPECT_NEAR(told.zones()[0].center.x(), 4.5, 0.25);
+  // Untold, every rise read as a new way and restarted the count.
+  EXPECT_EQ(untold.stalled_steps(), 0);
+  EXPECT_TRUE(untold.zones().empty());
+  // A refusal followed by progress along the dearer plan is progress.
+  BlockedWays moving(bo);
+  EXPECT_FALSE(moving.Update(PlanOnGrid(g, At(3.0, 0.0), po), 0));
+  PlanRequest dear = At(3.0, 0.0);
+  dear.costly = {{Eigen::Vector2d(4.0, 0.0), 0.6, 10.0}};
+  EXPECT_FALSE(moving.Update(PlanOnGrid(g, dear, po), 1));
+  EXPECT_EQ(moving.stalled_steps(), 1);
+  PlanRequest on = At(6.0, 0.0);  // through the gap now
+  on.costly = dear.costly;
+  EXPECT_FALSE(moving.Update(PlanOnGrid(g, on, po), 1));
+  EXPECT_EQ(moving.stalled_steps(), 0);
+}
+
 }  // namespace
 }  // namespace rover::planner
