@@ -118,6 +118,7 @@ class FaultRig {
     labels_.clear();
     heard_.clear();
     truth_.reset();
+    if (status_) wheels_done_m_ += status_->wheel_distance_m;
     status_.reset();
     std::string others;
     for (const auto& p : DeployedProcesses())
@@ -247,6 +248,9 @@ class FaultRig {
     return std::max(0.0, std::chrono::duration<double>(last_advance_ - since).count());
   }
   double odometer() const { return truth_ ? truth_->odometer_m : 0.0; }
+  // The distance rover_sim's wheels rolled over every command so far (its own report, not
+  // truth): on cobbles and sand the truth advances less, by the slip.
+  double wheels_rolled() const { return wheels_done_m_ + (status_ ? status_->wheel_distance_m : 0.0); }
   std::string mobility_detail() const {
     if (!status_) return "no MOBILITY_STATUS";
     return "MOBILITY_STATUS state " + std::to_string(status_->state) + " '" + status_->detail + "'";
@@ -434,7 +438,10 @@ class FaultRig {
     }, 1000);
     bus_.Subscribe<rover_msgs::mobility_status_t>(channels::kMobilityStatus,
                                                   [this](const rover_msgs::mobility_status_t& s) {
-                                                    if (From(s.pub_seq, "rover_sim")) status_ = s;
+                                                    if (!From(s.pub_seq, "rover_sim")) return;
+                                                    if (status_ && status_->command_id != s.command_id)
+                                                      wheels_done_m_ += status_->wheel_distance_m;
+                                                    status_ = s;
                                                   }, 1000);
     bus_.Subscribe<rover_msgs::hazard_status_t>(channels::kHazardStatus, [this](const rover_msgs::hazard_status_t& h) {
       if (From(h.pub_seq, "hazard_monitor") && h.state == rover_msgs::hazard_status_t::STATE_SAFE)
@@ -474,6 +481,7 @@ class FaultRig {
   std::map<std::int64_t, rover_msgs::sequence_status_t> final_;
   std::optional<rover_msgs::sim_truth_t> truth_;
   std::optional<rover_msgs::mobility_status_t> status_;
+  double wheels_done_m_ = 0;  // wheel distance of the commands before status_'s
   Clock::time_point hazard_safe_at_{};  // the last SAFE hazard status heard
   Clock::time_point last_advance_{};
   std::int64_t now_utime_ = 0;
