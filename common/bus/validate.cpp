@@ -70,8 +70,14 @@ std::string Image(const char* field, const rover_msgs::image_t& img) {
 }  // namespace
 
 std::string Problem(const rover_msgs::capture_request_t& m) {
-  if (m.purpose != "vo" && m.purpose != "vo_baseline" && m.purpose != "science" && m.purpose != "periodic")
-    return "purpose '" + m.purpose + "' is unknown (expected vo, vo_baseline, science or periodic)";
+  if (m.purpose != "vo" && m.purpose != "vo_baseline" && m.purpose != "science" && m.purpose != "periodic" &&
+      m.purpose != "look")
+    return "purpose '" + m.purpose + "' is unknown (expected vo, vo_baseline, science, periodic or look)";
+  if (const std::string p = First({Finite("pan_rad", m.pan_rad), Finite("tilt_rad", m.tilt_rad)}); !p.empty())
+    return p;
+  if (std::abs(m.pan_rad) > M_PI || std::abs(m.tilt_rad) > 0.5 * M_PI)
+    return "pointing pan " + std::to_string(m.pan_rad) + " rad, tilt " + std::to_string(m.tilt_rad) +
+           " rad is out of range (expected |pan| <= pi, |tilt| <= pi/2)";
   return "";
 }
 

@@ -1,5 +1,6 @@
 #include "capture/rendered_cameras.hpp"
 
+#include "geometry/mast_pointing.hpp"
 #include "terrain/world.hpp"
 
 #include <exception>
@@ -18,8 +19,13 @@ RenderedCameras::RenderedCameras(geometry::StereoRig navcam_rig, const render::R
 }
 
 Exposure RenderedCameras::Expose(const terrain::World& world, const Eigen::Isometry3d& T_site_rover,
-                                 std::int64_t frame_seed) {
+                                 std::int64_t frame_seed, const Pointing& pointing) {
   Exposure out;
+  if (pointing.pointed()) {
+    const geometry::StereoRig pointed = geometry::PointedRig(navcam_.rig, pointing.pan_rad, pointing.tilt_rad);
+    out.navcam = navcam_.renderer.RenderPair(world, pointed, T_site_rover, frame_seed);
+    return out;
+  }
   out.navcam = navcam_.renderer.RenderPair(world, navcam_.rig, T_site_rover, frame_seed);
   if (hazcam_) {
     try {

@@ -22,6 +22,17 @@ class World;
 
 namespace rover::capture {
 
+// Where the mast points the NAVCAM pair for one capture (capture_request_t's pan_rad,
+// tilt_rad; geometry/mast_pointing.hpp): + pan toward the rover's right, + tilt further
+// down, from the rig as mounted. Every ImageSource takes it; only the simulated cameras
+// can honour a pointed one.
+struct Pointing {
+  double pan_rad = 0, tilt_rad = 0;
+  // Anything but exactly (0, 0), a NaN included: a request that asks for a turn, or for
+  // nonsense, is not an unpointed capture.
+  bool pointed() const { return pan_rad != 0 || tilt_rad != 0; }
+};
+
 // What one exposure gives.
 struct Exposure {
   render::StereoImages navcam;
@@ -43,7 +54,12 @@ class RenderedCameras {
 
   // Both pairs at the true pose `T_site_rover`; `frame_seed` varies the sensor noise per
   // frame. A NAVCAM render failure throws; a HAZCAM one is returned in hazcam_error.
-  Exposure Expose(const terrain::World& world, const Eigen::Isometry3d& T_site_rover, std::int64_t frame_seed);
+  // A pointed exposure renders the NAVCAM pair from geometry::PointedRig (its StereoImages
+  // carry the pointed models) and no HAZCAM pair: the HAZCAMs are on the body, and a
+  // HAZCAM frame must not go out with a frame the mast took looking elsewhere. Throws
+  // std::invalid_argument on a non-finite angle.
+  Exposure Expose(const terrain::World& world, const Eigen::Isometry3d& T_site_rover, std::int64_t frame_seed,
+                  const Pointing& pointing = {});
 
  private:
   struct Pair {

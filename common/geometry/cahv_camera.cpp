@@ -133,6 +133,11 @@ std::unique_ptr<CameraModel> CahvCamera::Clone() const {
   return std::make_unique<CahvCamera>(*this);
 }
 
+std::unique_ptr<CameraModel> CahvCamera::Moved(const Eigen::Isometry3d& T) const {
+  const Eigen::Matrix3d R = T.linear();
+  return std::make_unique<CahvCamera>(width_, height_, T * C_, R * A_, R * H_, R * V_);
+}
+
 // ---------------------------------------------------------------- CAHVOR
 
 CahvorCamera::CahvorCamera(int width, int height, Eigen::Vector3d C, Eigen::Vector3d A,
@@ -241,6 +246,11 @@ std::vector<double> CahvorCamera::Params() const {
 
 std::unique_ptr<CameraModel> CahvorCamera::Clone() const {
   return std::make_unique<CahvorCamera>(*this);
+}
+
+std::unique_ptr<CameraModel> CahvorCamera::Moved(const Eigen::Isometry3d& T) const {
+  const Eigen::Matrix3d R = T.linear();
+  return std::make_unique<CahvorCamera>(width_, height_, T * C_, R * A_, R * H_, R * V_, R * O_, R_);
 }
 
 // ---------------------------------------------------------------- conversions

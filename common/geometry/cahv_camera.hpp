@@ -47,6 +47,8 @@ class CahvCamera : public CameraModel {
   Eigen::Vector3d Center() const override { return C_; }
   std::vector<double> Params() const override;
   std::unique_ptr<CameraModel> Clone() const override;
+  // C -> T C; A, H, V rotated by T's rotation (p.A, p.H, p.V are unchanged for p = X - C).
+  std::unique_ptr<CameraModel> Moved(const Eigen::Isometry3d& T) const override;
 
  private:
   int width_, height_;
@@ -85,6 +87,8 @@ class CahvorCamera : public CameraModel {
   Eigen::Vector3d Center() const override { return C_; }
   std::vector<double> Params() const override;
   std::unique_ptr<CameraModel> Clone() const override;
+  // As for CAHV, with O rotated too; R (radial, in the angle off O) does not change.
+  std::unique_ptr<CameraModel> Moved(const Eigen::Isometry3d& T) const override;
 
  private:
   int width_, height_;

@@ -271,4 +271,12 @@ std::unique_ptr<CameraModel> CahvoreCamera::Clone() const {
   return std::make_unique<CahvoreCamera>(*this);
 }
 
+std::unique_ptr<CameraModel> CahvoreCamera::Moved(const Eigen::Isometry3d& T) const {
+  // Through the constructor, so that the unit O and the angle limits follow (the limits
+  // depend on R, E and L only, and come out the same).
+  const Eigen::Matrix3d R = T.linear();
+  return std::make_unique<CahvoreCamera>(width_, height_, T * C_, R * A_, R * H_, R * V_, R * O_, R_, E_,
+                                         linearity_);
+}
+
 }  // namespace rover::geometry

@@ -56,6 +56,9 @@ class CahvoreCamera : public CameraModel {
   Eigen::Vector3d Center() const override { return C_; }
   std::vector<double> Params() const override;
   std::unique_ptr<CameraModel> Clone() const override;
+  // As for CAHVOR: C -> T C, A, H, V, O rotated; R, E and L (functions of the angle off O)
+  // unchanged.
+  std::unique_ptr<CameraModel> Moved(const Eigen::Isometry3d& T) const override;
 
  private:
   double Chi(double theta, double* dchi_dtheta) const;

@@ -6,7 +6,7 @@
 // that a stereo rig's two models share one reference frame.
 // Pixels are (x, y) = (sample, line), 0-based; (0,0) is the centre of the top-left pixel.
 //
-// Implementations (pinhole with OpenCV-style distortion, CAHV, CAHVOR) live beside this
+// Implementations (pinhole with OpenCV-style distortion, CAHV, CAHVOR, CAHVORE) live beside this
 // header. Each can be serialised as (type, width, height, params) for LCM messages and
 // YAML configs.
 #pragma once
@@ -52,6 +52,11 @@ class CameraModel {
   virtual std::vector<double> Params() const = 0;
 
   virtual std::unique_ptr<CameraModel> Clone() const = 0;
+
+  // The same camera after the rigid motion T of the reference frame's points: a point p
+  // seen at pixel u before is seen at u after at T * p (the camera moved with the point).
+  // Lens and image are unchanged; only where the camera stands and looks.
+  virtual std::unique_ptr<CameraModel> Moved(const Eigen::Isometry3d& T) const = 0;
 };
 
 // Rebuilds a model from its serialised form. Throws std::invalid_argument with a message

@@ -190,4 +190,9 @@ std::unique_ptr<CameraModel> PinholeCamera::Clone() const {
   return std::make_unique<PinholeCamera>(*this);
 }
 
+std::unique_ptr<CameraModel> PinholeCamera::Moved(const Eigen::Isometry3d& T) const {
+  // Through the constructor, so that T_cam_ref follows.
+  return std::make_unique<PinholeCamera>(width_, height_, fx_, fy_, cx_, cy_, distortion_, T * T_ref_cam_);
+}
+
 }  // namespace rover::geometry

@@ -55,6 +55,8 @@ class PinholeCamera : public CameraModel {
   Eigen::Vector3d Center() const override { return T_ref_cam_.translation(); }
   std::vector<double> Params() const override;
   std::unique_ptr<CameraModel> Clone() const override;
+  // T_ref_cam -> T * T_ref_cam.
+  std::unique_ptr<CameraModel> Moved(const Eigen::Isometry3d& T) const override;
 
   // Normalised image coordinates (x/z, y/z) -> distorted normalised coordinates, with the
   // 2x2 Jacobian.

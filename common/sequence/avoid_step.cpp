@@ -4,6 +4,7 @@
 // step the map cannot judge. MER drove this way under autonomous navigation: image, map,
 // then drive one step, GESTALT's vote guided by Field D*'s global costs.
 #include "avoidance/arc_voting.hpp"
+#include "avoidance/look_aside.hpp"
 #include "avoidance/loop_breaker.hpp"
 #include "hazards/hazard_assessor.hpp"
 #include "planner/global_planner.hpp"
@@ -150,7 +151,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   }
   // The global plan from here, over everything seen so far, and round the ways refused.
   const avoidance::Pose2 here{p.x, p.y, p.yaw};
-  const bool going_round = avoidance::BackWhereItWas(avoid_history_, here);
+  // (After a look aside the rover stands where it voted before: that vote said so already.)
+  const bool going_round = looked_here_ == 0 && avoidance::BackWhereItWas(avoid_history_, here);
   std::optional<planner::GlobalPlan> plan;
   if (options_.planner_enabled) {
     switch (PlanAhead(p, disc, o.footprint, zone_grow, going_round, &plan)) {
@@ -195,6 +197,9 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     AbortWith(abort_reason::kHazardUnknown, std::string("arc voting cannot decide: ") + e.what());
     return AvoidOutcome::kAborted;
   }
+  // 4. No step on but backing up, or none at all: first look aside at the ground a turn
+  //    would sweep, if no view from here has framed it, then vote again on the map with it.
+  if (LookAside(grid, o.footprint, here, choice)) return AvoidOutcome::kWait;
   if (!choice.found) {
     AbortWith(abort_reason::kHazardMap,
               "hazard_map: " + choice.detail +
@@ -339,6 +344,36 @@ bool SequenceExecutor::AvoidRefused(const HazardReply& reply) {
   step_note_ += "the monitor refused the voted step (" + reply.detail + "): voting again with a wider margin; ";
   EnterPhase(Phase::kReady);
   return true;
+}
+
+bool SequenceExecutor::LookAside(const avoidance::Grid& grid, const avoidance::Footprint& footprint,
+                                  const avoidance::Pose2& here, const avoidance::Choice& choice) {
+  if (options_.avoid_look_pan_deg <= 0.0) return false;
+  if (choice.found && choice.best.kind != avoidance::Candidate::Kind::kBackup) return false;
+  const auto unknown = avoidance::CountUnknownBeside(grid, footprint, here);
+  struct Side {
+    int bit, cells;
+    double sign;  // pan: + toward the right
+    const char* name;
+  };
+  Side sides[2] = {{1, unknown.left, -1.0, "left"}, {2, unknown.right, 1.0, "right"}};
+  if (sides[1].cells > sides[0].cells) std::swap(sides[0], sides[1]);  // the more unknown side first
+  for (const Side& s : sides) {
+    if ((looked_here_ & s.bit) != 0 || s.cells < options_.avoid_look_min_cells) continue;
+    looked_here_ |= s.bit;
+    ++looks_total_;
+    const double pan = s.sign * options_.avoid_look_pan_deg, tilt = options_.avoid_look_tilt_deg;
+    step_note_ += std::string("looked ") + s.name + " (" + std::to_string(s.cells) +
+                  " unknown cells a turn would sweep; pan " + Fixed(pan, 0) + " deg, tilt " + Fixed(tilt, 0) +
+                  " deg) before voting again; ";
+    detail_ = std::string("avoid: ") + (choice.found ? "only backing up" : "no step") + " here: looking " + s.name +
+              " at " + std::to_string(s.cells) + " unknown cells a turn would sweep";
+    StartCapture("look", pan * M_PI / 180.0, tilt * M_PI / 180.0);
+    science_frame_seen_ = false;
+    EnterPhase(Phase::kImages);
+    return true;
+  }
+  return false;
 }
 
 bool SequenceExecutor::ImagesForMap(const HazardReply& reply) {

@@ -145,6 +145,14 @@ struct ExecutorOptions {
   // body nearer to it (avoidance::SweepFootprint's hidden_reach_m): a known cell beside
   // unseen ground may hold the rim of a rock that lies in it. 0: off.
   double avoid_hidden_reach_m = 0.0;
+  // Looking aside (avoidance/look_aside.hpp): when the vote has no step on but backing up,
+  // or none at all, and the ground a turn in place would sweep holds at least
+  // avoid_look_min_cells unknown cells on a side, the NAVCAM is pointed at that side (pan
+  // this many degrees from ahead, tilted avoid_look_tilt_deg further down), the pair mapped
+  // and the vote taken again; once a side per pose. 0: off (the cameras cannot point).
+  double avoid_look_pan_deg = 0.0;
+  double avoid_look_tilt_deg = 15.0;
+  int avoid_look_min_cells = 3;
   // A rock the map once rated unsafe stays unsafe to the vote and the planner when a later
   // map reads it caution (a view from beside it sees less of it; a safe rating or driving
   // over it still replaces it): planner::SiteMap::set_keep_unsafe, common/avoidance/README.md
@@ -287,7 +295,9 @@ struct MobilityCommand {  // mobility_command_t
 struct CaptureRequest {  // capture_request_t
   int64_t utime = 0;
   int64_t frame_id = 0;
-  std::string purpose;  // "vo_baseline", "vo", "science"
+  std::string purpose;  // "vo_baseline", "vo", "science", "look"
+  double pan_rad = 0.0;   // the mast's pointing (capture_request_t): + right
+  double tilt_rad = 0.0;  // + further down
 };
 struct HazardQuery {  // hazard_query_t
   int64_t utime = 0;
@@ -478,7 +488,8 @@ class SequenceExecutor {
   void QueryStep();
   void CommandStep();
   void AfterMotion();
-  void StartCapture(const std::string& purpose);
+  // A pair for `purpose`; a "look" points the mast (pan + right, tilt + down) and is no VO pair.
+  void StartCapture(const std::string& purpose, double pan_rad = 0.0, double tilt_rad = 0.0);
   void CountVoFailure(const std::string& why);
 
   // The end of a step (executor_finish.cpp). Each check returns false when it aborted.
@@ -529,6 +540,11 @@ class SequenceExecutor {
   // An UNKNOWN map verdict on a step with no pair taken where the rover stands: take one
   // (MER: image, map, then drive) and ask again. False: the reply stands.
   bool ImagesForMap(const HazardReply& reply);
+  // No step on but backing up, or none: the mast pointed at a side whose ground a turn would
+  // sweep is unknown, before the vote is taken again (avoidance/look_aside.hpp). True when
+  // a look was started.
+  bool LookAside(const avoidance::Grid& grid, const avoidance::Footprint& footprint, const avoidance::Pose2& here,
+                 const avoidance::Choice& choice);
   // The monitor refused the step the vote chose (the drift it allows for): vote once more
   // with a wider margin. False: the refusal stands (abort).
   bool AvoidRefused(const HazardReply& reply);
@@ -647,6 +663,8 @@ class SequenceExecutor {
   std::optional<TraversabilityMap> map_;
   int64_t pair_here_id_ = -1;    // the last pair taken since the rover last moved, or -1
   bool map_images_taken_ = false;  // ImagesForMap took its pair for the step in hand
+  int looked_here_ = 0;            // sides looked at since the rover last moved: 1 left, 2 right
+  int looks_total_ = 0;            // looks aside in this sequence
   bool avoid_refused_ = false;
   double last_turn_rad_ = 0.0;    // the last commanded step's turn in place (0: not a turn)
   // The last commanded step's arc when it drove forward (length 0: it did not), which the

@@ -70,6 +70,7 @@ void SequenceExecutor::ClearRun(int64_t submission_id, const std::string& name) 
   step_index_ = 0;
   distance_m_ = 0.0;
   vo_failures_total_ = 0;
+  looks_total_ = 0;
 }
 
 // Every output goes out through here, in the order it was made.

@@ -150,6 +150,7 @@ void SequenceExecutor::CommandStep() {
   Emit(cmd);
   pair_here_id_ = -1;  // the rover moves: no pair is where it will stand
   map_images_taken_ = false;
+  looked_here_ = 0;
   avoid_refused_ = false;
   last_turn_rad_ = step_.kind == PlannedStep::Kind::kTurn ? step_.turn_rad : 0.0;
   const bool forward_arc = step_.kind == PlannedStep::Kind::kArc && step_.distance_m > 0.0;
@@ -180,12 +181,12 @@ void SequenceExecutor::AfterMotion() {
   EnterPhase(Phase::kWaitVo);
 }
 
-void SequenceExecutor::StartCapture(const std::string& purpose) {
+void SequenceExecutor::StartCapture(const std::string& purpose, double pan_rad, double tilt_rad) {
   frame_id_ = NewId();
   pair_here_id_ = frame_id_;
-  if (purpose != "science") last_vo_frame_ = frame_id_;
+  if (purpose != "science" && purpose != "look") last_vo_frame_ = frame_id_;
   vo_update_.reset();
-  Emit(CaptureRequest{now_utime_, frame_id_, purpose});
+  Emit(CaptureRequest{now_utime_, frame_id_, purpose, pan_rad, tilt_rad});
 }
 
 void SequenceExecutor::CountVoFailure(const std::string& why) {

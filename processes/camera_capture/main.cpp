@@ -6,6 +6,9 @@
 //            and instant and publishes it on HAZCAM_FRAME just before the STEREO_FRAME.
 //   dataset  a KITTI-layout directory (image_0/, image_1/, calib.txt), played in order
 //   genicam, gstreamer  real cameras (common/camera_hw; README "Camera hardware")
+// A request may point the mast (pan_rad, tilt_rad): the sim source renders the NAVCAM pair
+// from the pointed rig, sends the pointed models and no HAZCAM frame; the others refuse it
+// (capture failed, no frame sent).
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "bus/image_encode.hpp"
@@ -28,6 +31,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <deque>
 #include <future>
 #include <mutex>
@@ -35,6 +40,7 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <stdexcept>
 #include <tuple>
 
 using namespace rover;
@@ -61,19 +67,33 @@ struct CapturedPair {
   std::optional<camera_hw::StereoFrames> timestamps;
 };
 
+using capture::Pointing;
+
 // A source of stereo pairs. `truth` is given only to the simulator source.
 class ImageSource {
  public:
   virtual ~ImageSource() = default;
   // Whether a pair can be taken for a request stamped `request_utime` now.
   virtual bool Ready(std::int64_t request_utime) const = 0;
-  virtual CapturedPair Capture(std::int64_t frame_id) = 0;
+  // A pair with the mast pointed as asked; a source that cannot point throws for a
+  // pointed request (RefusePointing).
+  virtual CapturedPair Capture(std::int64_t frame_id, const Pointing& pointing) = 0;
   virtual void OnTruth(const rover_msgs::sim_truth_t&) {}
   // Called on the bus thread when a capture is decided, before Capture runs on a worker:
   // the moment of exposure (the sim source takes the truth of this instant, not of
   // whatever instant the worker happens to start in).
   virtual void Expose() {}
 };
+
+// The one line a source without a pan-tilt mast answers a pointed request with.
+void RefusePointing(const Pointing& pointing) {
+  if (!pointing.pointed()) return;
+  char angles[96];
+  std::snprintf(angles, sizeof(angles), "pan %.1f deg, tilt %.1f deg", pointing.pan_rad * 180 / M_PI,
+                pointing.tilt_rad * 180 / M_PI);
+  throw std::runtime_error(std::string("this camera source cannot point the mast (") + angles +
+                           " requested); pointed captures need the simulator's cameras");
+}
 
 class SimulatedCameras : public ImageSource {
  public:
@@ -91,7 +111,7 @@ class SimulatedCameras : public ImageSource {
     std::lock_guard<std::mutex> lock(mutex_);
     exposed_ = truth_;
   }
-  CapturedPair Capture(std::int64_t /*frame_id*/) override {
+  CapturedPair Capture(std::int64_t /*frame_id*/, const Pointing& pointing) override {
     rover_msgs::sim_truth_t truth;
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -104,7 +124,9 @@ class SimulatedCameras : public ImageSource {
     // first) and capture.render.noise_seed, not by its frame id: on a real clock the
     // executor's ids come from the wall clock, and every run drew other noise for the same
     // first view (the fault suite's first step past a cobble was refused now and then).
-    auto exposure = cameras_.Expose(world_, T, ++rendered_);
+    // A pointed pair counts as any other, so that the pairs after it draw the noise they
+    // would have drawn had it been an unpointed one.
+    auto exposure = cameras_.Expose(world_, T, ++rendered_, pointing);
     const auto& navcam = exposure.navcam;
     CapturedPair pair{navcam.left, navcam.right, navcam.rig, {}, exposure.hazcam_error, truth.utime, std::nullopt};
     if (exposure.hazcam) pair.hazcam = HazcamPair{exposure.hazcam->left, exposure.hazcam->right, exposure.hazcam->rig};
@@ -171,7 +193,9 @@ class DatasetCameras : public ImageSource {
     rig_ = geometry::LoadKittiCalib(dir_ + "/calib.txt", width_, height_);
   }
   bool Ready(std::int64_t) const override { return true; }
-  CapturedPair Capture(std::int64_t) override {
+  // A refused request takes no pair: the replay goes on where it was.
+  CapturedPair Capture(std::int64_t, const Pointing& pointing) override {
+    RefusePointing(pointing);
     const std::string& name = names_[next_ % names_.size()];
     ++next_;
     CapturedPair pair;
@@ -211,7 +235,10 @@ class HardwareCameras : public ImageSource {
   HardwareCameras(std::unique_ptr<camera_hw::StereoSource> source, geometry::StereoRig rig)
       : source_(std::move(source)), rig_(std::move(rig)) {}
   bool Ready(std::int64_t) const override { return true; }
-  CapturedPair Capture(std::int64_t) override {
+  // The rig file is the cameras as mounted, with no pan-tilt unit to drive: refused
+  // before the cameras are triggered.
+  CapturedPair Capture(std::int64_t, const Pointing& pointing) override {
+    RefusePointing(pointing);
     auto frames = source_->Capture();
     for (const auto& [image, model, side] : {std::tuple{&frames.left.image, rig_.left.get(), "left"},
                                              std::tuple{&frames.right.image, rig_.right.get(), "right"}}) {
@@ -283,7 +310,7 @@ std::unique_ptr<ImageSource> MakeCameras(const bus::Process& proc, const capture
 // messages stamped with the request and the pose at capture.
 CaptureFrames CaptureFrame(ImageSource& cameras, bool png, const rover_msgs::capture_request_t& request,
                            const rover_msgs::pose_t& pose, std::int64_t now) {
-  const auto pair = cameras.Capture(request.frame_id);
+  const auto pair = cameras.Capture(request.frame_id, Pointing{request.pan_rad, request.tilt_rad});
   CaptureFrames out;
   rover_msgs::stereo_frame_t& frame = out.navcam;
   frame.utime = pair.utime != 0 ? pair.utime : now;

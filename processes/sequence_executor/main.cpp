@@ -62,6 +62,8 @@ class OutputPublisher {
     m.utime = c.utime;
     m.frame_id = c.frame_id;
     m.purpose = c.purpose;
+    m.pan_rad = c.pan_rad;
+    m.tilt_rad = c.tilt_rad;
     proc_.bus().Publish(channels::kCaptureRequest, m);
   }
   void operator()(const seq::HazardQuery& q) {

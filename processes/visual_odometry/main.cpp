@@ -100,8 +100,9 @@ class VoNode {
  private:
   void OnFrame(const rover_msgs::stereo_frame_t& frame) {
     proc_.ObserveTime(frame.utime);
-    // Science pairs are for the operator; a baseline pair starts a new VO chain.
-    if (frame.purpose == "science") return;
+    // Science pairs are for the operator, and a look (the mast pointed aside) for the map;
+    // a baseline pair starts a new VO chain.
+    if (frame.purpose == "science" || frame.purpose == "look") return;
     if (frame.purpose == "vo_baseline") {
       vo_.Reset();
       previous_.reset();

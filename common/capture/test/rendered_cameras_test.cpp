@@ -3,11 +3,13 @@
 #include "capture/rendered_cameras.hpp"
 
 #include "geometry/camera_io.hpp"
+#include "geometry/mast_pointing.hpp"
 #include "geometry/pose.hpp"
 #include "terrain/world.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 namespace rover::capture {
@@ -71,6 +73,39 @@ TEST(RenderedCameras, AHazcamFailureLeavesTheNavcamPairWhole) {
   const Exposure n = navcam_only.Expose(world, geometry::PoseFromXyzRpy(0, 0, -world.Elevation(0, 0), 0, 0, 0), 1);
   EXPECT_FALSE(n.hazcam.has_value());
   EXPECT_EQ(n.hazcam_error, "");
+}
+
+TEST(RenderedCameras, APointedExposureIsTheNavcamPairFromThePointedRigAlone) {
+  const terrain::World world = SmallWorld();
+  const geometry::StereoRig navcam = LoadRig("navcam_pinhole.yaml");
+  const Eigen::Isometry3d T = geometry::PoseFromXyzRpy(1, 2, -world.Elevation(1, 2), 0, 0, 0.3);
+  const Pointing look{60 * M_PI / 180, 10 * M_PI / 180};
+  ASSERT_TRUE(look.pointed());
+  EXPECT_FALSE(Pointing{}.pointed());
+  RenderedCameras cameras(navcam, Scaled(0.125), LoadRig("hazcam_front.yaml"), Scaled(0.125));
+  const Exposure ahead = cameras.Expose(world, T, 5);
+  const Exposure pointed = cameras.Expose(world, T, 5, look);
+  // The same pose and noise seed, another view.
+  EXPECT_GT(cv::countNonZero(pointed.navcam.left != ahead.navcam.left), 128 * 128 / 2);
+  EXPECT_GT(cv::countNonZero(pointed.navcam.right != ahead.navcam.right), 128 * 128 / 2);
+  // The frame carries the pointed models (rendered at image_scale, as every pair).
+  const geometry::StereoRig expected = geometry::PointedRig(navcam, look.pan_rad, look.tilt_rad);
+  EXPECT_EQ(pointed.navcam.rig.left->Params(), expected.left->Scaled(0.125)->Params());
+  EXPECT_EQ(pointed.navcam.rig.right->Params(), expected.right->Scaled(0.125)->Params());
+  EXPECT_NE(pointed.navcam.rig.left->Params(), ahead.navcam.rig.left->Params());
+  // The body-fixed HAZCAMs go with unpointed pairs only, and their absence is no failure.
+  ASSERT_TRUE(ahead.hazcam.has_value());
+  EXPECT_FALSE(pointed.hazcam.has_value());
+  EXPECT_EQ(pointed.hazcam_error, "");
+  // A pointed exposure leaves nothing behind: the next unpointed one is the one a fresh
+  // set of cameras takes with the same seed.
+  RenderedCameras fresh(navcam, Scaled(0.125), LoadRig("hazcam_front.yaml"), Scaled(0.125));
+  const Exposure after = cameras.Expose(world, T, 6);
+  const Exposure reference = fresh.Expose(world, T, 6);
+  EXPECT_EQ(cv::countNonZero(after.navcam.left != reference.navcam.left), 0);
+  EXPECT_EQ(cv::countNonZero(after.hazcam->left != reference.hazcam->left), 0);
+  // A nonsense angle is refused, not rendered.
+  EXPECT_THROW(cameras.Expose(world, T, 7, Pointing{std::nan(""), 0}), std::invalid_argument);
 }
 
 }  // namespace

@@ -23,6 +23,9 @@ class MapWorld {
   Grid grid = Grid::Filled(-4, -6, 0.2, 60, 60, CellClass::kSafe, 0.9f);
   bool map_known = true;          // false: every cell unknown until the first pair
   bool camera = true;
+  // Set: what each pair shows of `grid` (the request, a site point); the map is what the
+  // pairs so far have shown. Unset: the whole grid once a pair was taken (map_known).
+  std::function<bool(const CaptureRequest&, const PlanePose&, double, double)> sees;
   PlanePose pose;
   std::vector<MobilityCommand> motions;
   std::vector<PlanePose> trail;  // the pose after each motion
@@ -63,6 +66,7 @@ class MapWorld {
 
  private:
   Grid Seen() const {
+    if (sees) return revealed_;
     if (map_known) return grid;
     return Grid::Filled(grid.origin_x, grid.origin_y, grid.cell_m, grid.rows, grid.cols, CellClass::kUnknown, 0.0f);
   }
@@ -87,6 +91,7 @@ class MapWorld {
     captures.push_back(c);
     if (!camera) return;
     map_known = true;  // the pair shows the ground
+    if (sees) Reveal(c);
     pending_.push_back([this, c] {
       ex_.OnStereoFrame(c.frame_id);
       TraversabilityMap m;
@@ -119,8 +124,23 @@ class MapWorld {
   template <class T>
   void Handle(const T&) {}
 
+  void Reveal(const CaptureRequest& c) {
+    if (revealed_.state.size() != grid.state.size())
+      revealed_ = Grid::Filled(grid.origin_x, grid.origin_y, grid.cell_m, grid.rows, grid.cols, CellClass::kUnknown,
+                               0.0f);
+    for (int i = 0; i < grid.rows; ++i)
+      for (int j = 0; j < grid.cols; ++j) {
+        if (!sees(c, pose, grid.CellCentreX(i), grid.CellCentreY(j))) continue;
+        const std::size_t k = static_cast<std::size_t>(i) * grid.cols + j;
+        revealed_.state[k] = grid.state[k];
+        revealed_.goodness[k] = grid.goodness[k];
+        revealed_.step_m[k] = grid.step_m[k];
+      }
+  }
+
   SequenceExecutor& ex_;
   std::deque<std::function<void()>> pending_;
+  Grid revealed_;
 };
 
 ExecutorOptions Fast() {
@@ -332,6 +352,64 @@ TEST(AvoidStep, AWayTheVoteRefusesCostsThePlannerAndTheRoverGoesRound) {
   EXPECT_GT(widest, 1.9);
   const CorridorRun without = DriveTheCorridor(0.0);
   EXPECT_NE(without.final.state, SequenceState::kCompleted) << without.final.detail;
+}
+
+
+// Looking aside (avoidance/look_aside.hpp): a wall across the way ahead, the goal to the
+// right, and the ground beside the rover never framed, since the mast looks ahead (the way
+// it came, behind, is known). Every ground that could hide a rock is refused (strict), so
+// the first vote has nothing on but backing up. With looks the mast is pointed at the side
+// first, the map gains it, and the rover turns right in place and drives to the goal;
+// without them it backs and fills, uncovering the sides by moving, refusals and all.
+struct LookRun {
+  SequenceStatus final;
+  std::vector<CaptureRequest> captures;
+  std::size_t motions = 0, backups = 0;
+};
+
+LookRun DriveBesideAWall(double look_pan_deg) {
+  ExecutorOptions o = Fast();
+  o.avoid_unseen_ground_strict = true;
+  o.avoid_start_ring_known = false;
+  o.avoid_look_pan_deg = look_pan_deg;
+  SequenceExecutor ex(o);
+  MapWorld w(ex);
+  for (double y = -3.0; y <= 1.2; y += 0.1) w.grid.Paint(1.6, y, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
+  // The mast's view, in the rover frame at the capture: 45 deg either side of its pointing,
+  // from 0.5 m to 6 m (the body itself is known to the vote as the ground it stands on).
+  w.sees = [](const CaptureRequest& c, const PlanePose& at, double x, double y) {
+    const double dx = x - at.x, dy = y - at.y, r = std::hypot(dx, dy);
+    const double bearing = std::remainder(std::atan2(dy, dx) - at.yaw, 2 * M_PI);  // + right
+    const bool behind = std::abs(bearing) > 2.0;
+    return r > 0.5 && r < 6.0 && (std::abs(std::remainder(bearing - c.pan_rad, 2 * M_PI)) < M_PI / 4 || behind);
+  };
+  ex.SubmitText("goto 0 m 3 m within 0.5 m avoid on\n", 1, "t.seq");
+  w.Run();
+  LookRun run{w.Final(), w.captures, w.motions.size(), 0};
+  for (const auto& m : w.motions)
+    if (m.type == MobilityCommand::Type::kArc && m.distance_m < 0.0) ++run.backups;
+  return run;
+}
+
+TEST(AvoidStep, LooksAsideAtUnframedGroundATurnWouldSweepInsteadOfBackingUp) {
+  const LookRun without = DriveBesideAWall(0.0);
+  EXPECT_EQ(without.final.state, SequenceState::kCompleted) << without.final.detail;
+  EXPECT_GE(without.backups, 1u) << "the world does not test looking: nothing but backing up was on";
+  for (const auto& c : without.captures) EXPECT_NE(c.purpose, "look");
+
+  const LookRun with = DriveBesideAWall(70.0);
+  EXPECT_EQ(with.final.state, SequenceState::kCompleted) << with.final.detail;
+  EXPECT_EQ(with.backups, 0u) << "backed up though it looked";
+  EXPECT_LT(with.motions, without.motions);
+  int left = 0, right = 0;
+  for (const auto& c : with.captures) {
+    if (c.purpose != "look") continue;
+    EXPECT_NEAR(std::abs(c.pan_rad), 70.0 * M_PI / 180.0, 1e-9);
+    EXPECT_NEAR(c.tilt_rad, 15.0 * M_PI / 180.0, 1e-9);
+    ++(c.pan_rad > 0 ? right : left);
+  }
+  EXPECT_EQ(right, 1) << "one look toward the goal's side, the side with more unknown ground";
+  EXPECT_EQ(left, 0) << "after the right look a turn right was on: no need to look left";
 }
 
 }  // namespace

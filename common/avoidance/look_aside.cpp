@@ -1,0 +1,33 @@
+#include "avoidance/look_aside.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rover::avoidance {
+
+UnknownBeside CountUnknownBeside(const Grid& g, const Footprint& footprint, const Pose2& pose,
+                                 double min_bearing_rad) {
+  // The disc out to the footprint's farthest corner, grown by half a cell (MarkTurnKnown).
+  const double grow = 0.5 * g.cell_m;
+  const double hx = 0.5 * footprint.length_m + grow, hy = 0.5 * footprint.width_m + grow;
+  const double cf = footprint.center_forward_m;
+  const double radius = std::max(std::hypot(cf + hx, hy), std::hypot(cf - hx, hy));
+  // Rover X forward, Y right; site X north, Y east; yaw clockwise from north.
+  const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);
+  UnknownBeside out;
+  const int i0 = std::max(0, static_cast<int>(std::floor((pose.x - radius - g.origin_x) / g.cell_m)));
+  const int j0 = std::max(0, static_cast<int>(std::floor((pose.y - radius - g.origin_y) / g.cell_m)));
+  for (int i = i0; i < g.rows && g.CellCentreX(i) <= pose.x + radius; ++i)
+    for (int j = j0; j < g.cols && g.CellCentreY(j) <= pose.y + radius; ++j) {
+      if (g.state[static_cast<std::size_t>(i) * g.cols + j] != CellClass::kUnknown) continue;
+      const double dx = g.CellCentreX(i) - pose.x, dy = g.CellCentreY(j) - pose.y;
+      if (std::hypot(dx, dy) > radius) continue;
+      const double forward = c * dx + s * dy, right = -s * dx + c * dy;
+      const double bearing = std::atan2(std::abs(right), forward);  // 0 ahead .. pi behind
+      if (bearing < min_bearing_rad || bearing > M_PI - min_bearing_rad) continue;
+      ++(right > 0.0 ? out.right : out.left);
+    }
+  return out;
+}
+
+}  // namespace rover::avoidance
