@@ -6,12 +6,13 @@
 namespace rover::avoidance {
 
 UnknownBeside CountUnknownBeside(const Grid& g, const Footprint& footprint, const Pose2& pose,
-                                 double min_bearing_rad) {
+                                 double behind_reach_m, double min_bearing_rad) {
   // The disc out to the footprint's farthest corner, grown by half a cell (MarkTurnKnown).
   const double grow = 0.5 * g.cell_m;
   const double hx = 0.5 * footprint.length_m + grow, hy = 0.5 * footprint.width_m + grow;
   const double cf = footprint.center_forward_m;
-  const double radius = std::max(std::hypot(cf + hx, hy), std::hypot(cf - hx, hy));
+  const double disc = std::max(std::hypot(cf + hx, hy), std::hypot(cf - hx, hy));
+  const double radius = disc + std::max(0.0, behind_reach_m);
   // Rover X forward, Y right; site X north, Y east; yaw clockwise from north.
   const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);
   UnknownBeside out;
@@ -21,11 +22,15 @@ UnknownBeside CountUnknownBeside(const Grid& g, const Footprint& footprint, cons
     for (int j = j0; j < g.cols && g.CellCentreY(j) <= pose.y + radius; ++j) {
       if (g.state[static_cast<std::size_t>(i) * g.cols + j] != CellClass::kUnknown) continue;
       const double dx = g.CellCentreX(i) - pose.x, dy = g.CellCentreY(j) - pose.y;
-      if (std::hypot(dx, dy) > radius) continue;
+      const double r = std::hypot(dx, dy);
+      if (r > radius) continue;
       const double forward = c * dx + s * dy, right = -s * dx + c * dy;
       const double bearing = std::atan2(std::abs(right), forward);  // 0 ahead .. pi behind
-      if (bearing < min_bearing_rad || bearing > M_PI - min_bearing_rad) continue;
-      ++(right > 0.0 ? out.right : out.left);
+      if (bearing > M_PI - min_bearing_rad) {
+        ++out.behind;
+      } else if (bearing >= min_bearing_rad && r <= disc) {
+        ++(right > 0.0 ? out.right : out.left);
+      }
     }
   return out;
 }

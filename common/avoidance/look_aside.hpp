@@ -12,14 +12,17 @@
 
 namespace rover::avoidance {
 
-// Unknown cells within the disc a whole turn in place of `footprint` at `pose` sweeps (the
-// same disc as Grid::MarkTurnKnown), on each side of the rover: cells whose bearing from the
-// rover's heading lies between min_bearing_rad and pi - min_bearing_rad, left or right. The
-// ground ahead is the mast's own view and the ground behind the back-up's blind ring.
+// Unknown cells round the rover, by where the mast would have to look to see them:
+//   - left, right: within the disc a whole turn in place of `footprint` at `pose` sweeps
+//     (the same disc as Grid::MarkTurnKnown), bearing from the heading between
+//     min_bearing_rad and pi - min_bearing_rad;
+//   - behind: bearing beyond pi - min_bearing_rad, out to that disc plus `behind_reach_m`
+//     (the ground a back-up would cross).
+// The ground ahead is the mast's own view.
 struct UnknownBeside {
-  int left = 0, right = 0;
+  int left = 0, right = 0, behind = 0;
 };
 UnknownBeside CountUnknownBeside(const Grid& grid, const Footprint& footprint, const Pose2& pose,
-                                 double min_bearing_rad = 0.5);
+                                 double behind_reach_m = 0.0, double min_bearing_rad = 0.5);
 
 }  // namespace rover::avoidance

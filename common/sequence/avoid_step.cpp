@@ -199,7 +199,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   }
   // 4. No step on but backing up, or none at all: first look aside at the ground a turn
   //    would sweep, if no view from here has framed it, then vote again on the map with it.
-  if (LookAside(grid, o.footprint, here, choice)) return AvoidOutcome::kWait;
+  if (LookAside(grid, o.footprint, o.backup_m, here, choice)) return AvoidOutcome::kWait;
   if (!choice.found) {
     AbortWith(abort_reason::kHazardMap,
               "hazard_map: " + choice.detail +
@@ -347,27 +347,32 @@ bool SequenceExecutor::AvoidRefused(const HazardReply& reply) {
 }
 
 bool SequenceExecutor::LookAside(const avoidance::Grid& grid, const avoidance::Footprint& footprint,
-                                  const avoidance::Pose2& here, const avoidance::Choice& choice) {
+                                  double backup_m, const avoidance::Pose2& here, const avoidance::Choice& choice) {
   if (options_.avoid_look_pan_deg <= 0.0) return false;
   if (choice.found && choice.best.kind != avoidance::Candidate::Kind::kBackup) return false;
-  const auto unknown = avoidance::CountUnknownBeside(grid, footprint, here);
+  const auto unknown = avoidance::CountUnknownBeside(grid, footprint, here, backup_m);
   struct Side {
     int bit, cells;
-    double sign;  // pan: + toward the right
+    double pan_deg;  // + toward the right
     const char* name;
+    const char* what;
   };
-  Side sides[2] = {{1, unknown.left, -1.0, "left"}, {2, unknown.right, 1.0, "right"}};
+  const double p = options_.avoid_look_pan_deg;
+  Side sides[3] = {{1, unknown.left, -p, "left", "a turn would sweep"},
+                   {2, unknown.right, p, "right", "a turn would sweep"},
+                   {4, unknown.behind, 180.0, "behind", "a back-up would cross"}};
   if (sides[1].cells > sides[0].cells) std::swap(sides[0], sides[1]);  // the more unknown side first
+  // Behind only when even backing up is refused: a back-up on offer needs no look back.
+  if (choice.found) sides[2].cells = 0;
   for (const Side& s : sides) {
     if ((looked_here_ & s.bit) != 0 || s.cells < options_.avoid_look_min_cells) continue;
     looked_here_ |= s.bit;
     ++looks_total_;
-    const double pan = s.sign * options_.avoid_look_pan_deg, tilt = options_.avoid_look_tilt_deg;
-    step_note_ += std::string("looked ") + s.name + " (" + std::to_string(s.cells) +
-                  " unknown cells a turn would sweep; pan " + Fixed(pan, 0) + " deg, tilt " + Fixed(tilt, 0) +
-                  " deg) before voting again; ";
+    const double pan = s.pan_deg, tilt = options_.avoid_look_tilt_deg;
+    step_note_ += std::string("looked ") + s.name + " (" + std::to_string(s.cells) + " unknown cells " + s.what +
+                  "; pan " + Fixed(pan, 0) + " deg, tilt " + Fixed(tilt, 0) + " deg) before voting again; ";
     detail_ = std::string("avoid: ") + (choice.found ? "only backing up" : "no step") + " here: looking " + s.name +
-              " at " + std::to_string(s.cells) + " unknown cells a turn would sweep";
+              " at " + std::to_string(s.cells) + " unknown cells " + s.what;
     StartCapture("look", pan * M_PI / 180.0, tilt * M_PI / 180.0);
     science_frame_seen_ = false;
     EnterPhase(Phase::kImages);

@@ -149,7 +149,9 @@ struct ExecutorOptions {
   // or none at all, and the ground a turn in place would sweep holds at least
   // avoid_look_min_cells unknown cells on a side, the NAVCAM is pointed at that side (pan
   // this many degrees from ahead, tilted avoid_look_tilt_deg further down), the pair mapped
-  // and the vote taken again; once a side per pose. 0: off (the cameras cannot point).
+  // and the vote taken again; once a side per pose. With no step at all, not even backing
+  // up, it looks behind (pan 180) at the ground a back-up would cross. 0: off (the cameras
+  // cannot point).
   double avoid_look_pan_deg = 0.0;
   double avoid_look_tilt_deg = 15.0;
   int avoid_look_min_cells = 3;
@@ -541,10 +543,10 @@ class SequenceExecutor {
   // (MER: image, map, then drive) and ask again. False: the reply stands.
   bool ImagesForMap(const HazardReply& reply);
   // No step on but backing up, or none: the mast pointed at a side whose ground a turn would
-  // sweep is unknown, before the vote is taken again (avoidance/look_aside.hpp). True when
-  // a look was started.
-  bool LookAside(const avoidance::Grid& grid, const avoidance::Footprint& footprint, const avoidance::Pose2& here,
-                 const avoidance::Choice& choice);
+  // sweep is unknown (or, with no step at all, behind, where a back-up of backup_m would
+  // go), before the vote is taken again (avoidance/look_aside.hpp). True when a look began.
+  bool LookAside(const avoidance::Grid& grid, const avoidance::Footprint& footprint, double backup_m,
+                 const avoidance::Pose2& here, const avoidance::Choice& choice);
   // The monitor refused the step the vote chose (the drift it allows for): vote once more
   // with a wider margin. False: the refusal stands (abort).
   bool AvoidRefused(const HazardReply& reply);
@@ -663,7 +665,7 @@ class SequenceExecutor {
   std::optional<TraversabilityMap> map_;
   int64_t pair_here_id_ = -1;    // the last pair taken since the rover last moved, or -1
   bool map_images_taken_ = false;  // ImagesForMap took its pair for the step in hand
-  int looked_here_ = 0;            // sides looked at since the rover last moved: 1 left, 2 right
+  int looked_here_ = 0;            // where it looked since the rover last moved: 1 left, 2 right, 4 behind
   int looks_total_ = 0;            // looks aside in this sequence
   bool avoid_refused_ = false;
   double last_turn_rad_ = 0.0;    // the last commanded step's turn in place (0: not a turn)

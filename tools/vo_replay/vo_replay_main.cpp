@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
       if (ev->channel != rover::channels::kStereoFrame) continue;
       rover_msgs::stereo_frame_t frame;
       if (frame.decode(ev->data, 0, ev->datalen) < 0) continue;
-      if (frame.purpose == "science") continue;
+      if (frame.purpose == "science" || frame.purpose == "look") continue;  // not VO pairs
       if (frame.purpose == "vo_baseline") {
         odometry.Reset();
         previous.reset();

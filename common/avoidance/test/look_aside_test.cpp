@@ -54,6 +54,20 @@ TEST(LookAside, GroundAheadBehindAndBeyondTheTurnDiscIsNotCounted) {
   const auto u = CountUnknownBeside(g, Rover(), {0.0, 0.0, 0.0});
   EXPECT_EQ(u.left, 0);
   EXPECT_EQ(u.right, 0);
+  EXPECT_GT(u.behind, 0);  // the sector behind, within the disc
+}
+
+TEST(LookAside, GroundBehindCountsOutToTheBackUpsReach) {
+  // Unknown only in a band 1.2 to 1.4 m behind a rover facing north: beyond the turn disc
+  // (about 1.06 m), within it plus a 0.5 m back-up.
+  const Grid g = Painted(CellClass::kUnknown, [](double x, double y) { return x < -1.2 && x > -1.4 && std::abs(y) < 0.2; });
+  EXPECT_EQ(CountUnknownBeside(g, Rover(), {0.0, 0.0, 0.0}).behind, 0);
+  const auto u = CountUnknownBeside(g, Rover(), {0.0, 0.0, 0.0}, 0.5);
+  EXPECT_GT(u.behind, 0);
+  EXPECT_EQ(u.left + u.right, 0);
+  // Facing south the same band is ahead: not behind, not beside.
+  const auto ahead = CountUnknownBeside(g, Rover(), {0.0, 0.0, M_PI}, 0.5);
+  EXPECT_EQ(ahead.behind + ahead.left + ahead.right, 0);
 }
 
 TEST(LookAside, UnsafeAndCautionCellsAreKnown) {

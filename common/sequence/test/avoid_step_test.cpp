@@ -412,4 +412,47 @@ TEST(AvoidStep, LooksAsideAtUnframedGroundATurnWouldSweepInsteadOfBackingUp) {
   EXPECT_EQ(left, 0) << "after the right look a turn right was on: no need to look left";
 }
 
+// Looking behind: the rover stands in a pocket of rocks (ahead and both sides), so no arc or
+// turn is on, and the ground behind it was never framed, so a back-up is refused too. With
+// looks it looks at each side (rocks), then behind (pan 180: clear), backs out and goes to a
+// goal behind it; without them it is boxed in at once.
+LookRun BackOutOfAPocket(double look_pan_deg) {
+  ExecutorOptions o = Fast();
+  o.avoid_unseen_ground_strict = true;
+  o.avoid_start_ring_known = false;
+  o.avoid_look_pan_deg = look_pan_deg;
+  SequenceExecutor ex(o);
+  MapWorld w(ex);
+  for (double y = -1.3; y <= 1.3; y += 0.1) w.grid.Paint(1.6, y, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
+  for (double x = -0.6; x <= 1.6; x += 0.1) {
+    w.grid.Paint(x, -1.3, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
+    w.grid.Paint(x, 1.3, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
+  }
+  w.sees = [](const CaptureRequest& c, const PlanePose& at, double x, double y) {
+    const double dx = x - at.x, dy = y - at.y, r = std::hypot(dx, dy);
+    const double bearing = std::remainder(std::atan2(dy, dx) - at.yaw, 2 * M_PI);  // + right
+    return r > 0.5 && r < 6.0 && std::abs(std::remainder(bearing - c.pan_rad, 2 * M_PI)) < M_PI / 4;
+  };
+  ex.SubmitText("goto -3 m 0 m within 0.5 m avoid on\n", 1, "t.seq");
+  w.Run();
+  LookRun run{w.Final(), w.captures, w.motions.size(), 0};
+  for (const auto& m : w.motions)
+    if (m.type == MobilityCommand::Type::kArc && m.distance_m < 0.0) ++run.backups;
+  return run;
+}
+
+TEST(AvoidStep, LooksBehindWhenEvenBackingUpIsRefusedAndBacksOut) {
+  const LookRun without = BackOutOfAPocket(0.0);
+  EXPECT_EQ(without.final.abort_reason, "hazard_map") << without.final.detail;
+  EXPECT_EQ(without.motions, 0u);
+
+  const LookRun with = BackOutOfAPocket(70.0);
+  EXPECT_EQ(with.final.state, SequenceState::kCompleted) << with.final.detail;
+  EXPECT_GE(with.backups, 1u);
+  bool behind = false;
+  for (const auto& c : with.captures)
+    if (c.purpose == "look" && std::abs(std::abs(c.pan_rad) - M_PI) < 1e-9) behind = true;
+  EXPECT_TRUE(behind) << "no look behind";
+}
+
 }  // namespace
