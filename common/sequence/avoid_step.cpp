@@ -349,7 +349,13 @@ bool SequenceExecutor::AvoidRefused(const HazardReply& reply) {
 bool SequenceExecutor::LookAside(const avoidance::Grid& grid, const avoidance::Footprint& footprint,
                                   double backup_m, const avoidance::Pose2& here, const avoidance::Choice& choice) {
   if (options_.avoid_look_pan_deg <= 0.0) return false;
-  if (choice.found && choice.best.kind != avoidance::Candidate::Kind::kBackup) return false;
+  // When: nothing on but backing up, or nothing at all; or the chosen step swings the body
+  // round (a turn in place or a tight arc), sweeping the ground beside it.
+  using Kind = avoidance::Candidate::Kind;
+  const bool stuck = !choice.found || choice.best.kind == Kind::kBackup;
+  const bool swings = choice.found && (choice.best.kind == Kind::kTurn ||
+                                       std::abs(choice.best.curvature_per_m) >= options_.avoid_look_curvature_per_m);
+  if (!stuck && !swings) return false;
   const auto unknown = avoidance::CountUnknownBeside(grid, footprint, here, backup_m);
   struct Side {
     int bit, cells;
@@ -371,7 +377,8 @@ bool SequenceExecutor::LookAside(const avoidance::Grid& grid, const avoidance::F
     const double pan = s.pan_deg, tilt = options_.avoid_look_tilt_deg;
     step_note_ += std::string("looked ") + s.name + " (" + std::to_string(s.cells) + " unknown cells " + s.what +
                   "; pan " + Fixed(pan, 0) + " deg, tilt " + Fixed(tilt, 0) + " deg) before voting again; ";
-    detail_ = std::string("avoid: ") + (choice.found ? "only backing up" : "no step") + " here: looking " + s.name +
+    detail_ = std::string("avoid: ") + (!choice.found ? "no step" : stuck ? "only backing up" : "the step swings the body") +
+              " here: looking " + s.name +
               " at " + std::to_string(s.cells) + " unknown cells " + s.what;
     StartCapture("look", pan * M_PI / 180.0, tilt * M_PI / 180.0);
     science_frame_seen_ = false;

@@ -146,7 +146,7 @@ struct ExecutorOptions {
   // unseen ground may hold the rim of a rock that lies in it. 0: off.
   double avoid_hidden_reach_m = 0.0;
   // Looking aside (avoidance/look_aside.hpp): when the vote has no step on but backing up,
-  // or none at all, and the ground a turn in place would sweep holds at least
+  // or none at all, or its step swings the body round, and the ground a turn in place would sweep holds at least
   // avoid_look_min_cells unknown cells on a side, the NAVCAM is pointed at that side (pan
   // this many degrees from ahead, tilted avoid_look_tilt_deg further down), the pair mapped
   // and the vote taken again; once a side per pose. With no step at all, not even backing
@@ -154,6 +154,8 @@ struct ExecutorOptions {
   // cannot point).
   double avoid_look_pan_deg = 0.0;
   double avoid_look_tilt_deg = 15.0;
+  // ... and before a step that swings the body round, a turn in place or an arc this tight.
+  double avoid_look_curvature_per_m = 0.5;
   int avoid_look_min_cells = 3;
   // A rock the map once rated unsafe stays unsafe to the vote and the planner when a later
   // map reads it caution (a view from beside it sees less of it; a safe rating or driving

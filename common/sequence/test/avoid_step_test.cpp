@@ -408,8 +408,13 @@ TEST(AvoidStep, LooksAsideAtUnframedGroundATurnWouldSweepInsteadOfBackingUp) {
     EXPECT_NEAR(c.tilt_rad, 15.0 * M_PI / 180.0, 1e-9);
     ++(c.pan_rad > 0 ? right : left);
   }
-  EXPECT_EQ(right, 1) << "one look toward the goal's side, the side with more unknown ground";
-  EXPECT_EQ(left, 0) << "after the right look a turn right was on: no need to look left";
+  EXPECT_EQ(right, 1) << "one look toward the goal's side";
+  EXPECT_LE(left, 1) << "a side is looked at once per pose";
+  for (const auto& c : with.captures)
+    if (c.purpose == "look") {
+      EXPECT_GT(c.pan_rad, 0.0) << "the side with more unknown ground, the goal's, first";
+      break;
+    }
 }
 
 // Looking behind: the rover stands in a pocket of rocks (ahead and both sides), so no arc or
