@@ -10,9 +10,18 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <lcm/lcm-cpp.hpp>
+#include <rover_msgs/capture_request_t.hpp>
+#include <rover_msgs/stereo_frame_t.hpp>
+#include <rover_msgs/traversability_map_t.hpp>
+#include <rover_msgs/vo_update_t.hpp>
+
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <set>
 #include <string>
+#include <vector>
 
 namespace rover::test {
 namespace {
@@ -90,6 +99,55 @@ TEST(Avoidance, GoalBehindTheRoverOnAStackThatHasDrivenIsReached) {
   EXPECT_NE(Detail(s).find("goto reached the disc"), std::string::npos) << Detail(s);
   EXPECT_NE(Detail(s).find("sigma"), std::string::npos) << Detail(s);  // the margin it used
   EXPECT_LT(Dist(s["final_truth"], 0.0, 0.0), 0.5);
+}
+
+// (f) Looking aside (common/avoidance/README.md): the same wall with its gap, cells no pair
+// framed unknown, the mast pointed at the ground beside before the body swings over it. End
+// to end on the bus: the executor asks for a pointed pair, camera_capture renders it from
+// the pointed rig (its models differ from the mounted ones), the hazard monitor maps it
+// before the executor votes again, VO leaves it alone, and the goto completes clear of
+// every rock.
+TEST(Avoidance, TheMastLooksAsideAndTheMapTakesThePointedPair) {
+  const YAML::Node s = RunScenario("rock_field_gap_look");
+  ASSERT_EQ(s["outcome"].as<std::string>(), "completed") << Detail(s);
+  EXPECT_GT(s["min_rock_clearance_m"].as<double>(), 0.0) << s["min_rock_clearance_rock"].as<std::string>("");
+
+  // (RunScenario ran it in test-out/avoidance_rock_field_gap_look; OutDir would empty it.)
+  lcm::LogFile log(std::string(ROVER_BINARY_DIR) + "/test-out/avoidance_rock_field_gap_look/log.lcm", "r");
+  ASSERT_TRUE(log.good());
+  std::map<std::int64_t, double> looks;  // frame id -> pan
+  std::set<std::int64_t> pointed_frames, mapped_looks, vo_on_looks;
+  std::vector<double> mounted_model;  // a VO frame's left model
+  std::int64_t last_mapped = -1;
+  for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
+    if (e->channel == "CAPTURE_REQUEST") {
+      rover_msgs::capture_request_t m;
+      if (m.decode(e->data, 0, e->datalen) > 0 && m.purpose == "look") looks[m.frame_id] = m.pan_rad;
+    } else if (e->channel == "STEREO_FRAME") {
+      rover_msgs::stereo_frame_t f;
+      if (f.decode(e->data, 0, e->datalen) <= 0) continue;
+      if (f.purpose == "vo" && mounted_model.empty()) mounted_model = f.left_model.params;
+      if (looks.count(f.frame_id) && f.purpose == "look" && !mounted_model.empty() &&
+          f.left_model.params != mounted_model)
+        pointed_frames.insert(f.frame_id);
+    } else if (e->channel == "TRAVERSABILITY_MAP") {
+      rover_msgs::traversability_map_t m;
+      if (m.decode(e->data, 0, e->datalen) <= 0) continue;
+      for (const auto& [id, pan] : looks)
+        if (id > last_mapped && id <= m.last_frame_id) mapped_looks.insert(id);
+      last_mapped = m.last_frame_id;
+    } else if (e->channel == "VO_UPDATE") {
+      rover_msgs::vo_update_t u;
+      if (u.decode(e->data, 0, e->datalen) > 0 && looks.count(u.to_frame_id)) vo_on_looks.insert(u.to_frame_id);
+    }
+  }
+  ASSERT_FALSE(looks.empty()) << "the rover never looked aside";
+  for (const auto& [id, pan] : looks) {
+    EXPECT_NEAR(std::abs(pan), 70.0 * M_PI / 180.0, 1e-9) << "frame " << id;
+    EXPECT_TRUE(pointed_frames.count(id)) << "no pointed STEREO_FRAME for look " << id;
+    EXPECT_TRUE(mapped_looks.count(id)) << "no map holds look " << id;
+  }
+  EXPECT_TRUE(vo_on_looks.empty()) << "VO ran on " << vo_on_looks.size() << " look pairs";
 }
 
 }  // namespace
