@@ -348,7 +348,7 @@ bool SequenceExecutor::AvoidRefused(const HazardReply& reply) {
 
 bool SequenceExecutor::LookAside(const avoidance::Grid& grid, const avoidance::Footprint& footprint,
                                   double backup_m, const avoidance::Pose2& here, const avoidance::Choice& choice) {
-  if (options_.avoid_look_pan_deg <= 0.0) return false;
+  if (options_.avoid_look_pan_deg <= 0.0 || looks_unanswered_) return false;
   // When: nothing on but backing up, or nothing at all; or the chosen step swings the body
   // round (a turn in place or a tight arc), sweeping the ground beside it.
   using Kind = avoidance::Candidate::Kind;
@@ -381,6 +381,7 @@ bool SequenceExecutor::LookAside(const avoidance::Grid& grid, const avoidance::F
               " here: looking " + s.name +
               " at " + std::to_string(s.cells) + " unknown cells " + s.what;
     StartCapture("look", pan * M_PI / 180.0, tilt * M_PI / 180.0);
+    look_frame_id_ = frame_id_;
     science_frame_seen_ = false;
     EnterPhase(Phase::kImages);
     return true;

@@ -669,6 +669,8 @@ class SequenceExecutor {
   bool map_images_taken_ = false;  // ImagesForMap took its pair for the step in hand
   int looked_here_ = 0;            // where it looked since the rover last moved: 1 left, 2 right, 4 behind
   int looks_total_ = 0;            // looks aside in this sequence
+  int64_t look_frame_id_ = -1;     // the last look's frame
+  bool looks_unanswered_ = false;  // a look went unanswered in this sequence: no more
   bool avoid_refused_ = false;
   double last_turn_rad_ = 0.0;    // the last commanded step's turn in place (0: not a turn)
   // The last commanded step's arc when it drove forward (length 0: it did not), which the

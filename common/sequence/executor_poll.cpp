@@ -180,6 +180,12 @@ void SequenceExecutor::PollImages() {
   } else if (PhaseAge() > options_.capture_wait_s) {
     detail_ = "frame " + std::to_string(frame_id_) + " not seen within " + Fixed(options_.capture_wait_s, 1) +
               " s; going on";
+    // A camera that cannot point (real cameras without a pan-tilt unit) refuses every look:
+    // no more asking in this sequence.
+    if (frame_id_ == look_frame_id_) {
+      looks_unanswered_ = true;
+      step_note_ += "the camera did not answer a look (cannot point?): no more looks in this sequence; ";
+    }
     EnterPhase(Phase::kReady);
   }
 }

@@ -23,6 +23,7 @@ class MapWorld {
   Grid grid = Grid::Filled(-4, -6, 0.2, 60, 60, CellClass::kSafe, 0.9f);
   bool map_known = true;          // false: every cell unknown until the first pair
   bool camera = true;
+  bool answers_looks = true;  // false: a camera with no pan-tilt unit, refusing pointed pairs
   // Set: what each pair shows of `grid` (the request, a site point); the map is what the
   // pairs so far have shown. Unset: the whole grid once a pair was taken (map_known).
   std::function<bool(const CaptureRequest&, const PlanePose&, double, double)> sees;
@@ -89,7 +90,7 @@ class MapWorld {
   }
   void Handle(const CaptureRequest& c) {
     captures.push_back(c);
-    if (!camera) return;
+    if (!camera || (c.purpose == "look" && !answers_looks)) return;
     map_known = true;  // the pair shows the ground
     if (sees) Reveal(c);
     pending_.push_back([this, c] {
@@ -367,13 +368,14 @@ struct LookRun {
   std::size_t motions = 0, backups = 0;
 };
 
-LookRun DriveBesideAWall(double look_pan_deg) {
+LookRun DriveBesideAWall(double look_pan_deg, bool answers_looks = true) {
   ExecutorOptions o = Fast();
   o.avoid_unseen_ground_strict = true;
   o.avoid_start_ring_known = false;
   o.avoid_look_pan_deg = look_pan_deg;
   SequenceExecutor ex(o);
   MapWorld w(ex);
+  w.answers_looks = answers_looks;
   for (double y = -3.0; y <= 1.2; y += 0.1) w.grid.Paint(1.6, y, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
   // The mast's view, in the rover frame at the capture: 45 deg either side of its pointing,
   // from 0.5 m to 6 m (the body itself is known to the vote as the ground it stands on).
@@ -458,6 +460,18 @@ TEST(AvoidStep, LooksBehindWhenEvenBackingUpIsRefusedAndBacksOut) {
   for (const auto& c : with.captures)
     if (c.purpose == "look" && std::abs(std::abs(c.pan_rad) - M_PI) < 1e-9) behind = true;
   EXPECT_TRUE(behind) << "no look behind";
+}
+
+// A camera that cannot point never answers a look: the executor waits capture_wait_s once,
+// asks no more in this sequence, and drives on the map it has, as without looks.
+TEST(AvoidStep, ACameraThatCannotPointIsAskedOnce) {
+  const LookRun without = DriveBesideAWall(0.0);
+  const LookRun refused = DriveBesideAWall(70.0, /*answers_looks=*/false);
+  EXPECT_EQ(refused.final.state, SequenceState::kCompleted) << refused.final.detail;
+  int looks = 0;
+  for (const auto& c : refused.captures) looks += c.purpose == "look";
+  EXPECT_EQ(looks, 1);
+  EXPECT_EQ(refused.motions, without.motions);
 }
 
 }  // namespace
