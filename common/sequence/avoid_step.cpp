@@ -197,8 +197,9 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     AbortWith(abort_reason::kHazardUnknown, std::string("arc voting cannot decide: ") + e.what());
     return AvoidOutcome::kAborted;
   }
-  // 4. No step on but backing up, or none at all: first look aside at the ground a turn
-  //    would sweep, if no view from here has framed it, then vote again on the map with it.
+  // 4. No step on but backing up, or none at all, or a step that swings the body round:
+  //    first look aside at the ground a turn would sweep, if no view from here has framed
+  //    it (behind, with no step at all), then vote again on the map with it.
   if (LookAside(grid, o.footprint, o.backup_m, here, choice)) return AvoidOutcome::kWait;
   if (!choice.found) {
     AbortWith(abort_reason::kHazardMap,
@@ -378,8 +379,7 @@ bool SequenceExecutor::LookAside(const avoidance::Grid& grid, const avoidance::F
     step_note_ += std::string("looked ") + s.name + " (" + std::to_string(s.cells) + " unknown cells " + s.what +
                   "; pan " + Fixed(pan, 0) + " deg, tilt " + Fixed(tilt, 0) + " deg) before voting again; ";
     detail_ = std::string("avoid: ") + (!choice.found ? "no step" : stuck ? "only backing up" : "the step swings the body") +
-              " here: looking " + s.name +
-              " at " + std::to_string(s.cells) + " unknown cells " + s.what;
+              " here: looking " + s.name + " at " + std::to_string(s.cells) + " unknown cells " + s.what;
     StartCapture("look", pan * M_PI / 180.0, tilt * M_PI / 180.0);
     look_frame_id_ = frame_id_;
     science_frame_seen_ = false;

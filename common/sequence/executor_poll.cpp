@@ -214,7 +214,8 @@ void SequenceExecutor::DispatchNext() {
     // The last goto's arrival, with the margin it used for the estimate's uncertainty.
     Finish(SequenceState::kCompleted, "",
            "all " + std::to_string(sequence_.commands.size()) + " commands done" +
-               (arrival_note_.empty() ? "" : "; " + arrival_note_));
+               (arrival_note_.empty() ? "" : "; " + arrival_note_) +
+               (looks_total_ == 0 ? "" : "; " + std::to_string(looks_total_) + " looks aside"));
     return;
   }
   StartCommand();

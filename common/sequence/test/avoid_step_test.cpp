@@ -402,6 +402,7 @@ TEST(AvoidStep, LooksAsideAtUnframedGroundATurnWouldSweepInsteadOfBackingUp) {
   const LookRun with = DriveBesideAWall(70.0);
   EXPECT_EQ(with.final.state, SequenceState::kCompleted) << with.final.detail;
   EXPECT_EQ(with.backups, 0u) << "backed up though it looked";
+  EXPECT_NE(with.final.detail.find("looks aside"), std::string::npos) << with.final.detail;
   EXPECT_LT(with.motions, without.motions);
   int left = 0, right = 0;
   for (const auto& c : with.captures) {
