@@ -32,6 +32,7 @@ ShippedOptions Shipped(double range_m) {
   o.map = LoadMapOptions(map["traversability"]);
   o.map.crest_view_range_m = range_m;
   o.map.open_cells_unknown = false;  // its own tests below
+  o.map.unframed_unknown = false;    // likewise (UnframedCells): it needs the crest rule's range
   o.hazcam = LoadCameraOptions(map["hazcam"], o.map);
   return o;
 }
