@@ -122,13 +122,7 @@ int Grid::MarkKnown(const Footprint& footprint, const Pose2& pose, double grow_m
 }
 
 int Grid::MarkTurnKnown(const Footprint& footprint, const Pose2& pose) {
-  // The swept area is the disc out to the footprint's farthest corner (grown by half a
-  // cell): the rectangle holds the centre of turning and so the segment from it to that
-  // corner, a point at every radius out to it, which a whole turn carries all round.
-  const double grow = 0.5 * cell_m;
-  const double hx = 0.5 * footprint.length_m + grow, hy = 0.5 * footprint.width_m + grow;
-  const double cf = footprint.center_forward_m;
-  const double radius = std::max(std::hypot(cf + hx, hy), std::hypot(cf - hx, hy));
+  const double radius = footprint.TurnRadius(0.5 * cell_m);
   return MarkSafeWhere(this, pose.x, pose.y, radius,
                        [&](double cx, double cy) { return std::hypot(cx - pose.x, cy - pose.y) <= radius; });
 }
@@ -196,6 +190,11 @@ void Grid::Paint(double x, double y, double radius_m, CellClass s, float g, floa
           sigma_m[k] = s == CellClass::kUnknown ? -1.0f : 0.0f;
         }
       }
+}
+
+double Footprint::TurnRadius(double grow_m) const {
+  const double hx = 0.5 * length_m + grow_m, hy = 0.5 * width_m + grow_m;
+  return std::max(std::hypot(center_forward_m + hx, hy), std::hypot(center_forward_m - hx, hy));
 }
 
 bool Footprint::Contains(const Pose2& p, double x, double y, double grow_m) const {

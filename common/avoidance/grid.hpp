@@ -93,6 +93,10 @@ struct Footprint {
   bool Contains(const Pose2& p, double x, double y, double grow_m = 0.0) const;
   // The least growth at which the rectangle at p contains (x, y) (< 0: inside it).
   double Outside(const Pose2& p, double x, double y) const;
+  // The radius, from the rover origin, of the disc a whole turn in place sweeps: out to the
+  // rectangle's farthest corner, grown by `grow_m` (the rectangle holds the centre of
+  // turning, so a point at every radius out to that corner, which the turn carries round).
+  double TurnRadius(double grow_m = 0.0) const;
 };
 
 // Poses along a turn in place by turn_rad and then an arc of signed length distance_m and

@@ -7,11 +7,8 @@ namespace rover::avoidance {
 
 UnknownBeside CountUnknownBeside(const Grid& g, const Footprint& footprint, const Pose2& pose,
                                  double behind_reach_m, double min_bearing_rad) {
-  // The disc out to the footprint's farthest corner, grown by half a cell (MarkTurnKnown).
-  const double grow = 0.5 * g.cell_m;
-  const double hx = 0.5 * footprint.length_m + grow, hy = 0.5 * footprint.width_m + grow;
-  const double cf = footprint.center_forward_m;
-  const double disc = std::max(std::hypot(cf + hx, hy), std::hypot(cf - hx, hy));
+  // The disc a whole turn in place sweeps, grown by half a cell (as Grid::MarkTurnKnown).
+  const double disc = footprint.TurnRadius(0.5 * g.cell_m);
   const double radius = disc + std::max(0.0, behind_reach_m);
   // Rover X forward, Y right; site X north, Y east; yaw clockwise from north.
   const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);

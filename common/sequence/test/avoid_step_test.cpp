@@ -368,7 +368,13 @@ struct LookRun {
   std::size_t motions = 0, backups = 0;
 };
 
-LookRun DriveBesideAWall(double look_pan_deg, bool answers_looks = true) {
+// A goto with looks (pan look_pan_deg; 0: none) on the rocks `rocks` paints, every ground
+// that could hide a rock refused (strict). What each pair shows, in the rover frame at the
+// capture: 45 deg either side of the mast's pointing, from 0.5 m to 6 m (the body itself is
+// known to the vote as the ground it stands on), and with `behind_known` the ground behind,
+// the way the rover came.
+LookRun RunWithLooks(double look_pan_deg, bool answers_looks, bool behind_known,
+                     const std::function<void(Grid*)>& rocks, const std::string& goto_line) {
   ExecutorOptions o = Fast();
   o.avoid_unseen_ground_strict = true;
   o.avoid_start_ring_known = false;
@@ -376,21 +382,26 @@ LookRun DriveBesideAWall(double look_pan_deg, bool answers_looks = true) {
   SequenceExecutor ex(o);
   MapWorld w(ex);
   w.answers_looks = answers_looks;
-  for (double y = -3.0; y <= 1.2; y += 0.1) w.grid.Paint(1.6, y, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
-  // The mast's view, in the rover frame at the capture: 45 deg either side of its pointing,
-  // from 0.5 m to 6 m (the body itself is known to the vote as the ground it stands on).
-  w.sees = [](const CaptureRequest& c, const PlanePose& at, double x, double y) {
+  rocks(&w.grid);
+  w.sees = [behind_known](const CaptureRequest& c, const PlanePose& at, double x, double y) {
     const double dx = x - at.x, dy = y - at.y, r = std::hypot(dx, dy);
     const double bearing = std::remainder(std::atan2(dy, dx) - at.yaw, 2 * M_PI);  // + right
-    const bool behind = std::abs(bearing) > 2.0;
+    const bool behind = behind_known && std::abs(bearing) > 2.0;
     return r > 0.5 && r < 6.0 && (std::abs(std::remainder(bearing - c.pan_rad, 2 * M_PI)) < M_PI / 4 || behind);
   };
-  ex.SubmitText("goto 0 m 3 m within 0.5 m avoid on\n", 1, "t.seq");
+  ex.SubmitText(goto_line + "\n", 1, "t.seq");
   w.Run();
   LookRun run{w.Final(), w.captures, w.motions.size(), 0};
   for (const auto& m : w.motions)
     if (m.type == MobilityCommand::Type::kArc && m.distance_m < 0.0) ++run.backups;
   return run;
+}
+
+LookRun DriveBesideAWall(double look_pan_deg, bool answers_looks = true) {
+  const auto wall = [](Grid* g) {
+    for (double y = -3.0; y <= 1.2; y += 0.1) g->Paint(1.6, y, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
+  };
+  return RunWithLooks(look_pan_deg, answers_looks, /*behind_known=*/true, wall, "goto 0 m 3 m within 0.5 m avoid on");
 }
 
 TEST(AvoidStep, LooksAsideAtUnframedGroundATurnWouldSweepInsteadOfBackingUp) {
@@ -425,28 +436,15 @@ TEST(AvoidStep, LooksAsideAtUnframedGroundATurnWouldSweepInsteadOfBackingUp) {
 // looks it looks at each side (rocks), then behind (pan 180: clear), backs out and goes to a
 // goal behind it; without them it is boxed in at once.
 LookRun BackOutOfAPocket(double look_pan_deg) {
-  ExecutorOptions o = Fast();
-  o.avoid_unseen_ground_strict = true;
-  o.avoid_start_ring_known = false;
-  o.avoid_look_pan_deg = look_pan_deg;
-  SequenceExecutor ex(o);
-  MapWorld w(ex);
-  for (double y = -1.3; y <= 1.3; y += 0.1) w.grid.Paint(1.6, y, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
-  for (double x = -0.6; x <= 1.6; x += 0.1) {
-    w.grid.Paint(x, -1.3, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
-    w.grid.Paint(x, 1.3, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
-  }
-  w.sees = [](const CaptureRequest& c, const PlanePose& at, double x, double y) {
-    const double dx = x - at.x, dy = y - at.y, r = std::hypot(dx, dy);
-    const double bearing = std::remainder(std::atan2(dy, dx) - at.yaw, 2 * M_PI);  // + right
-    return r > 0.5 && r < 6.0 && std::abs(std::remainder(bearing - c.pan_rad, 2 * M_PI)) < M_PI / 4;
+  const auto pocket = [](Grid* g) {
+    for (double y = -1.3; y <= 1.3; y += 0.1) g->Paint(1.6, y, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
+    for (double x = -0.6; x <= 1.6; x += 0.1) {
+      g->Paint(x, -1.3, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
+      g->Paint(x, 1.3, 0.2, CellClass::kUnsafe, 0.0f, 0.5f);
+    }
   };
-  ex.SubmitText("goto -3 m 0 m within 0.5 m avoid on\n", 1, "t.seq");
-  w.Run();
-  LookRun run{w.Final(), w.captures, w.motions.size(), 0};
-  for (const auto& m : w.motions)
-    if (m.type == MobilityCommand::Type::kArc && m.distance_m < 0.0) ++run.backups;
-  return run;
+  return RunWithLooks(look_pan_deg, /*answers_looks=*/true, /*behind_known=*/false, pocket,
+                      "goto -3 m 0 m within 0.5 m avoid on");
 }
 
 TEST(AvoidStep, LooksBehindWhenEvenBackingUpIsRefusedAndBacksOut) {
