@@ -272,7 +272,12 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
                                                           const avoidance::Footprint& footprint, double zone_grow,
                                                           bool going_round, std::optional<planner::GlobalPlan>* plan) {
   planner::PlannerOptions po;
-  po.SetRadiiFrom(footprint, 0.0);
+  // The vote counts a cell under the body when its centre is within half a cell of it, and
+  // marks a zone's cells out to a cell past its grown edge (AvoidStep): the plan keeps the
+  // rover's centre as far off both, or it leads into gaps no step will cross.
+  const double cell = site_map_.cell_m();
+  const bool vote_clearance = options_.planner_vote_clearance && cell > 0.0;
+  po.SetRadiiFrom(footprint, vote_clearance ? 0.5 * cell : 0.0);
   po.unknown_cost = options_.planner_unknown_cost;
   po.caution_cost = options_.planner_caution_cost;
   po.near_cost = options_.planner_near_cost;
@@ -281,7 +286,7 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
   r.start_x = p.x, r.start_y = p.y;
   r.goal_x = goto_.target.x(), r.goal_y = goto_.target.y();
   r.goal_radius_m = disc.radius_m;
-  r.zone_grow_m = zone_grow;
+  r.zone_grow_m = zone_grow + (vote_clearance ? cell : 0.0);
   r.prior = prior_ ? &*prior_ : nullptr;
   // Keep-out zones and the ways this goto could not follow (planner/blocked_ways.hpp).
   auto plan_once = [&] {

@@ -169,6 +169,12 @@ struct ExecutorOptions {
   double planner_unknown_cost = 1.25;   // per metre of ground never seen (safe ground: 1)
   double planner_caution_cost = 3.0;    // per metre of caution
   double planner_near_cost = 3.0;       // per metre within the circumscribed radius of a rock (planner::PlannerOptions::near_cost)
+  // The plan's configuration space as the vote sees the map: the vote counts a cell under
+  // the body when its centre lies within half a cell of it, and grows keep-out zones by a
+  // cell more than the monitor does. true: the planner keeps the rover's centre that much
+  // further off obstacles and zones, so that it never leads the rover into a gap the vote
+  // will not drive through (planner/README.md, "The vote's clearance").
+  bool planner_vote_clearance = true;
   double planner_margin_m = 10.0;       // the plan's window: map, rover and goal, plus this
   // A goal the plan finds unreachable this many steps running aborts the goto (the map
   // changes as the rover looks again; one unlucky map is not the end).

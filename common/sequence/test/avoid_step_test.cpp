@@ -356,6 +356,63 @@ TEST(AvoidStep, AWayTheVoteRefusesCostsThePlannerAndTheRoverGoesRound) {
 }
 
 
+// The plan's clearance as the vote sees it (planner_vote_clearance): a wall of rocks across
+// the way with a gap the rover's body (1.4 m, 1.5 m with the vote's margins here) cannot
+// pass, its rock cells' centres 1.6 m apart (0.8 m either side of the rover's centre cell). The planner measures from cell centres; the vote
+// counts a cell under the body when its centre lies within half a cell of it. Planning
+// with half the body's width alone, the plan leads through the gap, and the vote refuses
+// the way at its mouth: the rover backs out before the refusal, remembered, prices the gap
+// out (in a field of rocks, a refusal's cost is often not enough: keepout_avoid's variants
+// dithered at such a mouth for 37 steps). With the vote's clearance the plan goes round the
+// wall's end at once.
+namespace {
+struct GapRun {
+  SequenceStatus final;
+  std::vector<PlanePose> trail;
+  std::size_t backups = 0;
+};
+
+GapRun DriveAtTheGap(bool vote_clearance) {
+  ExecutorOptions o = Fast();
+  o.planner_vote_clearance = vote_clearance;
+  o.avoid_margin_m = 0.05;  // the planner's half-width 0.75 m, 0.85 m with the half cell
+  SequenceExecutor ex(o);
+  MapWorld w(ex);
+  w.grid = Grid::Filled(-4, -8, 0.2, 60, 80, CellClass::kSafe, 0.9f);
+  for (int i = 0; i < w.grid.rows; ++i)
+    for (int j = 0; j < w.grid.cols; ++j) {
+      const double x = w.grid.CellCentreX(i), y = w.grid.CellCentreY(j);
+      if (x < 2.4 || x > 2.8 || std::abs(y - 0.1) < 0.75 || std::abs(y) > 4.5) continue;
+      const std::size_t k = static_cast<std::size_t>(i) * w.grid.cols + j;
+      w.grid.state[k] = CellClass::kUnsafe, w.grid.goodness[k] = 0.0f, w.grid.step_m[k] = 0.5f;
+    }
+  ex.SubmitText("goto 5 m 0 m within 0.4 m distance 40 m avoid on\n", 1, "t.seq");
+  w.Run(60000);
+  GapRun r{w.Final(), w.trail, 0};
+  for (const auto& m : w.motions)
+    if (m.type == MobilityCommand::Type::kArc && m.distance_m < 0.0) ++r.backups;
+  return r;
+}
+}  // namespace
+
+TEST(AvoidStep, ThePlanLeavesTheVotesClearanceAndNeverLeadsIntoAGapTooNarrow) {
+  const GapRun with = DriveAtTheGap(true);
+  ASSERT_EQ(with.final.state, SequenceState::kCompleted) << with.final.abort_reason << ": " << with.final.detail;
+  EXPECT_EQ(with.backups, 0u);
+  double widest = 0.0;
+  for (const PlanePose& p : with.trail) widest = std::max(widest, std::abs(p.y));
+  EXPECT_GT(widest, 4.5);  // round the wall's end
+  // Without it the plan leads the rover to the gap's mouth, where it can only back up.
+  const GapRun without = DriveAtTheGap(false);
+  EXPECT_GT(without.backups, 0u) << without.final.detail;
+  const auto nearest_to_the_gap = [](const std::vector<PlanePose>& trail) {
+    double d = 1e9;
+    for (const PlanePose& p : trail) d = std::min(d, std::hypot(p.x - 2.4, p.y - 0.1));
+    return d;
+  };
+  EXPECT_LT(nearest_to_the_gap(without.trail), nearest_to_the_gap(with.trail) - 0.2);
+}
+
 // Looking aside (avoidance/look_aside.hpp): a wall across the way ahead, the goal to the
 // right, and the ground beside the rover never framed, since the mast looks ahead (the way
 // it came, behind, is known). Every ground that could hide a rock is refused (strict), so
