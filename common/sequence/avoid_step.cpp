@@ -361,13 +361,7 @@ bool SequenceExecutor::LookAside(const avoidance::Grid& grid, const avoidance::F
   const bool stuck = !choice.found || choice.best.kind == Kind::kBackup;
   const bool swings = choice.found && (choice.best.kind == Kind::kTurn ||
                                        std::abs(choice.best.curvature_per_m) >= options_.avoid_look_curvature_per_m);
-  // Or the step goes a worse way than one vetoed only for ground no pair has shown.
-  bool better_unseen = false;
-  if (choice.found && options_.avoid_look_goal_gain > 0.0)
-    for (const avoidance::Candidate& c : choice.candidates)
-      better_unseen = better_unseen || (c.vetoed && !c.hazard && !c.undoes_last_turn &&
-                                        c.goal >= choice.best.goal + options_.avoid_look_goal_gain);
-  if (!stuck && !swings && !better_unseen) return false;
+  if (!stuck && !swings) return false;
   const auto unknown = avoidance::CountUnknownBeside(grid, footprint, here, backup_m);
   struct Side {
     int bit, cells;
@@ -389,11 +383,7 @@ bool SequenceExecutor::LookAside(const avoidance::Grid& grid, const avoidance::F
     const double pan = s.pan_deg, tilt = options_.avoid_look_tilt_deg;
     step_note_ += std::string("looked ") + s.name + " (" + std::to_string(s.cells) + " unknown cells " + s.what +
                   "; pan " + Fixed(pan, 0) + " deg, tilt " + Fixed(tilt, 0) + " deg) before voting again; ";
-    detail_ = std::string("avoid: ") +
-              (!choice.found ? "no step"
-               : stuck       ? "only backing up"
-               : swings      ? "the step swings the body"
-                             : "a better way is vetoed for unseen ground") +
+    detail_ = std::string("avoid: ") + (!choice.found ? "no step" : stuck ? "only backing up" : "the step swings the body") +
               " here: looking " + s.name + " at " + std::to_string(s.cells) + " unknown cells " + s.what;
     StartCapture("look", pan * M_PI / 180.0, tilt * M_PI / 180.0);
     look_frame_id_ = frame_id_;

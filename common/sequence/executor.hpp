@@ -156,9 +156,6 @@ struct ExecutorOptions {
   double avoid_look_tilt_deg = 15.0;
   // ... and before a step that swings the body round, a turn in place or an arc this tight.
   double avoid_look_curvature_per_m = 0.5;
-  // ... and when a candidate whose goal vote beats the chosen step's by this much was vetoed
-  // for unknown ground alone: the look may open the better way (0: never).
-  double avoid_look_goal_gain = 0.0;
   int avoid_look_min_cells = 3;
   // A rock the map once rated unsafe stays unsafe to the vote and the planner when a later
   // map reads it caution (a view from beside it sees less of it; a safe rating or driving

@@ -358,9 +358,9 @@ TEST(AvoidStep, AWayTheVoteRefusesCostsThePlannerAndTheRoverGoesRound) {
 
 // The plan's clearance as the vote sees it (planner_vote_clearance): a wall of rocks across
 // the way with a gap the rover's body (1.4 m, 1.5 m with the vote's margins here) cannot
-// pass, its rock cells' centres 1.6 m apart (0.8 m either side of the rover's centre cell). The planner measures from cell centres; the vote
-// counts a cell under the body when its centre lies within half a cell of it. Planning
-// with half the body's width alone, the plan leads through the gap, and the vote refuses
+// pass, its rock cells' centres 1.6 m apart (0.8 m either side of the rover's centre
+// cell). The planner measures from cell centres; the vote counts a cell under the body
+// when its centre lies within half a cell of it. Planning with half the body's width alone, the plan leads through the gap, and the vote refuses
 // the way at its mouth: the rover backs out before the refusal, remembered, prices the gap
 // out (in a field of rocks, a refusal's cost is often not enough: keepout_avoid's variants
 // dithered at such a mouth for 37 steps). With the vote's clearance the plan goes round the
@@ -423,8 +423,6 @@ struct LookRun {
   SequenceStatus final;
   std::vector<CaptureRequest> captures;
   std::size_t motions = 0, backups = 0;
-  double driven_m = 0.0;  // arcs and back-ups, summed
-  std::vector<std::string> details;
 };
 
 // A goto with looks (pan look_pan_deg; 0: none) on the rocks `rocks` paints, every ground
@@ -433,14 +431,11 @@ struct LookRun {
 // known to the vote as the ground it stands on), and with `behind_known` the ground behind,
 // the way the rover came.
 LookRun RunWithLooks(double look_pan_deg, bool answers_looks, bool behind_known,
-                     const std::function<void(Grid*)>& rocks, const std::string& goto_line,
-                     double look_goal_gain = 0.0, double look_curvature_per_m = 0.5) {
+                     const std::function<void(Grid*)>& rocks, const std::string& goto_line) {
   ExecutorOptions o = Fast();
   o.avoid_unseen_ground_strict = true;
   o.avoid_start_ring_known = false;
   o.avoid_look_pan_deg = look_pan_deg;
-  o.avoid_look_goal_gain = look_goal_gain;
-  o.avoid_look_curvature_per_m = look_curvature_per_m;
   SequenceExecutor ex(o);
   MapWorld w(ex);
   w.answers_looks = answers_looks;
@@ -453,12 +448,9 @@ LookRun RunWithLooks(double look_pan_deg, bool answers_looks, bool behind_known,
   };
   ex.SubmitText(goto_line + "\n", 1, "t.seq");
   w.Run();
-  LookRun run{w.Final(), w.captures, w.motions.size(), 0, 0.0, {}};
-  for (const auto& m : w.motions) {
+  LookRun run{w.Final(), w.captures, w.motions.size(), 0};
+  for (const auto& m : w.motions)
     if (m.type == MobilityCommand::Type::kArc && m.distance_m < 0.0) ++run.backups;
-    if (m.type == MobilityCommand::Type::kArc) run.driven_m += std::abs(m.distance_m);
-  }
-  for (const SequenceStatus& st : w.statuses) run.details.push_back(st.detail);
   return run;
 }
 
@@ -539,23 +531,3 @@ TEST(AvoidStep, ACameraThatCannotPointIsAskedOnce) {
 }
 
 }  // namespace
-
-// A better way vetoed only for unseen ground (avoid_look_goal_gain): open ground, the goal
-// 3 m to the right, the ground beside the rover never framed. The turn toward the goal
-// sweeps it and is vetoed; a gentle arc ahead, over ground the mast sees, is allowed, and
-// neither stuck nor swinging the body round (turns alone count as swinging here). With the
-// rule the mast looks right first, the turn is allowed, and the rover drives less.
-TEST(AvoidStep, LooksAsideWhenABetterWayIsVetoedOnlyForUnseenGround) {
-  const auto open = [](Grid*) {};
-  const std::string line = "goto 0 m 3 m within 0.5 m distance 20 m avoid on";
-  const LookRun with = RunWithLooks(70.0, true, true, open, line, 0.1, 100.0);
-  const LookRun without = RunWithLooks(70.0, true, true, open, line, 0.0, 100.0);
-  ASSERT_EQ(with.final.state, SequenceState::kCompleted) << with.final.abort_reason << ": " << with.final.detail;
-  ASSERT_EQ(without.final.state, SequenceState::kCompleted) << without.final.detail;
-  // With: the pair where it stands, then a look right, before any step; without: no look.
-  ASSERT_GE(with.captures.size(), 2u);
-  EXPECT_EQ(with.captures[1].purpose, "look");
-  EXPECT_GT(with.captures[1].pan_rad, 0.0);  // right, where the goal is
-  for (const CaptureRequest& c : without.captures) EXPECT_NE(c.purpose, "look");
-  EXPECT_LT(with.driven_m, without.driven_m);  // the turn toward the goal, not a curve round to it
-}
