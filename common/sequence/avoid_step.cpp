@@ -89,8 +89,10 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     EnterPhase(Phase::kImages);
     return AvoidOutcome::kWait;
   }
-  // 2. The map that includes it (the monitor maps a pair before it answers anything after).
+  // 2. The map that includes it (the monitor maps a pair before it answers anything after),
+  //    unless a forward step known safe on the map in hand can be driven while it is mapped.
   if (!map_ || map_->last_frame_id < pair_here_id_) {
+    if (ThinkAhead(p, remaining, disc, step)) return AvoidOutcome::kStep;
     if (PhaseAge() <= options_.map_wait_s) return AvoidOutcome::kWait;
     if (!map_) {
       AbortWith(abort_reason::kHazardUnknown, "no traversability map within " + Fixed(options_.map_wait_s) +
@@ -99,7 +101,14 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     }
     step_note_ += "map without frame " + std::to_string(pair_here_id_) + "; ";
   }
-  // 3. Vote.
+  return VoteOnMap(p, remaining, disc, step);
+}
+
+// 3. The vote on map_, following the global plan. While thinking ahead (think_ahead.cpp)
+//    it only chooses: anything but a forward arc is kDeclined, and nothing is aborted,
+//    looked at or refused.
+SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, double remaining,
+                                                           const ArrivalDisc& disc, PlannedStep* step) {
   avoid_note_.clear();
   avoidance::VoteOptions o;
   o.footprint = map_->footprint;
@@ -158,6 +167,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     switch (PlanAhead(p, disc, o.footprint, zone_grow, going_round, &plan)) {
       case PlanVerdict::kFollow: break;
       case PlanVerdict::kAborted: return AvoidOutcome::kAborted;
+      case PlanVerdict::kDeclined: return AvoidOutcome::kDeclined;
     }
     if (plan) {
       o.goal_distance = &*plan;
@@ -182,6 +192,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     const bool drivable = o.max_driven_step_m <= 0.0 || s.max_step_m < o.max_driven_step_m;
     if (s.unsafe == 0 && drivable && avoidance::JudgeUnknown(s, o.unknown) == avoidance::UnknownVerdict::kAcceptable &&
         l.unsafe == 0) {
+      if (thinking_ahead_ && !KnownSafeAhead(grid, o.footprint, here, direct.step)) return AvoidOutcome::kDeclined;
       *step = direct.step;
       step_choice_ = StepChoice::kSteerAtGoal;
       detail_ = "avoid: the goal is in reach and the way to it clear: steering straight at it (" +
@@ -194,9 +205,16 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   try {
     choice = avoidance::VoteArcs(grid, {p.x, p.y, p.yaw}, goto_.target.x(), goto_.target.y(), o);
   } catch (const std::invalid_argument& e) {
+    if (thinking_ahead_) return AvoidOutcome::kDeclined;
     AbortWith(abort_reason::kHazardUnknown, std::string("arc voting cannot decide: ") + e.what());
     return AvoidOutcome::kAborted;
   }
+  // Ahead, only a forward arc gentle enough not to swing the body round (no look aside
+  // would be wanted before it) is chosen; the rest waits for the new map.
+  if (thinking_ahead_ && (!choice.found || choice.best.kind != avoidance::Candidate::Kind::kArc ||
+                          choice.best.distance_m <= 0.0 || choice.best.near_limit ||
+                          std::abs(choice.best.curvature_per_m) >= options_.avoid_look_curvature_per_m))
+    return AvoidOutcome::kDeclined;
   // 4. No step on but backing up, or none at all, or a step that swings the body round:
   //    first look aside at the ground a turn would sweep, if no view from here has framed
   //    it (behind, with no step at all), then vote again on the map with it.
@@ -221,6 +239,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
     }
     break;
   }
+  if (thinking_ahead_ && loop_broken) return AvoidOutcome::kDeclined;
   avoid_history_.push_back({here, *chosen});
   const avoidance::Candidate& b = *chosen;
   // Backing up while the plan's way lies ahead: the vote refused every step along it (a
@@ -260,6 +279,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::AvoidStep(PlannedStep* step) {
   if (b.near_limit) d += "; no other step allowed: " + b.near_limit_why;
   if (!avoid_note_.empty()) d += "; " + avoid_note_.substr(0, avoid_note_.size() - 2);  // less its "; "
   d += ")";
+  if (thinking_ahead_ && !KnownSafeAhead(grid, o.footprint, here, *step)) return AvoidOutcome::kDeclined;
   detail_ = std::move(d);
   step_choice_ = StepChoice::kArcVote;
   return AvoidOutcome::kStep;
@@ -315,6 +335,7 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
       plan_once();
     }
   } catch (const std::invalid_argument& e) {
+    if (thinking_ahead_) return PlanVerdict::kDeclined;
     AbortWith(abort_reason::kGoalUnreachable, std::string("the planner cannot plan: ") + e.what());
     return PlanVerdict::kAborted;
   }
@@ -322,6 +343,7 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
     unreachable_plans_ = 0;
     return PlanVerdict::kFollow;
   }
+  if (thinking_ahead_) return PlanVerdict::kDeclined;  // no way on the old map: see the new one
   if (++unreachable_plans_ >= options_.planner_unreachable_plans) {
     const std::size_t blocked = blocked_ways_.zones().size();
     AbortWith(abort_reason::kGoalUnreachable,

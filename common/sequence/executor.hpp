@@ -110,6 +110,12 @@ struct ExecutorOptions {
   // (VO's pair when VO is on) and the executor waits up to map_wait_s (wall) for a map
   // that includes it, then votes on what it has.
   double map_wait_s = 5.0;
+  // Thinking while driving (think_ahead.cpp), as Perseverance's ENav does: when the pair
+  // taken where the rover stands is still being mapped, the step may be chosen on the map
+  // in hand (an earlier pair's) and driven at once, while the new pair is mapped, provided
+  // it is a forward arc whose swept ground is all known and safe on that map. Otherwise the
+  // rover waits for the new map, as with this off.
+  bool think_while_driving = true;
   double avoid_lookahead_m = 3.0;        // arcs are judged over this length, driven one step
   double avoid_max_curvature_per_m = 1.0;
   int avoid_num_arcs = 21;
@@ -316,6 +322,9 @@ struct HazardQuery {  // hazard_query_t
   // path shifted by the predicted drift, from its end back to the start.
   std::vector<PlanePose> samples;
   double margin_m = 0.0;           // extra clearance: drift spread and the step's sigma growth
+  // Thinking while driving: the step was chosen on the map holding this frame while a newer
+  // pair was being mapped, and may be judged on it at once (0: on every pair taken before).
+  int64_t map_frame_id = 0;
 };
 struct KeepOutZoneSet {  // keepout_zones_t: the whole set in force, replacing the previous
   int64_t utime = 0;
@@ -370,6 +379,7 @@ struct StepReport {  // step_report_t
   int64_t utime_plan_start = 0;  // the rover time charged for choosing the step (0, 0: none)
   int64_t utime_plan_end = 0;
   StepChoice choice = StepChoice::kCommand;
+  bool thought_ahead = false;  // chosen on an earlier pair's map while this pair was mapped
 };
 
 using ExecutorOutput = std::variant<MobilityCommand, CaptureRequest, HazardQuery, KeepOutZoneSet,
@@ -536,12 +546,14 @@ class SequenceExecutor {
 
   // `goto ... avoid on` (avoid_step.cpp). kStep fills `step`; kWait waits for a pair or the
   // map (a phase may have been entered); kDone: inside the disc; kAborted: nothing is allowed.
-  enum class AvoidOutcome { kStep, kWait, kDone, kAborted };
+  // kDeclined: only while thinking ahead, the map in hand cannot choose the step alone.
+  enum class AvoidOutcome { kStep, kWait, kDone, kAborted, kDeclined };
   AvoidOutcome AvoidStep(PlannedStep* step);
+  AvoidOutcome VoteOnMap(const PlanePose& pose, double remaining_m, const ArrivalDisc& disc, PlannedStep* step);
   // The disc a goto ends in, judged with the estimate's uncertainty (stepping.hpp).
   ArrivalDisc GotoArrival() const;
   // The global plan for the avoid goto's next step (kAborted: no way, plans running).
-  enum class PlanVerdict { kFollow, kAborted };
+  enum class PlanVerdict { kFollow, kAborted, kDeclined };
   PlanVerdict PlanAhead(const PlanePose& pose, const ArrivalDisc& disc, const avoidance::Footprint& footprint,
                         double zone_grow_m, bool going_round, std::optional<planner::GlobalPlan>* plan);
   // The local check refused the way `plan` leads (refused_ways_): remembered, and said.
@@ -558,6 +570,27 @@ class SequenceExecutor {
   // The monitor refused the step the vote chose (the drift it allows for): vote once more
   // with a wider margin. False: the refusal stands (abort).
   bool AvoidRefused(const HazardReply& reply);
+
+  // Thinking while driving (think_ahead.cpp). ThinkAhead: the map in hand does not yet
+  // hold the pair taken here; true when it chose a forward step all of whose swept ground
+  // it knows safe (KnownSafeAhead), to be driven while the pair is mapped. Otherwise what
+  // the vote changed is undone and the rover waits for the new map.
+  bool ThinkAhead(const PlanePose& pose, double remaining_m, const ArrivalDisc& disc, PlannedStep* step);
+  bool KnownSafeAhead(const avoidance::Grid& grid, const avoidance::Footprint& footprint,
+                      const avoidance::Pose2& here, const PlannedStep& step) const;
+  // The monitor refused a step chosen ahead: undone, and the step is chosen on the new map.
+  bool AheadRefused(const HazardReply& reply);
+  // What a vote changes besides its step: kept to be put back when a choice made ahead is
+  // not taken.
+  struct AvoidState {
+    planner::RefusedWays refused_ways;
+    planner::BlockedWays blocked_ways;
+    std::vector<avoidance::Visit> history;
+    int unreachable_plans = 0;
+    std::string avoid_note, detail;
+  };
+  AvoidState SaveAvoidState() const;
+  void RestoreAvoidState(const AvoidState& state);
 
   // Processes and pose (executor.cpp).
   std::vector<std::string> SilentProcesses(bool include_vo) const;
@@ -693,6 +726,13 @@ class SequenceExecutor {
   int map_site_ = -1;
   std::optional<planner::PriorCostMap> prior_;
   int unreachable_plans_ = 0;     // consecutive plans that found no way
+  // Thinking while driving (think_ahead.cpp).
+  bool thinking_ahead_ = false;   // VoteOnMap is choosing on the map of an earlier pair
+  bool thought_ahead_ = false;    // the step in hand was chosen so (its query says on which map)
+  bool ahead_declined_ = false;   // here, the step waits for the new map (reset when the rover moves)
+  std::optional<AvoidState> ahead_saved_;  // before the step in hand was chosen ahead
+  int64_t ahead_map_frame_ = 0;   // the newest pair in the map it was chosen on
+  int steps_thought_ahead_ = 0;   // in this sequence
   std::string arrival_note_;      // how the last goto of the sequence ended (its disc and margin)
 };
 

@@ -86,6 +86,7 @@ void SequenceExecutor::ReportStep(const StepEnd& end) {
   r.utime_plan_start = plan_start_utime_;
   r.utime_plan_end = plan_end_utime_;
   r.choice = step_choice_;
+  r.thought_ahead = thought_ahead_;
   Emit(r);
 }
 

@@ -104,7 +104,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "predictive_hazard_check", "reactive_hazard_abort", "path_sample_spacing_m",
                "path_sample_turn_deg", "slip_min_step_m", "status_period_s", "blind_slope_deg",
                "blind_slip_pct", "recent_steps", "lost_min_step_m", "vo_retry_after_m", "step_sigma_growth_pct",
-               "margin_sigma_multiplier", "state_file", "map_wait_s", "avoid_lookahead_m",
+               "margin_sigma_multiplier", "state_file", "map_wait_s", "think_while_driving", "avoid_lookahead_m",
                "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m",
                "avoid_zone_sigma_multiplier", "avoid_unseen_ground_strict", "avoid_start_ring_known", "avoid_hidden_flank_step_m", "avoid_hidden_reach_m", "avoid_look_pan_deg", "avoid_look_tilt_deg", "avoid_look_min_cells", "avoid_look_curvature_per_m", "avoid_keep_unsafe", "planner_enabled", "planner_unknown_cost", "planner_caution_cost", "planner_near_cost", "planner_vote_clearance",
                "planner_margin_m", "planner_unreachable_plans", "planner_block_after_steps", "planner_block_min_gain_m",
@@ -158,6 +158,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("margin_sigma_multiplier", o.margin_sigma_multiplier, 0.1, 10.0);
   n.Get("state_file", o.state_file);
   n.Get("map_wait_s", o.map_wait_s, 1e-3, kInf);
+  n.Get("think_while_driving", o.think_while_driving);
   n.Get("avoid_lookahead_m", o.avoid_lookahead_m, 0.1, 20.0);
   n.Get("avoid_max_curvature_per_m", o.avoid_max_curvature_per_m, 0.01, 10.0);
   n.Get("avoid_num_arcs", o.avoid_num_arcs, 1, 101);

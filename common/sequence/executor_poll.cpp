@@ -109,6 +109,8 @@ void SequenceExecutor::PollQuery() {
   const HazardReply r = *hazard_reply_;
   if (r.verdict == HazardVerdict::kSafe) {
     CommandStep();
+  } else if (AheadRefused(r)) {
+    return;
   } else if (r.verdict == HazardVerdict::kUnsafe && r.zone_name == abort_reason::kHazardMap &&
              AvoidRefused(r)) {
     return;
@@ -215,7 +217,8 @@ void SequenceExecutor::DispatchNext() {
     Finish(SequenceState::kCompleted, "",
            "all " + std::to_string(sequence_.commands.size()) + " commands done" +
                (arrival_note_.empty() ? "" : "; " + arrival_note_) +
-               (looks_total_ == 0 ? "" : "; " + std::to_string(looks_total_) + " looks aside"));
+               (looks_total_ == 0 ? "" : "; " + std::to_string(looks_total_) + " looks aside") +
+               (steps_thought_ahead_ == 0 ? "" : "; " + std::to_string(steps_thought_ahead_) + " steps chosen while driving"));
     return;
   }
   StartCommand();

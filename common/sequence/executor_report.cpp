@@ -71,6 +71,7 @@ void SequenceExecutor::ClearRun(int64_t submission_id, const std::string& name) 
   distance_m_ = 0.0;
   vo_failures_total_ = 0;
   looks_total_ = 0;
+  steps_thought_ahead_ = 0;
   looks_unanswered_ = false;
 }
 

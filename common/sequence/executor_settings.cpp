@@ -40,6 +40,7 @@ void SequenceExecutor::PlanMotion(const Command& c) {
     is_goto_ = true;
     goto_ = *g;
     avoid_history_.clear();
+    ahead_declined_ = false;
     blocked_ways_.Reset();
     refused_ways_.Reset();
     last_turn_rad_ = 0.0;

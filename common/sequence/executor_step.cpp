@@ -23,10 +23,12 @@ bool SequenceExecutor::NextStepOfCommand() {
   }
   PlannedStep step;
   step_choice_ = StepChoice::kCommand;  // AvoidStep says otherwise
+  thought_ahead_ = false;               // and whether it chose on an earlier pair's map
   if (is_goto_ && goto_.avoid) {
     switch (AvoidStep(&step)) {
       case AvoidOutcome::kStep: break;
-      case AvoidOutcome::kWait: return true;
+      case AvoidOutcome::kWait:
+      case AvoidOutcome::kDeclined: return true;
       case AvoidOutcome::kDone: return false;
       case AvoidOutcome::kAborted: return true;
     }
@@ -112,7 +114,7 @@ void SequenceExecutor::QueryStep() {
     AbortWith(abort_reason::kHazardUnknown, std::string("cannot sample the step's path: ") + e.what());
     return;
   }
-  HazardQuery q{now_utime_, query_id_, {}, 0.0};
+  HazardQuery q{now_utime_, query_id_, {}, 0.0, thought_ahead_ ? ahead_map_frame_ : 0};
   for (const auto& s : path) q.samples.push_back({s.x, s.y, s.yaw});
   if (!turn) {
     // Opportunity stopped near Wopmay when VO showed it sliding toward the rock: the step
@@ -151,6 +153,9 @@ void SequenceExecutor::CommandStep() {
   pair_here_id_ = -1;  // the rover moves: no pair is where it will stand
   map_images_taken_ = false;
   looked_here_ = 0;
+  ahead_declined_ = false;
+  ahead_saved_.reset();
+  if (thought_ahead_) ++steps_thought_ahead_;
   avoid_refused_ = false;
   last_turn_rad_ = step_.kind == PlannedStep::Kind::kTurn ? step_.turn_rad : 0.0;
   const bool forward_arc = step_.kind == PlannedStep::Kind::kArc && step_.distance_m > 0.0;

@@ -280,11 +280,17 @@ class HazardNode {
 
   // A query that comes while a pair is being mapped waits for that map (answered on a
   // later tick): the step is judged on a map holding every pair taken before it. Pairs
-  // that come after the query do not hold it back.
+  // that come after the query do not hold it back. A step chosen while driving
+  // (hazard_query_t.map_frame_id > 0) is judged at once on the map in hand when that holds
+  // the pair it was chosen on: the executor chose it there because all its ground was
+  // known safe on that map, and this check holds it to the same map.
   void AnswerHeld() {
     if (!proc_.virtual_time() && TakeMap()) PublishMap();
     std::erase_if(held_, [&](const auto& h) {
-      if (map_ && (proc_.virtual_time() ? frames_mapped_ < h.second : !map_->Mapped(h.second))) return false;
+      const bool on_map_in_hand = h.first.map_frame_id > 0 && last_frame_id_ >= h.first.map_frame_id;
+      if (map_ && !on_map_in_hand &&
+          (proc_.virtual_time() ? frames_mapped_ < h.second : !map_->Mapped(h.second)))
+        return false;
       proc_.bus().Publish(channels::kHazardReply, Answer(h.first));
       return true;
     });

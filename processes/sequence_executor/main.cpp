@@ -77,6 +77,7 @@ class OutputPublisher {
       m.yaw.push_back(s.yaw);
     }
     m.margin_m = q.margin_m;
+    m.map_frame_id = q.map_frame_id;
     proc_.bus().Publish(channels::kHazardQuery, m);
   }
   void operator()(const seq::KeepOutZoneSet& set) {
@@ -156,6 +157,7 @@ class OutputPublisher {
     m.utime_after = r.utime_after;
     m.utime_plan_start = r.utime_plan_start;
     m.choice = static_cast<std::int8_t>(r.choice);
+    m.thought_ahead = r.thought_ahead;
     m.utime_plan_end = r.utime_plan_end;
     proc_.bus().Publish(channels::kStepReport, m);
   }

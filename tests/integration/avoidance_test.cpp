@@ -12,6 +12,8 @@
 
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/capture_request_t.hpp>
+#include <rover_msgs/hazard_query_t.hpp>
+#include <rover_msgs/hazard_reply_t.hpp>
 #include <rover_msgs/stereo_frame_t.hpp>
 #include <rover_msgs/traversability_map_t.hpp>
 #include <rover_msgs/vo_update_t.hpp>
@@ -46,6 +48,50 @@ TEST(Avoidance, RockFieldAvoidReachesTheGoalClearOfEveryTallRock) {
   int turned = 0;
   for (const auto& st : s["steps"]) turned += std::abs(st["commanded"]["turn_rad"].as<double>()) > 0.01;
   EXPECT_GT(turned, 0);
+
+  // Thinking while driving: on open ground steps were chosen on the map in hand, and the
+  // real hazard monitor judged each at once on that map (its reply before the map holding
+  // the pair taken where the step began), so the rover drove while that pair was mapped.
+  const int ahead = s["rover_time_breakdown"]["steps_thought_ahead"].as<int>();
+  EXPECT_GE(ahead, 3);
+  EXPECT_LT(ahead, s["rover_time_breakdown"]["steps"].as<int>()) << "near the rocks some steps must wait";
+  lcm::LogFile log(std::string(ROVER_BINARY_DIR) + "/test-out/avoidance_rock_field_avoid/log.lcm", "r");
+  ASSERT_TRUE(log.good());
+  std::int64_t newest_frame = -1, mapped = -1;
+  std::map<std::int64_t, std::int64_t> asked;  // query id -> the pair still being mapped
+  int answered_before_map = 0, commanded_before_map = 0;
+  std::int64_t waiting_for = -1;  // after an answer ahead: the pair whose map has not come
+  for (const lcm::LogEvent* e = log.readNextEvent(); e != nullptr; e = log.readNextEvent()) {
+    if (e->channel == "STEREO_FRAME") {
+      rover_msgs::stereo_frame_t f;
+      if (f.decode(e->data, 0, e->datalen) > 0) newest_frame = f.frame_id;
+    } else if (e->channel == "TRAVERSABILITY_MAP") {
+      rover_msgs::traversability_map_t m;
+      if (m.decode(e->data, 0, e->datalen) > 0) mapped = m.last_frame_id;
+      if (mapped >= waiting_for) waiting_for = -1;
+    } else if (e->channel == "HAZARD_QUERY") {
+      rover_msgs::hazard_query_t q;
+      if (q.decode(e->data, 0, e->datalen) <= 0 || q.map_frame_id <= 0) continue;
+      EXPECT_LE(q.map_frame_id, mapped) << "chosen on a map the monitor never sent";
+      EXPECT_LT(mapped, newest_frame) << "query " << q.query_id << ": the newest pair was already mapped";
+      asked[q.query_id] = newest_frame;
+    } else if (e->channel == "HAZARD_REPLY") {
+      rover_msgs::hazard_reply_t r;
+      if (r.decode(e->data, 0, e->datalen) <= 0) continue;
+      const auto it = asked.find(r.query_id);
+      if (it == asked.end()) continue;
+      if (mapped < it->second) {
+        ++answered_before_map;
+        if (r.verdict == rover_msgs::hazard_reply_t::VERDICT_SAFE) waiting_for = it->second;
+      }
+    } else if (e->channel == "MOBILITY_COMMAND" && waiting_for >= 0) {
+      ++commanded_before_map;
+      waiting_for = -1;
+    }
+  }
+  EXPECT_EQ(answered_before_map, static_cast<int>(asked.size()));
+  EXPECT_GE(static_cast<int>(asked.size()), ahead);
+  EXPECT_EQ(commanded_before_map, ahead);
 }
 
 // (b) The same goto without avoidance: the map stops it before the first tall rock, with

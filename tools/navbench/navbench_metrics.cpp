@@ -293,6 +293,8 @@ GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& 
     g.mapping_s += r.mapping_s;
     g.planning_s += r.planning_s;
     g.waiting_s += r.waiting_s;
+    g.steps += r.steps;
+    g.steps_thought_ahead += r.steps_thought_ahead;
     g.vo_accepted += r.vo_accepted;
     g.vo_false += r.vo_false;
   }
@@ -337,13 +339,14 @@ std::string TableText(const std::vector<GroupFigures>& groups) {
   os << "\nrover time (share of the sequences' span; VO and mapping overlap):\n";
   os << std::left << std::setw(11) << "world" << std::setw(10) << "hours" << std::setw(10) << "driving"
      << std::setw(10) << "imaging" << std::setw(10) << "VO" << std::setw(10) << "mapping" << std::setw(10)
-     << "planning" << "waiting\n";
+     << "planning" << std::setw(10) << "waiting" << "steps chosen while driving\n";
   for (const auto& g : groups) {
     auto share = [&](double s) { return g.rover_time_s > 0 ? Fixed(100.0 * s / g.rover_time_s, 1) + " %" : "-"; };
     os << std::left << std::setw(11) << g.group << std::setw(10) << Fixed(g.rover_time_s / 3600.0, 2)
        << std::setw(10) << share(g.driving_s) << std::setw(10) << share(g.imaging_s) << std::setw(10)
        << share(g.vo_s) << std::setw(10) << share(g.mapping_s) << std::setw(10) << share(g.planning_s)
-       << share(g.waiting_s) << "\n";
+       << std::setw(10) << share(g.waiting_s)
+       << (g.steps > 0 ? std::to_string(g.steps_thought_ahead) + " of " + std::to_string(g.steps) : "-") << "\n";
   }
   return os.str();
 }
@@ -379,6 +382,7 @@ std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vect
     j.Field("driving_s", g.driving_s).Field("imaging_s", g.imaging_s).Field("vo_s", g.vo_s);
     j.Field("mapping_s", g.mapping_s).Field("planning_s", g.planning_s).Field("waiting_s", g.waiting_s);
     j.EndObject();
+    j.Field("steps", g.steps).Field("steps_thought_ahead", g.steps_thought_ahead);
     j.Field("vo_updates_accepted", g.vo_accepted).Field("false_updates", g.vo_false);
     j.EndObject();
   }

@@ -102,6 +102,7 @@ struct RunFigures {
   double rover_time_s = 0;           // span of the sequence (rover_time_breakdown.span_s)
   // Planning counts only where the stack charges it (summary.json's planning_s; 0 when null).
   double driving_s = 0, imaging_s = 0, vo_s = 0, mapping_s = 0, planning_s = 0, waiting_s = 0;
+  int steps = 0, steps_thought_ahead = 0;  // step reports; chosen while driving (think_ahead.cpp)
   int vo_accepted = 0, vo_false = 0;
   bool collided() const { return rock_contacts + zone_contacts > 0; }
   // Completed, truly inside the goal disc, no contact, no wheel off the map.
@@ -123,6 +124,7 @@ struct GroupFigures {
   double driven_m = 0, rover_time_s = 0;    // sums over every run that ran
   std::optional<double> drive_rate_m_per_h; // driven_m / rover_time_s
   double driving_s = 0, imaging_s = 0, vo_s = 0, mapping_s = 0, planning_s = 0, waiting_s = 0;
+  int steps = 0, steps_thought_ahead = 0;  // step reports; chosen while driving (think_ahead.cpp)
   int vo_accepted = 0, vo_false = 0;
   double success_pct() const { return runs > 0 ? 100.0 * successes / runs : 0.0; }
 };

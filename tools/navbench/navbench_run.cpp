@@ -295,6 +295,8 @@ RunFigures ReadRun(const RunPlan& p, RunTrack* track) {
     r.mapping_s = Number(b["mapping_s"]);
     r.planning_s = Number(b["planning_s"]);
     r.waiting_s = Number(b["waiting_s"]);
+    r.steps = static_cast<int>(Number(b["steps"]));
+    r.steps_thought_ahead = static_cast<int>(Number(b["steps_thought_ahead"]));
   }
   r.vo_accepted = static_cast<int>(Number(s["vo_updates_accepted"]));
   r.vo_false = static_cast<int>(Number(s["false_updates"]));

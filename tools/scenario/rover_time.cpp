@@ -103,7 +103,10 @@ RoverTimeBreakdown BreakdownFromLog(const std::string& log_path) {
       }
     } else if (ch == channels::kStepReport) {
       rover_msgs::step_report_t m;
-      if (m.decode(e->data, 0, e->datalen) >= 0 && m.utime_plan_end > m.utime_plan_start && m.utime_plan_start > 0)
+      if (m.decode(e->data, 0, e->datalen) < 0) continue;
+      ++r.steps;
+      if (m.thought_ahead) ++r.steps_thought_ahead;
+      if (m.utime_plan_end > m.utime_plan_start && m.utime_plan_start > 0)
         planning.emplace_back(m.utime_plan_start, m.utime_plan_end);
     } else if (ch == channels::kSequenceStatus) {
       rover_msgs::sequence_status_t m;

@@ -636,6 +636,7 @@ std::string SummaryJson(const ScenarioSummary& s) {
     j.Field("span_s", b.span_s).Field("driving_s", b.driving_s).Field("imaging_s", b.imaging_s);
     j.Field("vo_s", b.vo_s).Field("mapping_s", b.mapping_s).Field("busy_s", b.busy_s).Field("waiting_s", b.waiting_s);
     j.Field("planning_s", b.planning_s);
+    j.Field("steps", b.steps).Field("steps_thought_ahead", b.steps_thought_ahead);
     j.EndObject();
   } else {
     j.Null();
@@ -706,6 +707,8 @@ std::string SummaryText(const ScenarioSummary& s) {
        << " s, imaging " << b.imaging_s << " s, VO " << b.vo_s << " s, mapping " << b.mapping_s
        << " s (VO and mapping at once), planning " << b.planning_s << " s, waiting " << b.waiting_s << " s";
     if (b.span_s > 0) os << "; drive rate " << s.distance_travelled_m / (b.span_s / 3600.0) << " m/h of rover time";
+    if (b.steps_thought_ahead > 0)
+      os << "; " << b.steps_thought_ahead << " of " << b.steps << " steps chosen while driving";
     os << "\n" << std::setprecision(3);
   }
   if (!s.log_digest.empty()) os << "  log digest: " << s.log_digest << " (sha256, less VO's ms_* wall times)\n";

@@ -8,9 +8,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <functional>
+#include <string>
 
 using namespace rover::sequence;
 using rover::avoidance::CellClass;
@@ -33,6 +35,12 @@ class MapWorld {
   std::vector<CaptureRequest> captures;
   std::vector<SequenceStatus> statuses;
   std::vector<StepReport> steps;
+  std::vector<HazardQuery> queries;
+  // What happened, in order: "frame N", "map N" (the map holding pair N), "motion".
+  std::vector<std::string> events;
+  // The monitor maps a pair this many ticks after it came (0: at once, with the frame).
+  int map_delay_ticks = 0;
+  bool refuse_ahead = false;  // the monitor refuses every step chosen on an earlier map
   int64_t utime = 1'000'000;
   double wall = 100.0;
 
@@ -75,6 +83,7 @@ class MapWorld {
   void Handle(const MobilityCommand& c) {
     if (c.type == MobilityCommand::Type::kStop) return;
     motions.push_back(c);
+    events.push_back("motion");
     PlannedStep s;
     if (c.type == MobilityCommand::Type::kTurn) {
       s.kind = PlannedStep::Kind::kTurn;
@@ -93,23 +102,41 @@ class MapWorld {
     if (!camera || (c.purpose == "look" && !answers_looks)) return;
     map_known = true;  // the pair shows the ground
     if (sees) Reveal(c);
-    pending_.push_back([this, c] {
+    const Grid seen = Seen();
+    pending_.push_back([this, c, seen] {
       ex_.OnStereoFrame(c.frame_id);
-      TraversabilityMap m;
-      m.utime = utime;
-      m.last_frame_id = c.frame_id;
-      m.grid = Seen();
-      ex_.OnTraversabilityMap(m);
+      events.push_back("frame " + std::to_string(c.frame_id));
+      Later(map_delay_ticks, [this, c, seen] {
+        TraversabilityMap m;
+        m.utime = utime;
+        m.last_frame_id = c.frame_id;
+        m.grid = seen;
+        events.push_back("map " + std::to_string(c.frame_id));
+        ex_.OnTraversabilityMap(m);
+      });
     });
+  }
+  // f runs `ticks` ticks from now (0: now).
+  void Later(int ticks, std::function<void()> f) {
+    if (ticks <= 0) {
+      f();
+      return;
+    }
+    pending_.push_back([this, ticks, f] { Later(ticks - 1, f); });
   }
   void Handle(const HazardQuery& q) {
     std::vector<rover::avoidance::Pose2> path;
     for (const auto& s : q.samples) path.push_back({s.x, s.y, s.yaw});
     const auto sw = rover::avoidance::SweepFootprint(Seen(), {}, path, path.front(), 0.5);
+    queries.push_back(q);
     HazardReply r;
     r.query_id = q.query_id;
     r.verdict = HazardVerdict::kSafe;
-    if (sw.unsafe > 0) {
+    if (refuse_ahead && q.map_frame_id > 0) {
+      r.verdict = HazardVerdict::kUnknown;
+      r.zone_name = "hazard_map";
+      r.detail = "hazard_map: unknown on the map in hand";
+    } else if (sw.unsafe > 0) {
       r.verdict = HazardVerdict::kUnsafe;
       r.zone_name = "hazard_map";
       r.detail = "hazard_map: step " + std::to_string(sw.worst_step_m).substr(0, 4) + " m";
@@ -528,6 +555,127 @@ TEST(AvoidStep, ACameraThatCannotPointIsAskedOnce) {
   for (const auto& c : refused.captures) looks += c.purpose == "look";
   EXPECT_EQ(looks, 1);
   EXPECT_EQ(refused.motions, without.motions);
+}
+
+// Thinking while driving (think_ahead.cpp): the monitor maps each pair for a while after it
+// came. Where the map in hand (the pair before's) already knows the next step's ground
+// safe, the step is chosen on it and driven while the new pair is mapped; the query says
+// which map it was chosen on.
+struct AheadRun {
+  SequenceStatus final;
+  std::vector<MobilityCommand> motions;
+  std::vector<StepReport> steps;
+  std::vector<HazardQuery> queries;
+  std::vector<std::string> events;
+  PlanePose pose;
+};
+
+AheadRun ThinkAheadRun(bool think, bool rock, bool refuse_ahead = false) {
+  ExecutorOptions o = Fast();
+  o.think_while_driving = think;
+  o.map_wait_s = 5.0;
+  SequenceExecutor ex(o);
+  MapWorld w(ex);
+  if (rock) Rock(&w.grid);
+  w.map_delay_ticks = 15;  // 1.5 s
+  w.refuse_ahead = refuse_ahead;
+  ex.SubmitText("goto 5 m 0 m within 0.4 m distance 12 m avoid on\n", 1, "t.seq");
+  w.Run();
+  return {w.Final(), w.motions, w.steps, w.queries, w.events, w.pose};
+}
+
+// The index in `events` of the motion commanded after `frame`'s pair came, before its map:
+// -1 when every motion after that pair waited for its map.
+int MotionBeforeMap(const std::vector<std::string>& events, int64_t frame) {
+  const auto at = std::find(events.begin(), events.end(), "frame " + std::to_string(frame));
+  for (auto it = at; it != events.end(); ++it) {
+    if (*it == "map " + std::to_string(frame)) return -1;
+    if (*it == "motion") return static_cast<int>(it - events.begin());
+  }
+  return -1;
+}
+
+TEST(AvoidStep, OnOpenGroundTheNextStepIsChosenAndDrivenWhileThePairIsMapped) {
+  const AheadRun with = ThinkAheadRun(true, false);
+  ASSERT_EQ(with.final.state, SequenceState::kCompleted) << with.final.detail;
+  EXPECT_LT(std::hypot(with.pose.x - 5.0, with.pose.y), 0.4);
+  ASSERT_GE(with.steps.size(), 4u);
+  // The first step waits for the first map (there is no earlier one); the later ones, on
+  // open ground, are chosen ahead, each on the map of the pair taken one step before.
+  EXPECT_FALSE(with.steps.front().thought_ahead);
+  int ahead = 0;
+  for (const auto& s : with.steps) ahead += s.thought_ahead;
+  EXPECT_GE(ahead, static_cast<int>(with.steps.size()) - 2) << with.final.detail;
+  EXPECT_NE(with.final.detail.find(std::to_string(ahead) + " steps chosen while driving"), std::string::npos)
+      << with.final.detail;
+  int ahead_queries = 0;
+  for (const auto& q : with.queries) {
+    if (q.map_frame_id <= 0) continue;
+    ++ahead_queries;
+    // Chosen on a map the monitor had sent, and a motion followed before the newer map.
+    EXPECT_NE(std::find(with.events.begin(), with.events.end(), "map " + std::to_string(q.map_frame_id)),
+              with.events.end());
+  }
+  EXPECT_EQ(ahead_queries, ahead);
+  int driven_while_mapping = 0;
+  for (const auto& e : with.events)
+    if (e.rfind("frame ", 0) == 0 && MotionBeforeMap(with.events, std::stoll(e.substr(6))) >= 0) ++driven_while_mapping;
+  EXPECT_EQ(driven_while_mapping, ahead);
+
+  // Off: every step waits for the map of the pair taken where it begins.
+  const AheadRun without = ThinkAheadRun(false, false);
+  ASSERT_EQ(without.final.state, SequenceState::kCompleted) << without.final.detail;
+  for (const auto& s : without.steps) EXPECT_FALSE(s.thought_ahead);
+  for (const auto& q : without.queries) EXPECT_LE(q.map_frame_id, 0);
+  for (const auto& e : without.events) {
+    if (e.rfind("frame ", 0) != 0) continue;
+    EXPECT_EQ(MotionBeforeMap(without.events, std::stoll(e.substr(6))), -1) << e;
+  }
+}
+
+// Near the rock the map in hand does not settle the step (a turn, a tight arc, ground not
+// yet known safe): those steps wait for the new map. Only gentle forward arcs are ahead.
+TEST(AvoidStep, NearAnObstacleTheRoverStopsToThink) {
+  const AheadRun with = ThinkAheadRun(true, true);
+  ASSERT_EQ(with.final.state, SequenceState::kCompleted) << with.final.detail;
+  EXPECT_LT(std::hypot(with.pose.x - 5.0, with.pose.y), 0.4);
+  int ahead = 0, waited = 0;
+  for (std::size_t k = 0; k < with.steps.size(); ++k) {
+    const StepReport& s = with.steps[k];
+    if (!s.thought_ahead) {
+      waited += k > 0;
+      continue;
+    }
+    ++ahead;
+    const auto m = std::find_if(with.motions.begin(), with.motions.end(),
+                                [&](const MobilityCommand& c) { return c.command_id == s.mobility_command_id; });
+    ASSERT_NE(m, with.motions.end()) << "step " << k;
+    EXPECT_EQ(m->type, MobilityCommand::Type::kArc) << "step " << k;
+    EXPECT_GT(m->distance_m, 0.0) << "step " << k;
+    EXPECT_LT(std::abs(m->curvature_per_m), ExecutorOptions{}.avoid_look_curvature_per_m) << "step " << k;
+  }
+  EXPECT_GE(ahead, 1);
+  EXPECT_GE(waited, 1) << "the rock made no step wait for its map";
+}
+
+// The monitor may refuse a step chosen on the map in hand: nothing aborts, and the step is
+// chosen again on the new map exactly as without thinking ahead (the vote's history, the
+// planner's refusals and blocks put back), so the drive is the same step for step.
+TEST(AvoidStep, AStepChosenAheadThatTheMonitorRefusesIsChosenAgainOnTheNewMap) {
+  const AheadRun refused = ThinkAheadRun(true, true, /*refuse_ahead=*/true);
+  const AheadRun without = ThinkAheadRun(false, true);
+  ASSERT_EQ(refused.final.state, SequenceState::kCompleted) << refused.final.detail;
+  int asked_ahead = 0;
+  for (const auto& q : refused.queries) asked_ahead += q.map_frame_id > 0;
+  EXPECT_GE(asked_ahead, 1);
+  for (const auto& s : refused.steps) EXPECT_FALSE(s.thought_ahead);
+  ASSERT_EQ(refused.motions.size(), without.motions.size());
+  for (std::size_t k = 0; k < refused.motions.size(); ++k) {
+    EXPECT_EQ(refused.motions[k].type, without.motions[k].type) << k;
+    EXPECT_DOUBLE_EQ(refused.motions[k].distance_m, without.motions[k].distance_m) << k;
+    EXPECT_DOUBLE_EQ(refused.motions[k].curvature_per_m, without.motions[k].curvature_per_m) << k;
+    EXPECT_DOUBLE_EQ(refused.motions[k].turn_rad, without.motions[k].turn_rad) << k;
+  }
 }
 
 }  // namespace
