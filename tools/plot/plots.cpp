@@ -251,6 +251,20 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
       plots.push_back(std::string("'traverse_steer.dat' using 2:1 with lines lw 4 lc rgb '") + kSteerColour +
                       "' title 'avoid on, way clear: steered straight at the goal (no vote)'");
     }
+    // Where a step began without waiting for the map of the pair taken there: chosen on the
+    // map in hand and driven while that pair was mapped (thinking while driving).
+    std::ofstream ahead(dir + "traverse_ahead.dat");
+    int n_ahead = 0;
+    for (const auto& s : log.steps) {
+      if (!s.thought_ahead) continue;
+      ahead << Num(s.pose_before[0]) << " " << Num(s.pose_before[1]) << "\n";
+      ++n_ahead;
+    }
+    if (n_ahead > 0) {
+      plots.push_back(
+          "'traverse_ahead.dat' using 2:1 with points pt 9 ps 1.5 lc rgb '#332288' title 'step chosen while driving "
+          "(no stop to think)'");
+    }
   }
   if (!log.estimate.empty()) {
     std::ofstream(dir + "traverse_start.dat") << MapRow(log.estimate.front().p) << "\n";
