@@ -52,6 +52,7 @@ void SequenceExecutor::OnTraversabilityMap(const TraversabilityMap& map) {
   } catch (const std::invalid_argument& e) {
     step_note_ += std::string("map not merged (") + e.what() + "); ";
   }
+  if (phase_ == Phase::kMoving && thought_ahead_ && map.last_frame_id > ahead_map_frame_) CheckStepChosenAhead();
   Advance();
 }
 

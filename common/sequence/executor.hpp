@@ -580,6 +580,9 @@ class SequenceExecutor {
                       const avoidance::Pose2& here, const PlannedStep& step) const;
   // The monitor refused a step chosen ahead: undone, and the step is chosen on the new map.
   bool AheadRefused(const HazardReply& reply);
+  // A newer map came while a step chosen ahead is driven: it stops the rover (abort
+  // hazard_map) when it rates ground on the step's way unsafe.
+  void CheckStepChosenAhead();
   // What a vote changes besides its step: kept to be put back when a choice made ahead is
   // not taken.
   struct AvoidState {
@@ -732,6 +735,8 @@ class SequenceExecutor {
   bool ahead_declined_ = false;   // here, the step waits for the new map (reset when the rover moves)
   std::optional<AvoidState> ahead_saved_;  // before the step in hand was chosen ahead
   int64_t ahead_map_frame_ = 0;   // the newest pair in the map it was chosen on
+  avoidance::Pose2 ahead_start_;  // where it was chosen (and begins)
+  std::string ahead_note_;        // why a step chosen ahead was not driven (the next step's note)
   int steps_thought_ahead_ = 0;   // in this sequence
   std::string arrival_note_;      // how the last goto of the sequence ended (its disc and margin)
 };

@@ -72,6 +72,7 @@ void SequenceExecutor::ClearRun(int64_t submission_id, const std::string& name) 
   vo_failures_total_ = 0;
   looks_total_ = 0;
   steps_thought_ahead_ = 0;
+  ahead_note_.clear();
   looks_unanswered_ = false;
 }
 

@@ -88,7 +88,8 @@ void SequenceExecutor::BeginStep(const PlannedStep& step) {
   vo_update_.reset();
   hazard_reply_.reset();
   step_vo_failed_ = false;
-  step_note_.clear();
+  step_note_ = std::move(ahead_note_);  // a step chosen ahead and refused before this one, if any
+  ahead_note_.clear();
   step_vo_on_ = VoActive();
   step_ref_frame_ = vo_frame_valid_ ? last_vo_frame_ : -1;
   step_retries_ = 0;

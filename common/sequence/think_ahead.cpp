@@ -10,7 +10,9 @@
 // (the vote's, with its margin) sweeps only cells that map knows and rates safe: no unknown
 // cell, no caution cell and no unsafe one, blind ring or not. The hazard monitor judges
 // that step on the same map (hazard_query_t.map_frame_id) and may still refuse it. The new
-// pair is mapped while the rover drives, and the next step is chosen on it.
+// pair is mapped while the rover drives, and the next step is chosen on it. Should that map
+// come while the step is still driven and rate ground on its way unsafe, the rover stops
+// (CheckStepChosenAhead).
 //
 // Anything else (a backup, a turn, a tight arc, a way the loop breaker or the planner
 // would change, a step into ground not yet known safe, a refusal) is declined: what the
@@ -59,6 +61,7 @@ bool SequenceExecutor::ThinkAhead(const PlanePose& pose, double remaining_m, con
   thought_ahead_ = true;
   ahead_saved_ = std::move(saved);
   ahead_map_frame_ = map_->last_frame_id;
+  ahead_start_ = {pose.x, pose.y, pose.yaw};
   detail_ += " [thought ahead: on the map of pair " + std::to_string(ahead_map_frame_) + " while pair " +
              std::to_string(pair_here_id_) + " is mapped]";
   return true;
@@ -83,10 +86,25 @@ bool SequenceExecutor::AheadRefused(const HazardReply& reply) {
   if (ahead_saved_) RestoreAvoidState(*ahead_saved_);
   ahead_saved_.reset();
   ahead_declined_ = true;
-  step_note_ += "the step chosen ahead on the map of pair " + std::to_string(ahead_map_frame_) +
+  ahead_note_ = "the step chosen ahead on the map of pair " + std::to_string(ahead_map_frame_) +
                 " was refused there (" + reply.detail + "): chosen again on the new map; ";
   EnterPhase(Phase::kReady);
   return true;
+}
+
+// The step is committed, as ENav's are, on ground its map knew safe; the map of the pair
+// taken where it began reads that ground from nearer. Should it rate any of the step's way
+// unsafe, the rover stops rather than finish the step onto it.
+void SequenceExecutor::CheckStepChosenAhead() {
+  if (step_.kind != PlannedStep::Kind::kArc || !map_) return;
+  const auto path = avoidance::SamplePath(ahead_start_, 0.0, step_.distance_m, step_.curvature_per_m);
+  const auto s = avoidance::SweepFootprint(map_->grid, map_->footprint, path, ahead_start_, map_->blind_margin_m);
+  if (s.unsafe == 0) return;
+  AbortWith(abort_reason::kHazardMap,
+            "hazard_map: the map of pair " + std::to_string(map_->last_frame_id) +
+                ", which came while the step chosen ahead on the map of pair " + std::to_string(ahead_map_frame_) +
+                " was driven, rates its way unsafe (step " + internal::Fixed(s.worst_step_m) + " m at " +
+                internal::Fixed(s.worst_x) + "," + internal::Fixed(s.worst_y) + "); stopped");
 }
 
 }  // namespace rover::sequence

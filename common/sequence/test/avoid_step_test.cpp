@@ -41,6 +41,9 @@ class MapWorld {
   // The monitor maps a pair this many ticks after it came (0: at once, with the frame).
   int map_delay_ticks = 0;
   bool refuse_ahead = false;  // the monitor refuses every step chosen on an earlier map
+  int motion_ticks = 1;        // a motion ends this many ticks after it was commanded
+  // Called as each motion is commanded (the pose already at its end): may change `grid`.
+  std::function<void(MapWorld&, const MobilityCommand&)> on_motion;
   int64_t utime = 1'000'000;
   double wall = 100.0;
 
@@ -95,22 +98,22 @@ class MapWorld {
     pose = EndOfStep(pose, s);
     trail.push_back(pose);
     utime += 10'000'000;
-    pending_.push_back([this, c] { ex_.OnMobilityStatus({utime, c.command_id, MobilityState::kDone, 0, 0, ""}); });
+    if (on_motion) on_motion(*this, c);
+    Later(motion_ticks, [this, c] { ex_.OnMobilityStatus({utime, c.command_id, MobilityState::kDone, 0, 0, ""}); });
   }
   void Handle(const CaptureRequest& c) {
     captures.push_back(c);
     if (!camera || (c.purpose == "look" && !answers_looks)) return;
     map_known = true;  // the pair shows the ground
     if (sees) Reveal(c);
-    const Grid seen = Seen();
-    pending_.push_back([this, c, seen] {
+    pending_.push_back([this, c] {
       ex_.OnStereoFrame(c.frame_id);
       events.push_back("frame " + std::to_string(c.frame_id));
-      Later(map_delay_ticks, [this, c, seen] {
+      Later(map_delay_ticks, [this, c] {
         TraversabilityMap m;
         m.utime = utime;
         m.last_frame_id = c.frame_id;
-        m.grid = seen;
+        m.grid = delivered_ = Seen();
         events.push_back("map " + std::to_string(c.frame_id));
         ex_.OnTraversabilityMap(m);
       });
@@ -127,7 +130,8 @@ class MapWorld {
   void Handle(const HazardQuery& q) {
     std::vector<rover::avoidance::Pose2> path;
     for (const auto& s : q.samples) path.push_back({s.x, s.y, s.yaw});
-    const auto sw = rover::avoidance::SweepFootprint(Seen(), {}, path, path.front(), 0.5);
+    // A step chosen ahead is judged on the map the monitor holds (the last one sent).
+    const auto sw = rover::avoidance::SweepFootprint(q.map_frame_id > 0 ? delivered_ : Seen(), {}, path, path.front(), 0.5);
     queries.push_back(q);
     HazardReply r;
     r.query_id = q.query_id;
@@ -169,6 +173,7 @@ class MapWorld {
   SequenceExecutor& ex_;
   std::deque<std::function<void()>> pending_;
   Grid revealed_;
+  Grid delivered_;  // the last map sent
 };
 
 ExecutorOptions Fast() {
@@ -676,6 +681,45 @@ TEST(AvoidStep, AStepChosenAheadThatTheMonitorRefusesIsChosenAgainOnTheNewMap) {
     EXPECT_DOUBLE_EQ(refused.motions[k].curvature_per_m, without.motions[k].curvature_per_m) << k;
     EXPECT_DOUBLE_EQ(refused.motions[k].turn_rad, without.motions[k].turn_rad) << k;
   }
+}
+
+// A step chosen ahead is committed; but when the map of the pair taken where it began comes
+// while it is driven and rates ground on its way unsafe (here a rock that pair shows and
+// the map before did not), the rover stops, naming both maps.
+TEST(AvoidStep, AStepChosenAheadStopsWhenTheNewerMapRatesItsWayUnsafe) {
+  ExecutorOptions o = Fast();
+  o.map_wait_s = 5.0;
+  SequenceExecutor ex(o);
+  MapWorld w(ex);
+  w.map_delay_ticks = 15;
+  w.motion_ticks = 30;  // the map comes while the step is driven
+  int rocks = 0;
+  w.on_motion = [&](MapWorld& world, const MobilityCommand& c) {
+    // The first step chosen ahead: the query before it named the map it was chosen on.
+    if (rocks > 0 || c.type != MobilityCommand::Type::kArc || world.queries.empty() ||
+        world.queries.back().map_frame_id <= 0)
+      return;
+    // Under the front of the body at the step's end, beyond where it stood.
+    const PlanePose end = world.pose;
+    world.grid.Paint(end.x + 0.6 * std::cos(end.yaw), end.y + 0.6 * std::sin(end.yaw), 0.2, CellClass::kUnsafe, 0.0f,
+                     0.4f);
+    ++rocks;
+  };
+  ex.SubmitText("goto 5 m 0 m within 0.4 m distance 12 m avoid on\n", 1, "t.seq");
+  w.Run();
+  ASSERT_EQ(rocks, 1);
+  EXPECT_EQ(w.Final().state, SequenceState::kAborted);
+  EXPECT_EQ(w.Final().abort_reason, "hazard_map");
+  EXPECT_NE(w.Final().detail.find("was driven, rates its way unsafe"), std::string::npos) << w.Final().detail;
+
+  // Without the rock the same drive completes.
+  SequenceExecutor ex2(o);
+  MapWorld clear(ex2);
+  clear.map_delay_ticks = 15;
+  clear.motion_ticks = 30;
+  ex2.SubmitText("goto 5 m 0 m within 0.4 m distance 12 m avoid on\n", 1, "t.seq");
+  clear.Run();
+  EXPECT_EQ(clear.Final().state, SequenceState::kCompleted) << clear.Final().detail;
 }
 
 }  // namespace
