@@ -583,14 +583,14 @@ class SequenceExecutor {
   // A newer map came while a step chosen ahead is driven: it stops the rover (abort
   // hazard_map) when it rates ground on the step's way unsafe.
   void CheckStepChosenAhead();
-  // What a vote changes besides its step: kept to be put back when a choice made ahead is
+  // What a vote changes besides its step and its texts (a vote writes detail_ only with a
+  // step, and clears avoid_note_ first): kept to be put back when a choice made ahead is
   // not taken.
   struct AvoidState {
     planner::RefusedWays refused_ways;
     planner::BlockedWays blocked_ways;
     std::vector<avoidance::Visit> history;
     int unreachable_plans = 0;
-    std::string avoid_note, detail;
   };
   AvoidState SaveAvoidState() const;
   void RestoreAvoidState(const AvoidState& state);

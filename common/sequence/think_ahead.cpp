@@ -27,7 +27,7 @@
 namespace rover::sequence {
 
 SequenceExecutor::AvoidState SequenceExecutor::SaveAvoidState() const {
-  return {refused_ways_, blocked_ways_, avoid_history_, unreachable_plans_, avoid_note_, detail_};
+  return {refused_ways_, blocked_ways_, avoid_history_, unreachable_plans_};
 }
 
 void SequenceExecutor::RestoreAvoidState(const AvoidState& state) {
@@ -35,8 +35,6 @@ void SequenceExecutor::RestoreAvoidState(const AvoidState& state) {
   blocked_ways_ = state.blocked_ways;
   avoid_history_ = state.history;
   unreachable_plans_ = state.unreachable_plans;
-  avoid_note_ = state.avoid_note;
-  detail_ = state.detail;
 }
 
 bool SequenceExecutor::ThinkAhead(const PlanePose& pose, double remaining_m, const ArrivalDisc& disc,
@@ -48,13 +46,11 @@ bool SequenceExecutor::ThinkAhead(const PlanePose& pose, double remaining_m, con
       pose_->site_index != map_site_ || avoid_refused_ || looked_here_ != 0 || map_images_taken_)
     return false;
   AvoidState saved = SaveAvoidState();
-  const std::string step_note = step_note_;
   thinking_ahead_ = true;
   const AvoidOutcome outcome = VoteOnMap(pose, remaining_m, disc, step);
   thinking_ahead_ = false;
   if (outcome != AvoidOutcome::kStep) {
     RestoreAvoidState(saved);
-    step_note_ = step_note;
     ahead_declined_ = true;
     return false;
   }

@@ -233,8 +233,11 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
   // from each step's start to its end: those arc voting chose, and those that steered
   // straight at the goal because the way was clear (each step report's `choice`).
   {
-    std::ofstream voted(dir + "traverse_avoid.dat"), steered(dir + "traverse_steer.dat");
-    int n_voted = 0, n_steered = 0;
+    // And where a step began without waiting for the map of the pair taken there: chosen on
+    // the map in hand and driven while that pair was mapped (thinking while driving).
+    std::ofstream voted(dir + "traverse_avoid.dat"), steered(dir + "traverse_steer.dat"),
+        ahead(dir + "traverse_ahead.dat");
+    int n_voted = 0, n_steered = 0, n_ahead = 0;
     for (const auto& s : log.steps) {
       if (s.choice == rover_msgs::step_report_t::CHOICE_COMMAND) continue;
       const bool steer = s.choice == rover_msgs::step_report_t::CHOICE_STEER_AT_GOAL;
@@ -242,6 +245,10 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
                                 << Num(s.pose_after[0]) << " " << Num(s.pose_after[1]) << "\n\n";
       b.Add(s.pose_after[0], s.pose_after[1]);
       ++(steer ? n_steered : n_voted);
+      if (s.thought_ahead) {
+        ahead << Num(s.pose_before[0]) << " " << Num(s.pose_before[1]) << "\n";
+        ++n_ahead;
+      }
     }
     if (n_voted > 0) {
       plots.push_back(std::string("'traverse_avoid.dat' using 2:1 with lines lw 4 lc rgb '") + kAvoidColour +
@@ -250,15 +257,6 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
     if (n_steered > 0) {
       plots.push_back(std::string("'traverse_steer.dat' using 2:1 with lines lw 4 lc rgb '") + kSteerColour +
                       "' title 'avoid on, way clear: steered straight at the goal (no vote)'");
-    }
-    // Where a step began without waiting for the map of the pair taken there: chosen on the
-    // map in hand and driven while that pair was mapped (thinking while driving).
-    std::ofstream ahead(dir + "traverse_ahead.dat");
-    int n_ahead = 0;
-    for (const auto& s : log.steps) {
-      if (!s.thought_ahead) continue;
-      ahead << Num(s.pose_before[0]) << " " << Num(s.pose_before[1]) << "\n";
-      ++n_ahead;
     }
     if (n_ahead > 0) {
       plots.push_back(
