@@ -186,11 +186,20 @@ void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalDist
     total += d;
     if (i < clear_end) clear += d;
   }
-  c->goodness = total > 0.0 ? la.good * clear / total : (la.hazard.empty() ? la.good : 0.0);
+  const double good = std::min(la.good, o.good_enough);
+  c->goodness = total > 0.0 ? good * clear / total : (la.hazard.empty() ? good : 0.0);
   c->clear_m = clear;
   const std::vector<Pose2> reached(look.begin(), look.begin() + std::max<std::size_t>(1, clear_end));
-  const double progress = std::clamp(Progress(field, pose, reached, gx, gy) / o.lookahead_m, -1.0, 1.0);
-  c->goal = 0.5 * (1.0 + progress);
+  c->progress_m = Progress(field, pose, reached, gx, gy);
+}
+
+// The goal vote and the sum. Progress is measured in the plan's cost to go, which falls
+// faster than a metre a metre through ground it prices higher (unknown, caution), so the
+// scale is the look-ahead or the best progress any allowed candidate makes, whichever is
+// more: divided by the look-ahead alone, every arc within some 35 deg of the plan's way
+// reached the top goal vote, and the goodness alone chose among them.
+void Score(const VoteOptions& o, double scale, Candidate* c) {
+  c->goal = 0.5 * (1.0 + std::clamp(c->progress_m / scale, -1.0, 1.0));
   c->vote = o.goodness_weight * c->goodness + o.goal_weight * c->goal -
             (c->kind == Candidate::Kind::kTurn ? o.turn_penalty : 0.0);
 }
@@ -258,6 +267,8 @@ void VoteOptions::Validate() const {
     throw std::invalid_argument("avoidance: previous_arc_m must be finite and >= 0, its curvature finite");
   if (!std::isfinite(previous_turn_rad)) throw std::invalid_argument("avoidance: previous_turn_rad must be finite");
   if (num_arcs < 1 || num_arcs > 101) throw std::invalid_argument("avoidance: num_arcs must be 1 to 101");
+  if (!(good_enough > 0.0) || !(good_enough <= 1.0))
+    throw std::invalid_argument("avoidance: good_enough " + std::to_string(good_enough) + " must be in (0, 1] (1: off)");
   const auto fraction = [](double f) { return f >= 0.0 && f <= 1.0; };
   if (!(blind_margin_m >= 0.0) || !(backup_m >= 0.0) || !fraction(unknown.max_fraction) ||
       !fraction(unknown.max_scattered_fraction) || !(unknown.hidden_patch_m >= 0.0) ||
@@ -330,6 +341,10 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     Judge(grid, heights, field, pose, gx, gy, o, step, look, &c, &first);
     choice.candidates.push_back(c);
   }
+  double scale = o.lookahead_m;
+  for (const Candidate& c : choice.candidates)
+    if (!c.vetoed) scale = std::max(scale, c.progress_m);
+  for (Candidate& c : choice.candidates) Score(o, scale, &c);
   // A turn after which not even one step is clear leads nowhere (see the header).
   const double one_step = std::min(o.step_m, std::max(remaining, 0.05)) - 1e-6;
   auto leads_nowhere = [&](const Candidate& c) { return c.kind == Candidate::Kind::kTurn && c.clear_m < one_step; };
@@ -373,6 +388,7 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
     c.curvature_per_m = curvature_per_m;
     const auto step = SamplePath(pose, 0.0, -distance_m, curvature_per_m);
     Judge(grid, heights, field, pose, gx, gy, behind, step, step, &c);
+    Score(o, scale, &c);
     choice.candidates.push_back(c);
   };
   if (way_behind && o.backup_m > 0.0) backup(o.backup_m, 0.0);

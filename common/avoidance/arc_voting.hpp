@@ -69,6 +69,13 @@ struct VoteOptions {
   double unknown_goodness = 0.5;
   double goodness_weight = 1.0;
   double goal_weight = 1.0;
+  // Ground good enough to drive ranks no higher for being better still: a candidate's
+  // goodness counts up to this (1: every difference counts, GESTALT's vote). At the map's
+  // caution level (1 - its caution_fraction) the vote stops weaving among safe cobbles for
+  // the best worst cell over 3 m and holds to the plan's way, as ENav ranks its safe paths by
+  // their cost to the goal; caution ground, and the clear fraction before an unsafe cell,
+  // still weigh as before.
+  double good_enough = 1.0;
   double turn_penalty = 0.05;          // a turn in place makes no progress by itself
   double backup_m = 0.3;               // 0: never back up
   // The arc the previous step drove forward: its length (0: the previous step drove no arc
@@ -124,7 +131,8 @@ struct Candidate {
   bool vetoed = false;
   std::string why;               // veto reason
   double goodness = 0.0;         // 0..1: worst cell before an unsafe one x clear fraction
-  double goal = 0.0;             // 0..1: (1 + progress to the clear part's end / look-ahead) / 2
+  double goal = 0.0;             // 0..1: (1 + progress / scale) / 2 (VoteArcs: the scale)
+  double progress_m = 0.0;       // the fall of the distance to go along the clear part
   double vote = 0.0;
   double clear_m = 0.0;          // how far the look-ahead runs before an unsafe cell (or pose)
   Sweep step_sweep;              // the step alone

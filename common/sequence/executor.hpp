@@ -168,6 +168,10 @@ struct ExecutorOptions {
   // over it still replaces it): planner::SiteMap::set_keep_unsafe, common/avoidance/README.md
   // "A rock read lower from beside it". false: the newest rating alone.
   bool avoid_keep_unsafe = false;
+  // A step's goodness counts up to this in the vote (avoidance::VoteOptions::good_enough):
+  // at the map's caution level (1 - hazards.map.traversability.caution_fraction) safe
+  // ground ranks alike and the plan's way decides. 1: every difference counts.
+  double avoid_good_enough = 1.0;
   // The global planner (common/planner): a cost-to-go over the site map the executor
   // accumulates from the monitor's maps; arc voting's goal vote scores progress along it.
   // false: the vote's local field over the monitor's latest map only.

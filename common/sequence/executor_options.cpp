@@ -106,7 +106,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "blind_slip_pct", "recent_steps", "lost_min_step_m", "vo_retry_after_m", "step_sigma_growth_pct",
                "margin_sigma_multiplier", "state_file", "map_wait_s", "think_while_driving", "avoid_lookahead_m",
                "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m",
-               "avoid_zone_sigma_multiplier", "avoid_unseen_ground_strict", "avoid_start_ring_known", "avoid_hidden_flank_step_m", "avoid_hidden_reach_m", "avoid_look_pan_deg", "avoid_look_tilt_deg", "avoid_look_min_cells", "avoid_look_curvature_per_m", "avoid_keep_unsafe", "planner_enabled", "planner_unknown_cost", "planner_caution_cost", "planner_near_cost", "planner_vote_clearance",
+               "avoid_zone_sigma_multiplier", "avoid_unseen_ground_strict", "avoid_start_ring_known", "avoid_hidden_flank_step_m", "avoid_hidden_reach_m", "avoid_look_pan_deg", "avoid_look_tilt_deg", "avoid_look_min_cells", "avoid_look_curvature_per_m", "avoid_keep_unsafe", "avoid_good_enough", "planner_enabled", "planner_unknown_cost", "planner_caution_cost", "planner_near_cost", "planner_vote_clearance",
                "planner_margin_m", "planner_unreachable_plans", "planner_block_after_steps", "planner_block_min_gain_m",
                "planner_block_ahead_m", "planner_block_radius_m", "planner_refusal_cost", "planner_refusal_ahead_m",
                "planner_refusal_radius_m", "planner_prior_map", "goto_arrival_sigmas",
@@ -174,6 +174,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("avoid_look_min_cells", o.avoid_look_min_cells, 1, 10000);
   n.Get("avoid_look_curvature_per_m", o.avoid_look_curvature_per_m, 0.0, 100.0);
   n.Get("avoid_keep_unsafe", o.avoid_keep_unsafe);
+  n.Get("avoid_good_enough", o.avoid_good_enough, 0.01, 1.0);
   n.Get("planner_enabled", o.planner_enabled);
   n.Get("planner_unknown_cost", o.planner_unknown_cost, 1.0, 100.0);
   n.Get("planner_caution_cost", o.planner_caution_cost, 1.0, 100.0);

@@ -251,6 +251,64 @@ TEST(ArcVoting, ShortStepAtTheGoal) {
   EXPECT_NEAR(c.best.distance_m, 0.4, 1e-9);
 }
 
+// Safe ground that is a little rougher straight ahead (a cobble, goodness 0.5 against 0.9
+// round it): GESTALT's vote, every difference counting, weaves round it; with
+// good_enough at the caution level (0.4) safe ground ranks alike and the rover drives at the
+// goal. Caution ground (goodness 0.2) is still steered round.
+TEST(ArcVoting, SafeGroundGoodEnoughRanksAlikeAndTheGoalDecides) {
+  auto cobble = [](CellClass state, float goodness) {
+    Grid g = Open();
+    g.Paint(2.6, 0.0, 0.25, state, goodness, 0.05f);
+    return g;
+  };
+  auto heading_change = [](const Candidate& c) {
+    return c.kind == Candidate::Kind::kTurn ? c.turn_rad : c.curvature_per_m * c.distance_m;
+  };
+  const Grid cobbles = cobble(CellClass::kSafe, 0.5f);
+  const Choice weave = VoteArcs(cobbles, {0, 0, 0}, 8.0, 0.0, VoteOptions{});
+  ASSERT_TRUE(weave.found);
+  EXPECT_GT(std::abs(heading_change(weave.best)), 1e-3) << "GESTALT's vote steers off the rougher safe cobble";
+  VoteOptions enough;
+  enough.good_enough = 0.4;
+  const Choice straight = VoteArcs(cobbles, {0, 0, 0}, 8.0, 0.0, enough);
+  ASSERT_TRUE(straight.found);
+  EXPECT_EQ(straight.best.kind, Candidate::Kind::kArc);
+  EXPECT_DOUBLE_EQ(straight.best.curvature_per_m, 0.0);
+  EXPECT_NEAR(straight.best.goodness, 0.4, 1e-6);
+  const Choice caution = VoteArcs(cobble(CellClass::kCaution, 0.2f), {0, 0, 0}, 8.0, 0.0, enough);
+  ASSERT_TRUE(caution.found);
+  EXPECT_GT(std::abs(heading_change(caution.best)), 1e-3) << "caution ground still weighs";
+  VoteOptions bad;
+  bad.good_enough = 0.0;
+  EXPECT_THROW(VoteArcs(Open(), {0, 0, 0}, 1, 0, bad), std::invalid_argument);
+}
+
+// A plan whose cost to go falls 1.5 a metre (ground it prices above seen safe ground): the
+// goal vote is scaled by the best progress, so an arc off the way scores less than the arc
+// along it. Divided by the look-ahead alone, both reached the top vote (1), and only the
+// goodness told them apart.
+TEST(ArcVoting, TheGoalVoteIsScaledByTheBestProgressNotCappedAtTheLookAhead) {
+  struct Costly final : GoalDistance {
+    double DistanceAt(double x, double y) const override { return 1.5 * std::hypot(10.0 - x, y); }
+  } costly;
+  VoteOptions o;
+  o.goal_distance = &costly;
+  const Choice c = VoteArcs(Open(), {0, 0, 0}, 10.0, 0.0, o);
+  ASSERT_TRUE(c.found);
+  const Candidate* straight = nullptr;
+  const Candidate* off = nullptr;
+  for (const auto& k : c.candidates) {
+    if (k.kind != Candidate::Kind::kArc) continue;
+    if (k.curvature_per_m == 0.0) straight = &k;
+    if (std::abs(k.curvature_per_m - 0.2) < 1e-9) off = &k;
+  }
+  ASSERT_TRUE(straight && off);
+  EXPECT_GT(off->progress_m, o.lookahead_m) << "the gentle arc alone would have reached the top vote";
+  EXPECT_DOUBLE_EQ(straight->goal, 1.0);
+  EXPECT_LT(off->goal, 0.995);
+  EXPECT_GT(straight->vote, off->vote);
+}
+
 TEST(ArcVoting, RockInTheStepVetoesStraightAndNamesIt) {
   Grid g = Open();
   g.Paint(1.3, 0.0, 0.3, CellClass::kUnsafe, 0.0f, 0.38f);
