@@ -196,8 +196,9 @@ void Judge(const Grid& grid, const clearance::HeightMap& heights, const GoalDist
 // The goal vote and the sum. Progress is measured in the plan's cost to go, which falls
 // faster than a metre a metre through ground it prices higher (unknown, caution), so the
 // scale is the look-ahead or the best progress any allowed candidate makes, whichever is
-// more: divided by the look-ahead alone, every arc within some 35 deg of the plan's way
-// reached the top goal vote, and the goodness alone chose among them.
+// more: divided by the look-ahead alone, every arc within 37 deg of the plan's way through
+// unseen ground (1.25 x cos 37 deg = 1) reached the top goal vote, and the goodness alone
+// chose among them.
 void Score(const VoteOptions& o, double scale, Candidate* c) {
   c->goal = 0.5 * (1.0 + std::clamp(c->progress_m / scale, -1.0, 1.0));
   c->vote = o.goodness_weight * c->goodness + o.goal_weight * c->goal -
