@@ -15,6 +15,7 @@ struct MapRules {
   double blind_margin_m = 0.5;
   avoidance::UnknownLimits unknown;
   double max_driven_step_m = 0.0;  // hazards.map.driven_step_fraction x the map's step limit (0: off)
+  double caution_goodness = 0.0;   // 1 - the map's caution_fraction: caution at this goodness or less (0: not given)
 };
 
 inline rover_msgs::traversability_map_t MapToMsg(const avoidance::Grid& g, const MapRules& rules,
@@ -47,6 +48,7 @@ inline rover_msgs::traversability_map_t MapToMsg(const avoidance::Grid& g, const
   m.hidden_patch_m = rules.unknown.hidden_patch_m;
   m.max_scattered_unknown_fraction = rules.unknown.max_scattered_fraction;
   m.max_driven_step_m = rules.max_driven_step_m;
+  m.caution_goodness = rules.caution_goodness;
   return m;
 }
 
@@ -71,6 +73,7 @@ inline avoidance::Grid GridFromMsg(const rover_msgs::traversability_map_t& m, Ma
     rules->blind_margin_m = m.blind_margin_m;
     rules->unknown = {m.max_unknown_fraction, m.hidden_patch_m, m.max_scattered_unknown_fraction};
     rules->max_driven_step_m = m.max_driven_step_m;
+    rules->caution_goodness = m.caution_goodness;
   }
   return g;
 }

@@ -112,7 +112,11 @@ std::string Problem(const rover_msgs::traversability_map_t& m) {
                 Finite("max_scattered_unknown_fraction", m.max_scattered_unknown_fraction),
                 NonNegative("max_scattered_unknown_fraction", m.max_scattered_unknown_fraction),
                 Finite("max_driven_step_m", m.max_driven_step_m),
-                NonNegative("max_driven_step_m", m.max_driven_step_m)});
+                NonNegative("max_driven_step_m", m.max_driven_step_m),
+                Finite("caution_goodness", m.caution_goodness),
+                m.caution_goodness >= 0.0 && m.caution_goodness <= 1.0
+                    ? ""
+                    : "caution_goodness " + std::to_string(m.caution_goodness) + " is out of range (expected 0 to 1)"});
 }
 
 std::string Problem(const rover_msgs::hazard_status_t& m) {

@@ -125,7 +125,9 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, d
   o.blind_margin_m = strict ? 0.0 : map_->blind_margin_m;
   o.unknown = map_->unknown;
   o.max_driven_step_m = map_->max_driven_step_m;
-  o.good_enough = options_.avoid_good_enough;
+  o.good_enough = options_.avoid_good_enough > 0.0   ? options_.avoid_good_enough
+                  : map_->caution_goodness > 0.0 ? map_->caution_goodness
+                                                 : 1.0;
   // Strict: ground that could hide a rock is not swept at all, not even by a corner.
   o.unknown.hidden_at_any_share = strict;
   // And not swept near either: a known cell beside it may hold a hidden rock's rim.

@@ -170,7 +170,9 @@ struct ExecutorOptions {
   bool avoid_keep_unsafe = false;
   // A step's goodness counts up to this in the vote (avoidance::VoteOptions::good_enough):
   // at the map's caution level (1 - hazards.map.traversability.caution_fraction) safe
-  // ground ranks alike and the plan's way decides. 1: every difference counts.
+  // ground ranks alike and the plan's way decides. 0: the caution level each map gives
+  // (TraversabilityMap::caution_goodness; a map that gives none: 1). 1: every difference
+  // counts.
   double avoid_good_enough = 1.0;
   // The global planner (common/planner): a cost-to-go over the site map the executor
   // accumulates from the monitor's maps; arc voting's goal vote scores progress along it.
@@ -285,6 +287,9 @@ struct TraversabilityMap {  // traversability_map_t (hazard_monitor)
   // A step drives over no cell whose step reads this high, caution or not (0: off; the
   // monitor's hazards.map.driven_step_fraction x its map's step limit).
   double max_driven_step_m = 0.0;
+  // The map's caution level: a cell of this goodness or less is caution or worse (1 - the
+  // monitor's hazards.map.traversability.caution_fraction; 0: not given).
+  double caution_goodness = 0.0;
   // The rover's suspension (configs/rover.yaml `clearance:`): arc voting judges paths by
   // its clearance bounds from the map's heights; unset: by the cells' ratings.
   std::optional<clearance::Suspension> suspension;

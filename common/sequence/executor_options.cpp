@@ -174,7 +174,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("avoid_look_min_cells", o.avoid_look_min_cells, 1, 10000);
   n.Get("avoid_look_curvature_per_m", o.avoid_look_curvature_per_m, 0.0, 100.0);
   n.Get("avoid_keep_unsafe", o.avoid_keep_unsafe);
-  n.Get("avoid_good_enough", o.avoid_good_enough, 0.01, 1.0);
+  n.Get("avoid_good_enough", o.avoid_good_enough, 0.0, 1.0);
   n.Get("planner_enabled", o.planner_enabled);
   n.Get("planner_unknown_cost", o.planner_unknown_cost, 1.0, 100.0);
   n.Get("planner_caution_cost", o.planner_caution_cost, 1.0, 100.0);

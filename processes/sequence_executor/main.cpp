@@ -299,6 +299,7 @@ seq::TraversabilityMap FromMsg(const rover_msgs::traversability_map_t& m,
   t.blind_margin_m = rules.blind_margin_m;
   t.unknown = rules.unknown;
   t.max_driven_step_m = rules.max_driven_step_m;
+  t.caution_goodness = rules.caution_goodness;
   t.suspension = suspension;
   return t;
 }

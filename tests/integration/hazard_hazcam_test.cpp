@@ -17,6 +17,7 @@
 #include "launch/process_set.hpp"
 #include "render/stereo_renderer.hpp"
 #include "terrain/world.hpp"
+#include "traversability/traversability_map.hpp"
 
 #include <rover_msgs/hazard_query_t.hpp>
 #include <rover_msgs/hazard_reply_t.hpp>
@@ -27,6 +28,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include <chrono>
 #include <cmath>
@@ -153,6 +155,22 @@ TEST(HazardMonitorHazcam, MapsTheHazcamPairAndRefusesAStepOntoWhatItSaw) {
         ++unsafe_at_rock;
     }
   EXPECT_GE(unsafe_at_rock, 1);
+  // It carries the map's caution level for the vote (executor.avoid_good_enough: 0), and
+  // its cells agree with it: caution and unsafe at that goodness or less, safe above it.
+  const double caution_fraction =
+      traversability::LoadMapOptions(YAML::LoadFile(SourceDir() + "/configs/rover.yaml")["hazards"]["map"]["traversability"],
+                                     "hazards.map.traversability")
+          .caution_fraction;
+  EXPECT_NEAR(map->caution_goodness, 1.0 - caution_fraction, 1e-9);
+  int rated = 0;
+  for (int k = 0; k < map->num_cells; ++k) {
+    if (map->state[k] == rover_msgs::traversability_map_t::STATE_UNKNOWN) continue;
+    ++rated;
+    const bool safe = map->state[k] == rover_msgs::traversability_map_t::STATE_SAFE;
+    if (safe) EXPECT_GT(map->goodness[k], map->caution_goodness - 1e-6) << "cell " << k;
+    else EXPECT_LE(map->goodness[k], map->caution_goodness + 1e-6) << "cell " << k;
+  }
+  EXPECT_GT(rated, 20);
   EXPECT_TRUE(set.Running("hazard_monitor"));
   set.StopAll();
   std::ifstream log(dir + "/hazard_monitor.log");

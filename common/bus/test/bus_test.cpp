@@ -9,6 +9,7 @@
 
 #include <rover_msgs/sequence_control_t.hpp>
 #include <rover_msgs/step_report_t.hpp>
+#include <rover_msgs/traversability_map_t.hpp>
 #include <rover_msgs/wheel_odometry_t.hpp>
 #include <rover_msgs/imu_t.hpp>
 #include <rover_msgs/rover_clock_t.hpp>
@@ -169,6 +170,26 @@ TEST(Bus, StepReportChoiceIsKnownOrDropped) {
   EXPECT_EQ(choices, (std::vector<int>{0, 1, 2}));
   EXPECT_EQ(bus.dropped(), 2);
   EXPECT_NE(bus.last_drop().find("choice -1 is unknown (expected 0 to 2)"), std::string::npos) << bus.last_drop();
+}
+
+// A map's caution level is a goodness: 0 (not given) to 1, and nothing else reaches the vote.
+TEST(Bus, MapCautionLevelOutsideZeroToOneIsDropped) {
+  Bus bus("memq://");
+  std::vector<double> levels;
+  bus.Subscribe<rover_msgs::traversability_map_t>(
+      rover::channels::kTraversabilityMap,
+      [&](const rover_msgs::traversability_map_t& m) { levels.push_back(m.caution_goodness); });
+  rover_msgs::traversability_map_t map{};
+  map.cell_m = 0.1;
+  for (double level : {0.0, 0.4, 1.0, 1.5, -0.1, std::nan("")}) {
+    map.caution_goodness = level;
+    bus.Publish(rover::channels::kTraversabilityMap, map);
+  }
+  while (bus.Handle(0)) {
+  }
+  EXPECT_EQ(levels, (std::vector<double>{0.0, 0.4, 1.0}));
+  EXPECT_EQ(bus.dropped(), 3);
+  EXPECT_NE(bus.last_drop().find("caution_goodness is not finite"), std::string::npos) << bus.last_drop();
 }
 
 // A tick after a stall must see what arrived during it: HandleReceived handles the
