@@ -25,6 +25,8 @@ void EstimatorOptions::Validate() const {
   RequireRange("along_track_sigma_fraction", along_track_sigma_fraction, 0.0, 1.0);
   RequireRange("cross_track_sigma_fraction", cross_track_sigma_fraction, 0.0, 1.0);
   RequireRange("vertical_sigma_fraction", vertical_sigma_fraction, 0.0, 1.0);
+  RequireRange("slip_memory_updates", slip_memory_updates, 0, 1000);
+  RequireRange("slip_min_distance_m", slip_min_distance_m, 1e-3, 1e3);
   RequireRange("gyro_drift_rad_per_s", gyro_drift_rad_per_s, 0.0, 1.0);
   RequireRange("gyro_random_walk_rad_per_sqrt_s", gyro_random_walk_rad_per_sqrt_s, 0.0, 1.0);
   RequireRange("gyro_bias_walk_rad_per_s_per_sqrt_s", gyro_bias_walk_rad_per_s_per_sqrt_s, 0.0, 1.0);
@@ -44,6 +46,8 @@ EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
   std::vector<std::string> keys = {"along_track_sigma_pct",
                                    "cross_track_sigma_pct",
                                    "vertical_sigma_pct",
+                                   "slip_memory_updates",
+                                   "slip_min_distance_m",
                                    "gyro_drift_deg_per_hour",
                                    "gyro_scale_sigma_pct",
                                    "gyro_random_walk_deg_per_sqrt_hour",
@@ -100,6 +104,8 @@ EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
                  : mode == "ignore" ? VoHeadingMode::kIgnore
                                     : VoHeadingMode::kFuse;
   section.Get("vo_future_tolerance_s", o.vo_future_tolerance_s, 0.0, 3600.0);
+  section.Get("slip_memory_updates", o.slip_memory_updates, 0, 1000);
+  section.Get("slip_min_distance_m", o.slip_min_distance_m, 1e-3, 1e3);
   section.Get("ignore_distance_while_turning_in_place", o.ignore_distance_while_turning_in_place);
   return o;
 }

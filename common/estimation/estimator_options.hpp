@@ -27,6 +27,14 @@ struct EstimatorOptions {
   double cross_track_sigma_fraction = 0.02;
   // Along the rover's up axis (elevation): the IMU knows pitch well, so smaller.
   double vertical_sigma_fraction = 0.01;
+  // Slip VO has measured raises the wheels' sigma. Each VO update over which the wheels
+  // drove at least slip_min_distance_m measures their error along and across track, as a
+  // fraction of that distance; the wheels' sigma fractions are then the larger of the ones
+  // above and the worst of the last slip_memory_updates such measurements. Ground that slips
+  // 15 % keeps slipping about as much on the next step, and a 2 % sigma there claims a
+  // position several sigmas off between VO updates. 0: off.
+  int slip_memory_updates = 3;
+  double slip_min_distance_m = 0.1;
 
   // Gyro drift: the 1-sigma of the gyro's bias about the vertical before any VO (heading
   // sigma grows linearly with time until VO has measured the bias). MER's LN-200: < 3 deg/h.
@@ -67,6 +75,7 @@ struct EstimatorOptions {
 
 // Reads the `estimator:` section. Keys (all optional; defaults above):
 //   along_track_sigma_pct, cross_track_sigma_pct, vertical_sigma_pct   (percent)
+//   slip_memory_updates, slip_min_distance_m
 //   gyro_drift_deg_per_hour, gyro_scale_sigma_pct, attitude_sigma_deg,
 //   gyro_random_walk_deg_per_sqrt_hour, gyro_bias_walk_deg_per_hour_per_sqrt_hour
 //   initial_position_sigma_m, initial_yaw_sigma_deg

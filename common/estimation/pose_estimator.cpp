@@ -198,8 +198,8 @@ void PoseEstimator::GrowPositionCovariance(const Eigen::Vector3d& displacement) 
   // that it stays proportional to the distance driven (slip and wheel radius are mostly
   // systematic): P += ((s + g)^2 - s^2) e e^T with s the current sigma along e.
   const Eigen::Vector3d axes[3] = {forward, cross, up};
-  const double growth[3] = {options_.along_track_sigma_fraction * distance,
-                            options_.cross_track_sigma_fraction * distance,
+  const Eigen::Vector2d fraction = wheel_sigma_fractions();
+  const double growth[3] = {fraction.x() * distance, fraction.y() * distance,
                             options_.vertical_sigma_fraction * distance};
   auto P_pos = P_.topLeftCorner<3, 3>();
   for (int i = 0; i < 3; ++i) {
@@ -207,6 +207,29 @@ void PoseEstimator::GrowPositionCovariance(const Eigen::Vector3d& displacement) 
     const double g = growth[i];
     P_pos += (2.0 * s * g + g * g) * axes[i] * axes[i].transpose();
   }
+}
+
+Eigen::Vector2d PoseEstimator::wheel_sigma_fractions() const {
+  Eigen::Vector2d f(options_.along_track_sigma_fraction, options_.cross_track_sigma_fraction);
+  for (const Eigen::Vector2d& m : measured_slip_) f = f.cwiseMax(m);
+  return f;
+}
+
+// The wheels' own error over [from, to]: where they put the rover (the history at `to`,
+// before this update) against where VO did, along and across the way driven, each as a
+// fraction of the wheels' travel. It includes VO's own error (millimetres over a step) and
+// the heading's swing of the path, both small beside the slip it is there to catch.
+void PoseEstimator::MeasureWheelSlip(const Sample& from, const Sample& to_wheels, const Eigen::Vector3d& t_site_vo) {
+  if (options_.slip_memory_updates <= 0) return;
+  const double travel = to_wheels.odometer - from.odometer;
+  const Eigen::Vector3d wheels = to_wheels.p - from.p;
+  Eigen::Vector3d forward(wheels.x(), wheels.y(), 0.0);
+  if (!(travel >= options_.slip_min_distance_m) || forward.norm() < 0.5 * options_.slip_min_distance_m) return;
+  forward.normalize();
+  const Eigen::Vector3d cross = Eigen::Vector3d::UnitZ().cross(forward);
+  const Eigen::Vector3d error = t_site_vo - wheels;
+  measured_slip_.emplace_back(std::abs(error.dot(forward)) / travel, std::abs(error.dot(cross)) / travel);
+  while (static_cast<int>(measured_slip_.size()) > options_.slip_memory_updates) measured_slip_.pop_front();
 }
 
 PoseEstimator::Sample PoseEstimator::Current() const {
@@ -408,6 +431,7 @@ VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
 
   const Eigen::Matrix3d R_from = from.q.toRotationMatrix();
   const Eigen::Vector3d t_site = R_from * t_vo;
+  MeasureWheelSlip(from, to_old, t_site);
 
   // The yaw changes over [from, to] as VO and as the gyro (bias already taken off) saw them.
   const double yaw_from = YawOf(R_from);
@@ -499,6 +523,7 @@ void PoseEstimator::Reset(const geometry::Pose& T_site_rover, int64_t utime) {
   utime_ = utime;
   has_time_ = true;
   history_.clear();
+  measured_slip_.clear();
   Record();
 }
 

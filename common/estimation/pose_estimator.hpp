@@ -170,6 +170,9 @@ class PoseEstimator {
   std::size_t history_size() const { return history_.size(); }
   int64_t inputs_rejected() const { return inputs_rejected_; }
   const std::vector<double>& last_wheel_distances_m() const { return wheel_distance_m_; }
+  // The wheels' 1-sigma fractions now in use, along and across track: the configured ones,
+  // or the worst error VO measured on the last updates where that is more.
+  Eigen::Vector2d wheel_sigma_fractions() const;
   const Eigen::Vector3d& last_angular_rate() const { return angular_rate_; }
   const EstimatorOptions& options() const { return options_; }
 
@@ -208,6 +211,8 @@ class PoseEstimator {
   Vector5d FuseGyroCheck(const VoCloneModel& model, double check, Matrix5d& P_to) const;
   void PropagateHeading(double dt, double abs_dyaw);
   void GrowPositionCovariance(const Eigen::Vector3d& displacement);
+  // The wheels' error VO measured over [from, to] (EstimatorOptions::slip_memory_updates).
+  void MeasureWheelSlip(const Sample& from, const Sample& to_wheels, const Eigen::Vector3d& t_site_vo);
   Matrix5d InitialCovariance() const;
   bool AdvanceTime(int64_t utime);
 
@@ -232,6 +237,9 @@ class PoseEstimator {
   double last_distance_m_ = 0.0;
   Eigen::Matrix3d R_at_last_odometry_ = Eigen::Matrix3d::Identity();
   std::vector<double> wheel_distance_m_;
+  // The wheels' along- and cross-track errors VO measured (fractions of the distance), the
+  // newest last, at most slip_memory_updates of them.
+  std::deque<Eigen::Vector2d> measured_slip_;
 
   PoseSource source_ = PoseSource::kWheelImu;
   int32_t site_index_ = 0;

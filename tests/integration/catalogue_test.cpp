@@ -141,7 +141,10 @@ TEST(Catalogue, WopmayVoStopsBeforeTheZone) {
   // It did drive, and it did slide: north (downslope), off its line x = 2.6.
   EXPECT_GT(s["distance_travelled_m"].as<double>(), 1.0);
   EXPECT_GT(Get(s["final_truth"], "x") - 2.6, 0.3);
-  EXPECT_LT(s["position_error_m"].as<double>(), 0.05);  // VO followed the slide
+  // VO followed the slide (blind, the estimate ends over 0.5 m off: below). The stop may
+  // come mid-step, after the last VO update: the monitor's footprint grows by 3 sigma, and
+  // the wheels' sigma grows at the slip VO measured on the last steps.
+  EXPECT_LT(s["position_error_m"].as<double>(), 0.10);
   EXPECT_EQ(CountVoStatus(s, kVoOk), static_cast<int>(s["steps"].size()));
   ExpectNoFalseUpdate(s);
 }

@@ -20,6 +20,8 @@ TEST(EstimatorOptions, ExampleFileLoadsToTheDefaults) {
   EXPECT_NEAR(o.gyro_scale_sigma_fraction, d.gyro_scale_sigma_fraction, 1e-15);
   EXPECT_NEAR(o.attitude_sigma_rad, d.attitude_sigma_rad, 1e-15);
   EXPECT_EQ(o.history_max_samples, d.history_max_samples);
+  EXPECT_EQ(o.slip_memory_updates, d.slip_memory_updates);
+  EXPECT_NEAR(o.slip_min_distance_m, d.slip_min_distance_m, 1e-15);
   EXPECT_EQ(o.vo_heading, VoHeadingMode::kFuse);
   EXPECT_NO_THROW(o.Validate());
 }
@@ -53,4 +55,8 @@ TEST(EstimatorOptions, ErrorsNameFileAndKey) {
   EXPECT_NE(mode.find("estimator.vo_heading"), std::string::npos) << mode;
   const std::string range = message("estimator:\n  cross_track_sigma_pct: -1\n");
   EXPECT_NE(range.find("estimator.cross_track_sigma_pct"), std::string::npos) << range;
+  const std::string memory = message("estimator:\n  slip_memory_updates: -1\n");
+  EXPECT_NE(memory.find("estimator.slip_memory_updates"), std::string::npos) << memory;
+  const std::string travel = message("estimator:\n  slip_min_distance_m: 0\n");
+  EXPECT_NE(travel.find("estimator.slip_min_distance_m"), std::string::npos) << travel;
 }

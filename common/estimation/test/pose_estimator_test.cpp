@@ -304,9 +304,72 @@ TEST(PoseEstimator, CovarianceAfterUpdateReflectsVo) {
   const Matrix6d P = est.covariance();
   EXPECT_NEAR(std::sqrt(P(0, 0)), 0.01, 1e-9);
   EXPECT_NEAR(std::sqrt(P(1, 1)), 0.01, 1e-9);
-  // Another metre of wheels grows sigma linearly from there: 0.01 + 0.02.
+  // Another metre of wheels grows sigma linearly from there, at the slip VO just measured
+  // along track (1 m short in 10: 10 %) and the configured 2 % across it.
   Drive(est, 10 * kSecond, 11 * kSecond, 10.0, 1.0, Q(0, 0, 0));
-  EXPECT_NEAR(std::sqrt(est.covariance()(0, 0)), 0.03, 1e-9);
+  EXPECT_NEAR(std::sqrt(est.covariance()(0, 0)), 0.01 + 0.10, 1e-9);
+  EXPECT_NEAR(std::sqrt(est.covariance()(1, 1)), 0.01 + 0.02, 1e-9);
+  // Without the slip memory, at the configured 2 %.
+  o.slip_memory_updates = 0;
+  PoseEstimator fixed(o);
+  Drive(fixed, 0, 10 * kSecond, 0.0, 10.0, Q(0, 0, 0));
+  ASSERT_TRUE(fixed.ApplyVoUpdate(Vo(0, 10 * kSecond, PoseFromXyzRpy(9, 0, 0, 0, 0, 0), 0.01)).applied());
+  Drive(fixed, 10 * kSecond, 11 * kSecond, 10.0, 1.0, Q(0, 0, 0));
+  EXPECT_NEAR(std::sqrt(fixed.covariance()(0, 0)), 0.03, 1e-9);
+}
+
+// Ground that slipped keeps slipping: the wheels' sigma is the worst error VO measured over
+// the last slip_memory_updates steps (along and across track), never under the configured
+// one, and it falls back once steps on firm ground have pushed the slip out of memory.
+TEST(PoseEstimator, SlipVoMeasuredSetsTheWheelsSigmaForTheNextSteps) {
+  EstimatorOptions o = Exact();
+  o.along_track_sigma_fraction = 0.02;
+  o.cross_track_sigma_fraction = 0.02;
+  o.slip_memory_updates = 3;
+  PoseEstimator est(o);
+  const double yaw = 0.6;
+  const Eigen::Quaterniond q = Q(0, 0, yaw);
+  int64_t t = 0;
+  double odo = 0.0;
+  // One metre a step; VO reports each step's motion in the rover frame at `from`.
+  auto step = [&](double vo_forward, double vo_left) {
+    Drive(est, t, t + kSecond, odo, 1.0, q);
+    const VoUpdateResult r = est.ApplyVoUpdate(Vo(t, t + kSecond, PoseFromXyzRpy(vo_forward, vo_left, 0, 0, 0, 0)));
+    ASSERT_TRUE(r.applied()) << r.reason;
+    t += kSecond;
+    odo += 1.0;
+  };
+  EXPECT_NEAR((est.wheel_sigma_fractions() - Eigen::Vector2d(0.02, 0.02)).norm(), 0.0, 1e-12);
+  step(0.80, 0.05);  // 20 % short, 5 % to the left
+  EXPECT_NEAR((est.wheel_sigma_fractions() - Eigen::Vector2d(0.20, 0.05)).norm(), 0.0, 1e-9);
+  // The next metre on the wheels alone: sigma 0.20 m along the heading, 0.05 m across it.
+  Drive(est, t, t + kSecond, odo, 1.0, q);
+  const Eigen::Matrix2d P = est.covariance().topLeftCorner<2, 2>();
+  const Eigen::Vector2d along(std::cos(yaw), std::sin(yaw)), across(-std::sin(yaw), std::cos(yaw));
+  EXPECT_NEAR(std::sqrt(along.dot(P * along)), 0.20, 1e-9);
+  EXPECT_NEAR(std::sqrt(across.dot(P * across)), 0.05, 1e-9);
+  EXPECT_NEAR(along.dot(P * across), 0.0, 1e-9);
+  ASSERT_TRUE(est.ApplyVoUpdate(Vo(t, t + kSecond, PoseFromXyzRpy(1.0, 0, 0, 0, 0, 0))).applied());
+  t += kSecond;
+  odo += 1.0;
+  // Two steps more on firm ground: the slip is still among the last three.
+  step(1.0, 0.0);
+  EXPECT_NEAR(est.wheel_sigma_fractions().x(), 0.20, 1e-9);
+  // The third pushes it out.
+  step(1.0, 0.0);
+  EXPECT_NEAR((est.wheel_sigma_fractions() - Eigen::Vector2d(0.02, 0.02)).norm(), 0.0, 1e-9);
+  // A step shorter than slip_min_distance_m measures nothing, nor does a turn in place.
+  o.slip_min_distance_m = 0.5;
+  PoseEstimator short_steps(o);
+  Drive(short_steps, 0, kSecond, 0.0, 0.3, q);
+  ASSERT_TRUE(short_steps.ApplyVoUpdate(Vo(0, kSecond, PoseFromXyzRpy(0.1, 0, 0, 0, 0, 0))).applied());
+  EXPECT_NEAR((short_steps.wheel_sigma_fractions() - Eigen::Vector2d(0.02, 0.02)).norm(), 0.0, 1e-12);
+  // Reset forgets the ground it measured.
+  est.Reset(Pose::Identity(), t);
+  step(0.5, 0.0);
+  EXPECT_NEAR(est.wheel_sigma_fractions().x(), 0.5, 1e-9);
+  est.Reset(Pose::Identity(), t + kSecond);
+  EXPECT_NEAR(est.wheel_sigma_fractions().x(), 0.02, 1e-12);
 }
 
 TEST(PoseEstimator, CovarianceAfterPastUpdateAddsLaterGrowth) {
