@@ -198,7 +198,8 @@ void SequenceExecutor::OnHazardStatus(const HazardStatus& status) {
   if (state_ == SequenceState::kRunning && phase_ == Phase::kMoving && options_.reactive_hazard_abort) {
     if (status.keepout_violated) {
       AbortWith(abort_reason::kKeepout, "keep-out violated during the step: zone '" + status.zone_name +
-                                            "', clearance " + Fixed(status.min_clearance_m) + " m");
+                                            "', clearance " + Fixed(status.min_clearance_m) +
+                                            " m (the footprint grown by the pose's uncertainty)");
       return;
     }
     const bool roll_over = tilt_.enabled && tilt_.roll_rad && std::abs(status.roll_rad) > *tilt_.roll_rad;
