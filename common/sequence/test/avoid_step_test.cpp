@@ -42,6 +42,7 @@ class MapWorld {
   int map_delay_ticks = 0;
   bool refuse_ahead = false;  // the monitor refuses every step chosen on an earlier map
   int motion_ticks = 1;        // a motion ends this many ticks after it was commanded
+  double caution_goodness = 0.0;  // the caution level each map gives (0: none)
   // Called as each motion is commanded (the pose already at its end): may change `grid`.
   std::function<void(MapWorld&, const MobilityCommand&)> on_motion;
   int64_t utime = 1'000'000;
@@ -114,6 +115,7 @@ class MapWorld {
         m.utime = utime;
         m.last_frame_id = c.frame_id;
         m.grid = delivered_ = Seen();
+        m.caution_goodness = caution_goodness;
         events.push_back("map " + std::to_string(c.frame_id));
         ex_.OnTraversabilityMap(m);
       });
@@ -232,6 +234,32 @@ TEST(AvoidStep, StepReportsSayHowEachStepWasChosen) {
     ASSERT_GE(w.steps.size(), 2u);
     for (const auto& s : w.steps) EXPECT_EQ(s.choice, StepChoice::kCommand) << "step " << s.step_index;
   }
+}
+
+// executor.avoid_good_enough 0 takes the cap from each map's caution level: a safe cobble
+// (goodness 0.5) 2.6 m ahead on the line to the goal is driven over as the map's level 0.4
+// makes it rank with open ground, and is steered round where every difference counts (1)
+// or where the map gives no level.
+TEST(AvoidStep, GoodEnoughZeroTakesTheMapsCautionLevel) {
+  auto first_heading_change = [](double good_enough, double map_level) {
+    ExecutorOptions o = Fast();
+    o.avoid_good_enough = good_enough;
+    SequenceExecutor ex(o);
+    MapWorld w(ex);
+    w.caution_goodness = map_level;
+    w.grid.Paint(2.6, 0.0, 0.25, CellClass::kSafe, 0.5f, 0.05f);
+    ex.SubmitText("goto 6 m 0 m within 0.4 m distance 14 m avoid on\n", 1, "t.seq");
+    w.Run();
+    EXPECT_EQ(w.Final().state, SequenceState::kCompleted) << w.Final().abort_reason << ": " << w.Final().detail;
+    EXPECT_FALSE(w.motions.empty());
+    if (w.motions.empty()) return 99.0;
+    const MobilityCommand& m = w.motions.front();
+    return m.type == MobilityCommand::Type::kTurn ? m.turn_rad : m.curvature_per_m * m.distance_m;
+  };
+  EXPECT_DOUBLE_EQ(first_heading_change(0.0, 0.4), 0.0) << "the map's level: safe ground ranks alike";
+  EXPECT_DOUBLE_EQ(first_heading_change(0.4, 0.0), 0.0) << "the same level, set in the options";
+  EXPECT_GT(std::abs(first_heading_change(1.0, 0.4)), 1e-3) << "every difference counts";
+  EXPECT_GT(std::abs(first_heading_change(0.0, 0.0)), 1e-3) << "no level from the map: off";
 }
 
 TEST(AvoidStep, WithoutAvoidanceTheMapStopsTheRover) {

@@ -828,6 +828,11 @@ TEST(ExecutorOptions, LoadsTheExampleAndRejectsBadValues) {
   EXPECT_FALSE(o.avoid_keep_unsafe);
   EXPECT_TRUE(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_keep_unsafe: true\n", "x.yaml")).avoid_keep_unsafe);
   EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_keep_unsafe: 3\n", "x.yaml")), ConfigError);
+  EXPECT_DOUBLE_EQ(o.avoid_good_enough, 1.0);  // off in the example
+  EXPECT_DOUBLE_EQ(
+      LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_good_enough: 0\n", "x.yaml")).avoid_good_enough, 0.0);
+  EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_good_enough: -0.1\n", "x.yaml")), ConfigError);
+  EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_good_enough: 1.5\n", "x.yaml")), ConfigError);
   EXPECT_DOUBLE_EQ(o.planner_near_cost, 3.0);
   EXPECT_DOUBLE_EQ(
       LoadExecutorOptions(ConfigNode::FromString("executor:\n  planner_near_cost: 1.5\n", "x.yaml")).planner_near_cost, 1.5);
