@@ -358,7 +358,7 @@ TEST(PoseEstimator, SlipVoMeasuredSetsTheWheelsSigmaForTheNextSteps) {
   // The third pushes it out.
   step(1.0, 0.0);
   EXPECT_NEAR((est.wheel_sigma_fractions() - Eigen::Vector2d(0.02, 0.02)).norm(), 0.0, 1e-9);
-  // A step shorter than slip_min_distance_m measures nothing, nor does a turn in place.
+  // A step shorter than slip_min_distance_m measures nothing.
   o.slip_min_distance_m = 0.5;
   PoseEstimator short_steps(o);
   Drive(short_steps, 0, kSecond, 0.0, 0.3, q);
