@@ -265,6 +265,7 @@ GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& 
   GroupFigures g;
   g.group = group;
   std::vector<double> ratios, shortest, over_shortest;
+  double nees_sum = 0, beyond_sum = 0;  // over the horizontal poses
   for (const auto& r : runs) {
     if (r.group != group) continue;
     ++g.runs;
@@ -297,6 +298,13 @@ GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& 
     g.steps_thought_ahead += r.steps_thought_ahead;
     g.vo_accepted += r.vo_accepted;
     g.vo_false += r.vo_false;
+    g.horizontal_poses += r.horizontal_poses;
+    nees_sum += r.horizontal_nees_mean * r.horizontal_poses;
+    beyond_sum += r.horizontal_beyond_pct / 100.0 * r.horizontal_poses;
+  }
+  if (g.horizontal_poses > 0) {
+    g.horizontal_nees_mean = nees_sum / g.horizontal_poses;
+    g.horizontal_beyond_pct = 100.0 * beyond_sum / g.horizontal_poses;
   }
   g.median_path_ratio = Median(ratios);
   g.median_shortest_ratio = Median(shortest);
@@ -348,6 +356,14 @@ std::string TableText(const std::vector<GroupFigures>& groups) {
        << std::setw(10) << share(g.waiting_s)
        << (g.steps > 0 ? std::to_string(g.steps_thought_ahead) + " of " + std::to_string(g.steps) : "-") << "\n";
   }
+  os << "\npose honesty (POSE against truth over every run's poses; horizontal NEES 2 is honest):\n";
+  os << std::left << std::setw(11) << "world" << std::setw(10) << "poses" << std::setw(16) << "NEES mean"
+     << "beyond the 99.7 % bound\n";
+  for (const auto& g : groups) {
+    os << std::left << std::setw(11) << g.group << std::setw(10) << g.horizontal_poses << std::setw(16)
+       << (g.horizontal_nees_mean ? Fixed(*g.horizontal_nees_mean, 2) : "-")
+       << (g.horizontal_beyond_pct ? Fixed(*g.horizontal_beyond_pct, 2) + " %" : "-") << "\n";
+  }
   return os.str();
 }
 
@@ -384,6 +400,9 @@ std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vect
     j.EndObject();
     j.Field("steps", g.steps).Field("steps_thought_ahead", g.steps_thought_ahead);
     j.Field("vo_updates_accepted", g.vo_accepted).Field("false_updates", g.vo_false);
+    j.Field("horizontal_poses", g.horizontal_poses);
+    optional("horizontal_nees_mean", g.horizontal_nees_mean);
+    optional("horizontal_beyond_bound_pct", g.horizontal_beyond_pct);
     j.EndObject();
   }
   j.EndArray();

@@ -104,6 +104,10 @@ struct RunFigures {
   double driving_s = 0, imaging_s = 0, vo_s = 0, mapping_s = 0, planning_s = 0, waiting_s = 0;
   int steps = 0, steps_thought_ahead = 0;  // step reports; chosen while driving (think_ahead.cpp)
   int vo_accepted = 0, vo_false = 0;
+  // Pose honesty (summary.json's pose_honesty: POSE against truth): the horizontal poses
+  // judged, their mean NEES (2 is honest) and the share beyond the 99.7 % bound.
+  int horizontal_poses = 0;
+  double horizontal_nees_mean = 0, horizontal_beyond_pct = 0;
   bool collided() const { return rock_contacts + zone_contacts > 0; }
   // Completed, truly inside the goal disc, no contact, no wheel off the map.
   bool success() const { return outcome == "completed" && in_goal_disc && !collided() && off_map_samples == 0; }
@@ -126,6 +130,9 @@ struct GroupFigures {
   double driving_s = 0, imaging_s = 0, vo_s = 0, mapping_s = 0, planning_s = 0, waiting_s = 0;
   int steps = 0, steps_thought_ahead = 0;  // step reports; chosen while driving (think_ahead.cpp)
   int vo_accepted = 0, vo_false = 0;
+  // Pose honesty over every pose of every run that ran (each run weighted by its poses).
+  int horizontal_poses = 0;
+  std::optional<double> horizontal_nees_mean, horizontal_beyond_pct;
   double success_pct() const { return runs > 0 ? 100.0 * successes / runs : 0.0; }
 };
 

@@ -300,6 +300,11 @@ RunFigures ReadRun(const RunPlan& p, RunTrack* track) {
   }
   r.vo_accepted = static_cast<int>(Number(s["vo_updates_accepted"]));
   r.vo_false = static_cast<int>(Number(s["false_updates"]));
+  if (const YAML::Node h = s["pose_honesty"]; h && h.IsMap()) {
+    r.horizontal_poses = static_cast<int>(Number(h["horizontal_poses"]));
+    r.horizontal_nees_mean = Number(h["horizontal_nees_mean"]);
+    r.horizontal_beyond_pct = Number(h["horizontal_beyond_3_sigma_pct"]);
+  }
 
   // The world and rover config the run used: the runner's copies when the scenario
   // overrode them (scenario_overrides.hpp), else the originals.

@@ -192,6 +192,9 @@ TEST(NavbenchTable, RowsCountWhatTheRunsSay) {
     r.planning_s = 0.125 * time_s;
     r.vo_accepted = 10;
     r.vo_false = 1;
+    r.horizontal_poses = r.ran ? 100 : 0;
+    r.horizontal_nees_mean = driven > 25 ? 4.0 : 1.0;
+    r.horizontal_beyond_pct = driven > 25 ? 2.0 : 0.0;
     return r;
   };
   std::vector<nb::RunFigures> runs = {
@@ -227,10 +230,18 @@ TEST(NavbenchTable, RowsCountWhatTheRunsSay) {
   EXPECT_NEAR(g.planning_s, 975.0, 1e-9);
   EXPECT_EQ(g.vo_accepted, 70);
   EXPECT_EQ(g.vo_false, 7);
+  // Pose honesty pooled by poses: 7 runs ran, 3 of them (26, 30 and 60 m) at NEES 4 and
+  // 2 % beyond the bound, 4 at NEES 1 and none beyond.
+  EXPECT_EQ(g.horizontal_poses, 700);
+  ASSERT_TRUE(g.horizontal_nees_mean && g.horizontal_beyond_pct);
+  EXPECT_NEAR(*g.horizontal_nees_mean, (3 * 4.0 + 4 * 1.0) / 7, 1e-12);
+  EXPECT_NEAR(*g.horizontal_beyond_pct, 3 * 2.0 / 7, 1e-12);
   const std::string text = nb::TableText({g});
   EXPECT_NE(text.find("2 (25.0 %)"), std::string::npos) << text;
   EXPECT_NE(text.find("hazard_map 1"), std::string::npos) << text;
   EXPECT_NE(text.find("77.5"), std::string::npos) << text;  // 168 m in 7800 s: 77.5 m/h
   EXPECT_NE(text.find("50.0 %"), std::string::npos) << text;  // driving share
   EXPECT_NE(text.find("12.5 %"), std::string::npos) << text;  // planning share
+  EXPECT_NE(text.find("pose honesty"), std::string::npos) << text;
+  EXPECT_NE(text.find("2.29"), std::string::npos) << text;    // the pooled NEES, 16 / 7
 }
