@@ -224,6 +224,8 @@ void PoseEstimator::MeasureWheelSlip(const Sample& from, const Sample& to_wheels
   const double travel = to_wheels.odometer - from.odometer;
   const Eigen::Vector3d wheels = to_wheels.p - from.p;
   Eigen::Vector3d forward(wheels.x(), wheels.y(), 0.0);
+  // Too little travel, or travel that went back and forth (or round) with too little net
+  // way to tell along from across: no measurement.
   if (!(travel >= options_.slip_min_distance_m) || forward.norm() < 0.5 * options_.slip_min_distance_m) return;
   forward.normalize();
   const Eigen::Vector3d cross = Eigen::Vector3d::UnitZ().cross(forward);

@@ -57,10 +57,6 @@ struct MapCheckOptions {
   // The limit in metres (0: none): the caller sets it from the map's own options
   // (DrivenStepLimit), as hazard_monitor does.
   double max_driven_step_m = 0.0;
-  // Not for this check: the map's caution level (1 - its caution_fraction), which the
-  // caller sets from the map's options as above and the map message carries to the vote
-  // (0: not given).
-  double caution_goodness = 0.0;
   double DrivenStepLimit(double map_max_step_m) const {
     return driven_step_fraction < 1.0 ? driven_step_fraction * map_max_step_m : 0.0;
   }

@@ -710,7 +710,7 @@ void TraversabilityMap::Rate() const {
       // met one were told apart by the goal alone (k0.20_r02 drove into a rock so).
       if (crest_unseen && out.state != CellState::kUnsafe) {
         out.state = CellState::kCaution;
-        out.goodness = std::min(out.goodness, static_cast<float>(1.0 - o.caution_fraction));
+        out.goodness = std::min(out.goodness, static_cast<float>(o.CautionGoodness()));
         out.step_m = static_cast<float>(o.max_step_m);
         out.crest_unseen = true;
       }

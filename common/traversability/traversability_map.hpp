@@ -158,6 +158,9 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   int min_points = 3;         // per cell; fewer -> unknown
   // A cell is kCaution when step, tilt or roughness exceeds this fraction of its limit.
   double caution_fraction = 0.6;
+  // The goodness at or under which a rated cell is caution or worse (goodness is 1 less
+  // the worst fraction of a limit): what the map message carries as caution_goodness.
+  double CautionGoodness() const { return 1.0 - caution_fraction; }
   // A patch needs at least this fraction of its cells known to be rated.
   double min_patch_fraction = 0.3;
 

@@ -67,7 +67,6 @@ std::unique_ptr<MapWorker> MakeMapWorker(const config::ConfigNode& section, cons
   const auto map_options = traversability::LoadMapOptions(section["map"]["traversability"]);
   map_check->max_driven_step_m =
       map_check->DrivenStepLimit(map_options.max_step_m, map_options.crest_view_range_m > 0.0);
-  map_check->caution_goodness = 1.0 - map_options.caution_fraction;
   if (const std::string note = hazards::MapTiltLimitProblem(map_options.max_tilt_deg, options.tilt); !note.empty()) {
     std::cerr << "hazard_monitor: warning: " << note << "\n";
   }
@@ -139,7 +138,7 @@ class HazardNode {
     rules_.blind_margin_m = map_check_.blind_margin_m;
     rules_.unknown = map_check_.Unknown();
     rules_.max_driven_step_m = map_check_.max_driven_step_m;
-    rules_.caution_goodness = map_check_.caution_goodness;
+    rules_.caution_goodness = map_ ? map_->options().CautionGoodness() : 0.0;
   }
 
   void Subscribe() {

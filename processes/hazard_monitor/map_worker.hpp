@@ -104,6 +104,8 @@ class MapWorker {
   }
   // The grid before any pair (every cell unknown).
   avoidance::Grid Initial() const { return initial_; }
+  // The NAVCAM map's options (fixed at construction, so safe to read beside the worker).
+  const traversability::MapOptions& options() const { return map_.options(); }
   // Forgets every pair: queued ones, the one being mapped, and the map. For when the poses
   // the pairs were placed with can no longer be trusted against the new ones (the pose
   // source restarted, a new site frame). The next Take gives the empty grid.
