@@ -81,6 +81,8 @@ class Bus {
   // The name this bus publishes under (pub_seq's publisher id; heartbeats).
   void set_publisher(const std::string& name);
   const std::string& publisher() const { return publisher_; }
+  // The channels subscribed so far (`--channels`, bus/process.hpp).
+  const std::set<std::string>& subscribed() const { return subscribed_; }
 
   // Subscribes `callback(msg)` to `channel`. `queue_capacity` bounds LCM's queue.
   template <class Msg>

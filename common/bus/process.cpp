@@ -44,6 +44,7 @@ std::string Usage(const std::string& name, const std::string& summary,
   line("--lcm-url", "URL", std::string("LCM URL (default: $ROVER_LCM_URL, else ") +
                                kDefaultLcmUrl + ")");
   line("--key", "FILE", "the deployment's key for signed commands (default: auth.key_file, else $ROVER_KEY_FILE)");
+  line("--channels", "", "print the channels this process publishes and subscribes, and exit (./rover graph)");
   for (const auto& o : options) line(o.flag, o.value_name, o.help);
   return os.str();
 }
@@ -84,7 +85,8 @@ std::map<std::string, std::string> ParseArgs(const std::string& name, const std:
     const OptionSpec* spec = nullptr;
     static const std::vector<OptionSpec> builtin = {{"--config", "FILE", ""},
                                                     {"--lcm-url", "URL", ""},
-                                                    {"--key", "FILE", ""}};
+                                                    {"--key", "FILE", ""},
+                                                    {"--channels", "", ""}};
     for (const auto& o : builtin)
       if (o.flag == arg) spec = &o;
     for (const auto& o : options)
@@ -322,6 +324,18 @@ void Process::SetHealth(std::int8_t state, std::string detail) {
   health_detail_ = std::move(detail);
 }
 
+void Process::DeclarePublications(std::vector<Publication> publications) {
+  if (!has_switch("--channels")) return;
+  publications.insert(publications.begin(), Publication{channels::kHeartbeat, ""});
+  std::ostringstream os;
+  os << "process " << name_ << "\n";
+  for (const auto& p : publications) os << "publishes " << p.channel << (p.when.empty() ? "" : " when " + p.when) << "\n";
+  for (const auto& channel : bus_.subscribed()) os << "subscribes " << channel << "\n";
+  std::cout << os.str() << std::flush;
+  // No unwinding: worker threads a process has started need not be stopped for a listing.
+  std::_Exit(0);
+}
+
 bool Process::stopping() const { return stop_requested_ || g_signalled; }
 
 void Process::PublishHeartbeat() {
@@ -346,6 +360,10 @@ int Process::HandleReceived(int max_ms) {
 }
 
 void Process::Run(const std::function<void()>& on_tick, int tick_ms) {
+  if (has_switch("--channels")) {
+    throw config::ConfigError(name_ + ": argument --channels: this program declares no channels "
+                              "(expected a process that calls DeclarePublications)");
+  }
   if (virtual_) return RunVirtual(on_tick, tick_ms);
   using Clock = std::chrono::steady_clock;
   auto next_heartbeat = Clock::now();

@@ -28,6 +28,14 @@ struct OptionSpec {
   std::string help;
 };
 
+// A channel a process publishes. `when` is empty for a channel published in every run,
+// else the condition, in a few words ("with capture.hazcam"): `./rover graph` draws those
+// dashed, and its test does not expect them on the bus of every run.
+struct Publication {
+  std::string channel;
+  std::string when = "";
+};
+
 class Process {
  public:
   // Parses argv. Prints usage and exits 0 on --help. Throws config::ConfigError on a bad
@@ -70,6 +78,12 @@ class Process {
   double wall_seconds() const;
 
   void SetHealth(std::int8_t state, std::string detail);
+
+  // What this process publishes: one list in each main, after its subscriptions and before
+  // it runs (HEARTBEAT is added here). With --channels the process prints its channels
+  // (`publishes CHANNEL [when ...]`, and `subscribes CHANNEL` for each subscription the
+  // bus holds) and exits 0 without running: `./rover graph` draws a deployment from them.
+  void DeclarePublications(std::vector<Publication> publications);
 
   // Loops until SIGINT/SIGTERM or Stop(): dispatches messages, publishes the heartbeat
   // every heartbeat period, and calls `on_tick` every `tick_ms`: of wall time on a

@@ -448,6 +448,7 @@ int main(int argc, char** argv) {
         capture::CaptureOptions::Load(section, proc.config_path(), proc.option("--dataset") ? "dataset" : "");
     if (!options.notice.empty()) std::cerr << "camera_capture: " << options.notice << "\n";
     Capturer capturer(proc, MakeCameras(proc, options, section), options.encoding == "png", options.rate_hz);
+    proc.DeclarePublications({{channels::kStereoFrame}, {channels::kHazcamFrame, "capture.hazcam names a rig"}});
     proc.Run([&] { capturer.Tick(); }, 5);
     capturer.Drain();
     return 0;

@@ -400,6 +400,8 @@ int main(int argc, char** argv) {
     std::cerr << "hazard_monitor: traversability map " << (map ? "on" : "off") << "\n";
     HazardNode node(proc, options, map_check, std::move(map));
     node.Subscribe();
+    proc.DeclarePublications({{channels::kHazardStatus}, {channels::kHazardReply},
+                              {channels::kTraversabilityMap, "the map is on (hazards.map.enabled, --map)"}});
     proc.Run([&] { node.Tick(publish_hz); }, static_cast<int>(1000.0 / publish_hz));
     return 0;
   });

@@ -540,6 +540,8 @@ int main(int argc, char** argv) {
           rover.OnHeartbeat(hb);
         }, 1000);
 
+    proc.DeclarePublications({{channels::kClock}, {channels::kImu}, {channels::kWheelOdometry},
+                              {channels::kMobilityStatus}, {channels::kSimTruth}});
     if (proc.virtual_time()) return VirtualClock(rover, members).Run();
     return RunRealTime(rover, waiting);
   });

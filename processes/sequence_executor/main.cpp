@@ -459,6 +459,9 @@ int main(int argc, char** argv) {
         RestoreRunState(state_file, proc.option("--state-file") ? "argument --state-file" : "executor.state_file");
     ExecutorNode node(proc, options, state_file, std::move(restored), std::move(suspension));
     node.Subscribe();
+    proc.DeclarePublications({{channels::kMobilityCommand}, {channels::kCaptureRequest}, {channels::kHazardQuery},
+                              {channels::kKeepOutZones}, {channels::kNewSite, "a sequence starts a new site"},
+                              {channels::kSequenceStatus}, {channels::kStepReport}});
     proc.Run([&] { node.Tick(); }, 25);
     node.Shutdown();
     return 0;

@@ -173,6 +173,7 @@ int main(int argc, char** argv) {
     section.Get("publish_hz", publish_hz, 8.0, 1000.0);
     EstimatorNode node(proc, options, StartPose(proc), publish_hz);
     node.Subscribe();
+    proc.DeclarePublications({{channels::kPose}});
     proc.Run([&] {
       const auto rejected = node.rejected_vo();
       proc.SetHealth(0, rejected ? std::to_string(rejected) + " VO updates refused" : "");

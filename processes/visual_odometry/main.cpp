@@ -187,6 +187,7 @@ int main(int argc, char** argv) {
                       argc, argv, {}, {"visual_odometry"});
     auto vo_options = vo::LoadVoOptions(proc.config()["vo"]);
     VoNode node(proc, std::move(vo_options), LoadVoProcessOptions(proc.config()["visual_odometry"]));
+    proc.DeclarePublications({{channels::kVoUpdate}});
     proc.Run();
     return 0;
   });
