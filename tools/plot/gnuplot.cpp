@@ -4,12 +4,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
 
 namespace rover::plot {
 namespace {
@@ -90,6 +92,49 @@ std::string Quoted(const std::string& text) {
   }
   return out + "\"";
 }
+
+namespace {
+
+// Where a line of `line` longer than `max_chars` breaks: just after the last separator that
+// leaves the head at most `max_chars` long, preferring "; " to ", " to " ". npos: nowhere.
+std::size_t BreakPoint(const std::string& line, std::size_t max_chars) {
+  for (const char* sep : {"; ", ", ", " "}) {
+    const std::size_t n = std::char_traits<char>::length(sep);
+    std::size_t best = std::string::npos;
+    for (std::size_t at = line.find(sep); at != std::string::npos && at + n - 1 <= max_chars; at = line.find(sep, at + 1)) {
+      if (at > 0) best = at + n;
+    }
+    if (best != std::string::npos && best > max_chars / 3) return best;  // no stub lines
+  }
+  const std::size_t space = line.find(' ', max_chars);  // a word longer than a line
+  return space == std::string::npos ? std::string::npos : space + 1;
+}
+
+}  // namespace
+
+std::string WrapTitle(const std::string& text, std::size_t max_chars) {
+  std::string out;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    std::string line = text.substr(start, end - start);
+    while (line.size() > max_chars) {
+      const std::size_t cut = BreakPoint(line, max_chars);
+      if (cut == std::string::npos || cut >= line.size()) break;
+      std::string head = line.substr(0, cut);
+      while (!head.empty() && head.back() == ' ') head.pop_back();
+      out += head + "\n";
+      line = line.substr(cut);
+    }
+    out += line;
+    if (end == text.size()) break;
+    out += "\n";
+    start = end + 1;
+  }
+  return out;
+}
+
+std::size_t TitleChars(int width_px) { return static_cast<std::size_t>(std::max(20, width_px / 7)); }
 
 std::string Num(double v) {
   if (!std::isfinite(v)) return "?";

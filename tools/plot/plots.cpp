@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -109,7 +110,7 @@ std::string OutcomeText(const DriveLog& log) {
   }
   std::string text;
   for (const auto& r : log.runs) {
-    text += (text.empty() ? "" : "; ") + r.name + " " +
+    text += (text.empty() ? "" : "; ") + std::filesystem::path(r.name).filename().string() + " " +
             (r.final_status ? StatusText(*r.final_status) : std::string("without a final status"));
   }
   return text;
@@ -313,8 +314,9 @@ PlotOutcome WriteTraversePlot(const DriveLog& log, const PlotPlace& place) {
   std::ostringstream gp;
   gp << Header(place, "traverse.png", 900, 950);
   const std::string final_line = FinalErrorLine(log);
-  gp << "set title " << Quoted(place.title + ": traverse, " + OutcomeText(log) +
-                               (final_line.empty() ? "" : "\n" + final_line))
+  gp << "set title " << Quoted(WrapTitle(place.title + ": traverse, " + OutcomeText(log) +
+                                             (final_line.empty() ? "" : "\n" + final_line),
+                                         TitleChars(900)))
      << "\n"
      << "set xlabel 'east (site y), m'\nset ylabel 'north (site x), m'\n"
      << "set size ratio -1\n"
@@ -361,7 +363,9 @@ PlotOutcome WriteErrorPlot(const DriveLog& log, const PlotPlace& place) {
   }
   std::ostringstream gp;
   gp << Header(place, "error.png", 900, 600);
-  gp << "set title " << Quoted(place.title + ": position error against distance travelled\n" + FinalErrorLine(log))
+  gp << "set title "
+     << Quoted(WrapTitle(place.title + ": position error against distance travelled\n" + FinalErrorLine(log),
+                         TitleChars(900)))
      << "\n"
      << "set xlabel 'distance travelled (truth), m'\nset ylabel 'position error (3-D), m'\n"
      << "set xrange [0:*]\nset yrange [0:*]\nset grid\nset key top left box opaque\n"
@@ -383,7 +387,8 @@ PlotOutcome WriteSlipPlot(const DriveLog& log, const PlotPlace& place) {
     // The picture is still there (every run leaves one), and says why it is empty.
     std::ostringstream gp;
     gp << Header(place, "slip.png", 900, 400)
-       << "set title " << Quoted(place.title + ": progress and slip per step, " + OutcomeText(log)) << "\n"
+       << "set title " << Quoted(WrapTitle(place.title + ": progress and slip per step, " + OutcomeText(log), TitleChars(900)))
+       << "\n"
        << "set xrange [0:1]\nset yrange [0:1]\nunset xtics\nunset ytics\n"
        << "set label 'no step was driven (no STEP_REPORT in the log)' at graph 0.5, 0.5 center\n"
        << "plot 1/0 notitle\n";
@@ -409,7 +414,8 @@ PlotOutcome WriteSlipPlot(const DriveLog& log, const PlotPlace& place) {
   }
   std::ostringstream gp;
   gp << Header(place, "slip.png", 900, 850);
-  gp << "set multiplot layout 2,1 title " << Quoted(place.title + ": progress and slip per step, " + OutcomeText(log))
+  gp << "set multiplot layout 2,1 title "
+     << Quoted(WrapTitle(place.title + ": progress and slip per step, " + OutcomeText(log), TitleChars(900)))
      << "\n"
      << "set grid\nset key below horizontal maxrows 2\nset xrange [0.5:" << rows.size() << ".5]\n"
      << "set offsets 0, 0, graph 0.05, graph 0.05\n"

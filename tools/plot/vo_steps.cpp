@@ -156,7 +156,7 @@ VoStepsOutcome WriteVoSteps(const DriveLog& log, const std::string& vo_config, i
        << "set terminal " << place.terminal << " size " << std::max(720, w + 100) << "," << std::max(400, h + 170)
        << " noenhanced" << (place.terminal == "pngcairo" ? " font 'sans,10'" : "") << "\n"
        << "set output " << Quoted("../vo_steps/" + name + ".png") << "\n"
-       << "set title " << Quoted(title.str()) << "\n"
+       << "set title " << Quoted(WrapTitle(title.str(), TitleChars(std::max(720, w + 100)))) << "\n"
        << "set size ratio -1\nunset colorbox\nset palette gray\n"
        // Image rows grow downward: the y axis is reversed so (u, v) is where the pixel is.
        << "set xrange [-0.5:" << w - 0.5 << "]\nset yrange [" << h - 0.5 << ":-0.5]\n"

@@ -257,6 +257,36 @@ TEST(Gnuplot, QuotesAndNumbers) {
   EXPECT_EQ(Num(std::nan("")), "?");
 }
 
+// A title too long for its picture is broken into lines that fit, at "; " where it can,
+// and loses nothing.
+TEST(Gnuplot, LongTitlesWrapIntoLinesThatFit) {
+  const std::string three =
+      "day_one (first_drive.seq, second_leg.seq, third_goto.seq): traverse, first_drive.seq completed; "
+      "second_leg.seq aborted (progress); third_goto.seq completed\nafter 12.345 m: on-board estimate off by "
+      "0.012 m, wheel odometry alone by 0.345 m";
+  const std::size_t width = TitleChars(900);
+  EXPECT_GE(width, 100u);
+  EXPECT_LE(width, 137u) << "137 characters filled 900 px";
+  const std::string wrapped = WrapTitle(three, width);
+  std::vector<std::string> lines;
+  std::stringstream in(wrapped);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_GE(lines.size(), 3u) << wrapped;
+  for (const auto& line : lines) EXPECT_LE(line.size(), width) << line;
+  EXPECT_EQ(lines[0].back(), ';') << "broken after a sequence's outcome: " << lines[0];
+  // Nothing lost: the same words in the same order.
+  auto words = [](const std::string& text) {
+    std::vector<std::string> w;
+    std::stringstream ss(text);
+    for (std::string word; ss >> word;) w.push_back(word);
+    return w;
+  };
+  EXPECT_EQ(words(wrapped), words(three));
+  // A title that fits is left alone; so is a word longer than a line.
+  EXPECT_EQ(WrapTitle("demo (demo.seq): traverse, completed", width), "demo (demo.seq): traverse, completed");
+  EXPECT_EQ(WrapTitle(std::string(50, 'x') + " y", 20), std::string(50, 'x') + "\ny");
+}
+
 TEST(Plots, WritesTheThreePicturesAndSaysWhyVoStepsAreEmpty) {
   const std::string terminal = PngTerminal();
   if (terminal.empty()) GTEST_SKIP() << "gnuplot is not installed (Debian gnuplot-nox; ./rover setup installs it)";
@@ -422,6 +452,34 @@ TEST(Plots, TraverseShowsBothSequencesTheirAbortsTheGoalRocksAndSteeringSteps) {
   EXPECT_EQ(steer_rows.rfind("0 0\n0.45 0\n", 0), 0u) << steer_rows;
   EXPECT_EQ(avoid_rows.rfind("0.45 0\n0.9 0\n", 0), 0u) << avoid_rows;
   EXPECT_EQ(lines("traverse_goals.dat"), 1);
+}
+
+// A log with three sequences: the traverse title names each and fits its picture.
+TEST(Plots, AThreeSequenceTitleFitsThePicture) {
+  const std::string terminal = PngTerminal();
+  if (terminal.empty()) GTEST_SKIP() << "gnuplot is not installed (Debian gnuplot-nox; ./rover setup installs it)";
+  const std::string dir = FreshDir("three_title");
+  const auto log = ReadDriveLog(AppendSecondSequence(dir));
+  PlotPlace place{dir, dir + "/plot", terminal,
+                  "a_long_day_of_operations (synthetic.seq, second.seq, a_third_sequence_with_a_long_name.seq)"};
+  fs::create_directories(place.data_dir);
+  ASSERT_TRUE(WriteTraversePlot(log, place).written);
+  const std::string script = ReadAll(dir + "/plot/traverse.gp");
+  const auto at = script.find("set title \"");
+  ASSERT_NE(at, std::string::npos) << script;
+  const std::string title = script.substr(at + 11, script.find('\n', at) - at - 12);  // between the quotes
+  std::size_t lines = 0, start = 0;
+  for (std::size_t end; start <= title.size(); start = end + 2) {
+    end = std::min(title.find("\\n", start), title.size());
+    EXPECT_LE(end - start, TitleChars(900)) << title.substr(start, end - start);
+    ++lines;
+    if (end == title.size()) break;
+  }
+  EXPECT_GE(lines, 3u) << title;
+  for (const char* name : {"a_third_sequence_with_a_long_name.seq", "synthetic.seq aborted (progress);",
+                           "second.seq aborted (hazard_map)"}) {
+    EXPECT_NE(title.find(name), std::string::npos) << name << " is not in the title: " << title;
+  }
 }
 
 }  // namespace
