@@ -104,6 +104,7 @@ void Bus::set_publisher(const std::string& name) {
 }
 
 bool Bus::Handle(int timeout_ms) {
+  ++handle_round_;  // one datagram a call (Admit: the replay check runs once per datagram)
   const int status = lcm_.handleTimeout(timeout_ms);
   // A signal (SIGTERM from systemd or the launcher) interrupts the wait: not an error.
   if (status < 0 && errno == EINTR) return false;
@@ -111,9 +112,22 @@ bool Bus::Handle(int timeout_ms) {
   return status > 0;
 }
 
+std::int64_t Bus::dropped_on(const std::string& channel) const {
+  const auto it = drops_by_channel_.find(channel);
+  return it == drops_by_channel_.end() ? 0 : it->second.first;
+}
+
+std::string Bus::last_drop_on(const std::string& channel) const {
+  const auto it = drops_by_channel_.find(channel);
+  return it == drops_by_channel_.end() ? "" : it->second.second;
+}
+
 void Bus::Drop(const std::string& channel, const std::string& type, const std::string& why) {
   ++dropped_;
   last_drop_ = channel + ": " + why;
+  auto& on_channel = drops_by_channel_[channel];
+  ++on_channel.first;
+  on_channel.second = why;
   log_.Report(channel, "bus: " + channel + ": dropped a " + type + ": " + why + " (" +
                            std::to_string(dropped_) + " dropped so far)");
 }

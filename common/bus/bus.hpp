@@ -89,6 +89,14 @@ class Bus {
   void Subscribe(const std::string& channel, std::function<void(const Msg&)> callback,
                  int queue_capacity = 30);
 
+  // The same without the time and authentication checks (size, decoding and fields are
+  // checked): for a console's diagnostics only. What it delivers may be forged, replayed or
+  // stamped in another time, so nothing may act on it; rover_web reads the executor's
+  // heartbeat so, to say why its commands are refused when its key does not verify them.
+  template <class Msg>
+  void SubscribeUnverified(const std::string& channel, std::function<void(const Msg&)> callback,
+                           int queue_capacity = 30);
+
   template <class Msg>
   void Publish(const std::string& channel, const Msg& msg);
 
@@ -104,6 +112,15 @@ class Bus {
   const std::string& last_drop() const { return last_drop_; }
   // Kept for older callers: the same count.
   std::int64_t corrupt_count() const { return dropped_; }
+  // Per channel: the messages dropped and the last reason (0 and "" when none). The
+  // executor names its command channels' drops in its heartbeat, so a console can tell
+  // that its own command was refused even while other channels drop messages too.
+  std::int64_t dropped_on(const std::string& channel) const;
+  std::string last_drop_on(const std::string& channel) const;
+  // Of those, the messages refused for their authentication (a missing or wrong tag, a
+  // replayed counter), and the last one: "CHANNEL: reason".
+  std::int64_t auth_rejected() const { return auth_rejected_; }
+  const std::string& last_auth_rejection() const { return last_auth_rejection_; }
   // Records a drop found by a receiver after the Bus's own checks (an image that does not
   // match its camera model, say): same line, same count.
   void Drop(const std::string& channel, const std::string& type, const std::string& why);
@@ -169,6 +186,7 @@ class Bus {
     Bus* bus;
     std::function<void(const Msg&)> callback;
     int queue_capacity = 30;
+    bool unverified = false;  // SubscribeUnverified
     void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
     void Deliver(const Msg& msg, const std::string& channel);
   };
@@ -185,7 +203,11 @@ class Bus {
   std::string Hold(const std::string& channel, int queue_capacity);
 
   template <class Msg>
-  std::string Admit(const std::string& channel, const lcm::ReceiveBuffer* rbuf, Msg* msg, const void* handler);
+  std::string Admit(const std::string& channel, const lcm::ReceiveBuffer* rbuf, Msg* msg, const void* handler,
+                    bool unverified);
+  template <class Msg>
+  void SubscribeHandler(const std::string& channel, std::function<void(const Msg&)> callback, int queue_capacity,
+                        bool unverified);
   template <class Msg>
   std::string Authenticate(const Msg& msg);
   template <class Msg>
@@ -201,17 +223,24 @@ class Bus {
   RateLimitedLog log_;
   std::int64_t dropped_ = 0;
   std::string last_drop_;
+  std::map<std::string, std::pair<std::int64_t, std::string>> drops_by_channel_;
+  std::int64_t auth_rejected_ = 0;
+  std::string last_auth_rejection_;
   Auth auth_;
   bool has_auth_ = false;
   std::set<std::string> subscribed_;
-  // The datagram whose authentication was last accepted (Admit says why).
+  // The datagram whose authentication was last accepted (Admit says why). `round`: the
+  // Handle call that dispatched it; LCM dispatches one datagram a call, so a replay, which
+  // is another datagram, comes in another round even where LCM reuses its buffer.
   struct Received {
     const void* data;
     std::uint32_t size;
     std::int64_t recv_utime;
     std::string channel;
+    std::uint64_t round;
     bool operator==(const Received&) const = default;
   };
+  std::uint64_t handle_round_ = 0;
   std::optional<Received> last_verified_;
   std::set<const void*> verified_for_;  // the subscriptions that have had it
   std::map<std::string, std::map<std::uint32_t, std::int64_t>> received_;
@@ -281,7 +310,8 @@ void Bus::Publish(const std::string& channel, const Msg& msg) {
 
 // The checks in order; "" admits the message into `msg`.
 template <class Msg>
-std::string Bus::Admit(const std::string& channel, const lcm::ReceiveBuffer* rbuf, Msg* msg, const void* handler) {
+std::string Bus::Admit(const std::string& channel, const lcm::ReceiveBuffer* rbuf, Msg* msg, const void* handler,
+                       bool unverified) {
   const std::size_t max_bytes = MaxPayloadBytes(channel);
   if (rbuf->data_size > max_bytes) {
     return std::to_string(rbuf->data_size) + " bytes is over the channel's limit of " +
@@ -302,22 +332,28 @@ std::string Bus::Admit(const std::string& channel, const lcm::ReceiveBuffer* rbu
   if constexpr (requires { Problem(*msg); }) {
     if (std::string p = Problem(*msg); !p.empty()) return p;
   }
+  if (unverified) return "";  // SubscribeUnverified: no time, no authentication
   if constexpr (requires { msg->utime; }) {
     if (TimeChecked(channel) && channel != channels::kClock) {  // the clock: RoverClock::AcceptClock
       if (std::string p = clock_.Judge(msg->utime, RoverClock::WallClock::now()); !p.empty()) return p;
     }
   }
-  // LCM hands one datagram to every subscription of its channel with the same receive
-  // buffer: a second subscription on this Bus takes the first one's verdict, instead of
-  // seeing the counter again and calling the same datagram a replay. A replay is another
-  // datagram (another receive), so it is still checked.
-  // (A datagram handed to a subscription that already had it is checked again.)
-  const Received same{rbuf->data, rbuf->data_size, rbuf->recv_utime, channel};
+  // The replay check runs once per datagram, not once per subscription: LCM hands one
+  // datagram to every subscription of its channel, in one Handle call and with the same
+  // receive buffer, so a second subscription on this Bus takes the first one's verdict
+  // instead of seeing the counter again and calling the same datagram a replay. A replay
+  // is another datagram (another Handle call), so it is still checked, by every
+  // subscription; so is a datagram handed again to a subscription that already had it.
+  const Received same{rbuf->data, rbuf->data_size, rbuf->recv_utime, channel, handle_round_};
   if (last_verified_ && *last_verified_ == same && !verified_for_.count(handler)) {
     verified_for_.insert(handler);
     return "";
   }
-  if (std::string p = Authenticate(*msg); !p.empty()) return "rejected: " + p;
+  if (std::string p = Authenticate(*msg); !p.empty()) {
+    ++auth_rejected_;
+    last_auth_rejection_ = channel + ": " + p;
+    return "rejected: " + p;
+  }
   if constexpr (requires { msg->auth.tag; }) {
     last_verified_ = same;
     verified_for_ = {handler};
@@ -328,7 +364,7 @@ std::string Bus::Admit(const std::string& channel, const lcm::ReceiveBuffer* rbu
 template <class Msg>
 void Bus::TypedHandler<Msg>::OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   auto msg = std::make_shared<Msg>();
-  if (std::string why = bus->Admit(channel, rbuf, msg.get(), this); !why.empty()) {
+  if (std::string why = bus->Admit(channel, rbuf, msg.get(), this, unverified); !why.empty()) {
     bus->Drop(channel, Msg::getTypeName(), why);
     return;
   }
@@ -367,10 +403,23 @@ void Bus::TypedHandler<Msg>::Deliver(const Msg& msg, const std::string& channel)
 template <class Msg>
 void Bus::Subscribe(const std::string& channel, std::function<void(const Msg&)> callback,
                     int queue_capacity) {
+  SubscribeHandler<Msg>(channel, std::move(callback), queue_capacity, false);
+}
+
+template <class Msg>
+void Bus::SubscribeUnverified(const std::string& channel, std::function<void(const Msg&)> callback,
+                              int queue_capacity) {
+  SubscribeHandler<Msg>(channel, std::move(callback), queue_capacity, true);
+}
+
+template <class Msg>
+void Bus::SubscribeHandler(const std::string& channel, std::function<void(const Msg&)> callback,
+                           int queue_capacity, bool unverified) {
   auto handler = std::make_unique<TypedHandler<Msg>>();
   handler->bus = this;
   handler->callback = std::move(callback);
   handler->queue_capacity = queue_capacity;
+  handler->unverified = unverified;
   lcm::Subscription* sub =
       lcm_.subscribe(channel, &TypedHandler<Msg>::OnMessage, handler.get());
   if (sub == nullptr) throw std::runtime_error("LCM subscribe failed on channel " + channel);

@@ -368,7 +368,17 @@ class ExecutorNode {
     executor_.Tick(proc_.now(), proc_.guard_seconds());
     Flush();
     if (proc_.now() > 0 || (!proc_.virtual_time() && proc_.wall_seconds() > 2.0)) ReportInterrupted();
-    proc_.SetHealth(0, seq::ToString(executor_.state()));
+    // The heartbeat's detail: the state, and the commands dropped, per channel, with the
+    // last reason ("idle; SEQUENCE_SUBMIT dropped 1: rejected: no authentication tag ..."),
+    // so that a console whose command was dropped (unsigned, a wrong key) can say it was
+    // refused and why (rover_web), whatever else the bus drops meanwhile.
+    std::string detail = seq::ToString(executor_.state());
+    for (const char* channel : {channels::kSequenceSubmit, channels::kSequenceControl}) {
+      if (const std::int64_t n = proc_.bus().dropped_on(channel); n > 0) {
+        detail += "; " + std::string(channel) + " dropped " + std::to_string(n) + ": " + proc_.bus().last_drop_on(channel);
+      }
+    }
+    proc_.SetHealth(0, detail);
   }
 
   // Stopping the executor while it drives stops the rover: commanding nothing is safe.

@@ -12,6 +12,13 @@
 //                          the checker's line), then published on SEQUENCE_SUBMIT
 //   POST /api/pause, /api/resume, /api/abort   body: an optional one-line reason
 //
+// A command is answered once the executor has said what became of it (command_watch.hpp,
+// as rover_seq finds out): 200 when it took it (a submit: its first status), 403 with the
+// executor's reason when it dropped it (unsigned on a signed stack, a wrong key), 409 when
+// it rejected the sequence, 504 when it said nothing within kAnswerWaitS. A console whose
+// commands the stack will refuse (no key on a signed stack, a key that does not verify
+// its messages) says so once on stderr and in the page's state (commands.key_problem).
+//
 // Every POST needs the operator secret in the X-Rover-Secret header (403 otherwise), and
 // is signed with the deployment's key when one is held (--key, auth.key_file,
 // $ROVER_KEY_FILE), through the same Bus signing as every process and rover_seq.
@@ -30,7 +37,9 @@
 #include "bus/process.hpp"
 #include "config/file_read.hpp"
 #include "config/yaml_config.hpp"
+#include "report/json_writer.hpp"
 #include "sequence/parser.hpp"
+#include "web_console/command_watch.hpp"
 #include "web_console/log_playback.hpp"
 #include "web_console/static_files.hpp"
 #include "web_console/web_state.hpp"
@@ -68,6 +77,8 @@ namespace {
 constexpr const char* kSecretHeader = "X-Rover-Secret";
 constexpr std::size_t kMaxReasonBytes = 200;
 constexpr std::size_t kMinSecretBytes = 12;
+// How long a command waits for the executor to say what became of it (rover_seq: 4 s).
+constexpr double kAnswerWaitS = 5.0;
 
 double Now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -345,9 +356,10 @@ void FeedStateFromBus(rover::bus::Bus& bus, rover::web::WebState& state) {
 class WebConsole {
  public:
   WebConsole(rover::bus::Process& proc, ConsoleArgs args, rover::web::WebStateOptions options)
-      : proc_(proc), args_(std::move(args)), options_(options), state_(options_) {
+      : proc_(proc), args_(std::move(args)), options_(options), state_(options_), watch_(options_.signing) {
     if (args_.log_path) playback_ = OpenPlayback(*args_.log_path, options_);
     FeedStateFromBus(proc_.bus(), state_);
+    if (!playback_) WatchCommands();
     server_.set_payload_max_length(rover::config::kMaxSequenceFileBytes);  // larger: 413
     server_.set_read_timeout(5, 0);
     server_.set_write_timeout(5, 0);
@@ -377,6 +389,45 @@ class WebConsole {
   }
 
  private:
+  // What the executor says of the commands sent (command_watch.hpp). Its heartbeat is read
+  // unverified: with a key that does not verify the stack's messages, the Bus would drop
+  // the very heartbeat that says why the commands are refused.
+  void WatchCommands() {
+    namespace ch = rover::channels;
+    proc_.bus().SubscribeUnverified<rover_msgs::heartbeat_t>(
+        ch::kHeartbeat, [this](const rover_msgs::heartbeat_t& hb) { watch_.OnHeartbeat(hb); }, 100);
+    proc_.bus().Subscribe<rover_msgs::sequence_status_t>(
+        ch::kSequenceStatus, [this](const rover_msgs::sequence_status_t& st) { watch_.OnStatus(st); }, 50);
+  }
+
+  // On the bus thread: what the console's own bus refused for its authentication, and a
+  // key problem said once, on stderr and on the page.
+  void CheckKey() {
+    const rover::bus::Bus& bus = proc_.bus();
+    if (bus.auth_rejected() > auth_rejected_seen_) {
+      auth_rejected_seen_ = bus.auth_rejected();
+      watch_.OnAuthRejection(bus.last_auth_rejection());
+    }
+    if (const std::string problem = watch_.TakeNewKeyProblem(); !problem.empty()) {
+      std::cerr << "rover_web: " << problem << "\n" << std::flush;
+      state_.SetKeyProblem(problem);
+    }
+  }
+
+  // The answer to a command (`what`, for the log) from what the executor said, or did not
+  // say, of it; a command not taken is logged with the same line the page shows.
+  static void Answer(const rover::web::CommandWatch::Verdict& v, const std::string& what,
+                     const std::string& accepted_json, httplib::Response& res) {
+    using V = rover::web::CommandWatch::Verdict;
+    if (v.kind == V::kAccepted) return res.set_content(accepted_json, "application/json");
+    const int status = v.kind == V::kRefused ? 403 : v.kind == V::kRejected ? 409 : 504;
+    const std::string line = v.kind == V::kRefused    ? "refused by sequence_executor: " + v.text
+                             : v.kind == V::kRejected ? "rejected by sequence_executor: " + v.text
+                                                      : "sent, but " + v.text;
+    std::cout << "rover_web: " << what << ": " << line << "\n" << std::flush;
+    Text(res, status, line);
+  }
+
   // A page from another site that a DNS name re-pointed at 127.0.0.1 sends its own name in
   // Host: refuse it, so no other site can read the bus through the browser.
   void RefuseOtherHosts() {
@@ -562,12 +613,15 @@ class WebConsole {
     p->submit.submission_id = id;
     p->submit.name = name;
     p->submit.text = req.body;
+    const auto ticket = watch_.Expect(rover::channels::kSequenceSubmit, id);
     if (!Publish(p, res)) return;
     std::cout << "rover_web: submitted " << name << " as " << id << (options_.signing ? " (signed)" : "") << " for "
               << req.remote_addr << "\n" << std::flush;
-    res.set_content("{\"submission_id\":" + std::to_string(id) + ",\"signed\":" +
-                        (options_.signing ? "true" : "false") + "}\n",
-                    "application/json");
+    const auto verdict = watch_.Wait(ticket, kAnswerWaitS);
+    Answer(verdict, "submission " + std::to_string(id),
+           "{\"submission_id\":" + std::to_string(id) + ",\"signed\":" + (options_.signing ? "true" : "false") +
+               ",\"executor\":" + rover::tools::JsonWriter::Quote(verdict.text) + "}\n",
+           res);
   }
 
   void Control(const char* path, std::int8_t action, const std::string& verb) {
@@ -579,11 +633,15 @@ class WebConsole {
       p->kind = Pending::kControl;
       p->control.action = action;
       p->control.reason = reason.empty() ? "operator " + verb + " (web console)" : reason;
+      const auto ticket = watch_.Expect(rover::channels::kSequenceControl);
       if (!Publish(p, res)) return;
       std::cout << "rover_web: " << verb << " sent" << (options_.signing ? " (signed)" : "") << ": "
                 << p->control.reason << "\n" << std::flush;
-      res.set_content("{\"sent\":\"" + verb + "\",\"signed\":" + (options_.signing ? "true" : "false") + "}\n",
-                      "application/json");
+      const auto verdict = watch_.Wait(ticket, kAnswerWaitS);
+      Answer(verdict, verb,
+             "{\"sent\":\"" + verb + "\",\"signed\":" + (options_.signing ? "true" : "false") +
+                 ",\"executor\":" + rover::tools::JsonWriter::Quote(verdict.text) + "}\n",
+             res);
     });
   }
 
@@ -591,6 +649,7 @@ class WebConsole {
   // pages' commands onto the bus.
   void PublishPendingCommands() {
     state_.OnRoverClock(proc_.now());
+    CheckKey();
     for (auto& p : commands_.Take()) {
       try {
         if (p->kind == Pending::kSubmit) {
@@ -657,6 +716,8 @@ class WebConsole {
   const ConsoleArgs args_;
   const rover::web::WebStateOptions options_;
   rover::web::WebState state_;
+  rover::web::CommandWatch watch_;
+  std::int64_t auth_rejected_seen_ = 0;
   std::unique_ptr<rover::web::LogPlayback> playback_;
   httplib::Server server_;
   std::vector<std::string> allowed_hosts_;  // filled once the port is known

@@ -233,6 +233,11 @@ void WebState::OnRoverClock(std::int64_t utime) {
   rover_utime_ = std::max(rover_utime_, utime);
 }
 
+void WebState::SetKeyProblem(std::string problem) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  key_problem_ = std::move(problem);
+}
+
 std::int64_t WebState::messages() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return messages_;
@@ -297,6 +302,7 @@ std::string WebState::StateJson(double wall_now_s, const PlaybackInfo* playback)
   j.Key("commands").Begin('{');
   j.Key("enabled").Bool(options_.commands_enabled);
   j.Key("signed").Bool(options_.signing);
+  j.Key("key_problem").Str(key_problem_);
   j.End('}');
   j.Key("playback");
   if (playback != nullptr) {

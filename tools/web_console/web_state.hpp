@@ -77,6 +77,9 @@ class WebState {
   void On(const rover_msgs::heartbeat_t& m, double wall_s);
   void On(const rover_msgs::stereo_frame_t& m, double wall_s);
   void OnRoverClock(std::int64_t utime);
+  // Why the stack will refuse this console's commands (command_watch.hpp), once known:
+  // the state's commands.key_problem, a banner on the page.
+  void SetKeyProblem(std::string problem);
 
   // The whole picture as one JSON object; "playback" is null live, else `playback`.
   std::string StateJson(double wall_now_s, const PlaybackInfo* playback = nullptr) const;
@@ -97,6 +100,7 @@ class WebState {
   mutable std::mutex mutex_;
   std::int64_t messages_ = 0;
   std::int64_t rover_utime_ = 0;
+  std::string key_problem_;
   std::optional<rover_msgs::pose_t> pose_;
   std::vector<Point> pose_path_;
   std::int32_t pose_path_site_ = -1;

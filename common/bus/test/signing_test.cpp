@@ -286,3 +286,46 @@ TEST(Signing, TwoSubscriptionsToASignedChannelBothGetItAndBothRefuseAReplay) {
   EXPECT_EQ(second.size(), 1u);
   EXPECT_EQ(bus.dropped(), 4) << "two copies, each refused by both subscriptions";
 }
+
+// What the Bus counts of its refusals, per channel and for authentication, and a
+// subscription for diagnostics that sees what the checked one refuses (rover_web reads the
+// executor's heartbeat so when its own key is wrong).
+TEST(Signing, RefusalsAreCountedPerChannelAndAnUnverifiedSubscriptionSeesWhatIsRefused) {
+  rover::bus::Bus bus("memq://");
+  bus.set_publisher("rover_web");
+  bus.set_auth(rover::bus::MakeBusAuth(TestKey(), "rover_web"));
+  std::vector<sequence_control_t> checked, unverified;
+  bus.Subscribe<sequence_control_t>(rover::channels::kSequenceControl,
+                                    [&](const sequence_control_t& m) { checked.push_back(m); });
+  bus.SubscribeUnverified<sequence_control_t>(rover::channels::kSequenceControl,
+                                              [&](const sequence_control_t& m) { unverified.push_back(m); });
+  auto inject = [&](const sequence_control_t& m) {
+    const auto bytes = rover::bus::EncodeMessage(m);
+    bus.lcm().publish(rover::channels::kSequenceControl, bytes.data(), static_cast<unsigned>(bytes.size()));
+    while (bus.Handle(0)) {
+    }
+  };
+  inject(Abort("unsigned"));
+  Signer forger(TestKey(8), "rover_seq");
+  sequence_control_t forged = Abort("forged");
+  SignMessage(forged, forger);
+  inject(forged);
+  EXPECT_TRUE(checked.empty());
+  ASSERT_EQ(unverified.size(), 2u);
+  EXPECT_EQ(unverified[1].reason, "forged");
+  EXPECT_EQ(bus.auth_rejected(), 2);
+  EXPECT_EQ(bus.dropped_on(rover::channels::kSequenceControl), 2);
+  EXPECT_EQ(bus.dropped_on(rover::channels::kSequenceSubmit), 0);
+  EXPECT_EQ(bus.last_drop_on(rover::channels::kSequenceControl).rfind("rejected: wrong tag from \"rover_seq\"", 0), 0u)
+      << bus.last_drop_on(rover::channels::kSequenceControl);
+  EXPECT_EQ(bus.last_auth_rejection().rfind(std::string(rover::channels::kSequenceControl) + ": wrong tag from", 0), 0u)
+      << bus.last_auth_rejection();
+  // A signed one: both take it, once each; nothing more is counted.
+  bus.Publish(rover::channels::kSequenceControl, Abort("operator"));
+  while (bus.Handle(0)) {
+  }
+  EXPECT_EQ(checked.size(), 1u);
+  EXPECT_EQ(unverified.size(), 3u);
+  EXPECT_EQ(bus.auth_rejected(), 2);
+  EXPECT_EQ(bus.dropped(), 2);
+}

@@ -63,6 +63,7 @@ function readPage(points) {
     zones: map.dataset.zones ? map.dataset.zones.split(',') : [],
     goal: map.dataset.goal ? map.dataset.goal.split(' ').map(Number) : null,
     result: $('result').textContent,
+    banner: $('banner').hidden ? '' : $('banner').textContent,
     colours,
   };
 }

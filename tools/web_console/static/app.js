@@ -5,6 +5,9 @@
 // POSE shown), #steps data-count (steps of the sequence shown), #seqhead data-state and
 // data-submission, and on the #map canvas data-zones (names drawn), data-goal ("x y r"
 // drawn) and data-view (the site-to-canvas transform drawMap used, see sx and sy there).
+// #banner, shown only then, says why the stack will refuse this console's commands
+// (commands.key_problem); #result holds each command's answer (refused: the executor's
+// reason, in red).
 // Playing back a log (rover_web --log, the state's "playback" is set), it asks for the
 // state at the slider's time instead (/api/state?at=SECONDS) and sends no commands.
 'use strict';
@@ -261,15 +264,7 @@ function drawTables(s) {
     cell(tr, pr.detail);
   }
 
-  if (s.image && s.image.frame_id !== imageFrame) {
-    imageFrame = s.image.frame_id;
-    $('navcam').src = 'api/image.png?frame=' + encodeURIComponent(imageFrame) +
-        (s.playback ? '&at=' + encodeURIComponent(s.playback.at_s) : '');
-    $('navcam').hidden = false;
-    $('imginfo').textContent = 'frame ' + s.image.frame_id + ' (' + s.image.purpose + '), ' + s.image.width + 'x' +
-        s.image.height + ' ' + s.image.encoding + ', right exposed ' + (s.image.pair_skew_us / 1000).toFixed(3) +
-        ' ms after left';
-  }
+  drawImage(s);
   $('cmdstate').textContent = s.playback ? 'Playback of a log: commands are off.'
       : s.commands.enabled
       ? 'Commands need the operator secret' + (s.commands.signed ? ' and are signed with the deployment key.' : ' (no key: unsigned).')
@@ -278,11 +273,42 @@ function drawTables(s) {
   $('clock').textContent = 'rover time ' + fix(s.rover_time_s, 1) + ' s, ' + s.messages + ' messages';
 }
 
+// The NAVCAM image of the state: the newest frame it holds, or none. A playback moved to
+// before the first frame has none, and the frame shown before (from a later time) must go.
+function drawImage(s) {
+  const img = $('navcam');
+  if (!s.image) {
+    imageFrame = null;
+    img.hidden = true;
+    img.removeAttribute('src');
+    $('imginfo').textContent = s.playback ? 'no STEREO_FRAME at or before this time' : 'no STEREO_FRAME heard';
+    return;
+  }
+  if (s.image.frame_id === imageFrame) return;
+  imageFrame = s.image.frame_id;
+  img.src = 'api/image.png?frame=' + encodeURIComponent(imageFrame) +
+      (s.playback ? '&at=' + encodeURIComponent(s.playback.at_s) : '');
+  img.hidden = false;
+  $('imginfo').textContent = 'frame ' + s.image.frame_id + ' (' + s.image.purpose + '), ' + s.image.width + 'x' +
+      s.image.height + ' ' + s.image.encoding + ', right exposed ' + (s.image.pair_skew_us / 1000).toFixed(3) +
+      ' ms after left';
+}
+
+// A console whose commands the stack will refuse (no key on a signed stack, a key that
+// does not verify the stack's messages) says so above everything.
+function drawBanner(s) {
+  const banner = $('banner');
+  const problem = !s.playback && s.commands && s.commands.key_problem;
+  banner.hidden = !problem;
+  banner.textContent = problem ? 'Commands will be refused: ' + problem : '';
+}
+
 function render(s) {
   last = s;
   drawMap(s);
   drawSequence(s);
   drawTables(s);
+  drawBanner(s);
 }
 
 function connect() {

@@ -294,6 +294,7 @@ TEST(WebBrowser, PageShowsTheBusAndItsButtonsPauseAndResume) {
     ASSERT_TRUE(page);
     EXPECT_EQ(page["state"].as<std::string>(""), "paused");
     EXPECT_EQ(page["submission_id"].as<std::int64_t>(0), id);
+    EXPECT_EQ(page["banner"].as<std::string>("(none read)"), "") << "a key problem shown on the keyed console";
     ASSERT_TRUE(page["pose"] && !page["pose"].IsNull());
     EXPECT_LT(std::hypot(page["pose"]["x"].as<double>() - pose.position[0], page["pose"]["y"].as<double>() - pose.position[1]),
               0.01)

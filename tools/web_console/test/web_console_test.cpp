@@ -319,6 +319,100 @@ TEST(WebConsole, StateMatchesPoseAndCommandsNeedTheSecret) {
   EXPECT_EQ(executor_log.find("SEQUENCE_CONTROL: dropped"), std::string::npos) << executor_log;
 }
 
+// Consoles the signed stack will not obey, beside the keyed one: one started without a key
+// and one with another key. Each says so once on stderr and on the page's state, and a
+// command from it shows as refused (403) with the executor's reason, not 200; the
+// executor does not run it.
+TEST(WebConsole, WithoutTheStacksKeyCommandsShowAsRefusedWithTheExecutorsReason) {
+  WebStack stack("web_console_refused", 59);
+  ASSERT_GT(stack.port, 0);
+  const std::string other_key = stack.dir + "/other.key";
+  ASSERT_EQ(RunCommand(Bin("rover_seq") + " keygen " + other_key).exit_code, 0);
+  const std::string secret_file = stack.dir + "/secret";
+  // Started by hand beside a running simulation: no ROVER_TIME, so they follow its clock
+  // as observers, outside its barrier.
+  auto start_console = [&](const std::string& name, std::vector<std::string> extra) {
+    launch::ProcessSpec web;
+    web.name = name;
+    web.program = "rover_web";
+    web.args = {"--port", "0", "--secret-file", secret_file};
+    web.args.insert(web.args.end(), extra.begin(), extra.end());
+    stack.set.Start(web, {"ROVER_LCM_URL=" + stack.url});
+    int port = 0;
+    const std::string listening = "listening on http://127.0.0.1:";
+    stack.WaitFor([&] {
+      const std::string log = ReadText(stack.dir + "/" + name + ".log");
+      if (const auto at = log.find(listening); at != std::string::npos) port = std::atoi(log.c_str() + at + listening.size());
+      return port > 0;
+    }, 30);
+    return port;
+  };
+  struct Console {
+    std::string name, says, refused;
+    int port;
+  };
+  std::vector<Console> consoles = {
+      {"rover_web_nokey", "rover_web: this stack signs its messages (a signed HEARTBEAT from ",
+       "refused by sequence_executor: SEQUENCE_SUBMIT: rejected: no authentication tag (a key is required on this bus)",
+       start_console("rover_web_nokey", {})},
+      {"rover_web_otherkey", "rover_web: rover_web's key does not verify this bus's messages (",
+       "refused by sequence_executor: SEQUENCE_SUBMIT: rejected: wrong tag from \"rover_web@",
+       start_console("rover_web_otherkey", {"--key", other_key})}};
+  const httplib::Headers with_secret = {{"X-Rover-Secret", stack.secret}};
+  for (const Console& c : consoles) {
+    SCOPED_TRACE(c.name);
+    ASSERT_GT(c.port, 0) << ReadText(stack.dir + "/" + c.name + ".log");
+    // Said once at start, as soon as it can tell, and on the page's state.
+    ASSERT_TRUE(stack.WaitFor([&] { return ReadText(stack.dir + "/" + c.name + ".log").find(c.says) != std::string::npos; },
+                              60))
+        << ReadText(stack.dir + "/" + c.name + ".log");
+    const std::string log = ReadText(stack.dir + "/" + c.name + ".log");
+    EXPECT_EQ(log.find(c.says), log.rfind(c.says)) << "said more than once:\n" << log;
+    httplib::Client http("127.0.0.1", c.port);
+    http.set_connection_timeout(5);
+    http.set_read_timeout(20);
+    auto state = http.Get("/api/state");
+    ASSERT_TRUE(state);
+    const std::string problem = YAML::Load(state->body)["commands"]["key_problem"].as<std::string>("");
+    EXPECT_NE(problem, "");
+    EXPECT_NE(c.says.find(problem.substr(0, 20)), std::string::npos) << problem;
+    auto page = http.Get("/");
+    ASSERT_TRUE(page);
+    EXPECT_NE(page->body.find("<div id=\"banner\" role=\"alert\" hidden></div>"), std::string::npos)
+        << "the page has no banner to show it in";
+
+    // Submit: refused, with the executor's reason; the executor never ran it.
+    auto submitted = http.Post("/api/submit?name=" + c.name + ".seq", with_secret, "drive 0.4 m\n", "text/plain");
+    ASSERT_TRUE(submitted);
+    EXPECT_EQ(submitted->status, 403) << submitted->body;
+    EXPECT_EQ(submitted->body.rfind(c.refused, 0), 0u) << submitted->body;
+    // Pause: refused the same way (nothing runs, so a taken pause would change nothing).
+    auto paused = http.Post("/api/pause", with_secret, "", "text/plain");
+    ASSERT_TRUE(paused);
+    EXPECT_EQ(paused->status, 403) << paused->body;
+    EXPECT_EQ(paused->body.rfind("refused by sequence_executor: SEQUENCE_CONTROL: rejected: ", 0), 0u) << paused->body;
+    EXPECT_NE(ReadText(stack.dir + "/" + c.name + ".log").find("rover_web: pause: refused by sequence_executor: "),
+              std::string::npos);
+  }
+  {
+    std::lock_guard<std::mutex> lock(stack.heard.mutex);
+    for (const auto& [id, list] : stack.heard.statuses) {
+      for (const auto& st : list) EXPECT_EQ(st.sequence_name.find("rover_web_"), std::string::npos) << st.sequence_name;
+    }
+  }
+  // The keyed console beside them: its submit is answered, 200, with the executor's state.
+  httplib::Client keyed("127.0.0.1", stack.port);
+  keyed.set_read_timeout(20);
+  auto ok = keyed.Post("/api/submit?name=keyed.seq", with_secret, "turn 10 deg\n", "text/plain");
+  ASSERT_TRUE(ok);
+  ASSERT_EQ(ok->status, 200) << ok->body;
+  const YAML::Node answer = YAML::Load(ok->body);
+  EXPECT_TRUE(answer["signed"].as<bool>());
+  EXPECT_EQ(answer["executor"].as<std::string>(""), "running") << ok->body;
+  EXPECT_EQ(YAML::Load(keyed.Get("/api/state")->body)["commands"]["key_problem"].as<std::string>("x"), "");
+  stack.set.StopAll();
+}
+
 TEST(WebConsole, BadArgumentsGetOneLine) {
   struct Case {
     std::string args, expect;
