@@ -302,6 +302,55 @@ StereoCalibration LoadRosCameraInfoPair(const std::string& left_path, const std:
   return cal;
 }
 
+namespace {
+
+double UnitScale(const std::string& unit) { return unit == "mm" ? 1e-3 : unit == "cm" ? 1e-2 : 1.0; }
+
+// The --t-unit that puts a baseline read in `unit` inside the plausible range, or "";
+// of two that do, the one nearer a typical 0.2 m rover baseline (in ratio).
+std::string FittingUnit(double baseline_m, const std::string& unit) {
+  const double raw = baseline_m / UnitScale(unit);
+  std::string best;
+  double best_off = 0;
+  for (const char* u : {"mm", "cm", "m"}) {
+    const double b = raw * UnitScale(u);
+    const double off = std::abs(std::log(b / 0.2));
+    if (u != unit && b >= kMinBaselineM && b <= kMaxBaselineM && (best.empty() || off < best_off)) {
+      best = u;
+      best_off = off;
+    }
+  }
+  return best;
+}
+
+std::string FocalProblem(const Intrinsics& in, const char* camera) {
+  for (const auto& [name, f] : {std::pair<const char*, double>{"fx", in.fx}, {"fy", in.fy}}) {
+    if (f < kMinFocalPx || f > kMaxFocalPx) {
+      return std::string(camera) + " camera's " + name + " " + Short(f) + " px is outside " + Short(kMinFocalPx) +
+             " to " + Short(kMaxFocalPx) + " px: is its camera matrix in pixels, for images of " +
+             std::to_string(in.width) + "x" + std::to_string(in.height) + "?";
+    }
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string PlausibilityProblem(const StereoCalibration& cal, const std::string& t_unit) {
+  const double b = cal.T.norm();
+  if (!(b >= kMinBaselineM && b <= kMaxBaselineM)) {
+    std::string why = "baseline " + Short(b) + " m is outside " + Short(kMinBaselineM) + " to " +
+                      Short(kMaxBaselineM) + " m";
+    if (t_unit.empty()) return why + ": is the right camera's projection_matrix Tx = -fx * baseline in metres?";
+    const std::string fit = FittingUnit(b, t_unit);
+    why += ": T was read in " + t_unit + (t_unit == "m" ? " (the default)" : "");
+    return why + (fit.empty() ? "; is T the translation between the two cameras?"
+                              : "; if the calibration target was measured in " + fit + ", pass --t-unit " + fit);
+  }
+  if (std::string p = FocalProblem(cal.left, "the left"); !p.empty()) return p;
+  return FocalProblem(cal.right, "the right");
+}
+
 std::string RigYaml(const StereoCalibration& cal, const Mount& mount) {
   const double k = M_PI / 180.0;
   const Eigen::Matrix3d R_rover_left =

@@ -40,6 +40,15 @@ StereoCalibration LoadOpenCvStereo(const std::string& path, double translation_s
                                    int height = 0);
 StereoCalibration LoadRosCameraInfoPair(const std::string& left_path, const std::string& right_path);
 
+// What makes a calibration implausible for a rover's stereo camera, in one line, or "" when
+// nothing does: a baseline outside kMinBaselineM..kMaxBaselineM (naming the --t-unit that
+// would bring it inside: a file in millimetres read as metres gives 1000 times the
+// baseline), or a focal length outside kMinFocalPx..kMaxFocalPx. `t_unit` is the unit T
+// was read in (m, cm or mm; "" for a ROS pair, whose baseline is in metres by definition).
+inline constexpr double kMinBaselineM = 0.01, kMaxBaselineM = 2.0;
+inline constexpr double kMinFocalPx = 50.0, kMaxFocalPx = 50000.0;
+std::string PlausibilityProblem(const StereoCalibration& calibration, const std::string& t_unit);
+
 // The left camera's mount in the rover frame: centre, and body roll/pitch/yaw (x along
 // the optical axis, y right, z down; as rpy_deg in a rig file).
 struct Mount {

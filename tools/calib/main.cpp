@@ -5,6 +5,7 @@
 #include "config/number_list.hpp"
 #include "config/yaml_config.hpp"
 
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 
@@ -14,7 +15,7 @@ namespace {
 
 const char* kUsage =
     "usage: calib_import (--opencv FILE [--t-unit m|cm|mm] [--size WxH] | --ros-left FILE --ros-right FILE)\n"
-    "                    --left-position X,Y,Z --left-rpy ROLL,PITCH,YAW --out RIG.yaml\n\n"
+    "                    --left-position X,Y,Z --left-rpy ROLL,PITCH,YAW --out RIG.yaml [--force]\n\n"
     "Writes the rig file camera_capture's capture.rig reads: both cameras as pinhole models with\n"
     "OpenCV distortion, in the rover frame (X forward, Y right, Z down), the left camera at its\n"
     "mount (metres; body roll, pitch, yaw in degrees, as rpy_deg in a rig file) and the right one\n"
@@ -22,7 +23,12 @@ const char* kUsage =
     "  --opencv FILE   cv::FileStorage YAML with K1|M1, D1, K2|M2, D2, R, T (X_right = R X_left + T)\n"
     "                  and image_width/image_height or imageSize (else --size)\n"
     "  --t-unit U      the unit of T (the calibration target's): m (default), cm or mm\n"
-    "  --ros-left/--ros-right FILE   ROS camera_info YAML of each camera (camera_calibration)\n";
+    "  --ros-left/--ros-right FILE   ROS camera_info YAML of each camera (camera_calibration)\n"
+    "  --force         write a baseline outside 1 cm to 2 m or a focal length outside 50 to\n"
+    "                  50,000 px (else one line naming the value and exit 2), and replace an\n"
+    "                  existing --out (else it is kept, exit 2)\n"
+    "Exit codes: 0 written; 2 a bad argument or file, an implausible calibration, or an\n"
+    "existing --out (nothing written).\n";
 
 using calib::BadArgument;
 
@@ -36,7 +42,7 @@ Eigen::Vector3d Triple(const std::string& option, const std::string& text) {
 
 int Run(int argc, char** argv) {
   std::string opencv, ros_left, ros_right, out, unit = "m";
-  bool have_position = false, have_rpy = false;
+  bool have_position = false, have_rpy = false, force = false;
   int width = 0, height = 0;
   calib::Mount mount;
   calib::Arguments args(argc, argv);
@@ -53,6 +59,8 @@ int Run(int argc, char** argv) {
       ros_right = args.Value();
     } else if (arg == "--out") {
       out = args.Value();
+    } else if (arg == "--force") {
+      force = true;
     } else if (arg == "--t-unit") {
       unit = args.Value();
       if (unit != "m" && unit != "cm" && unit != "mm") {
@@ -80,9 +88,18 @@ int Run(int argc, char** argv) {
   if (!have_position) throw BadArgument("missing argument --left-position X,Y,Z (the left camera's centre, rover frame, m)");
   if (!have_rpy) throw BadArgument("missing argument --left-rpy ROLL,PITCH,YAW (the left camera's body angles, deg)");
   if (out.empty()) throw BadArgument("missing argument --out RIG.yaml");
+  std::error_code ec;
+  if (!force && std::filesystem::exists(out, ec)) {
+    throw BadArgument("--out " + out + ": exists; kept (pass --force to replace it)");
+  }
   const double scale = unit == "mm" ? 1e-3 : unit == "cm" ? 1e-2 : 1.0;
   const auto cal = opencv.empty() ? calib::LoadRosCameraInfoPair(ros_left, ros_right)
                                   : calib::LoadOpenCvStereo(opencv, scale, width, height);
+  const std::string problem = calib::PlausibilityProblem(cal, opencv.empty() ? "" : unit);
+  if (!problem.empty() && !force) {
+    throw BadArgument((opencv.empty() ? ros_right : opencv) + ": " + problem + " (nothing written; --force writes it anyway)");
+  }
+  if (!problem.empty()) std::cerr << "calib_import: warning: " << problem << " (written anyway: --force)\n";
   std::ofstream file(out);
   file << calib::RigYaml(cal, mount);
   if (!file) throw BadArgument("cannot write " + out);

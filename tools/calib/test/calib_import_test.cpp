@@ -8,9 +8,13 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 
 using namespace rover;
 namespace fs = std::filesystem;
@@ -208,4 +212,102 @@ TEST(CalibImport, BadInputIsOneLineNamingTheKey) {
   std::ofstream(ros) << good << "camera_matrx: {rows: 3, cols: 3, data: [500, 0, 320, 0, 500, 240, 0, 0, 1]}\n";
   const std::string unknown = ErrorOf([&] { calib::LoadRosCameraInfoPair(ros, ros); });
   EXPECT_EQ(unknown.rfind(ros + ": camera_matrx: unknown key (expected one of: ", 0), 0u) << unknown;
+}
+
+// ---- plausibility (issue 44): a unit mismatch or a focal length not in pixels ----
+
+TEST(CalibImportPlausibility, AMillimetreFileReadAsMetresNamesTheUnit) {
+  // T = (-200, 0, 0) written in millimetres: read as metres it is a 200 m baseline.
+  const std::string mm = WriteOpenCv("mm.yaml", cv::Matx33d::eye(), {-200.0, 0, 0});
+  const auto as_m = calib::LoadOpenCvStereo(mm);
+  EXPECT_DOUBLE_EQ(as_m.T.norm(), 200.0);
+  EXPECT_EQ(calib::PlausibilityProblem(as_m, "m"),
+            "baseline 200 m is outside 0.01 to 2 m: T was read in m (the default); if the calibration target "
+            "was measured in mm, pass --t-unit mm");
+  // Read in millimetres it is 0.2 m, and nothing is wrong.
+  const auto as_mm = calib::LoadOpenCvStereo(mm, 1e-3);
+  EXPECT_NEAR(as_mm.T.norm(), 0.2, 1e-15);
+  EXPECT_EQ(calib::PlausibilityProblem(as_mm, "mm"), "");
+  // 20 read as metres fits both cm (0.2 m) and mm (0.02 m): cm, nearer a rover's baseline.
+  const auto cm = calib::LoadOpenCvStereo(WriteOpenCv("cm.yaml", cv::Matx33d::eye(), {-20.0, 0, 0}));
+  EXPECT_NE(calib::PlausibilityProblem(cm, "m").find("pass --t-unit cm"), std::string::npos);
+  // A metre file read with --t-unit mm: 0.2 mm, and the fix is metres.
+  const auto tiny = calib::LoadOpenCvStereo(WriteOpenCv("m.yaml", cv::Matx33d::eye(), {-0.2, 0, 0}), 1e-3);
+  EXPECT_EQ(calib::PlausibilityProblem(tiny, "mm"),
+            "baseline 0.0002 m is outside 0.01 to 2 m: T was read in mm; if the calibration target was "
+            "measured in m, pass --t-unit m");
+}
+
+TEST(CalibImportPlausibility, TheBoundsAreInclusiveAndFocalLengthsInPixels) {
+  calib::StereoCalibration cal;
+  cal.left.fx = cal.left.fy = cal.right.fx = cal.right.fy = 500;
+  cal.left.width = cal.right.width = 640;
+  cal.left.height = cal.right.height = 480;
+  for (double b : {0.01, 0.2, 2.0}) {
+    cal.T = {-b, 0, 0};
+    EXPECT_EQ(calib::PlausibilityProblem(cal, "m"), "") << b;
+  }
+  cal.T = {-2.001, 0, 0};
+  EXPECT_NE(calib::PlausibilityProblem(cal, "m"), "");
+  cal.T = {0, 0, 0};  // both cameras at one place
+  EXPECT_EQ(calib::PlausibilityProblem(cal, "m").rfind("baseline 0 m is outside", 0), 0u);
+  cal.T = {-0.2, 0, 0};
+  // A ROS pair's baseline is in metres by definition: the cause named is its Tx.
+  cal.T = {-300, 0, 0};
+  EXPECT_EQ(calib::PlausibilityProblem(cal, ""),
+            "baseline 300 m is outside 0.01 to 2 m: is the right camera's projection_matrix Tx = -fx * baseline "
+            "in metres?");
+  cal.T = {-0.2, 0, 0};
+  cal.right.fy = 4.8;  // a normalised or millimetre focal length
+  EXPECT_EQ(calib::PlausibilityProblem(cal, "m"),
+            "the right camera's fy 4.8 px is outside 50 to 50000 px: is its camera matrix in pixels, for images "
+            "of 640x480?");
+  cal.right.fy = 50;
+  cal.left.fx = 50000;
+  EXPECT_EQ(calib::PlausibilityProblem(cal, "m"), "");
+  cal.left.fx = 50001;
+  EXPECT_EQ(calib::PlausibilityProblem(cal, "m").rfind("the left camera's fx 50001 px", 0), 0u);
+}
+
+namespace {
+// calib_import as a user runs it: exit status, and what it printed (both streams).
+int RunImport(const std::string& args, std::string* output) {
+  const std::string command = std::string(ROVER_BINARY_DIR) + "/bin/calib_import " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return -1;
+  output->clear();
+  char buffer[512];
+  while (fgets(buffer, sizeof buffer, pipe) != nullptr) *output += buffer;
+  const int status = pclose(pipe);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+std::string FileText(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+}  // namespace
+
+TEST(CalibImportPlausibility, TheToolRefusesWithOneLineUnlessForcedAndKeepsAnExistingOut) {
+  const std::string mm = WriteOpenCv("tool_mm.yaml", cv::Matx33d::eye(), {-200.0, 0, 0});
+  const std::string out = Dir() + "/tool_rig.yaml";
+  fs::remove(out);
+  const std::string mount = " --left-position 0,0,-1 --left-rpy 0,-20,0 --out " + out;
+  std::string text;
+  EXPECT_EQ(RunImport("--opencv " + mm + mount, &text), 2);
+  EXPECT_EQ(text, "calib_import: " + mm + ": baseline 200 m is outside 0.01 to 2 m: T was read in m (the default); "
+                  "if the calibration target was measured in mm, pass --t-unit mm (nothing written; --force writes "
+                  "it anyway)\n");
+  EXPECT_FALSE(fs::exists(out));
+  // The suggested unit: written, a 0.2 m baseline.
+  ASSERT_EQ(RunImport("--opencv " + mm + " --t-unit mm" + mount, &text), 0) << text;
+  EXPECT_NEAR(geometry::LoadStereoRigFile(out).Baseline(), 0.2, 1e-12);
+  const std::string first = FileText(out);
+  // Again: the rig written is kept, one line, exit 2.
+  EXPECT_EQ(RunImport("--opencv " + mm + " --t-unit mm" + mount, &text), 2);
+  EXPECT_EQ(text, "calib_import: --out " + out + ": exists; kept (pass --force to replace it)\n");
+  EXPECT_EQ(FileText(out), first);
+  // --force replaces it, and writes the implausible one with a warning.
+  EXPECT_EQ(RunImport("--opencv " + mm + mount + " --force", &text), 0) << text;
+  EXPECT_NE(text.find("calib_import: warning: baseline 200 m"), std::string::npos) << text;
+  EXPECT_NEAR(geometry::LoadStereoRigFile(out).Baseline(), 200.0, 1e-9);
 }
