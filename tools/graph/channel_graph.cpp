@@ -58,6 +58,10 @@ namespace {
 std::string Quoted(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
+    if (c == '\n') {
+      out += "\\n";  // a line break in a label
+      continue;
+    }
     if (c == '"' || c == '\\') out += '\\';
     out += c;
   }
@@ -97,8 +101,8 @@ void WriteChannels(std::ostringstream& os, const Edges& e, std::size_t set_size,
     const bool all_pub = !options.every_edge && set_size > 1 && pubs.size() == set_size;
     const bool all_sub = !options.every_edge && set_size > 1 && subs.size() == set_size;
     std::string label = channel;
-    if (all_pub) label += "\\n(from every process)";
-    if (all_sub) label += "\\n(to every process)";
+    if (all_pub) label += "\n(from every process)";
+    if (all_sub) label += "\n(to every process)";
     os << "  " << ChannelNode(channel) << " [label=" << Quoted(label) << "];\n";
     if (!all_pub) {
       for (const auto& [process, when] : pubs) {
@@ -126,8 +130,8 @@ void WriteChannels(std::ostringstream& os, const Edges& e, std::size_t set_size,
 std::string Dot(const std::vector<ProcessChannels>& set, const DotOptions& options) {
   std::ostringstream os;
   os << "digraph rover {\n"
-     << "  graph [rankdir=LR, fontname=Helvetica, fontsize=12, labelloc=t, nodesep=0.15, ranksep=0.9, label="
-     << Quoted(options.title + "\\nboxes: processes; ellipses: channels; dashed: published only in some runs"
+     << "  graph [rankdir=TB, fontname=Helvetica, fontsize=12, labelloc=t, nodesep=0.15, ranksep=0.9, label="
+     << Quoted(options.title + "\nboxes: processes; ellipses: channels; dashed: published only in some runs"
                                " (tooltip); dotted: outside the set") << "];\n"
      << "  node [fontname=Helvetica, fontsize=10, shape=ellipse, style=filled, fillcolor=\"#f2f2f2\", color=\"#888888\"];\n"
      << "  edge [color=\"#555555\", arrowsize=0.6];\n";
