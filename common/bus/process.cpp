@@ -361,8 +361,10 @@ int Process::HandleReceived(int max_ms) {
 
 void Process::Run(const std::function<void()>& on_tick, int tick_ms) {
   if (has_switch("--channels")) {
-    throw config::ConfigError(name_ + ": argument --channels: this program declares no channels "
-                              "(expected a process that calls DeclarePublications)");
+    // Not thrown: the worker threads a program may hold would make unwinding abort.
+    std::cerr << name_ << ": argument --channels: this program declares no channels "
+                          "(expected a process that calls DeclarePublications)\n";
+    std::_Exit(2);
   }
   if (virtual_) return RunVirtual(on_tick, tick_ms);
   using Clock = std::chrono::steady_clock;
