@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # ./rover private --name NAME: separate commands, each started on its own, share one
 # private bus. A recorder started by one call is heard by a console started by another
-# call with the same name, and not by one with another name; the namespace is not the
-# caller's; --stop ends it and whatever still runs on it, and a second --stop says there
-# is none.
+# call with the same name; a name that is not there is not joined (one line naming the
+# buses there are, exit 2), unless --make makes it; the namespace is not the caller's;
+# --stop ends it and whatever still runs on it, and a second --stop says there is none.
 # usage: private_name_test.sh ROOT BUILD
 set -u
 root="$1"
@@ -24,7 +24,7 @@ cleanup() {
 trap cleanup EXIT
 
 mine="$(readlink /proc/self/ns/net)"
-first="$("$rover" private --name "$name" readlink /proc/self/ns/net 2>"$XDG_RUNTIME_DIR/made.txt")"
+first="$("$rover" private --name "$name" --make readlink /proc/self/ns/net 2>"$XDG_RUNTIME_DIR/made.txt")"
 second="$("$rover" private --name "$name" readlink /proc/self/ns/net)"
 check "the first call made it and said so" "grep -q \"private bus '$name' made\" '$XDG_RUNTIME_DIR/made.txt'"
 check "two calls, one namespace ($first, $second)" '[ -n "$first" ] && [ "$first" = "$second" ]'
@@ -37,10 +37,14 @@ check "multicast routed to loopback" '"$rover" private --name "$name" ip route |
 rec=$!
 "$rover" private --name "$name" "$build/bin/rover_console" --once --wait 3 --lcm-url "$url" >"$XDG_RUNTIME_DIR/same.txt" 2>&1
 same=$?
-"$rover" private --name "${name}b" "$build/bin/rover_console" --once --wait 3 --lcm-url "$url" >"$XDG_RUNTIME_DIR/other.txt" 2>&1
+"$rover" private --name "${name}b" "$build/bin/rover_console" --once --wait 3 --lcm-url "$url" >"$XDG_RUNTIME_DIR/typo.txt" 2>&1
+typo=$?
+"$rover" private --name "${name}b" --make "$build/bin/rover_console" --once --wait 3 --lcm-url "$url" >"$XDG_RUNTIME_DIR/other.txt" 2>&1
 other=$?
 check "a console in the same named bus hears the recorder" '[ "$same" -eq 0 ] && grep -q "rover_recorder" "$XDG_RUNTIME_DIR/same.txt"'
-check "a console in another named bus hears nothing (exit 3)" '[ "$other" -eq 3 ]'
+check "a name that is not there: exit 2, one line naming the buses there are" \
+  '[ "$typo" -eq 2 ] && [ "$(wc -l <"$XDG_RUNTIME_DIR/typo.txt")" -eq 1 ] && grep -q "there are: $name" "$XDG_RUNTIME_DIR/typo.txt"'
+check "a console in another named bus (--make) hears nothing (exit 3)" '[ "$other" -eq 3 ]'
 kill "$rec"
 wait "$rec"
 rec=""

@@ -38,7 +38,8 @@ constexpr const char* kUsage =
     "Data files and gnuplot scripts go to DIR/plot/. DIR defaults to the log's folder.\n"
     "--vo-config: the VO options for vo_steps (default configs/vo.yaml).\n"
     "--world: the simulated world, for its rocks (default: rover_sim's --world in a run\n"
-    "DIR's commands.txt, as the scenario runner writes it).\n";
+    "DIR's commands.txt, as the scenario runner writes it; with neither, one line says the\n"
+    "rocks are not drawn).\n";
 
 // The world rover_sim ran on, from a scenario's commands.txt; "" when there is none.
 std::string WorldOfRun(const std::string& run_dir) {
@@ -110,7 +111,11 @@ int main(int argc, char** argv) {
 
     auto log = rover::plot::ReadDriveLog(log_path);
     if (world.empty()) world = WorldOfRun(fs::path(log_path).parent_path().string());
-    if (!world.empty()) {
+    if (world.empty()) {
+      // A log recorded by hand (not a scenario's run folder) does not say which world it drove.
+      std::cout << "plot: no world: the log's folder has no commands.txt naming rover_sim's --world and no "
+                   "--world was given, so traverse.png draws no rocks (pass --world FILE to draw them)\n";
+    } else {
       std::error_code exists_ec;
       if (fs::is_regular_file(world, exists_ec)) {
         log.rocks = rover::plot::ReadWorldRocks(world, 0.10);

@@ -11,9 +11,14 @@
 // A submit that no executor answers within 4 s ends with exit 3 and one line naming the
 // URL and the likely causes (README, "Several hosts"): ttl=0, no multicast route on the
 // LAN interface, another group or port on the executor's host, the executor not running.
+// abort, pause and resume first hear the executor's status (it publishes one a second):
+// with no sequence to act on they say so and exit 4 (abort still commands a stop).
+// Exit codes: 0 done, 1 the sequence aborted or was rejected, 2 a bad
+// argument, URL or file, 3 no executor heard or it did not act, 4 nothing to act on.
 #include "auth/auth.hpp"
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
+#include "bus/lcm_url_check.hpp"
 #include "bus/process.hpp"
 #include "bus/signing.hpp"
 #include "config/file_read.hpp"
@@ -174,16 +179,145 @@ std::optional<rover::auth::Key> LoadKey(const std::string& flag_value) {
 // A bus for the operator's commands: signed as "rover_seq" when there is a key.
 std::unique_ptr<rover::bus::Bus> OpenBus(const std::string& url,
                                          const std::optional<rover::auth::Key>& key) {
-  auto bus = std::make_unique<rover::bus::Bus>(url);
+  std::unique_ptr<rover::bus::Bus> bus;
+  try {
+    bus = std::make_unique<rover::bus::Bus>(url);
+  } catch (const std::runtime_error& e) {  // a URL this host cannot open: a bad argument
+    throw ConfigError(std::string("rover_seq: ") + e.what());
+  }
   bus->set_publisher("rover_seq");
   if (key) bus->set_auth(rover::bus::MakeBusAuth(*key, "rover_seq"));
   return bus;
 }
 
+// What the executor's statuses and heartbeats say, heard while a control command waits.
+struct ExecutorWatch {
+  std::optional<sequence_status_t> status;  // the last status heard
+  bool heartbeat = false;
+  std::int64_t dropped_first = -1, dropped_now = -1;  // its count of dropped messages
+
+  void Subscribe(rover::bus::Bus& bus) {
+    bus.Subscribe<sequence_status_t>(rover::channels::kSequenceStatus,
+                                     [this](const sequence_status_t& st) { status = st; });
+    bus.Subscribe<rover_msgs::heartbeat_t>(rover::channels::kHeartbeat, [this](const rover_msgs::heartbeat_t& hb) {
+      if (hb.process != "sequence_executor") return;
+      heartbeat = true;
+      if (dropped_first < 0) dropped_first = hb.dropped;
+      dropped_now = hb.dropped;
+    });
+  }
+  // Handles the bus until `done` holds or `seconds` pass; whether it held.
+  bool WaitFor(rover::bus::Bus& bus, double seconds, const std::function<bool()>& done) {
+    const double start = Now();
+    while (!done()) {
+      if (Now() - start > seconds) return false;
+      bus.Handle(100);
+    }
+    return true;
+  }
+  bool Active() const {
+    return status && (status->state == sequence_status_t::STATE_RUNNING ||
+                      status->state == sequence_status_t::STATE_PAUSED);
+  }
+};
+
+// "no sequence has run" / "the last sequence, NAME, completed" / "NAME is running".
+std::string Describe(const sequence_status_t& st) {
+  const std::string state = rover::sequence::ToString(static_cast<rover::sequence::SequenceState>(st.state));
+  if (st.state == sequence_status_t::STATE_IDLE) return "the executor is idle: no sequence has run";
+  if (Terminal(st.state)) {
+    return "the last sequence, " + st.sequence_name + ", " + state +
+           (st.abort_reason.empty() ? "" : " (" + st.abort_reason + ")");
+  }
+  return st.sequence_name + " is " + state;
+}
+
+// Why the executor did not act on a command it was sent: one line, exit 3.
+int NotActedOn(const ExecutorWatch& watch, const std::string& sub, bool signed_commands, const std::string& url) {
+  std::cerr << "rover_seq: " << sub << " sent on " << url << " but sequence_executor did not act on it within "
+            << kAnswerWaitS << " s"
+            << (watch.dropped_now > watch.dropped_first ? " (it dropped a message meanwhile)" : "")
+            << (signed_commands ? ": does it hold the same key as --key / $ROVER_KEY_FILE?"
+                                : ": if it requires signed commands, pass --key FILE or set $ROVER_KEY_FILE")
+            << "\n";
+  return 3;
+}
+
+// abort, pause, resume: hear the executor's state first (its status comes once a second),
+// act only on a sequence there is, and wait for the status that shows the effect.
+int Control(const std::string& sub, const std::string& reason, const std::string& url,
+            const std::optional<rover::auth::Key>& key) {
+  auto bus = OpenBus(url, key);
+  ExecutorWatch watch;
+  watch.Subscribe(*bus);
+  rover_msgs::sequence_control_t msg{};
+  msg.action = sub == "abort"   ? rover_msgs::sequence_control_t::ACTION_ABORT
+               : sub == "pause" ? rover_msgs::sequence_control_t::ACTION_PAUSE
+                                : rover_msgs::sequence_control_t::ACTION_RESUME;
+  msg.reason = reason;
+  const char* sent = key ? " sent (signed): " : " sent: ";
+  // An abort goes at once: stopping is never delayed by waiting for a status.
+  if (sub == "abort") bus->Publish(rover::channels::kSequenceControl, msg);
+  if (!watch.WaitFor(*bus, kAnswerWaitS, [&] { return watch.status.has_value(); })) {
+    std::cerr << "rover_seq: " << sub << ": no sequence status heard within " << kAnswerWaitS << " s on " << url
+              << (watch.heartbeat ? " (sequence_executor is heard but reported nothing)"
+                                  : ": no sequence_executor heard; " +
+                                        rover::launch::NothingHeardCauses(url, "sequence_executor"))
+              << "\n";
+    return 3;
+  }
+  if (sub == "abort") {
+    // The abort's own status (aborted, reason operator), or a sequence still going.
+    auto aborted = [&] {
+      return watch.status->state == sequence_status_t::STATE_ABORTED && watch.status->abort_reason == "operator" &&
+             watch.status->detail.find("operator abort: " + reason) != std::string::npos;
+    };
+    if (!watch.Active() && !aborted()) {
+      std::cerr << "rover_seq: nothing to abort: " << Describe(*watch.status) << " (a stop was commanded anyway)\n";
+      return 4;
+    }
+    if (!watch.WaitFor(*bus, kAnswerWaitS, aborted)) return NotActedOn(watch, sub, key.has_value(), url);
+    std::cout << "abort" << sent << reason << "\n";
+    Print(*watch.status);
+    return 0;
+  }
+  const auto state = watch.status->state;
+  if (sub == "pause" ? state != sequence_status_t::STATE_RUNNING
+                     : state != sequence_status_t::STATE_PAUSED && state != sequence_status_t::STATE_RUNNING) {
+    std::cerr << "rover_seq: nothing to " << sub << ": " << Describe(*watch.status)
+              << (state == sequence_status_t::STATE_PAUSED ? " (already paused)" : "") << "\n";
+    return 4;
+  }
+  bus->Publish(rover::channels::kSequenceControl, msg);
+  std::cout << sub << sent << reason;
+  if (sub == "pause") {
+    std::cout << " (" << watch.status->sequence_name
+              << " pauses between steps: the current step finishes first)\n";
+    // A dropped command (unsigned on a signed stack) shows in the executor's next heartbeats.
+    const std::int64_t before = watch.dropped_now;
+    watch.WaitFor(*bus, 1.0, [] { return false; });
+    if (before >= 0 && watch.dropped_now > before) return NotActedOn(watch, sub, key.has_value(), url);
+    return 0;
+  }
+  if (state == sequence_status_t::STATE_RUNNING) {
+    std::cout << " (" << watch.status->sequence_name << " is running, not paused: a pause not yet in effect is cancelled)\n";
+    return 0;
+  }
+  std::cout << "\n";
+  if (!watch.WaitFor(*bus, kAnswerWaitS, [&] { return watch.status->state != sequence_status_t::STATE_PAUSED; })) {
+    return NotActedOn(watch, sub, key.has_value(), url);
+  }
+  Print(*watch.status);
+  return watch.status->state == sequence_status_t::STATE_ABORTED ? 1 : 0;
+}
+
 // The usage of one subcommand, or of all ("" or an unknown name).
 std::string Usage(const std::string& sub) {
   const std::string common =
-      "\nThe bus: --lcm-url URL, else $ROVER_LCM_URL, else the default bus.\n";
+      "\nThe bus: --lcm-url URL, else $ROVER_LCM_URL, else the default bus.\n"
+      "Exit codes: 0 done; 1 the sequence aborted or was rejected; 2 a bad argument, URL or\n"
+      "file; 3 no sequence_executor heard, or it did not act on the command (the likely cause\n"
+      "is named); 4 nothing to act on (no sequence running to pause or abort, none paused).\n";
   const std::string keyed =
       "--key FILE (else $ROVER_KEY_FILE): sign with the deployment's key (an executor that\n"
       "holds a key refuses unsigned commands).\n";
@@ -202,17 +336,22 @@ std::string Usage(const std::string& sub) {
   if (sub == "abort") {
     return "usage: rover_seq abort [REASON] [--key FILE] [--lcm-url URL]\n\n"
            "Aborts the running sequence: the executor commands STOP and skips the rest\n"
-           "(reason \"operator\"; REASON, default \"operator abort\", goes in its detail).\n" + keyed + common;
+           "(reason \"operator\"; REASON, default \"operator abort\", goes in its detail). Waits\n"
+           "for the executor's status that says so. With no sequence running or paused it still\n"
+           "commands STOP, says there was nothing to abort, and exits 4.\n" + keyed + common;
   }
   if (sub == "pause") {
     return "usage: rover_seq pause [REASON] [--key FILE] [--lcm-url URL]\n\n"
            "Pauses the running sequence between steps: the current step finishes first, then\n"
-           "the executor holds (state paused) until resume or abort.\n" + keyed + common;
+           "the executor holds (state paused) until resume or abort. With no sequence running\n"
+           "(the executor's status says so) it sends nothing, says so and exits 4.\n" + keyed + common;
   }
   if (sub == "resume") {
     return "usage: rover_seq resume [REASON] [--key FILE] [--lcm-url URL]\n\n"
            "Resumes a paused sequence at its next step (the executor aborts with process_lost\n"
-           "if a process it needs has gone silent meanwhile).\n" + keyed + common;
+           "if a process it needs has gone silent meanwhile; exit 1). Waits for the executor's\n"
+           "status that says it runs. On a running sequence it cancels a pause not yet in\n"
+           "effect; with none running or paused it sends nothing, says so and exits 4.\n" + keyed + common;
   }
   if (sub == "keygen") {
     return "usage: rover_seq keygen FILE\n\n"
@@ -239,7 +378,8 @@ int main(int argc, char** argv) {
     bool once = false, follow = true, help = false;
     std::vector<std::string> positional;
     for (std::size_t i = 0; i < args.size(); ++i) {
-      if (args[i] == "--lcm-url" && i + 1 < args.size()) {
+      if (args[i] == "--lcm-url") {
+        if (i + 1 >= args.size()) throw ConfigError("rover_seq: argument --lcm-url: missing value (expected a udpm:// URL)");
         url = args[++i];
       } else if (args[i] == "--key") {
         if (i + 1 >= args.size()) throw ConfigError("rover_seq: argument --key: missing value (expected FILE)");
@@ -261,9 +401,19 @@ int main(int argc, char** argv) {
     if (positional.empty()) {
       throw ConfigError("rover_seq: missing subcommand (expected submit, status, abort, pause, resume or keygen; see --help)");
     }
+    std::string url_from = "--lcm-url";
     if (url.empty()) {
       const char* env = std::getenv("ROVER_LCM_URL");
+      url_from = env != nullptr && *env ? "$ROVER_LCM_URL" : "the default bus";
       url = env != nullptr && *env ? env : rover::bus::kDefaultLcmUrl;
+    }
+    // A bad URL is a bad argument (exit 2), not a sequence's outcome.
+    // The executor is reached over UDP multicast only (another provider reaches no executor).
+    std::string problem = rover::bus::LcmUrlProblem(url);
+    if (problem.empty() && url.rfind("udpm://", 0) != 0) problem = "not a udpm:// URL";
+    if (!problem.empty() && positional[0] != "keygen") {
+      throw ConfigError("rover_seq: " + url_from + " " + url + ": " + problem + " (expected " +
+                        rover::bus::kLcmUrlExpected + ")");
     }
     const std::string sub = positional[0];
     if (sub == "keygen") {
@@ -314,18 +464,7 @@ int main(int argc, char** argv) {
         throw ConfigError("rover_seq " + sub + ": expected at most one REASON (quote it), got " +
                           std::to_string(positional.size() - 1) + " words");
       }
-      const auto key = LoadKey(key_flag);
-      auto bus = OpenBus(url, key);
-      rover_msgs::sequence_control_t msg{};
-      msg.action = sub == "abort"   ? rover_msgs::sequence_control_t::ACTION_ABORT
-                   : sub == "pause" ? rover_msgs::sequence_control_t::ACTION_PAUSE
-                                    : rover_msgs::sequence_control_t::ACTION_RESUME;
-      msg.reason = positional.size() > 1 ? positional[1] : "operator " + sub;
-      bus->Publish(rover::channels::kSequenceControl, msg);
-      std::cout << sub << (key ? " sent (signed): " : " sent: ") << msg.reason;
-      if (sub == "pause") std::cout << " (takes effect between steps: the current step finishes first)";
-      std::cout << "\n";
-      return 0;
+      return Control(sub, positional.size() > 1 ? positional[1] : "operator " + sub, url, LoadKey(key_flag));
     }
     throw ConfigError("rover_seq: unknown subcommand " + sub +
                       " (expected submit, status, abort, pause, resume or keygen; see --help)");

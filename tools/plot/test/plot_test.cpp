@@ -21,9 +21,11 @@
 #include <rover_msgs/step_report_t.hpp>
 #include <rover_msgs/wheel_odometry_t.hpp>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -483,4 +485,38 @@ TEST(Plots, AThreeSequenceTitleFitsThePicture) {
 }
 
 }  // namespace
+}  // namespace rover::plot
+
+namespace rover::plot {
+
+// rover_plot as a user runs it on a log recorded by hand: no run folder's commands.txt
+// names the world, so one line says the rocks are not drawn and how to draw them; with
+// --world that line is gone and the world's rocks are drawn.
+TEST(PlotTool, AHandRecordedLogSaysTheRocksAreNotDrawnAndNamesWorld) {
+  if (PngTerminal().empty()) GTEST_SKIP() << "gnuplot is not installed (Debian gnuplot-nox; ./rover setup installs it)";
+  const std::string dir = FreshDir("hand_recorded");
+  const std::string log = WriteDriveLog(dir);
+  auto run = [&](const std::string& extra) {
+    const std::string command = std::string(ROVER_BINARY_DIR) + "/bin/rover_plot " + log + " --vo-steps 0 " +
+                                "--vo-config " + ROVER_SOURCE_DIR + "/configs/vo.yaml " + extra + " 2>&1";
+    std::string out;
+    FILE* pipe = popen(command.c_str(), "r");
+    char buffer[512];
+    while (pipe != nullptr && fgets(buffer, sizeof buffer, pipe) != nullptr) out += buffer;
+    const int status = pipe != nullptr ? pclose(pipe) : -1;
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << command << "\n" << out;
+    return out;
+  };
+  const std::string bare = run("");
+  EXPECT_NE(bare.find("plot: no world: the log's folder has no commands.txt naming rover_sim's --world and no "
+                      "--world was given, so traverse.png draws no rocks (pass --world FILE to draw them)\n"),
+            std::string::npos)
+      << bare;
+  EXPECT_FALSE(fs::exists(dir + "/plot/traverse_rocks.dat"));
+  const std::string with_world = run("--world " + std::string(ROVER_SOURCE_DIR) + "/configs/worlds/rock_field.yaml");
+  EXPECT_EQ(with_world.find("no world"), std::string::npos) << with_world;
+  // The picture's data holds the world's rocks now.
+  EXPECT_TRUE(fs::exists(dir + "/plot/traverse_rocks.dat")) << with_world;
+}
+
 }  // namespace rover::plot
