@@ -65,6 +65,20 @@ bool TimeChecked(const std::string& channel) {
          channel != channels::kSequenceControl;
 }
 
+std::int64_t RoverClock::SystemUtime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+void RoverClock::set_system(bool on) {
+  system_ = on;
+  anchored_ = false;
+  newest_ = 0;
+  behind_streak_ = 0;
+  rate_ = 1.0;
+  candidate_.reset();
+}
+
 void RoverClock::Anchor(std::int64_t utime, WallClock::time_point wall) {
   anchored_ = true;
   anchor_utime_ = utime;
@@ -78,6 +92,7 @@ void RoverClock::ObserveClock(std::int64_t utime, double rate, WallClock::time_p
 }
 
 void RoverClock::Observe(std::int64_t utime, WallClock::time_point wall) {
+  if (system_) return;  // the system clock needs no anchor
   if (!anchored_) Anchor(utime, wall);
   if (utime > newest_) newest_ = utime;
   // A trusted time ahead of the extrapolated anchor moves the anchor (no ROVER_CLOCK on
@@ -143,6 +158,7 @@ std::string RoverClock::AcceptClock(std::int64_t utime, std::int64_t count, doub
 }
 
 std::string RoverClock::Judge(std::int64_t utime, WallClock::time_point wall) {
+  if (system_) return JudgeOnSystemClock(utime);
   if (!anchored_) {
     behind_streak_ = 0;
     return "";
@@ -187,6 +203,21 @@ std::string RoverClock::Judge(std::int64_t utime, WallClock::time_point wall) {
            Seconds(window_.max_behind_wall_s * rate_ + window_.max_behind_rover_s) + ")";
   }
   behind_streak_ = 0;
+  return "";
+}
+
+std::string RoverClock::JudgeOnSystemClock(std::int64_t utime) const {
+  const double now = static_cast<double>(SystemUtime()), t = static_cast<double>(utime);
+  const double ahead_s = window_.max_ahead_wall_s + window_.max_ahead_rover_s;
+  const double behind_s = window_.max_behind_wall_s + window_.max_behind_rover_s;
+  if (t > now + ahead_s * 1e6) {
+    return "utime " + std::to_string(utime) + " is " + Seconds((t - now) * 1e-6) +
+           " ahead of the system clock (expected within " + Seconds(ahead_s) + ")";
+  }
+  if (t < now - behind_s * 1e6) {
+    return "utime " + std::to_string(utime) + " is " + Seconds((now - t) * 1e-6) +
+           " behind the system clock (expected within " + Seconds(behind_s) + ")";
+  }
   return "";
 }
 

@@ -91,8 +91,15 @@ class RoverClock {
   // Any trusted utime (the process accepted the message that carried it).
   void Observe(std::int64_t utime, WallClock::time_point wall);
 
-  // The newest rover time seen (0 before any).
-  std::int64_t now() const { return newest_; }
+  // The newest rover time seen (0 before any); on the system clock, the system clock.
+  std::int64_t now() const { return system_ ? SystemUtime() : newest_; }
+  // Rover time is the system clock (CLOCK_REALTIME, microseconds since 1970): a rover with
+  // no time source, or one whose time source has not been heard yet. Messages are judged
+  // against it at rate 1; nothing anchors. Turning it off forgets every anchor, so the
+  // time source's first clock message starts the clock afresh.
+  void set_system(bool on);
+  bool system() const { return system_; }
+  static std::int64_t SystemUtime();
   bool anchored() const { return anchored_; }
 
   // "" when `utime` is plausible now, else why not (for the drop line). A rejection
@@ -104,6 +111,7 @@ class RoverClock {
   // The latest utime Judge takes in real time: the anchor extrapolated at the rate, plus
   // the window's margin.
   double AheadLimit(WallClock::time_point wall) const;
+  std::string JudgeOnSystemClock(std::int64_t utime) const;
   // Whether this clock message is the source's next after the candidate and fits it.
   bool Confirms(std::int64_t utime, std::int64_t count, double rate, bool virtual_mode,
                 WallClock::time_point wall) const;
@@ -117,6 +125,7 @@ class RoverClock {
   int behind_streak_ = 0;
   WallClock::time_point behind_streak_start_{};
   bool virtual_ = false;
+  bool system_ = false;
   bool clock_taken_ = false;
   std::int64_t clock_utime_ = 0;
   // A clock message refused as too far ahead, kept until the source's next one.

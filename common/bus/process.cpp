@@ -113,7 +113,7 @@ TimeWindow LoadTimeWindow(const config::ConfigNode& section) {
   TimeWindow w;
   section.CheckKeys({"max_ahead_wall_s", "max_ahead_rover_s", "max_behind_wall_s",
                      "max_behind_rover_s", "resync_wall_s", "resync_count", "max_clock_step_s",
-                     "time", "time_source", "heartbeat_period_s"});
+                     "time", "time_source", "time_source_silent_s", "time_source_wait_s", "heartbeat_period_s"});
   section.Get("max_clock_step_s", w.max_clock_step_s, 0.001, 3600.0);
   section.Get("max_ahead_wall_s", w.max_ahead_wall_s, 0.0, 3600.0);
   section.Get("max_ahead_rover_s", w.max_ahead_rover_s, 0.0, 86400.0);
@@ -166,20 +166,37 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
   bus_.set_publisher(name_);
   const auto bus_section = config_["bus"];
   bus_.clock().set_window(LoadTimeWindow(bus_section));
-  // Real or virtual time: `bus.time`, else $ROVER_TIME (the launcher and the scenario
-  // runner set it for a simulated set, so every process of the set agrees), else real.
-  std::string time_mode = "real";
+  // The time mode: `bus.time`, else $ROVER_TIME (the launcher and the scenario runner set
+  // it for a set, so every process of the set agrees), else auto (docs/HARDWARE.md, "Rover
+  // time"): the time source's clock if it is heard within bus.time_source_wait_s of
+  // start, else the system clock.
+  std::string time_mode = "auto";
   if (const char* env = std::getenv("ROVER_TIME"); env != nullptr && *env != '\0') {
     time_mode = env;
-    if (time_mode != "real" && time_mode != "virtual") {
-      throw config::ConfigError(name_ + ": $ROVER_TIME: \"" + time_mode + "\": expected real or virtual");
+    if (time_mode != "real" && time_mode != "virtual" && time_mode != "system" && time_mode != "auto") {
+      throw config::ConfigError(name_ + ": $ROVER_TIME: \"" + time_mode + "\": expected real, virtual, system or auto");
     }
   }
-  bus_section.GetEnum("time", time_mode, {"real", "virtual"});
-  bus_section.Get("time_source", time_source_);
+  // system: a real clock that is the system clock, with no time source at all (a rover;
+  // rover_sim as the rover's hardware): the same as real with bus.time_source: system.
+  bus_section.GetEnum("time", time_mode, {"real", "virtual", "system", "auto"});
+  auto_time_ = time_mode == "auto";
+  if (time_mode == "system") time_source_ = "system";
+  if (time_mode != "system") bus_section.Get("time_source", time_source_);
+  if (time_source_.empty()) {
+    throw config::ConfigError(config_path_ + ": bus.time_source: empty (expected a process name, or system)");
+  }
+  bus_section.Get("time_source_silent_s", source_silent_after_s_, 0.05, 3600.0);
+  bus_section.Get("time_source_wait_s", source_wait_s_, 0.0, 3600.0);
   bus_section.Get("heartbeat_period_s", heartbeat_period_s_, 0.01, 60.0);
   compute_ = LoadComputeProfile(config_["compute"]);
   virtual_ = time_mode == "virtual";
+  if (virtual_ && time_source_ == "system") {
+    throw config::ConfigError(config_path_ + ": bus.time_source: system with virtual time (expected the process that "
+                              "owns the virtual clock, rover_sim; the system clock is for a real clock)");
+  }
+  // The system clock from the start when asked for (the time source itself keeps its own).
+  if (!virtual_ && time_source_ == "system") bus_.clock().set_system(true);
   if (virtual_) {
     bus_.clock().set_virtual(true);
     // Every message waits for the tick it belongs to; the clock itself is acted on at once.
@@ -202,6 +219,13 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
         const auto stamp = StampOf(msg);
         // The time source keeps its own time: any clock it hears is its own or forged.
         if (name_ == time_source_) return;
+        if (bus_.clock().system()) {
+          bus_.Drop(channels::kClock, type,
+                    time_source_ == "system"
+                        ? "rover time here is the system clock (bus.time: system)"
+                        : "rover time here is the system clock: no ROVER_CLOCK came within bus.time_source_wait_s of start");
+          return;
+        }
         if (stamp->first != PublisherId(time_source_)) {
           bus_.Drop(channels::kClock, type, "not from the time source '" + time_source_ + "' (bus.time_source)");
           return;
@@ -211,6 +235,7 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
                     "signed by '" + msg.auth.sender + "', not by the time source '" + time_source_ + "'");
           return;
         }
+        source_seen_ = true;  // a clock is on this bus: auto never falls back to the system clock
         const bool virtual_clock = msg.mode == rover_msgs::rover_clock_t::MODE_VIRTUAL;
         if (virtual_clock != virtual_ && clock_observer_ && !virtual_) {
           bus_.clock().ObserveClock(msg.utime, msg.rate, std::chrono::steady_clock::now());
@@ -222,6 +247,7 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
                         (virtual_ ? "virtual" : "real") + " time (bus.time)");
           return;
         }
+        if (!virtual_) OnSourceClock();
         if (const std::string why = bus_.clock().AcceptClock(msg.utime, stamp->second, msg.rate, virtual_clock,
                                                              std::chrono::steady_clock::now());
             !why.empty()) {
@@ -240,6 +266,64 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
       1000);
 }
 
+Process::TimeMode Process::time_mode() const {
+  if (virtual_) return TimeMode::kVirtual;
+  if (bus_.clock().system()) return TimeMode::kSystemClock;
+  return source_heard_ || time_source_ == name_ ? TimeMode::kSourceClock : TimeMode::kUndecided;
+}
+
+void Process::AnnounceTime() const {
+  std::cerr << name_ << ": rover time: ";
+  if (virtual_) {
+    std::cerr << "virtual, " << time_source_ << "'s clock and barrier (bus.time: virtual)\n";
+  } else if (time_source_ == "system") {
+    std::cerr << "the system clock (bus.time: system)\n";
+  } else if (time_source_ == name_) {
+    std::cerr << "this process's own clock, published on ROVER_CLOCK (it is bus.time_source)\n";
+  } else if (time_mode() == TimeMode::kSourceClock) {
+    std::cerr << time_source_ << "'s ROVER_CLOCK (bus.time_source)\n";
+  } else if (auto_time_) {
+    std::cerr << time_source_ << "'s ROVER_CLOCK if it is heard within " << source_wait_s_
+              << " s, else the system clock (bus.time: auto)\n";
+  } else {
+    std::cerr << time_source_ << "'s ROVER_CLOCK, once it is heard (bus.time: real)\n";
+  }
+}
+
+void Process::OnSourceClock() {
+  const auto now = std::chrono::steady_clock::now();
+  if (!source_heard_) {
+    source_heard_ = true;
+    std::cerr << name_ << ": rover time: " << time_source_ << "'s ROVER_CLOCK, heard after " << wall_seconds()
+              << " s\n";
+  } else if (source_silent_) {
+    std::cerr << name_ << ": the time source " << time_source_ << " speaks again after "
+              << std::chrono::duration<double>(now - source_heard_wall_).count() << " s of wall time; work resumes\n";
+  }
+  source_silent_ = false;
+  source_heard_wall_ = now;
+}
+
+void Process::CheckTimeSource() {
+  if (virtual_) return;
+  // auto: no clock within the wait, so there is none: a rover. The system clock, for good
+  // (a simulated clock heard later need not be near it, and times never go back).
+  if (auto_time_ && !source_seen_ && !bus_.clock().system() && time_source_ != name_ &&
+      wall_seconds() >= source_wait_s_) {
+    bus_.clock().set_system(true);
+    std::cerr << name_ << ": rover time: the system clock: no ROVER_CLOCK from " << time_source_ << " within "
+              << source_wait_s_ << " s of start (bus.time_source_wait_s)\n";
+    return;
+  }
+  if (!source_heard_ || source_silent_) return;
+  const double silent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - source_heard_wall_).count();
+  if (silent_s < source_silent_after_s_) return;
+  source_silent_ = true;
+  std::cerr << name_ << ": the time source " << time_source_ << " fell silent: no ROVER_CLOCK for " << silent_s
+            << " s of wall time (bus.time_source_silent_s " << source_silent_after_s_
+            << "); rover time stands still, a drive stops, until it speaks again\n";
+}
+
 double Process::guard_seconds() const { return virtual_ ? static_cast<double>(now()) * 1e-6 : wall_seconds(); }
 
 std::int64_t Process::DueAt(std::int64_t start_utime, double seconds) const {
@@ -248,7 +332,9 @@ std::int64_t Process::DueAt(std::int64_t start_utime, double seconds) const {
 
 void Process::SendSync(bool busy) {
   if (!sync_) return;
-  sync_->Send(bus_.SyncState(name_, last_tick_utime_, busy));
+  simtime::SyncReport report = bus_.SyncState(name_, last_tick_utime_, busy);
+  report.quiet_until = !busy && quiet_until_ ? quiet_until_() : 0;
+  sync_->Send(report);
 }
 
 void Process::RunVirtualTick(const std::function<void()>& on_tick, std::int64_t tick_us) {
@@ -366,6 +452,7 @@ void Process::Run(const std::function<void()>& on_tick, int tick_ms) {
                           "(expected a process that calls DeclarePublications)\n";
     std::_Exit(2);
   }
+  AnnounceTime();
   if (virtual_) return RunVirtual(on_tick, tick_ms);
   using Clock = std::chrono::steady_clock;
   auto next_heartbeat = Clock::now();
@@ -382,6 +469,7 @@ void Process::Run(const std::function<void()>& on_tick, int tick_ms) {
       next_tick = now + std::chrono::milliseconds(tick_ms);
     }
     if (pending_work_) pending_work_();
+    CheckTimeSource();
     const auto wait = std::min(next_heartbeat, on_tick ? next_tick : next_heartbeat) - Clock::now();
     const int wait_ms = static_cast<int>(
         std::max<long>(0, std::chrono::duration_cast<std::chrono::milliseconds>(wait).count()));

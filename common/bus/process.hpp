@@ -77,6 +77,24 @@ class Process {
   // Seconds of wall time since start (for dead-peer guards only: rover time comes from messages).
   double wall_seconds() const;
 
+  // Where rover time comes from (docs/HARDWARE.md, "Rover time"), decided here for every
+  // process: virtual time (the time source's barrier); on a real clock the time source's
+  // ROVER_CLOCK (`bus.time_source`, rover_sim by default); or the system clock (`bus.time:
+  // system`: a rover, or rover_sim as hardware). `auto` (no bus.time, no $ROVER_TIME):
+  // undecided (rover time unknown, 0) until the time source is heard, or the system clock
+  // once bus.time_source_wait_s (2 s) of wall time has passed without it.
+  enum class TimeMode { kVirtual, kSourceClock, kSystemClock, kUndecided };
+  TimeMode time_mode() const;
+  const std::string& time_source() const { return time_source_; }
+  // One line on stderr saying so (Run prints it; a process with a loop of its own calls it).
+  void AnnounceTime() const;
+  // A real clock taken from a time source that has sent no ROVER_CLOCK for
+  // `bus.time_source_silent_s` of wall time: rover time stands still, so a process that
+  // drives stops the rover (sequence_executor aborts with time_source_lost). Said once on
+  // stderr when it falls silent and once when it speaks again (CheckTimeSource, in Run).
+  bool time_source_silent() const { return source_silent_; }
+  void CheckTimeSource();
+
   void SetHealth(std::int8_t state, std::string detail);
 
   // What this process publishes: one list in each main, after its subscriptions and before
@@ -94,6 +112,14 @@ class Process {
   // publishes what has become due and returns true while work due by now is unfinished.
   // In virtual time the clock waits for it (the process says it is busy, and alive).
   void set_pending_work(std::function<bool()> poll) { pending_work_ = std::move(poll); }
+  // Virtual time: the rover time before which this process has nothing of its own to do
+  // (0: the next tick; kQuietForGood: nothing until a message comes), asked after each
+  // tick and sent in the sync report. While every member of the set is quiet past the next
+  // tick and the rover stands still, rover_sim steps the clock straight on, up to
+  // sim.idle_step_s at a time (an idle stride: hours parked cost minutes of wall time, not
+  // hours). A process that sets none is never quiet, and the clock never strides.
+  static constexpr std::int64_t kQuietForGood = std::int64_t{1} << 62;
+  void set_quiet_until(std::function<std::int64_t()> quiet_until) { quiet_until_ = std::move(quiet_until); }
   // Rover time a result of work started at `start_utime` is due, with the compute
   // profile's `seconds` (simtime/compute_profile.hpp): charged in virtual time only.
   std::int64_t DueAt(std::int64_t start_utime, double seconds) const;
@@ -130,7 +156,17 @@ class Process {
   bool virtual_ = false;
   bool clock_observer_ = false;
   std::string time_source_ = "rover_sim";
+  double source_silent_after_s_ = 1.0;
+  double source_wait_s_ = 2.0;
+  bool auto_time_ = false;
+  bool source_seen_ = false;  // any ROVER_CLOCK of the time source, of either mode
+  bool source_heard_ = false, source_silent_ = false;
+  std::chrono::steady_clock::time_point source_heard_wall_{};
+  // A real-clock ROVER_CLOCK from the time source: the switch from the system clock at the
+  // first one, and the end of a silence.
+  void OnSourceClock();
   std::function<bool()> pending_work_;
+  std::function<std::int64_t()> quiet_until_;
   simtime::ComputeProfile compute_;
   std::unique_ptr<SyncSender> sync_;
   std::int64_t sync_seq_ = 0;

@@ -29,6 +29,7 @@ rover_msgs::sim_sync_t ToMsg(const simtime::SyncReport& r, std::int64_t seq) {
   m.process = r.process;
   m.seq = seq;
   m.busy = r.busy ? 1 : 0;
+  m.quiet_until = r.quiet_until;
   m.subscribes_all = r.subscribes_all ? 1 : 0;
   m.subscribed.assign(r.subscribed.begin(), r.subscribed.end());
   m.num_subscribed = static_cast<std::int32_t>(m.subscribed.size());
@@ -53,6 +54,7 @@ simtime::SyncReport FromMsg(const rover_msgs::sim_sync_t& m) {
   r.utime = m.utime;
   r.process = m.process;
   r.busy = m.busy != 0;
+  r.quiet_until = m.quiet_until;
   r.subscribes_all = m.subscribes_all != 0;
   r.subscribed.insert(m.subscribed.begin(), m.subscribed.end());
   for (std::size_t i = 0; i < m.published_channel.size() && i < m.published_count.size(); ++i)

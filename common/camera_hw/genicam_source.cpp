@@ -62,6 +62,7 @@ struct Camera {
   int width = 0, height = 0;
 
   bool answering = true;  // false once a command to it failed: nothing more is sent to it
+  ClockMapping clock;     // its timestamps onto the system clock
 };
 
 // Gives up one camera's Aravis objects. A camera that no longer answers is sent nothing
@@ -385,6 +386,9 @@ class GenicamStereo : public StereoSource {
     frame.frame_id = arv_buffer_get_frame_id(buffer);
     frame.timestamp_ns = static_cast<std::int64_t>(options_.timestamps == "device" ? arv_buffer_get_timestamp(buffer)
                                                                                      : arv_buffer_get_system_timestamp(buffer));
+    // The exposure on the system clock: the frame's timestamp, in whichever clock it is,
+    // mapped through the lowest receipt delay seen (ClockMapping).
+    frame.system_ns = cam.clock.ToSystem(frame.timestamp_ns, SystemNowNs());
     return frame;
   }
 

@@ -193,6 +193,12 @@ class GstreamerStereo : public StereoSource {
     GstSegment* segment = gst_sample_get_segment(sample);
     const GstClockTime running = segment ? gst_segment_to_running_time(segment, GST_FORMAT_TIME, pts) : pts;
     frame.timestamp_ns = static_cast<std::int64_t>(gst_element_get_base_time(p.pipeline) + running);
+    // The same instant on the system clock: the pipeline's clock (Play) read now against
+    // the system clock now.
+    GstClock* clock = gst_system_clock_obtain();
+    const auto clock_now = static_cast<std::int64_t>(gst_clock_get_time(clock));
+    gst_object_unref(clock);
+    frame.system_ns = SystemNowNs() - (clock_now - frame.timestamp_ns);
     frame.frame_id = p.samples++;
     return frame;
   }

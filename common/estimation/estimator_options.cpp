@@ -37,6 +37,11 @@ void EstimatorOptions::Validate() const {
   RequireRange("history_s", history_s, 1e-3, 1e7);
   RequireRange("history_max_samples", history_max_samples, 2, 1e8);
   RequireRange("vo_future_tolerance_s", vo_future_tolerance_s, 0.0, 3600.0);
+  RequireRange("zupt_settle_s", zupt_settle_s, 0.0, 3600.0);
+  RequireRange("zupt_odometry_timeout_s", zupt_odometry_timeout_s, 1e-3, 3600.0);
+  RequireRange("zupt_max_rate_rad_per_s", zupt_max_rate_rad_per_s, 0.0, 1.0);
+  RequireRange("zupt_bias_segment_s", zupt_bias_segment_s, 1.0, 86400.0);
+  RequireRange("zupt_yaw_reading_sigma_rad", zupt_yaw_reading_sigma_rad, 0.0, 0.1);
 }
 
 EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
@@ -59,7 +64,13 @@ EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
                                    "history_max_samples",
                                    "vo_heading",
                                    "vo_future_tolerance_s",
-                                   "ignore_distance_while_turning_in_place"};
+                                   "ignore_distance_while_turning_in_place",
+                                   "zero_velocity_updates",
+                                   "zupt_settle_s",
+                                   "zupt_odometry_timeout_s",
+                                   "zupt_max_rate_deg_s",
+                                   "zupt_bias_segment_s",
+                                   "zupt_yaw_reading_sigma_deg"};
   keys.insert(keys.end(), extra_keys.begin(), extra_keys.end());
   section.CheckKeys(keys);
 
@@ -107,6 +118,16 @@ EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
   section.Get("slip_memory_updates", o.slip_memory_updates, 0, 1000);
   section.Get("slip_min_distance_m", o.slip_min_distance_m, 1e-3, 1e3);
   section.Get("ignore_distance_while_turning_in_place", o.ignore_distance_while_turning_in_place);
+  section.Get("zero_velocity_updates", o.zero_velocity_updates);
+  section.Get("zupt_settle_s", o.zupt_settle_s, 0.0, 3600.0);
+  section.Get("zupt_odometry_timeout_s", o.zupt_odometry_timeout_s, 1e-3, 3600.0);
+  double zupt_rate_deg_s = o.zupt_max_rate_rad_per_s * 180.0 / M_PI;
+  section.Get("zupt_max_rate_deg_s", zupt_rate_deg_s, 0.0, 57.0);
+  o.zupt_max_rate_rad_per_s = zupt_rate_deg_s * M_PI / 180.0;
+  section.Get("zupt_bias_segment_s", o.zupt_bias_segment_s, 1.0, 86400.0);
+  double yaw_reading_deg = o.zupt_yaw_reading_sigma_rad * 180.0 / M_PI;
+  section.Get("zupt_yaw_reading_sigma_deg", yaw_reading_deg, 0.0, 5.0);
+  o.zupt_yaw_reading_sigma_rad = yaw_reading_deg * M_PI / 180.0;
   return o;
 }
 

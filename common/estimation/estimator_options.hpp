@@ -65,6 +65,20 @@ struct EstimatorOptions {
   // caller may retry it after more input. 0 = always wait for input past `to`.
   double vo_future_tolerance_s = 0.5;
 
+  // At rest (zero-velocity update). A rover whose wheels have not turned for zupt_settle_s
+  // (wheel odometry heard within zupt_odometry_timeout_s) and whose gyro reads under
+  // zupt_max_rate_rad_per_s is standing still: its heading is held (the gyro's yaw drift is
+  // not integrated) and neither heading nor position sigma grows, however long it stands
+  // (a night). The drift it reads meanwhile measures the gyro's bias: every
+  // zupt_bias_segment_s of rest is one measurement (its yaw change over its length, noise
+  // arw^2/T + 2 zupt_yaw_reading_sigma^2/T^2), fused into the bias estimate and its sigma.
+  bool zero_velocity_updates = true;
+  double zupt_settle_s = 0.5;
+  double zupt_odometry_timeout_s = 3.0;
+  double zupt_max_rate_rad_per_s = 0.5 * 3.14159265358979323846 / 180.0;
+  double zupt_bias_segment_s = 60.0;
+  double zupt_yaw_reading_sigma_rad = 0.001 * 3.14159265358979323846 / 180.0;
+
   // During a turn in place the body does not travel; some encoders still report a
   // body distance. When true, that distance is not integrated into position.
   bool ignore_distance_while_turning_in_place = true;
@@ -82,6 +96,8 @@ struct EstimatorOptions {
 //   history_s, history_max_samples
 //   vo_heading: fuse | replace | ignore
 //   vo_future_tolerance_s, ignore_distance_while_turning_in_place
+//   zero_velocity_updates, zupt_settle_s, zupt_odometry_timeout_s, zupt_max_rate_deg_s,
+//   zupt_bias_segment_s, zupt_yaw_reading_sigma_deg
 // `extra_keys` are keys the caller (the process shell) reads itself from the same section;
 // any other key is rejected. Throws config::ConfigError naming file and key.
 EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,

@@ -85,6 +85,59 @@ void PoseEstimator::PropagateHeading(double dt, double abs_dyaw) {
   P_(kBias, kBias) += walk * walk * dt;
 }
 
+bool PoseEstimator::StandingStill(int64_t utime, const Eigen::Vector3d& angular_rate) const {
+  if (!options_.zero_velocity_updates || !has_odometry_) return false;
+  const double since_odometry_s = static_cast<double>(utime - last_odometry_utime_) * 1e-6;
+  const double since_motion_s = static_cast<double>(utime - last_wheel_motion_utime_) * 1e-6;
+  return since_odometry_s <= options_.zupt_odometry_timeout_s && since_motion_s >= options_.zupt_settle_s &&
+         angular_rate.norm() <= options_.zupt_max_rate_rad_per_s;
+}
+
+// Zero-velocity update on heading: the wheels stand and the gyro is quiet, so the rover's
+// heading has not changed, whatever the IMU's integrated yaw says (its drift). The heading
+// error therefore does not grow; only the bias's own walk does.
+void PoseEstimator::HoldHeadingAtRest(double dt, double dyaw) {
+  yaw_offset_ = WrapAngle(yaw_offset_ - dyaw);
+  const double walk = options_.gyro_bias_walk_rad_per_s_per_sqrt_s;
+  P_(kBias, kBias) += walk * walk * dt;
+  rest_segment_s_ += dt;
+  rest_segment_dyaw_ += dyaw;
+  if (rest_segment_s_ >= options_.zupt_bias_segment_s) {
+    FuseRestBias(rest_segment_s_, rest_segment_dyaw_);
+    rest_segment_s_ = rest_segment_dyaw_ = 0.0;
+  }
+}
+
+// The rest ends: its last segment counts when it is at least a quarter of a full one.
+void PoseEstimator::EndRest() {
+  if (rest_segment_s_ >= 0.25 * options_.zupt_bias_segment_s) FuseRestBias(rest_segment_s_, rest_segment_dyaw_);
+  rest_segment_s_ = rest_segment_dyaw_ = 0.0;
+  at_rest_ = false;
+}
+
+// A rest segment's yaw drift over its length measures the gyro's bias (rad/s): noise
+// arw^2/T from the gyro's white noise and 2 s_r^2/T^2 from the two yaw readings at its ends.
+// The update changes the bias estimate only (the heading is held; what the bias did to the
+// heading before the rest is VO's to correct), with its sigma and cross terms as such a
+// gain leaves them: P_bb R/S and P_xb R/S.
+void PoseEstimator::FuseRestBias(double segment_s, double segment_dyaw) {
+  if (segment_s <= 0.0) return;
+  const double arw = options_.gyro_random_walk_rad_per_sqrt_s;
+  const double reading = options_.zupt_yaw_reading_sigma_rad;
+  const double R = arw * arw / segment_s + 2.0 * reading * reading / (segment_s * segment_s);
+  const double S = P_(kBias, kBias) + R;
+  if (!(S > 0.0)) return;
+  const double gain = P_(kBias, kBias) / S;
+  gyro_bias_ += gain * (segment_dyaw / segment_s - gyro_bias_);
+  const double keep = R / S;
+  for (int i = 0; i < 5; ++i) {
+    if (i == kBias) continue;
+    P_(i, kBias) *= keep;
+    P_(kBias, i) *= keep;
+  }
+  P_(kBias, kBias) *= keep;
+}
+
 bool PoseEstimator::AdvanceTime(int64_t utime) {
   if (has_time_ && utime < utime_) {
     ++inputs_rejected_;
@@ -117,10 +170,20 @@ InputResult PoseEstimator::OnImu(const ImuSample& imu) {
   if (has_imu_) {
     const double dt = static_cast<double>(imu.utime - last_imu_utime_) * 1e-6;
     const double dyaw = WrapAngle(yaw_imu - YawOf(q_imu_.toRotationMatrix()));
-    // The IMU's heading drifts by the gyro's bias: take off the bias VO has measured.
-    yaw_offset_ = WrapAngle(yaw_offset_ - gyro_bias_ * dt);
-    turned_rad_ += std::abs(dyaw);
-    PropagateHeading(dt, std::abs(dyaw));
+    // Quiet: the gyro's rate and the attitude's own yaw change both under the limit.
+    const bool still = StandingStill(imu.utime, imu.angular_rate) &&
+                       (dt <= 0.0 || std::abs(dyaw) / dt <= options_.zupt_max_rate_rad_per_s);
+    if (at_rest_ && !still) EndRest();
+    at_rest_ = still;
+    if (at_rest_) {
+      HoldHeadingAtRest(dt, dyaw);
+    } else {
+      // The IMU's heading drifts by the gyro's bias: take off the bias VO has measured.
+      yaw_offset_ = WrapAngle(yaw_offset_ - gyro_bias_ * dt);
+      turned_rad_ += std::abs(dyaw);
+      gyro_s_ += dt;
+      PropagateHeading(dt, std::abs(dyaw));
+    }
   } else if (pending_reset_yaw_) {
     yaw_offset_ = WrapAngle(*pending_reset_yaw_ - yaw_imu);
     pending_reset_yaw_.reset();
@@ -151,9 +214,16 @@ InputResult PoseEstimator::OnWheelOdometry(const WheelOdometrySample& odo) {
     return InputResult::kNotFinite;
   }
   if (!AdvanceTime(odo.utime)) return InputResult::kOutOfOrder;
+  // Any wheel that turned (or a turn in place) ends a rest (EstimatorOptions, "At rest").
+  const bool wheels_turned = !has_odometry_ || odo.distance_m != last_distance_m_ || odo.turning_in_place ||
+                             odo.wheel_distance_m != wheel_distance_m_;
+  last_odometry_utime_ = odo.utime;
+  if (wheels_turned) {
+    last_wheel_motion_utime_ = odo.utime;
+    if (at_rest_) EndRest();  // this sample starts the motion: not one of the rest's
+  }
   wheel_distance_m_ = odo.wheel_distance_m;
   const Eigen::Matrix3d R_now = T_site_rover_.linear();
-
   if (!has_odometry_) {
     has_odometry_ = true;
     last_distance_m_ = odo.distance_m;
@@ -242,6 +312,8 @@ PoseEstimator::Sample PoseEstimator::Current() const {
   s.P = P_;
   s.odometer = odometer_m_;
   s.turned = turned_rad_;
+  s.gyro_s = gyro_s_;
+  s.at_rest = at_rest_;
   return s;
 }
 
@@ -251,11 +323,17 @@ void PoseEstimator::SetCurrent(const Sample& s) {
   P_ = s.P;
   odometer_m_ = s.odometer;
   turned_rad_ = s.turned;
+  gyro_s_ = s.gyro_s;
 }
 
 void PoseEstimator::Record() {
   const Sample s = Current();
-  if (!history_.empty() && history_.back().utime == s.utime) {
+  // A stretch at rest is kept as its two ends: the pose between them is the same, so an
+  // hour or a night parked costs two samples, and a VO update from before it still finds
+  // its `from` (a pause is not a reason to refuse a VO update for age).
+  const bool resting = s.at_rest && history_.size() >= 2 && history_.back().at_rest &&
+                       history_[history_.size() - 2].at_rest;
+  if (!history_.empty() && (history_.back().utime == s.utime || resting)) {
     history_.back() = s;
   } else {
     history_.push_back(s);
@@ -287,6 +365,8 @@ PoseEstimator::Sample PoseEstimator::Interpolate(int64_t utime) const {
   s.P = a.P + f * (b.P - a.P);
   s.odometer = a.odometer + f * (b.odometer - a.odometer);
   s.turned = a.turned + f * (b.turned - a.turned);
+  s.gyro_s = a.gyro_s + f * (b.gyro_s - a.gyro_s);
+  s.at_rest = a.at_rest && b.at_rest;
   return s;
 }
 
@@ -308,14 +388,17 @@ PoseEstimator::VoCloneModel PoseEstimator::CloneToVoEnd(const Sample& from, cons
   // interval, the bias walk v, and VO's noise on its translation (rover frame at `from`) and
   // on its yaw change.
   enum { kW = 5, kV = 6, kVoT = 7, kVoYaw = 10, kInputs = 11 };
-  const double dt = static_cast<double>(to.utime - from.utime) * 1e-6;
+  // The gyro's bias and noise act on the heading only while it was integrated (not at
+  // rest, where it was held); the bias wanders all the time.
+  const double dt = std::max(0.0, to.gyro_s - from.gyro_s);
+  const double dt_walk = static_cast<double>(to.utime - from.utime) * 1e-6;
   const double arw = options_.gyro_random_walk_rad_per_sqrt_s;
   const double scale = options_.gyro_scale_sigma_fraction * std::max(0.0, to.turned - from.turned);
   const double walk = options_.gyro_bias_walk_rad_per_s_per_sqrt_s;
   Eigen::Matrix<double, kInputs, kInputs> S = Eigen::Matrix<double, kInputs, kInputs>::Zero();
   S.topLeftCorner<5, 5>() = from.P;
   S(kW, kW) = arw * arw * dt + scale * scale;
-  S(kV, kV) = walk * walk * dt;
+  S(kV, kV) = walk * walk * dt_walk;
   const int vo_index[4] = {0, 1, 2, 5};  // x y z yaw of VO's x y z roll pitch yaw
   for (int i = 0; i < 4; ++i) {
     for (int j = 0; j < 4; ++j) S(kVoT + i, kVoT + j) = vo_covariance(vo_index[i], vo_index[j]);

@@ -170,6 +170,9 @@ class PoseEstimator {
   std::size_t history_size() const { return history_.size(); }
   int64_t inputs_rejected() const { return inputs_rejected_; }
   const std::vector<double>& last_wheel_distances_m() const { return wheel_distance_m_; }
+  // Standing still now (EstimatorOptions::zero_velocity_updates): the heading is held and
+  // the gyro's drift measures its bias.
+  bool at_rest() const { return at_rest_; }
   // The wheels' 1-sigma fractions now in use, along and across track: the configured ones,
   // or the worst error VO measured on the last updates where that is more.
   Eigen::Vector2d wheel_sigma_fractions() const;
@@ -189,6 +192,10 @@ class PoseEstimator {
     Matrix5d P = Matrix5d::Zero();
     double odometer = 0.0;
     double turned = 0.0;  // cumulative |yaw change| the gyro measured (rad)
+    // Cumulative seconds the gyro's heading was integrated (not at rest): its bias acts on
+    // the heading over these only.
+    double gyro_s = 0.0;
+    bool at_rest = false;
   };
 
   Sample Current() const;
@@ -210,6 +217,12 @@ class PoseEstimator {
   // (estimate minus truth; the bias entry is the bias still left in the gyro) and lowers P_to.
   Vector5d FuseGyroCheck(const VoCloneModel& model, double check, Matrix5d& P_to) const;
   void PropagateHeading(double dt, double abs_dyaw);
+  // At rest: holds the heading against the IMU's yaw change `dyaw` over `dt`, and feeds the
+  // rest segment's bias measurement (FuseRestBias).
+  void HoldHeadingAtRest(double dt, double dyaw);
+  void FuseRestBias(double segment_s, double segment_dyaw);
+  void EndRest();
+  bool StandingStill(int64_t utime, const Eigen::Vector3d& angular_rate) const;
   void GrowPositionCovariance(const Eigen::Vector3d& displacement);
   // The wheels' error VO measured over [from, to] (EstimatorOptions::slip_memory_updates).
   void MeasureWheelSlip(const Sample& from, const Sample& to_wheels, const Eigen::Vector3d& t_site_vo);
@@ -226,6 +239,10 @@ class PoseEstimator {
   double turned_rad_ = 0.0;
   double yaw_offset_ = 0.0;
   double gyro_bias_ = 0.0;
+  double gyro_s_ = 0.0;  // seconds the gyro's heading was integrated (Sample::gyro_s)
+  bool at_rest_ = false;
+  double rest_segment_s_ = 0.0, rest_segment_dyaw_ = 0.0;  // the rest segment so far
+  int64_t last_odometry_utime_ = 0, last_wheel_motion_utime_ = 0;
   std::optional<double> pending_reset_yaw_;  // Reset() before the first IMU sample
 
   bool has_imu_ = false;

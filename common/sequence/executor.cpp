@@ -66,6 +66,7 @@ void SequenceExecutor::Submit(Sequence sequence, int64_t submission_id, const st
   distance_m_ = 0.0;
   started_ = false;
   pause_requested_ = false;
+  paused_total_us_ = 0;
   command_active_ = false;
   arrival_note_.clear();
   ResetSettings();
@@ -125,6 +126,14 @@ void SequenceExecutor::Abort(const std::string& detail) {
   }
 }
 
+void SequenceExecutor::TimeSourceLost(const std::string& detail) {
+  if (Active()) {
+    AbortWith(abort_reason::kTimeSourceLost, detail);
+  } else {
+    EmitStop();
+  }
+}
+
 void SequenceExecutor::RecordInterrupted(int64_t submission_id, const std::string& name,
                                          const std::string& detail) {
   if (Active()) return;
@@ -150,8 +159,15 @@ void SequenceExecutor::Resume() {
     AbortWith(abort_reason::kProcessLost, "no heartbeat from " + Join(silent) + " at resume");
     return;
   }
+  // The pause counts against no time limit: the sequence's and the goto's clocks start
+  // again where they stood.
+  const int64_t paused_us = std::max<int64_t>(0, now_utime_ - paused_since_utime_);
+  start_utime_ += paused_us;
+  if (is_goto_) goto_start_utime_ += paused_us;
+  paused_total_us_ += paused_us;
   state_ = SequenceState::kRunning;
-  detail_ = "resumed";
+  detail_ = "resumed after " + Fixed(paused_us * 1e-6, 1) + " s paused (not counted against the time limits; " +
+            TimeLeftText() + ")";
   EmitStatus();
   EnterPhase(Phase::kReady);
   Advance();

@@ -415,6 +415,7 @@ inline constexpr const char* kTimeout = "timeout";
 inline constexpr const char* kInvalidSequence = "invalid_sequence";  // rejections only
 inline constexpr const char* kBusy = "busy";                         // rejections only
 inline constexpr const char* kInterrupted = "interrupted";  // the executor restarted mid-sequence
+inline constexpr const char* kTimeSourceLost = "time_source_lost";  // rover time stood still (a silent clock)
 }  // namespace abort_reason
 
 const char* ToString(SequenceState state);
@@ -435,6 +436,10 @@ class SequenceExecutor {
   void SubmitText(std::string_view text, int64_t submission_id, const std::string& name,
                   const LanguageLimits& limits = {});
   void Abort(const std::string& detail);  // reason "operator"; always commands STOP
+  // The deployment's time source fell silent (bus::Process::time_source_silent): rover time
+  // stands still, so nothing the executor waits for can be judged. A running or paused
+  // sequence aborts with time_source_lost; the rover is stopped either way.
+  void TimeSourceLost(const std::string& detail);
   // After a restart: the sequence the previous executor was running (its state file)
   // is reported ABORTED with reason "interrupted" and `detail`, and STOP is commanded
   // once. It is never resumed. Does nothing while a sequence is active.
@@ -531,6 +536,9 @@ class SequenceExecutor {
   bool CheckProgress(const StepEnd& end);
   bool ApplyVoFailurePolicy(const StepEnd& end);
   bool CheckLimits(const StepEnd& end);
+  // What the time limits leave, for the pause and resume lines: "sequence 1742.5 s of
+  // 1800.0 s left, goto 512.0 s of 600.0 s left", or "no time limits".
+  std::string TimeLeftText() const;
 
   // Finishing and status (executor_report.cpp).
   void Finish(SequenceState state, const std::string& reason, const std::string& detail);
@@ -643,8 +651,12 @@ class SequenceExecutor {
   std::string detail_;
   int command_index_ = -1;
   int step_index_ = 0;
+  // Where the sequence's time limit counts from: its start, moved later by each pause, so
+  // that a pause counts against no time limit (LANGUAGE.md, "Pauses and nights").
   int64_t start_utime_ = 0;
   int64_t end_utime_ = 0;  // when it finished: its elapsed time stops there
+  int64_t paused_since_utime_ = 0;  // kPaused: when the pause began
+  int64_t paused_total_us_ = 0;     // rover time spent paused in this sequence
   double distance_m_ = 0.0;
   bool started_ = false;
   bool sequence_uses_vo_ = false;

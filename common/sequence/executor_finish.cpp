@@ -183,6 +183,19 @@ bool SequenceExecutor::ApplyVoFailurePolicy(const StepEnd& end) {
   return true;
 }
 
+std::string SequenceExecutor::TimeLeftText() const {
+  const int64_t now = state_ == SequenceState::kPaused ? paused_since_utime_ : now_utime_;
+  std::string text;
+  auto left = [&](const char* what, int64_t since, double limit_s) {
+    const double used_s = started_ ? std::max(0.0, (now - since) * 1e-6) : 0.0;
+    text += (text.empty() ? "" : ", ") + std::string(what) + " " + Fixed(std::max(0.0, limit_s - used_s), 1) +
+            " s of " + Fixed(limit_s, 1) + " s left";
+  };
+  if (limits_.time_s) left("sequence", start_utime_, *limits_.time_s);
+  if (is_goto_ && goto_.time_limit_s) left("goto", goto_start_utime_, *goto_.time_limit_s);
+  return text.empty() ? "no time limits" : text;
+}
+
 // 4. Limits: the sequence's time and distance, then the goto's unless it arrived.
 bool SequenceExecutor::CheckLimits(const StepEnd& end) {
   const std::string& step_text = end.text;

@@ -76,7 +76,8 @@ void SequenceExecutor::PollReady() {
   if (pause_requested_) {
     pause_requested_ = false;
     state_ = SequenceState::kPaused;
-    detail_ = "paused by the operator";
+    paused_since_utime_ = now_utime_;
+    detail_ = "paused by the operator; the time limits stand still while paused (" + TimeLeftText() + ")";
     EmitStatus();
     return;
   }

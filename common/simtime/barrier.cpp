@@ -1,6 +1,7 @@
 #include "simtime/barrier.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <sstream>
 #include <utility>
 
@@ -103,6 +104,16 @@ std::string Barrier::Holds(const std::string& name, const Member& m, std::int64_
     }
   }
   return "";
+}
+
+std::int64_t Barrier::QuietUntil() const {
+  std::int64_t until = std::numeric_limits<std::int64_t>::max();
+  for (const auto& entry : members_) {
+    const Member& m = entry.second;
+    if (m.lost || !m.heard) return 0;
+    until = std::min(until, m.last.quiet_until);
+  }
+  return until;
 }
 
 bool Barrier::Finished(std::int64_t utime) const {

@@ -40,6 +40,8 @@ struct SyncReport {
   std::string process;
   std::int64_t utime = 0;     // rover time whose work is finished
   bool busy = false;          // alive, still working on work due at `utime`
+  // Nothing of its own to do before this rover time (0: the next tick). See QuietUntil.
+  std::int64_t quiet_until = 0;
   bool subscribes_all = false;  // a recorder: counts as a subscriber of every channel
   std::set<std::string> subscribed;
   std::map<std::string, std::int64_t> published;  // channel -> messages published
@@ -84,6 +86,10 @@ class Barrier {
   Cut Published() const;
   // Members currently lost.
   std::vector<std::string> Lost() const;
+  // The earliest rover time any member has something of its own to do, from the last
+  // reports (0 when one is lost, or has said nothing of it): the clock may step straight
+  // to it while the rover stands still (an idle stride; sim.idle_step_s).
+  std::int64_t QuietUntil() const;
   std::uint32_t Id(const std::string& process) const;
 
  private:

@@ -65,6 +65,9 @@ struct CapturedPair {
   // Real cameras: each image's own timestamp (ns, the camera's clock), to carry their
   // difference into the frame's left_utime and right_utime. Unset: both at the capture time.
   std::optional<camera_hw::StereoFrames> timestamps;
+  // Real cameras: the exposure on the system clock (camera_hw::ExposureSystemUtime; 0:
+  // unknown), which stamps the frame instead of the request's time.
+  std::int64_t system_utime = 0;
 };
 
 using capture::Pointing;
@@ -249,8 +252,9 @@ class HardwareCameras : public ImageSource {
                                  " (capture.rig against the region and binning)");
       }
     }
-    // Stamped with the bus time of the request; each image's exposure from its own timestamp.
-    CapturedPair pair{frames.left.image, frames.right.image, rig_, {}, {}, 0, std::nullopt};
+    // Stamped with the exposure on the system clock; each image's from its own timestamp.
+    CapturedPair pair{frames.left.image, frames.right.image, rig_, {}, {}, 0, std::nullopt,
+                      camera_hw::ExposureSystemUtime(frames)};
     frames.left.image.release();
     frames.right.image.release();
     pair.timestamps = std::move(frames);
@@ -308,12 +312,18 @@ std::unique_ptr<ImageSource> MakeCameras(const bus::Process& proc, const capture
 
 // One capture, on the worker thread: the pair (and the HAZCAM pair taken with it) as
 // messages stamped with the request and the pose at capture.
+// `now` is rover time when the capture started and `system_now` the system clock then (they
+// are one on a rover): a real camera's exposure on the system clock is moved into rover time
+// by their difference.
 CaptureFrames CaptureFrame(ImageSource& cameras, bool png, const rover_msgs::capture_request_t& request,
-                           const rover_msgs::pose_t& pose, std::int64_t now) {
+                           const rover_msgs::pose_t& pose, std::int64_t now, std::int64_t system_now) {
   const auto pair = cameras.Capture(request.frame_id, Pointing{request.pan_rad, request.tilt_rad});
   CaptureFrames out;
   rover_msgs::stereo_frame_t& frame = out.navcam;
-  frame.utime = pair.utime != 0 ? pair.utime : now;
+  // Before rover time is known (now 0: a real clock not decided yet) a real camera's pair
+  // carries its exposure on the system clock.
+  const std::int64_t exposed = now > 0 ? now + (pair.system_utime - system_now) : pair.system_utime;
+  frame.utime = pair.utime != 0 ? pair.utime : pair.system_utime != 0 ? exposed : now;
   frame.left_utime = frame.right_utime = frame.utime;  // one renderer, one dataset pair: at once
   if (pair.timestamps) {
     const auto exposed = camera_hw::ExposureUtimes(*pair.timestamps, frame.utime);
@@ -348,6 +358,12 @@ class Capturer {
     proc_.bus().Subscribe<rover_msgs::capture_request_t>(
         channels::kCaptureRequest, [this](const rover_msgs::capture_request_t& m) { pending_.push_back(m); });
     proc_.set_pending_work([this] { return Finish(); });
+    // Quiet (virtual time's idle strides) with no capture asked for or in hand, until the
+    // next periodic one.
+    proc_.set_quiet_until([this]() -> std::int64_t {
+      if (job_.valid() || !pending_.empty()) return 0;
+      return rate_hz_ > 0 ? next_auto_utime_ : bus::Process::kQuietForGood;
+    });
   }
 
   // The loop's tick: a finished capture out, then the next one started.
@@ -382,7 +398,8 @@ class Capturer {
     at_capture.orientation[0] = 1.0;
     if (pose_) at_capture = *pose_;
     cameras_->Expose();
-    job_ = std::async(std::launch::async, CaptureFrame, std::ref(*cameras_), png_, request, at_capture, proc_.now());
+    job_ = std::async(std::launch::async, CaptureFrame, std::ref(*cameras_), png_, request, at_capture, proc_.now(),
+                      bus::RoverClock::SystemUtime());
     job_due_ = proc_.DueAt(proc_.now(), proc_.compute().capture_s);
   }
 
@@ -391,15 +408,33 @@ class Capturer {
     if (!job_.valid() || proc_.now() < job_due_) return false;
     if (job_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return true;
     try {
-      Publish(job_.get());  // get() rethrows a capture error
+      CaptureFrames frames = job_.get();  // rethrows a capture error
+      AnnounceReturn(frames.navcam.frame_id);
+      Publish(std::move(frames));
     } catch (const std::exception& e) {
       // No frame for this request: the executor counts a VO failure; the process goes on,
       // and its heartbeat says DEGRADED with the failure until a capture succeeds again
-      // (the camera contract, docs/HARDWARE.md).
-      std::cerr << "camera_capture: capture failed, no frame sent: " << e.what() << "\n";
-      proc_.SetHealth(rover_msgs::heartbeat_t::STATE_DEGRADED, std::string("capture failed: ") + e.what());
+      // (the camera contract, docs/HARDWARE.md). The first failure of an outage is one
+      // line; the rest are counted in the heartbeat, and the return is one line.
+      if (failures_ == 0) {
+        std::cerr << "camera_capture: capture failed, no frame sent: " << e.what()
+                  << " (the next failures are counted, not printed, until a pair is taken again)\n";
+        failing_since_wall_ = proc_.wall_seconds();
+      }
+      ++failures_;
+      proc_.SetHealth(rover_msgs::heartbeat_t::STATE_DEGRADED,
+                      std::string("capture failed: ") + e.what() + " (" + std::to_string(failures_) + " in a row)");
     }
     return false;
+  }
+
+  // One line when a pair is taken after an outage: the cameras are back.
+  void AnnounceReturn(std::int64_t frame_id) {
+    if (failures_ == 0) return;
+    std::cerr << "camera_capture: the cameras are back: frame " << frame_id << " taken after " << failures_
+              << " failed capture" << (failures_ == 1 ? "" : "s") << " over "
+              << static_cast<int>(std::lround(proc_.wall_seconds() - failing_since_wall_)) << " s of wall time\n";
+    failures_ = 0;
   }
 
   void Publish(CaptureFrames frames) {
@@ -430,6 +465,8 @@ class Capturer {
   std::int64_t next_auto_id_ = 1, next_auto_utime_ = 0;
   std::future<CaptureFrames> job_;
   std::int64_t job_due_ = 0;
+  std::int64_t failures_ = 0;  // captures failed in a row
+  double failing_since_wall_ = 0;
 };
 
 }  // namespace

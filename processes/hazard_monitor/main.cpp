@@ -162,6 +162,12 @@ class HazardNode {
       AnswerHeld();
     });
     proc_.set_pending_work([this] { return PendingWork(); });
+    // Quiet (virtual time's idle strides) with no query held and no pair to map, or until
+    // the pair in work is due.
+    proc_.set_quiet_until([this]() -> std::int64_t {
+      if (!held_.empty() || !waiting_jobs_.empty()) return 0;
+      return in_work_due_ ? *in_work_due_ : bus::Process::kQuietForGood;
+    });
   }
 
   // The steady status, the queries a finished map releases, and now and then the map again.

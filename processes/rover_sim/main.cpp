@@ -56,14 +56,21 @@ struct SimOptions {
   double status_hz = 4.0;    // periodic MOBILITY_STATUS (changes are sent at once)
   std::int64_t start_utime = 1000000;
   double tick_s = 0.1;             // virtual time: one instant of the barrier
+  // Virtual time: the longest step the clock takes while the rover stands still and every
+  // member is quiet (bus::Process::set_quiet_until): hours parked in minutes. Sensors then
+  // report once a step. 0: every step is tick_s.
+  double idle_step_s = 2.0;
   double barrier_timeout_s = 10.0;  // virtual time: wall seconds before a silent process is lost
 };
 
 SimOptions LoadSimOptions(const config::ConfigNode& section) {
   SimOptions o;
   section.CheckKeys({"rate", "step_s", "truth_hz", "clock_hz", "status_hz", "start_utime", "tick_s",
-                     "barrier_timeout_s"});
+                     "barrier_timeout_s", "idle_step_s"});
   section.Get("tick_s", o.tick_s, 0.01, 1.0);
+  // At most the members' bus.max_clock_step_s (5 s by default), or they wait for a second
+  // clock message to confirm each step.
+  section.Get("idle_step_s", o.idle_step_s, 0.0, 5.0);
   section.Get("barrier_timeout_s", o.barrier_timeout_s, 0.1, 600.0);
   if (section.Has("rate") && section["rate"].AsString() == "max") {
     o.rate = 0;
@@ -200,27 +207,49 @@ class SimOnBus {
 
   void OnHeartbeat(const rover_msgs::heartbeat_t& hb) { deadman_.OnHeartbeat(hb.process, proc_.guard_seconds()); }
 
-  // One simulation step, the dead-man judged first, and what it produced on the bus.
-  void Step() {
+  // One simulation step, the dead-man judged first, and what it produced on the bus. With
+  // `hold` (an idle stride) only the newest sample of each kind is kept, for FlushHeld.
+  void Step(bool hold = false) {
     if (const auto why = deadman_.Check(sim_.moving(), proc_.guard_seconds())) {
       std::cerr << "rover_sim: command " << sim_.status().command_id << ": " << *why << "\n";
       sim_.Halt(*why);
     }
     const mobility::StepOutput out = sim_.Step(options_.step_s);
-    for (const auto& s : out.imu) PublishImu(s);
-    for (const auto& s : out.odometry) PublishOdometry(s);
+    for (const auto& s : out.imu) hold ? void(held_imu_ = s) : PublishImu(s);
+    for (const auto& s : out.odometry) hold ? void(held_odometry_ = s) : PublishOdometry(s);
     for (const auto& s : out.status) proc_.bus().Publish(channels::kMobilityStatus, ToMsg(s));
     const std::int64_t now = sim_.utime();
     if (now >= next_status_) {
       auto st = sim_.status();
       st.utime = now;
-      proc_.bus().Publish(channels::kMobilityStatus, ToMsg(st));
+      if (hold) {
+        held_status_ = st;
+      } else {
+        proc_.bus().Publish(channels::kMobilityStatus, ToMsg(st));
+      }
       next_status_ += Period(options_.status_hz);
     }
     if (now >= next_truth_) {
-      PublishTruth();
+      if (hold) {
+        truth_held_ = true;
+      } else {
+        PublishTruth();
+      }
       next_truth_ += Period(options_.truth_hz);
     }
+  }
+
+  // The end of an idle stride: the newest of each sensor's samples, as a driver that
+  // sleeps with the rover reports on waking.
+  void FlushHeld() {
+    if (held_imu_) PublishImu(*held_imu_);
+    if (held_odometry_) PublishOdometry(*held_odometry_);
+    if (held_status_) proc_.bus().Publish(channels::kMobilityStatus, ToMsg(*held_status_));
+    if (truth_held_) PublishTruth();
+    held_imu_.reset();
+    held_odometry_.reset();
+    held_status_.reset();
+    truth_held_ = false;
   }
 
   void PublishClock(std::int64_t now, const simtime::Cut* cut = nullptr) {
@@ -290,6 +319,10 @@ class SimOnBus {
   mobility::RoverSimulator& sim_;
   mobility::Deadman& deadman_;
   std::int64_t next_truth_, next_status_;
+  std::optional<mobility::ImuSample> held_imu_;
+  std::optional<mobility::WheelOdometrySample> held_odometry_;
+  std::optional<mobility::MobilityStatus> held_status_;
+  bool truth_held_ = false;
 };
 
 // ---- Virtual time: one instant at a time, when the whole set has finished it. ----
@@ -371,7 +404,9 @@ class VirtualClock {
       // silence meanwhile is not theirs to answer for.
       if (proc_.wall_seconds() - last_pass > 1.0) tick_wall_ = proc_.wall_seconds();
       last_pass = proc_.wall_seconds();
-      barrier_.Report(proc_.bus().SyncState("rover_sim", t_, false), proc_.wall_seconds());
+      auto own = proc_.bus().SyncState("rover_sim", t_, false);
+      own.quiet_until = rover_.sim().moving() ? 0 : bus::Process::kQuietForGood;
+      barrier_.Report(own, proc_.wall_seconds());
       if (barrier_.Finished(t_)) return true;
       DeclareLost();
       AnnounceAgainForTheFarBehind();
@@ -420,19 +455,36 @@ class VirtualClock {
   // 2. No faster than `rate` times the wall clock. False: stopped meanwhile.
   bool PaceToRate() {
     if (options_.rate <= 0) return true;
-    const double due = wall_start_ + (t_ + tick_us_ - rover_start_) * 1e-6 / options_.rate;
+    const double due = wall_start_ + (t_ + NextStep() - rover_start_) * 1e-6 / options_.rate;
     while (!proc_.stopping() && proc_.wall_seconds() < due) {
       HandleEither(proc_.bus().lcm(), &sync_bus_, std::max(1, static_cast<int>((due - proc_.wall_seconds()) * 1000)));
     }
     return !proc_.stopping();
   }
 
+  // How far the clock moves next: one tick, or an idle stride when the rover stands still
+  // and every member has nothing of its own to do before then (Barrier::QuietUntil), on
+  // the tick grid and at most sim.idle_step_s.
+  std::int64_t NextStep() const {
+    const std::int64_t idle_us = static_cast<std::int64_t>(std::llround(options_.idle_step_s * 1e6));
+    if (idle_us <= tick_us_ || rover_.sim().moving()) return tick_us_;
+    const std::int64_t quiet = barrier_.QuietUntil();
+    if (quiet <= t_ + tick_us_) return tick_us_;
+    const std::int64_t step = std::min(idle_us, quiet - t_);
+    return std::max(tick_us_, step / tick_us_ * tick_us_);
+  }
+
   // 3. The next instant: what came during this one acts first (commands, heartbeats).
   void NextInstant() {
-    proc_.bus().SealBatch(t_ + tick_us_);
+    const std::int64_t step = NextStep();
+    proc_.bus().SealBatch(t_ + step);
     proc_.bus().DispatchBatch();
-    const std::int64_t until = t_ + tick_us_;
-    while (rover_.sim().utime() < until) rover_.Step();
+    const std::int64_t until = t_ + step;
+    // A command from outside the set (it said nothing of being quiet) may start a motion in
+    // a stride: that stride's samples go out one by one as in any instant.
+    const bool stride = step > tick_us_ && !rover_.sim().moving();
+    while (rover_.sim().utime() < until) rover_.Step(stride);
+    if (stride) rover_.FlushHeld();
     t_ = rover_.sim().utime();
     BeginInstant();
     tick_wall_ = proc_.wall_seconds();
@@ -469,6 +521,10 @@ int RunRealTime(SimOnBus& rover, const std::set<std::string>& waiting) {
       throw std::runtime_error("--hold-for: no heartbeat within 30 s from:" + list);
     }
   }
+  // As the rover's hardware (rover time is the system clock: bus.time system) rover_sim
+  // publishes what real drivers do and no clock; its time is the system clock's, paced at
+  // rate 1.
+  const bool hardware = proc.time_mode() == bus::Process::TimeMode::kSystemClock;
   std::int64_t next_clock = rover.sim().utime();
   const auto wall_start = std::chrono::steady_clock::now();
   const std::int64_t rover_start = rover.sim().utime();
@@ -479,7 +535,7 @@ int RunRealTime(SimOnBus& rover, const std::set<std::string>& waiting) {
     rover.Step();
     const std::int64_t now = rover.sim().utime();
     proc.ObserveTime(now);
-    if (now >= next_clock) {
+    if (!hardware && now >= next_clock) {
       rover.PublishClock(now);
       next_clock += SimOnBus::Period(options.clock_hz);
     }
@@ -518,6 +574,17 @@ int main(int argc, char** argv) {
                        {"--hold-for", "NAMES", "comma-separated processes the clock waits for: before it starts, and in virtual time at every instant"}});
     SimOptions options = LoadSimOptions(proc.config()["sim"]);
     if (auto r = proc.option("--rate")) options.rate = ParseRate(*r);
+    if (proc.time_mode() == bus::Process::TimeMode::kSystemClock) {
+      // The rover's hardware on the system clock: the simulated rover's time is the
+      // system clock's, at its pace (sim.rate is a simulation's pace, not taken here).
+      if (proc.option("--rate") && options.rate != 1.0) {
+        throw config::ConfigError("rover_sim: argument --rate " + *proc.option("--rate") +
+                                  " with rover time on the system clock (bus.time: system): as the rover's hardware "
+                                  "rover_sim runs at the wall clock's pace (expected --rate 1)");
+      }
+      options.rate = 1.0;
+      options.start_utime = bus::RoverClock::SystemUtime();
+    }
     if (options.rate <= 0 && !proc.virtual_time()) {
       throw config::ConfigError("rover_sim: rate max (0) needs virtual time (expected $ROVER_TIME=virtual or bus.time: virtual, or a rate > 0)");
     }
@@ -528,6 +595,7 @@ int main(int argc, char** argv) {
     mobility::Deadman deadman(mobility::LoadDeadmanOptions(proc.config()));
     const auto sim = MakeSimulator(proc, world, mobility_options, options);
     proc.ObserveTime(sim->utime());
+    proc.AnnounceTime();
 
     SimOnBus rover(proc, options, *sim, deadman);
     proc.bus().Subscribe<rover_msgs::mobility_command_t>(

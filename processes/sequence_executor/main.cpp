@@ -365,6 +365,12 @@ class ExecutorNode {
     // judges its peers lost (at most 50 ms of them, so a flood cannot stall it; in virtual
     // time nothing is starved: they came in this tick's batch).
     proc_.HandleReceived(50);
+    // A silent time source stops the rover once (its line is bus::Process's).
+    if (proc_.time_source_silent() && !source_lost_handled_) {
+      executor_.TimeSourceLost("the time source " + proc_.time_source() + " fell silent: rover time stands still");
+      source_lost_handled_ = true;
+    }
+    if (!proc_.time_source_silent()) source_lost_handled_ = false;
     executor_.Tick(proc_.now(), proc_.guard_seconds());
     Flush();
     if (proc_.now() > 0 || (!proc_.virtual_time() && proc_.wall_seconds() > 2.0)) ReportInterrupted();
@@ -380,6 +386,8 @@ class ExecutorNode {
     }
     proc_.SetHealth(0, detail);
   }
+
+  bool running() const { return executor_.state() == seq::SequenceState::kRunning; }
 
   // Stopping the executor while it drives stops the rover: commanding nothing is safe.
   void Shutdown() {
@@ -442,6 +450,7 @@ class ExecutorNode {
   seq::SequenceExecutor executor_;
   OutputPublisher publisher_;
   bool write_failing_ = false;
+  bool source_lost_handled_ = false;
 };
 
 }  // namespace
@@ -472,6 +481,9 @@ int main(int argc, char** argv) {
     proc.DeclarePublications({{channels::kMobilityCommand}, {channels::kCaptureRequest}, {channels::kHazardQuery},
                               {channels::kKeepOutZones}, {channels::kNewSite, "a sequence starts a new site"},
                               {channels::kSequenceStatus}, {channels::kStepReport}});
+    // A sequence that is not running (none, paused, finished) leaves it nothing of its own to
+    // do: quiet, so a pause or a night passes in idle strides of virtual time.
+    proc.set_quiet_until([&node] { return node.running() ? 0 : bus::Process::kQuietForGood; });
     proc.Run([&] { node.Tick(); }, 25);
     node.Shutdown();
     return 0;

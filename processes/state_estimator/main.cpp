@@ -98,6 +98,7 @@ class EstimatorNode {
   }
 
   std::int64_t rejected_vo() const { return rejected_vo_; }
+  bool waiting_vo() const { return !waiting_vo_.empty(); }
 
  private:
   // The estimate starts at the first input's instant.
@@ -173,6 +174,9 @@ int main(int argc, char** argv) {
     section.Get("publish_hz", publish_hz, 8.0, 1000.0);
     EstimatorNode node(proc, options, StartPose(proc), publish_hz);
     node.Subscribe();
+    // It acts on its inputs only: quiet (virtual time's idle strides) unless a VO update
+    // waits for the inputs to reach it.
+    proc.set_quiet_until([&node] { return node.waiting_vo() ? 0 : bus::Process::kQuietForGood; });
     proc.DeclarePublications({{channels::kPose}});
     proc.Run([&] {
       const auto rejected = node.rejected_vo();

@@ -93,6 +93,9 @@ class VoNode {
       }
       return false;
     });
+    // Nothing of its own to do but the next answer (virtual time's idle strides).
+    proc_.set_quiet_until(
+        [this] { return answers_.empty() ? bus::Process::kQuietForGood : answers_.front().first; });
     proc_.bus().Subscribe<rover_msgs::stereo_frame_t>(
         channels::kStereoFrame, [this](const rover_msgs::stereo_frame_t& frame) { OnFrame(frame); }, 4);
   }

@@ -39,7 +39,8 @@ Deployment LoadDeployment(const std::string& path) {
   d.source = path;
   root.Get("lcm_url", d.lcm_url);
   std::string time;
-  root.GetEnum("time", time, {"virtual", "real"});
+  // system: the system clock, no time source (rover_sim, if any, as the rover's hardware).
+  root.GetEnum("time", time, {"virtual", "real", "system"});
   const auto list = root["processes"];
   if (!list.IsSequence() || list.size() == 0) {
     list.Fail("expected a non-empty list of processes (name, args)");
@@ -78,7 +79,8 @@ Deployment LoadDeployment(const std::string& path) {
   // A set with the simulator runs in virtual time unless the file says `time: real`.
   bool simulated = false;
   for (const auto& p : d.processes) simulated = simulated || p.name == "rover_sim";
-  d.time = !time.empty() ? time : simulated ? "virtual" : "real";
+  // Without the simulator there is no clock on the bus: the system clock (a rover).
+  d.time = !time.empty() ? time : simulated ? "virtual" : "system";
   if (d.time == "virtual" && !simulated) root["time"].Fail("virtual time needs rover_sim in the set (its clock)");
 
   return d;

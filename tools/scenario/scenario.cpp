@@ -31,7 +31,7 @@ namespace rover::tools {
 ScenarioSpec LoadScenario(const std::string& path) {
   const auto root = config::ConfigNode::LoadFile(path);
   root.CheckKeys({"name", "description", "world", "sequence", "sequence_name", "then_sequences", "deployment", "rover_config",
-                  "start", "sim_rate", "timeout_s", "inject", "expect", "seeds", "dragged_wheel",
+                  "start", "sim_rate", "timeout_s", "inject", "expect", "seeds", "dragged_wheel", "pause", "then_idle_s",
                   "overrides", "world_overrides", "campaign"});
   ScenarioSpec s;
   s.source = path;
@@ -61,6 +61,17 @@ ScenarioSpec LoadScenario(const std::string& path) {
   }
   root.Get("sim_rate", s.sim_rate, 1.0, 10000.0);
   root.Get("timeout_s", s.timeout_s, 1.0, 7200.0);
+  if (root.Has("pause")) {
+    const auto pause = root["pause"];
+    pause.CheckKeys({"after_steps", "for_s"});
+    pause.Get("after_steps", s.pause_after_steps, 1, 100000);
+    pause.Get("for_s", s.pause_for_s, 0.0, 1e6);
+    if (!pause.Has("after_steps")) pause.Fail("expected after_steps: N (the pause comes after N steps)");
+  }
+  root.Get("then_idle_s", s.then_idle_s, 0.0, 1e6);
+  if (s.then_idle_s > 0 && s.then_sequences.empty()) {
+    root["then_idle_s"].Fail("expected then_sequences (the idle comes before each of them)");
+  }
   if (root.Has("inject")) {
     const auto inject = root["inject"];
     inject.CheckKeys({"kill", "after_steps"});
@@ -624,6 +635,16 @@ std::string SummaryJson(const ScenarioSummary& s) {
     j.Null();
   }
   WriteReason(j, s, "pose_honesty");
+  j.Key("rest_checks");
+  j.BeginArray();
+  for (const auto& c : s.rest_checks) {
+    j.BeginObject();
+    j.Field("after", c.after).Field("rested_s", c.rested_s).Field("position_error_m", c.position_error_m);
+    j.Field("heading_error_deg", c.heading_error_deg).Field("heading_sigma_deg", c.heading_sigma_deg);
+    j.Field("heading_nees", c.heading_nees).Field("horizontal_nees", c.horizontal_nees);
+    j.EndObject();
+  }
+  j.EndArray();
   WriteFigure(j, s, "rover_time_s", s.rover_time_s);
   j.Field("wall_time_s", s.wall_time_s);
   WriteLogCheck(j, s.log);
@@ -696,6 +717,13 @@ std::string SummaryText(const ScenarioSummary& s) {
        << h->heading_nees_mean << " (1 is honest), " << std::setprecision(1) << h->heading_beyond_pct
        << " % beyond 3 sigma; horizontal NEES mean " << std::setprecision(2) << h->horizontal_nees_mean
        << " (2 is honest), " << std::setprecision(1) << h->horizontal_beyond_pct << " % beyond its 99.7 % bound\n"
+       << std::setprecision(3);
+  }
+  for (const auto& c : s.rest_checks) {
+    os << std::setprecision(1) << "  after " << c.rested_s << " s " << (c.after == "pause" ? "paused" : "parked")
+       << ": estimate against truth " << std::setprecision(3) << c.position_error_m << " m, heading "
+       << c.heading_error_deg << " deg (sigma " << c.heading_sigma_deg << " deg); NEES heading " << std::setprecision(2)
+       << c.heading_nees << ", horizontal " << c.horizontal_nees << "\n"
        << std::setprecision(3);
   }
   for (const auto& e : s.process_events) os << "  " << e << "\n";

@@ -37,6 +37,13 @@ struct ScenarioSpec {
   double sim_rate = 50;       // rover seconds per wall second
   double timeout_s = 300;     // the run's limit: wall seconds on a real clock; in virtual time
                               // timeout_s x sim_rate seconds of rover time from the submission
+  // A day of operations (docs/OPERATING.md, "Pauses and nights"): `pause: {after_steps:
+  // N, for_s: S}` pauses the first sequence once N step reports were seen and resumes it S
+  // seconds of rover time after it paused; `then_idle_s` parks the rover that long (rover
+  // time) after each sequence completes before the next of then_sequences is submitted.
+  int pause_after_steps = 0;  // 0: no pause
+  double pause_for_s = 0;
+  double then_idle_s = 0;
   // Fault injection: kill `kill_process` once `kill_after_steps` step reports were seen.
   std::string kill_process;
   int kill_after_steps = 0;
@@ -115,6 +122,17 @@ struct ScenarioSummary {
   double rover_time_s = 0;
   double wall_time_s = 0;
   std::vector<std::string> process_events;
+  // At each resume after a pause and each submission after an idle: the estimate against
+  // truth (the runner fills it; heading and horizontal NEES against the pose's own sigma).
+  struct RestCheck {
+    std::string after;          // "pause" or "idle"
+    double rested_s = 0;        // rover seconds paused or parked
+    double position_error_m = 0;  // horizontal
+    double heading_error_deg = 0;
+    double heading_sigma_deg = 0;
+    double heading_nees = 0, horizontal_nees = 0;
+  };
+  std::vector<RestCheck> rest_checks;
   // Why a figure is absent: summary.json writes null for KEY and a KEY_reason beside it.
   std::map<std::string, std::string> missing;
   // Whether the log lost anything (tools/logcheck): counts and gaps per channel.

@@ -22,6 +22,9 @@
 #include "terrain/world.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
+#include <rover_msgs/pose_t.hpp>
+#include <rover_msgs/sequence_control_t.hpp>
+#include <rover_msgs/sim_truth_t.hpp>
 #include <rover_msgs/rover_clock_t.hpp>
 #include <rover_msgs/sequence_status_t.hpp>
 #include <rover_msgs/sequence_submit_t.hpp>
@@ -358,6 +361,7 @@ class Run {
   double wall() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start_).count(); }
   const std::vector<std::string>& process_events() const { return process_events_; }
   const std::optional<rover_msgs::sequence_status_t>& final_status() const { return final_status_; }
+  const std::vector<rover::tools::ScenarioSummary::RestCheck>& rest_checks() const { return rest_checks_; }
 
  private:
   void Note(const std::string& e) {
@@ -372,6 +376,10 @@ class Run {
                                               [this](const rover_msgs::step_report_t&) { ++steps_seen_; });
     bus_.Subscribe<rover_msgs::sequence_status_t>(
         rover::channels::kSequenceStatus, [this](const rover_msgs::sequence_status_t& st) { OnStatus(st); });
+    // The estimate and the truth, for the checks after a pause or an idle (RestCheck).
+    bus_.Subscribe<rover_msgs::pose_t>(rover::channels::kPose, [this](const rover_msgs::pose_t& p) { pose_ = p; }, 100);
+    bus_.Subscribe<rover_msgs::sim_truth_t>(rover::channels::kSimTruth,
+                                            [this](const rover_msgs::sim_truth_t& t) { truth_ = t; }, 100);
     // Virtual time (README, "Simulated time"): the runner and the recorder are members of
     // the set too, so that the sequence goes in at the first instant and the log holds
     // every message of every instant, whatever the machine's load.
@@ -391,6 +399,7 @@ class Run {
 
   void OnStatus(const rover_msgs::sequence_status_t& st) {
     if (st.submission_id != submission_id_) return;
+    OnPausedStatus(st);
     if (!args_.quiet && st.detail != last_line_) {
       std::cout << "[t=" << std::fixed << std::setprecision(1) << st.elapsed_s << " s] " << st.detail << "\n"
                 << std::flush;
@@ -402,19 +411,112 @@ class Run {
       return;
     }
     if (!final_status_) final_status_ = st;
-    // The next sequence on the same running stack, when this one completed.
+    // The next sequence on the same running stack, when this one completed (after the
+    // scenario's idle, the rover parked: ActWhenDue).
     if (st.state == rover_msgs::sequence_status_t::STATE_COMPLETED &&
         submission_id_ <= static_cast<std::int64_t>(spec_.then_sequences.size())) {
-      rover_msgs::sequence_submit_t next{};
-      next.submission_id = ++submission_id_;
-      next.name = spec_.then_sequences[static_cast<std::size_t>(submission_id_ - 2)];
-      next.text = plan_.then_texts[static_cast<std::size_t>(submission_id_ - 2)];
-      bus_.Publish(rover::channels::kSequenceSubmit, next);
       final_status_.reset();
+      if (spec_.then_idle_s > 0) {
+        parked_at_ = std::max<std::int64_t>(clock_seen_, 0);
+      } else {
+        SubmitNext();
+      }
     }
   }
 
-  void SendSync() { sync_.Send(bus_.SyncState("scenario_runner", instant_, false)); }
+  void OnPausedStatus(const rover_msgs::sequence_status_t& st) {
+    if (st.submission_id == 1 && st.state == rover_msgs::sequence_status_t::STATE_PAUSED && pause_sent_ && !paused_at_) {
+      paused_at_ = std::max<std::int64_t>(clock_seen_, 0);
+    }
+  }
+
+  void SubmitNext() {
+    rover_msgs::sequence_submit_t next{};
+    next.submission_id = ++submission_id_;
+    next.name = spec_.then_sequences[static_cast<std::size_t>(submission_id_ - 2)];
+    next.text = plan_.then_texts[static_cast<std::size_t>(submission_id_ - 2)];
+    bus_.Publish(rover::channels::kSequenceSubmit, next);
+    acted_at_ = instant_;
+  }
+
+  void Control(std::int8_t action, const std::string& reason) {
+    rover_msgs::sequence_control_t c{};
+    c.utime = std::max<std::int64_t>(instant_, 0);
+    c.action = action;
+    c.reason = reason;
+    bus_.Publish(rover::channels::kSequenceControl, c);
+    acted_at_ = instant_;
+  }
+
+  // The operator's day (ScenarioSpec: pause, then_idle_s), at the instant each is due.
+  void ActWhenDue() {
+    const std::int64_t now = std::max<std::int64_t>(virtual_time_ ? instant_ : clock_seen_, 0);
+    if (spec_.pause_after_steps > 0 && !pause_sent_ && submission_id_ == 1 && steps_seen_ >= spec_.pause_after_steps) {
+      Note("operator: pause after " + std::to_string(steps_seen_) + " steps, for " + Num(spec_.pause_for_s) +
+           " s of rover time");
+      Control(rover_msgs::sequence_control_t::ACTION_PAUSE, "scenario: a pause");
+      pause_sent_ = true;
+    }
+    if (paused_at_ && !resume_sent_ && now >= *paused_at_ + static_cast<std::int64_t>(spec_.pause_for_s * 1e6)) {
+      CheckAfterRest("pause", (now - *paused_at_) * 1e-6);
+      Control(rover_msgs::sequence_control_t::ACTION_RESUME, "scenario: the pause is over");
+      resume_sent_ = true;
+    }
+    if (parked_at_ && now >= *parked_at_ + static_cast<std::int64_t>(spec_.then_idle_s * 1e6)) {
+      CheckAfterRest("idle", (now - *parked_at_) * 1e-6);
+      parked_at_.reset();
+      SubmitNext();
+    }
+  }
+
+  // The rover time of this runner's next action (Process::set_quiet_until): nothing of its
+  // own to do before it, so the clock may stride while everything else is quiet too.
+  std::int64_t QuietUntil() const {
+    if (acted_at_ >= instant_) return 0;  // what it sent this instant is on its way: the next one is a tick
+    std::int64_t until = rover::bus::Process::kQuietForGood;
+    if (paused_at_ && !resume_sent_) until = std::min(until, *paused_at_ + static_cast<std::int64_t>(spec_.pause_for_s * 1e6));
+    if (parked_at_) until = std::min(until, *parked_at_ + static_cast<std::int64_t>(spec_.then_idle_s * 1e6));
+    if (spec_.pause_after_steps > 0 && !pause_sent_) until = 0;  // counting steps
+    return until;
+  }
+
+  // The estimate against truth after a pause or an idle: horizontal position and heading
+  // errors, and their NEES against the pose's own covariance.
+  void CheckAfterRest(const std::string& after, double rested_s) {
+    if (!pose_ || !truth_) {
+      Note("after the " + after + ": no pose or truth heard to check against");
+      return;
+    }
+    rover::tools::ScenarioSummary::RestCheck c;
+    c.after = after;
+    c.rested_s = rested_s;
+    const double ex = pose_->position[0] - truth_->position[0], ey = pose_->position[1] - truth_->position[1];
+    c.position_error_m = std::hypot(ex, ey);
+    const auto yaw_of = [](const double q[4]) {
+      return std::atan2(2.0 * (q[0] * q[3] + q[1] * q[2]), 1.0 - 2.0 * (q[2] * q[2] + q[3] * q[3]));
+    };
+    double dyaw = yaw_of(pose_->orientation) - yaw_of(truth_->orientation);
+    dyaw = std::atan2(std::sin(dyaw), std::cos(dyaw));
+    c.heading_error_deg = dyaw * 180.0 / M_PI;
+    const double var_yaw = pose_->covariance[5][5];
+    c.heading_sigma_deg = std::sqrt(std::max(0.0, var_yaw)) * 180.0 / M_PI;
+    c.heading_nees = var_yaw > 0 ? dyaw * dyaw / var_yaw : 0.0;
+    const double a = pose_->covariance[0][0], b = pose_->covariance[0][1], d = pose_->covariance[1][1];
+    const double det = a * d - b * b;
+    c.horizontal_nees = det > 0 ? (d * ex * ex - 2 * b * ex * ey + a * ey * ey) / det : 0.0;
+    rest_checks_.push_back(c);
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(4) << "after " << std::setprecision(1) << rested_s << " s "
+       << (after == "pause" ? "paused" : "parked") << ": estimate - truth " << std::setprecision(4)
+       << c.position_error_m << " m, heading " << c.heading_error_deg << " deg";
+    Note(os.str());
+  }
+
+  void SendSync() {
+    auto report = bus_.SyncState("scenario_runner", instant_, false);
+    report.quiet_until = QuietUntil();
+    sync_.Send(report);
+  }
 
   // The recorder first, and heard on the bus before any process starts, so that the log
   // holds every publisher from its first message (the completeness check expects each
@@ -479,6 +581,7 @@ class Run {
     submit.name = spec_.sequence_name;
     submit.text = plan_.sequence_text;
     bus_.Publish(rover::channels::kSequenceSubmit, submit);
+    acted_at_ = instant_;
     // The run's limit. On a real clock it is timeout_s of wall time. In virtual time it is
     // rover time, timeout_s x the scenario's sim_rate from the submission (what timeout_s
     // means at the rate the scenario was written for), so that load cannot change where a
@@ -515,6 +618,7 @@ class Run {
         Note(name + " " + how + " unexpectedly");
       }
       InjectKillWhenDue();
+      if (!virtual_time_ || report_due) ActWhenDue();
       // The instant is reported finished only now, after an injected kill: the clock cannot
       // move on before it, so the process dies at the same instant in every run.
       if (virtual_time_ && (report_due || wall() - last_sync > 0.25)) {
@@ -622,6 +726,14 @@ class Run {
   std::int64_t submitted_at_ = 0, rover_limit_us_ = 0, clock_moved_ = -1;
   double clock_moved_wall_ = 0;
   std::optional<std::int64_t> final_utime_;
+  // The operator's day: the pause sent, when the sequence said paused, the resume sent;
+  // when the rover parked before the next sequence; whether this instant sent a command.
+  bool pause_sent_ = false, resume_sent_ = false;
+  std::int64_t acted_at_ = -2;  // the instant it last sent a command or a sequence in
+  std::optional<std::int64_t> paused_at_, parked_at_;
+  std::optional<rover_msgs::pose_t> pose_;
+  std::optional<rover_msgs::sim_truth_t> truth_;
+  std::vector<rover::tools::ScenarioSummary::RestCheck> rest_checks_;
   bool died_at_start_ = false;
   bool killed_ = false;
   std::optional<SyncWatch> sync_watch_;
@@ -643,6 +755,7 @@ rover::tools::ScenarioSummary Summarize(const RunPlan& plan, const Run& run) {
   summary.scenario = plan.spec.name;
   summary.wall_time_s = run.wall();
   summary.process_events = run.process_events();
+  summary.rest_checks = run.rest_checks();
   return summary;
 }
 

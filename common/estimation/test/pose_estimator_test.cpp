@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 using namespace rover::estimation;
 using rover::geometry::Matrix6d;
@@ -539,4 +540,96 @@ TEST(PoseEstimator, InvalidOptionsThrowNamingTheField) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("along_track_sigma_fraction"), std::string::npos);
   }
+}
+
+namespace {
+
+// The rover parked for `seconds` from `t0` at heading 0: wheels still (odometry at 10 Hz,
+// the same reading), the IMU at 10 Hz with its yaw drifting by `bias` (rad/s) plus angle
+// random walk `arw` (seeded), and its rate reading the bias. Returns the end time.
+int64_t Park(PoseEstimator& est, int64_t t0, double seconds, double distance, double bias, double arw,
+             unsigned seed, double* imu_yaw_error) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal;
+  const int ticks = static_cast<int>(seconds * 10);
+  for (int i = 1; i <= ticks; ++i) {
+    const int64_t t = t0 + i * (kSecond / 10);
+    *imu_yaw_error += bias * 0.1 + arw * std::sqrt(0.1) * normal(rng);
+    est.OnImu(t, Q(0, 0, *imu_yaw_error), Eigen::Vector3d(0, 0, bias));
+    est.OnWheelOdometry(t, distance);
+  }
+  return t0 + ticks * (kSecond / 10);
+}
+
+}  // namespace
+
+// A night parked: the wheels stand and the gyro is quiet, so the heading is held against
+// the IMU's drift (3 deg/h here, 36 deg over 12 h), its sigma does not grow, the position
+// stays, the drift measures the gyro's bias, and the history stays two samples long.
+TEST(PoseEstimator, ParkedForANightTheHeadingIsHeldAndTheBiasLearned) {
+  EstimatorOptions o;  // the defaults: 3 deg/h drift sigma, zero-velocity updates on
+  const double bias = 3.0 * M_PI / 180.0 / 3600.0;
+  const double arw = o.gyro_random_walk_rad_per_sqrt_s;
+  PoseEstimator est(o);
+  double imu_yaw = 0.0;
+  Drive(est, 0, 10 * kSecond, 0.0, 1.0, Q(0, 0, 0));
+  // The first second parked: at rest once the wheels have stood zupt_settle_s.
+  const int64_t settled = Park(est, 10 * kSecond, 1.0, 1.0, bias, arw, 10, &imu_yaw);
+  ASSERT_TRUE(est.at_rest());
+  const Pose before = est.pose();
+  const double heading_sigma_before = std::sqrt(est.covariance()(5, 5));
+  const std::size_t history_before = est.history_size();
+  const int64_t end = Park(est, settled, 12 * 3600.0, 1.0, bias, arw, 11, &imu_yaw);
+  EXPECT_TRUE(est.at_rest());
+  EXPECT_GT(imu_yaw * 180 / M_PI, 30.0);  // the IMU turned 36 deg in its own yaw
+  EXPECT_NEAR(Yaw(est.pose()), Yaw(before), 1e-9);
+  EXPECT_LT((est.pose().translation() - before.translation()).norm(), 1e-12);
+  EXPECT_NEAR(std::sqrt(est.covariance()(5, 5)), heading_sigma_before, 1e-9);
+  // The bias, measured over 12 h of rest, and honest. Its sigma settles where the bias's
+  // own walk and the gyro's noise balance (walk x arw: 0.27 deg/h here), far under the
+  // 3 deg/h it started from.
+  EXPECT_LT(est.gyro_bias_sigma_rad_per_s(), 0.5 * M_PI / 180.0 / 3600.0);
+  EXPECT_LT(std::abs(est.gyro_bias_rad_per_s() - bias), 3.0 * est.gyro_bias_sigma_rad_per_s() + 1e-9);
+  EXPECT_LE(est.history_size(), history_before + 3);
+
+  // A VO update from a capture before the night to one after a metre's drive is applied,
+  // not refused for age.
+  Drive(est, end, end + 10 * kSecond, 1.0, 2.0, Q(0, 0, imu_yaw));
+  const auto r = est.ApplyVoUpdate(Vo(settled, end + 10 * kSecond, PoseFromXyzRpy(1.0, 0, 0, 0, 0, 0), 0.01));
+  EXPECT_TRUE(r.applied()) << r.reason;
+}
+
+// The same night with zero-velocity updates off: the heading follows the IMU's drift, and
+// its sigma grows (what the held heading is measured against).
+TEST(PoseEstimator, ParkedWithoutZeroVelocityUpdatesTheHeadingDrifts) {
+  EstimatorOptions o;
+  o.zero_velocity_updates = false;
+  const double bias = 3.0 * M_PI / 180.0 / 3600.0;
+  PoseEstimator est(o);
+  double imu_yaw = 0.0;
+  Drive(est, 0, 10 * kSecond, 0.0, 1.0, Q(0, 0, 0));
+  const double sigma_before = std::sqrt(est.covariance()(5, 5));
+  Park(est, 10 * kSecond, 3600.0, 1.0, bias, 0.0, 11, &imu_yaw);
+  EXPECT_FALSE(est.at_rest());
+  EXPECT_NEAR(Yaw(est.pose()) * 180 / M_PI, 3.0, 0.01);
+  EXPECT_GT(std::sqrt(est.covariance()(5, 5)), sigma_before + 2.0 * M_PI / 180.0);
+}
+
+// A rover that turns in place, or whose gyro reads a turn, is not at rest.
+TEST(PoseEstimator, AQuietGyroAndStillWheelsAreBothNeededForRest) {
+  PoseEstimator est;
+  Drive(est, 0, 5 * kSecond, 0.0, 0.5, Q(0, 0, 0));
+  for (int i = 1; i <= 20; ++i) {
+    const int64_t t = 5 * kSecond + i * (kSecond / 10);
+    est.OnImu(t, Q(0, 0, 0.01 * i), Eigen::Vector3d(0, 0, 0.1));  // turning 0.1 rad/s
+    est.OnWheelOdometry(t, 0.5);
+  }
+  EXPECT_FALSE(est.at_rest());
+  EXPECT_NEAR(Yaw(est.pose()), 0.2, 1e-9);  // the turn is followed
+  for (int i = 21; i <= 40; ++i) {
+    const int64_t t = 5 * kSecond + i * (kSecond / 10);
+    est.OnImu(t, Q(0, 0, 0.2), Eigen::Vector3d::Zero());
+    est.OnWheelOdometry(t, 0.5);
+  }
+  EXPECT_TRUE(est.at_rest());
 }

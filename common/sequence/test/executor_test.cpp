@@ -718,6 +718,57 @@ TEST(SequenceExecutor, PauseHoldsBetweenStepsAndResumeFinishes) {
   EXPECT_TRUE(saw_paused);
 }
 
+// A pause counts against no time limit: an hour paused in a goto with a 600 s limit, inside
+// a sequence limited to 1200 s, and the goto still completes; the resume line says what is left.
+TEST(SequenceExecutor, AnHourPausedCountsAgainstNoTimeLimit) {
+  SequenceExecutor ex(FastOptions());
+  FakeWorld w(ex);
+  SubmitText(ex, "limit time 1200 s\ngoto 3 m 0 m within 0.3 m time 600 s\n");
+  bool paused_once = false;
+  int paused_iterations = 0;
+  w.on_iteration = [&](SequenceExecutor& e, int) {
+    if (w.motions.size() == 2 && !paused_once) {
+      e.Pause();
+      paused_once = true;
+    }
+    if (e.state() != SequenceState::kPaused) return;
+    ++paused_iterations;
+    if (paused_iterations == 3) {
+      w.utime += 3600'000'000;  // an hour of rover time while paused
+      w.wall += 3600.0;
+    }
+    if (paused_iterations == 6) e.Resume();
+  };
+  w.Run();
+  const SequenceStatus last = w.Final();
+  EXPECT_EQ(last.state, SequenceState::kCompleted) << last.abort_reason << ": " << last.detail;
+  EXPECT_LT(last.elapsed_s, 1200.0);  // the hour paused is not in it
+  bool said_paused = false, said_resumed = false;
+  for (const auto& st : w.statuses) {
+    said_paused |= st.state == SequenceState::kPaused &&
+                   st.detail.find("the time limits stand still while paused") != std::string::npos &&
+                   st.detail.find("goto ") != std::string::npos;
+    said_resumed |= st.detail.find("resumed after 3600.") != std::string::npos &&
+                    st.detail.find("not counted against the time limits") != std::string::npos;
+  }
+  EXPECT_TRUE(said_paused);
+  EXPECT_TRUE(said_resumed);
+
+  // The same hour passing while the goto runs (no pause) is over its limit.
+  SequenceExecutor running(FastOptions());
+  FakeWorld r(running);
+  SubmitText(running, "goto 3 m 0 m within 0.3 m time 600 s\n");
+  bool jumped = false;
+  r.on_iteration = [&](SequenceExecutor&, int) {
+    if (r.motions.size() == 2 && !jumped) {
+      r.utime += 3600'000'000;
+      jumped = true;
+    }
+  };
+  r.Run();
+  EXPECT_EQ(r.Final().abort_reason, "goto_time_limit") << r.Final().detail;
+}
+
 TEST(SequenceExecutor, MobilityFaultAndSilenceAbort) {
   {
     SequenceExecutor ex(FastOptions());
