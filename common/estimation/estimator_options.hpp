@@ -53,7 +53,8 @@ struct EstimatorOptions {
   double initial_position_sigma_m = 0.0;
   double initial_yaw_sigma_rad = 0.0;
 
-  // Pose history kept for VO updates, in rover time and in samples (both bound it).
+  // Pose history kept for VO updates, in rover time not at rest and in samples (both
+  // bound it).
   // A VO update whose `from` is older than the history is refused.
   double history_s = 600.0;
   int history_max_samples = 50000;

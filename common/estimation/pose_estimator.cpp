@@ -342,8 +342,10 @@ void PoseEstimator::Record() {
     history_.pop_front();
   }
   // Keep one sample at or before the cut-off so that look-ups at the cut-off interpolate.
-  const int64_t cutoff = utime_ - static_cast<int64_t>(options_.history_s * 1e6);
-  while (history_.size() > 2 && history_[1].utime <= cutoff) history_.pop_front();
+  // The history spans history_s of time the rover was not at rest (Sample::gyro_s): a
+  // pause or a night adds nothing to it, so the capture before it stays in reach.
+  const double cutoff = gyro_s_ - options_.history_s;
+  while (history_.size() > 2 && history_[1].gyro_s <= cutoff) history_.pop_front();
 }
 
 PoseEstimator::Sample PoseEstimator::Interpolate(int64_t utime) const {

@@ -417,7 +417,9 @@ class Run {
         submission_id_ <= static_cast<std::int64_t>(spec_.then_sequences.size())) {
       final_status_.reset();
       if (spec_.then_idle_s > 0) {
-        parked_at_ = std::max<std::int64_t>(clock_seen_, 0);
+        // Parked from the first completed status (the executor repeats it while idle).
+        if (parked_after_ != submission_id_) parked_at_ = std::max<std::int64_t>(clock_seen_, 0);
+        parked_after_ = submission_id_;
       } else {
         SubmitNext();
       }
@@ -731,6 +733,7 @@ class Run {
   bool pause_sent_ = false, resume_sent_ = false;
   std::int64_t acted_at_ = -2;  // the instant it last sent a command or a sequence in
   std::optional<std::int64_t> paused_at_, parked_at_;
+  std::int64_t parked_after_ = 0;  // the submission whose completion parked the rover
   std::optional<rover_msgs::pose_t> pose_;
   std::optional<rover_msgs::sim_truth_t> truth_;
   std::vector<rover::tools::ScenarioSummary::RestCheck> rest_checks_;
