@@ -764,6 +764,8 @@ int main(int argc_in, char** argv_in) {
     options.commands_enabled = !args.secret.empty();
     options.signing = !args.log_path && proc.bus().has_auth();
     WebConsole console(proc, std::move(args), options);
+    proc.DeclarePublications({{rover::channels::kSequenceSubmit, "commands are on (--secret-file, --secret)"},
+                              {rover::channels::kSequenceControl, "commands are on (--secret-file, --secret)"}});
     return console.Run();
   });
 }
