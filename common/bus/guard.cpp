@@ -207,6 +207,9 @@ std::string RoverClock::Judge(std::int64_t utime, WallClock::time_point wall) {
 }
 
 std::string RoverClock::JudgeOnSystemClock(std::int64_t utime) const {
+  // 0 is "not stamped" (a tool that does not know rover time, e.g. a bare capture request),
+  // not a message from 1970: taken as now, as an unanchored clock takes its first message.
+  if (utime == 0) return "";
   const double now = static_cast<double>(SystemUtime()), t = static_cast<double>(utime);
   const double ahead_s = window_.max_ahead_wall_s + window_.max_ahead_rover_s;
   const double behind_s = window_.max_behind_wall_s + window_.max_behind_rover_s;

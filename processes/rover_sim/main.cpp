@@ -58,8 +58,8 @@ struct SimOptions {
   double tick_s = 0.1;             // virtual time: one instant of the barrier
   // Virtual time: the longest step the clock takes while the rover stands still and every
   // member is quiet (bus::Process::set_quiet_until): hours parked in minutes. Sensors then
-  // report once a step. 0: every step is tick_s.
-  double idle_step_s = 2.0;
+  // report once a step. 0 (the default): every step is tick_s.
+  double idle_step_s = 0.0;
   double barrier_timeout_s = 10.0;  // virtual time: wall seconds before a silent process is lost
 };
 

@@ -51,6 +51,29 @@ int RampMismatches(const rover_msgs::image_t& image) {
   return bad;
 }
 
+// Why the fake GigE cameras cannot run here ("" when they can).
+std::string WhyNoFakeCameras() {
+  if (!camera_hw::GenicamAvailable()) return "built without Aravis (libaravis-dev)";
+  const char* netns = std::getenv("ROVER_CAMERA_NETNS");
+  if (netns == nullptr || std::string(netns) != "1") {
+    return "run through ctest: it needs the private network namespace of common/camera_hw/test/in_netns.sh";
+  }
+  if (!FakeGvCamera::Installed()) return std::string(FakeGvCamera::kProgram) + " is not installed (aravis-tools)";
+  return "";
+}
+
+// The rig and a capture config for the two fake cameras in `dir`, with `extra` capture keys.
+// The fake answers a trigger on its next 40 ms tick (100 ms before its first frame): hence
+// the tolerance (common/camera_hw/test/genicam_test.cpp).
+void WriteCaptureConfig(const std::string& dir, const std::string& extra) {
+  std::ofstream(dir + "/rig.yaml") << kRig;
+  std::ofstream(dir + "/capture.yaml") << "capture:\n  source: genicam\n  rig: rig.yaml\n" << extra
+                                       << "  genicam:\n    left: {serial: GV01}\n    right: {serial: GV02}\n"
+                                          "    roi: {x: 0, y: 0, width: 256, height: 192}\n"
+                                          "    timestamps: device\n    pairing_tolerance_ms: 110\n"
+                                          "    timeout_ms: 1000\n";
+}
+
 class Requester {
  public:
   explicit Requester(bus::Bus& bus) : bus_(bus) {
@@ -87,25 +110,13 @@ class Requester {
 };
 
 TEST(CameraCaptureGenicam, FakeGigECamerasOnTheBusSurviveAKill) {
-  if (!camera_hw::GenicamAvailable()) GTEST_SKIP() << "built without Aravis (libaravis-dev)";
-  const char* netns = std::getenv("ROVER_CAMERA_NETNS");
-  if (netns == nullptr || std::string(netns) != "1") {
-    GTEST_SKIP() << "run through ctest: it needs the private network namespace of common/camera_hw/test/in_netns.sh";
-  }
-  if (!FakeGvCamera::Installed()) GTEST_SKIP() << FakeGvCamera::kProgram << " is not installed (aravis-tools)";
+  if (const std::string why = WhyNoFakeCameras(); !why.empty()) GTEST_SKIP() << why;
   FakeGvCamera left("127.0.0.1", "GV01"), right("127.0.0.2", "GV02");
   ASSERT_TRUE(left.Start());
   ASSERT_TRUE(right.Start());
 
   const std::string dir = OutDir("camera_genicam");
-  std::ofstream(dir + "/rig.yaml") << kRig;
-  // The fake answers a trigger on its next 40 ms tick (100 ms before its first frame):
-  // hence the tolerance (common/camera_hw/test/genicam_test.cpp).
-  std::ofstream(dir + "/capture.yaml") << "capture:\n  source: genicam\n  rig: rig.yaml\n  genicam:\n"
-                                          "    left: {serial: GV01}\n    right: {serial: GV02}\n"
-                                          "    roi: {x: 0, y: 0, width: 256, height: 192}\n"
-                                          "    timestamps: device\n    pairing_tolerance_ms: 110\n"
-                                          "    timeout_ms: 1000\n";
+  WriteCaptureConfig(dir, "");
   const std::string url = PrivateUrl(13);
   bus::Bus bus(url);
   Requester requests(bus);
@@ -171,23 +182,13 @@ TEST(CameraCaptureGenicam, FakeGigECamerasOnTheBusSurviveAKill) {
 // order; the camera conformance kit passes; a camera killed and restarted costs one line for
 // the loss and one for the return.
 TEST(CameraCaptureGenicam, WithNoSimulatorPairsCarryTheSystemClockAndTheKitPasses) {
-  if (!camera_hw::GenicamAvailable()) GTEST_SKIP() << "built without Aravis (libaravis-dev)";
-  const char* netns = std::getenv("ROVER_CAMERA_NETNS");
-  if (netns == nullptr || std::string(netns) != "1") {
-    GTEST_SKIP() << "run through ctest: it needs the private network namespace of common/camera_hw/test/in_netns.sh";
-  }
-  if (!FakeGvCamera::Installed()) GTEST_SKIP() << FakeGvCamera::kProgram << " is not installed (aravis-tools)";
+  if (const std::string why = WhyNoFakeCameras(); !why.empty()) GTEST_SKIP() << why;
   FakeGvCamera left("127.0.0.1", "GV01"), right("127.0.0.2", "GV02");
   ASSERT_TRUE(left.Start());
   ASSERT_TRUE(right.Start());
 
   const std::string dir = OutDir("camera_no_sim");
-  std::ofstream(dir + "/rig.yaml") << kRig;
-  std::ofstream(dir + "/capture.yaml") << "capture:\n  source: genicam\n  rig: rig.yaml\n  rate_hz: 2\n  genicam:\n"
-                                          "    left: {serial: GV01}\n    right: {serial: GV02}\n"
-                                          "    roi: {x: 0, y: 0, width: 256, height: 192}\n"
-                                          "    timestamps: device\n    pairing_tolerance_ms: 110\n"
-                                          "    timeout_ms: 1000\n";
+  WriteCaptureConfig(dir, "  rate_hz: 2\n");
   const std::string url = PrivateUrl(14);
   bus::Bus bus(url);
   struct Seen {

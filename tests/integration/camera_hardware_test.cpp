@@ -91,7 +91,7 @@ TEST(CameraCaptureHardware, ImagesOfAnotherSizeThanTheRigAreRefusedInOneLine) {
   std::ifstream log(dir + "/camera_capture.log");
   const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("camera_capture: capture failed, no frame sent: left image is 64x48 but its camera model is "
-                      "1024x1024 (capture.rig against the region and binning)\n"),
+                      "1024x1024 (capture.rig against the region and binning)"),
             std::string::npos)
       << text;
 }

@@ -89,7 +89,8 @@ int Run(int argc, char** argv) {
   if (!have_rpy) throw BadArgument("missing argument --left-rpy ROLL,PITCH,YAW (the left camera's body angles, deg)");
   if (out.empty()) throw BadArgument("missing argument --out RIG.yaml");
   std::error_code ec;
-  if (!force && std::filesystem::exists(out, ec)) {
+  // A rig file already there is kept; a device or a pipe (/dev/null, /dev/stdout) is written.
+  if (!force && std::filesystem::is_regular_file(out, ec)) {
     throw BadArgument("--out " + out + ": exists; kept (pass --force to replace it)");
   }
   const double scale = unit == "mm" ? 1e-3 : unit == "cm" ? 1e-2 : 1.0;

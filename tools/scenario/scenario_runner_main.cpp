@@ -475,6 +475,7 @@ class Run {
   // own to do before it, so the clock may stride while everything else is quiet too.
   std::int64_t QuietUntil() const {
     if (acted_at_ >= instant_) return 0;  // what it sent this instant is on its way: the next one is a tick
+    if (final_status_) return 0;  // the last instants of a run are ticks, as they always were
     std::int64_t until = rover::bus::Process::kQuietForGood;
     if (paused_at_ && !resume_sent_) until = std::min(until, *paused_at_ + static_cast<std::int64_t>(spec_.pause_for_s * 1e6));
     if (parked_at_) until = std::min(until, *parked_at_ + static_cast<std::int64_t>(spec_.then_idle_s * 1e6));

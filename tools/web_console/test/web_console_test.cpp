@@ -391,8 +391,14 @@ TEST(WebConsole, WithoutTheStacksKeyCommandsShowAsRefusedWithTheExecutorsReason)
     ASSERT_TRUE(paused);
     EXPECT_EQ(paused->status, 403) << paused->body;
     EXPECT_EQ(paused->body.rfind("refused by sequence_executor: SEQUENCE_CONTROL: rejected: ", 0), 0u) << paused->body;
-    EXPECT_NE(ReadText(stack.dir + "/" + c.name + ".log").find("rover_web: pause: refused by sequence_executor: "),
-              std::string::npos);
+    // Its log says so too (written just after the answer: waited for).
+    EXPECT_TRUE(stack.WaitFor(
+        [&] {
+          return ReadText(stack.dir + "/" + c.name + ".log").find("rover_web: pause: refused by sequence_executor: ") !=
+                 std::string::npos;
+        },
+        10))
+        << ReadText(stack.dir + "/" + c.name + ".log");
   }
   {
     std::lock_guard<std::mutex> lock(stack.heard.mutex);
