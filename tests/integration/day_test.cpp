@@ -80,15 +80,21 @@ TEST(RoverOnTheSystemClock, ATwoMetreDriveWithVoOnRoverSimAsHardware) {
   const std::string url = PrivateUrl(61);
   std::filesystem::current_path(SourceDir());  // the deployment's paths are relative to the repository root
   bus::Bus bus(url);
+  // A message's time is on the system clock when it is never ahead of its arrival and behind it
+  // only by the work done since the exposure (VO's stereo and tracking, slower on a busy
+  // machine). A virtual clock, or a stamp of 0, would be off by years.
   struct Lag {
     int count = 0;
-    double worst_s = 0;
+    double most_behind_s = 0;  // arrival - utime, the largest
+    double most_ahead_s = 0;   // utime - arrival, the largest
   };
-  std::map<std::string, Lag> lag;  // |utime - system clock at arrival|, per channel
+  std::map<std::string, Lag> lag;
   auto note = [&lag](const std::string& channel, std::int64_t utime) {
     Lag& l = lag[channel];
     ++l.count;
-    l.worst_s = std::max(l.worst_s, std::abs(static_cast<double>(bus::RoverClock::SystemUtime() - utime)) * 1e-6);
+    const double behind_s = static_cast<double>(bus::RoverClock::SystemUtime() - utime) * 1e-6;
+    l.most_behind_s = std::max(l.most_behind_s, behind_s);
+    l.most_ahead_s = std::max(l.most_ahead_s, -behind_s);
   };
   std::set<std::string> alive;
   bus.Subscribe<rover_msgs::heartbeat_t>(channels::kHeartbeat,
@@ -127,7 +133,8 @@ TEST(RoverOnTheSystemClock, ATwoMetreDriveWithVoOnRoverSimAsHardware) {
 
   for (const char* channel : {"STEREO_FRAME", "POSE", "VO_UPDATE"}) {
     EXPECT_GT(lag[channel].count, 0) << "no " << channel;
-    EXPECT_LT(lag[channel].worst_s, 1.0) << channel << " times are off the system clock";
+    EXPECT_LT(lag[channel].most_ahead_s, 0.1) << channel << " times are ahead of the system clock";
+    EXPECT_LT(lag[channel].most_behind_s, 10.0) << channel << " times are behind the system clock";
   }
   EXPECT_GE(lag["VO_UPDATE ok"].count, 3) << "VO measured too few of the drive's steps";
   // Each process said so at start (the launcher's log holds their lines).
