@@ -80,30 +80,42 @@ TEST(RoverOnTheSystemClock, ATwoMetreDriveWithVoOnRoverSimAsHardware) {
   const std::string url = PrivateUrl(61);
   std::filesystem::current_path(SourceDir());  // the deployment's paths are relative to the repository root
   bus::Bus bus(url);
-  // A message's time is on the system clock when it is never ahead of its arrival and behind it
-  // only by the work done since the exposure (VO's stereo and tracking, slower on a busy
-  // machine). A virtual clock, or a stamp of 0, would be off by years.
+  // A message's time is on the system clock when it is never ahead of its arrival and, as a
+  // rule (the median), behind it by less than 1 s: the worst is the work done since the
+  // exposure, VO's above all, and a busy machine makes that longer (1.003 s was seen). A
+  // virtual clock, or a stamp of 0, would be off by years. A VO update carries its pair's
+  // exposure time, so it must name a pair that was heard.
   struct Lag {
     int count = 0;
-    double most_behind_s = 0;  // arrival - utime, the largest
-    double most_ahead_s = 0;   // utime - arrival, the largest
+    std::vector<double> behind_s;  // arrival - utime
+    double most_ahead_s = 0;       // utime - arrival, the largest
   };
   std::map<std::string, Lag> lag;
+  std::set<std::int64_t> frame_utimes;
+  int vo_off_the_frames = 0;
   auto note = [&lag](const std::string& channel, std::int64_t utime) {
     Lag& l = lag[channel];
     ++l.count;
     const double behind_s = static_cast<double>(bus::RoverClock::SystemUtime() - utime) * 1e-6;
-    l.most_behind_s = std::max(l.most_behind_s, behind_s);
+    l.behind_s.push_back(behind_s);
     l.most_ahead_s = std::max(l.most_ahead_s, -behind_s);
+  };
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
   };
   std::set<std::string> alive;
   bus.Subscribe<rover_msgs::heartbeat_t>(channels::kHeartbeat,
                                          [&](const rover_msgs::heartbeat_t& hb) { alive.insert(hb.process); });
   bus.Subscribe<rover_msgs::stereo_frame_t>(channels::kStereoFrame,
-                                            [&](const rover_msgs::stereo_frame_t& f) { note("STEREO_FRAME", f.utime); }, 4);
+                                            [&](const rover_msgs::stereo_frame_t& f) {
+                                              note("STEREO_FRAME", f.utime);
+                                              frame_utimes.insert(f.utime);
+                                            }, 4);
   bus.Subscribe<rover_msgs::pose_t>(channels::kPose, [&](const rover_msgs::pose_t& p) { note("POSE", p.utime); }, 100);
   bus.Subscribe<rover_msgs::vo_update_t>(channels::kVoUpdate, [&](const rover_msgs::vo_update_t& u) {
     note("VO_UPDATE", u.utime);
+    if (!frame_utimes.count(u.utime)) ++vo_off_the_frames;
     if (u.status == rover_msgs::vo_update_t::STATUS_OK) ++lag["VO_UPDATE ok"].count;
   });
 
@@ -133,9 +145,11 @@ TEST(RoverOnTheSystemClock, ATwoMetreDriveWithVoOnRoverSimAsHardware) {
 
   for (const char* channel : {"STEREO_FRAME", "POSE", "VO_UPDATE"}) {
     EXPECT_GT(lag[channel].count, 0) << "no " << channel;
+    if (lag[channel].count == 0) continue;
     EXPECT_LT(lag[channel].most_ahead_s, 0.1) << channel << " times are ahead of the system clock";
-    EXPECT_LT(lag[channel].most_behind_s, 10.0) << channel << " times are behind the system clock";
+    EXPECT_LT(median(lag[channel].behind_s), 1.0) << channel << " times are behind the system clock";
   }
+  EXPECT_EQ(vo_off_the_frames, 0) << "VO updates whose time is no pair's exposure";
   EXPECT_GE(lag["VO_UPDATE ok"].count, 3) << "VO measured too few of the drive's steps";
   // Each process said so at start (the launcher's log holds their lines).
   const std::string launcher_log = ReadFile(dir + "/launcher.log");

@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -235,8 +236,7 @@ std::vector<std::pair<std::string, std::string>> ProcessSet::Poll(int timeout_ms
     Forward(c, false);
     if (!c.running) continue;
     int status = 0;
-    if (waitpid(c.pid, &status, WNOHANG) == c.pid) {
-      c.running = false;
+    if (Reap(c, false, &status)) {
       Forward(c, true);
       exited.emplace_back(c.name, DescribeWaitStatus(status));
     }
@@ -263,6 +263,22 @@ void ProcessSet::Signal(const std::string& name, int signal) {
   }
 }
 
+bool ProcessSet::Reap(Child& child, bool block, int* status) {
+  rusage ru{};
+  if (wait4(child.pid, status, block ? 0 : WNOHANG, &ru) != child.pid) return false;
+  auto seconds = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
+  child.cpu_s = seconds(ru.ru_utime) + seconds(ru.ru_stime);
+  child.running = false;
+  return true;
+}
+
+std::vector<std::pair<std::string, double>> ProcessSet::CpuSeconds() const {
+  std::vector<std::pair<std::string, double>> cpu;
+  for (const auto& c : children_)
+    if (!c.running && c.pid > 0) cpu.emplace_back(c.name, c.cpu_s);
+  return cpu;
+}
+
 void ProcessSet::StopAll(int grace_ms) {
   for (auto& c : children_)
     if (c.running) kill(c.pid, SIGTERM);
@@ -275,8 +291,7 @@ void ProcessSet::StopAll(int grace_ms) {
       EmitLine(c, "did not stop within " + std::to_string(grace_ms) + " ms; killing it");
       kill(c.pid, SIGKILL);
       int status = 0;
-      waitpid(c.pid, &status, 0);
-      c.running = false;
+      Reap(c, true, &status);
     }
     Forward(c, true);
     if (c.out_fd >= 0) {

@@ -74,6 +74,8 @@ class ProcessSet {
   void StopAll(int grace_ms = 3000);
   // Names of children still running.
   std::vector<std::string> RunningNames() const;
+  // User + sys CPU seconds of each child that has exited (and been reaped), in start order.
+  std::vector<std::pair<std::string, double>> CpuSeconds() const;
 
  private:
   struct Child {
@@ -83,7 +85,10 @@ class ProcessSet {
     std::string partial;
     FILE* log = nullptr;
     bool running = false;
+    double cpu_s = 0;  // user + sys, once reaped
   };
+  // Reaps `child` (blocking or not); true when it was reaped, with its status and CPU time.
+  bool Reap(Child& child, bool block, int* status);
   void Forward(Child& child, bool flush_partial);
   void EmitLine(Child& child, const std::string& line);
 

@@ -462,6 +462,22 @@ void WriteFigure(JsonWriter& j, const ScenarioSummary& s, const std::string& key
   WriteReason(j, s, key);
 }
 
+// cpu_s: the whole run's user + sys CPU seconds, per rover-hour, and each process's share.
+void WriteCpu(JsonWriter& j, const ScenarioSummary& s) {
+  if (s.cpu_s.empty()) return;
+  double total = 0;
+  for (const auto& [name, cpu] : s.cpu_s) total += cpu;
+  j.Key("cpu_s");
+  j.BeginObject();
+  j.Field("total", total);
+  if (s.rover_time_s > 0) j.Field("per_rover_hour", total / (s.rover_time_s / 3600.0));
+  j.Key("by_process");
+  j.BeginObject();
+  for (const auto& [name, cpu] : s.cpu_s) j.Field(name, cpu);
+  j.EndObject();
+  j.EndObject();
+}
+
 // Whether the log lost anything: the verdict, and count, lost and gaps per channel.
 void WriteLogCheck(JsonWriter& j, const logcheck::LogReport& log) {
   j.Field("log_complete", log.complete);
@@ -647,6 +663,7 @@ std::string SummaryJson(const ScenarioSummary& s) {
   j.EndArray();
   WriteFigure(j, s, "rover_time_s", s.rover_time_s);
   j.Field("wall_time_s", s.wall_time_s);
+  WriteCpu(j, s);
   WriteLogCheck(j, s.log);
   if (!s.log_digest.empty()) j.Field("log_digest", s.log_digest);
   // Rover time by activity (scenario/rover_time.hpp); null on a real-clock log.
@@ -697,6 +714,12 @@ std::string SummaryText(const ScenarioSummary& s) {
   os << "  distance travelled (truth): " << s.distance_travelled_m << " m in "
      << std::setprecision(1) << s.rover_time_s << " s of rover time, " << s.wall_time_s
      << " s wall\n" << std::setprecision(3);
+  if (!s.cpu_s.empty() && s.rover_time_s > 0) {
+    double total = 0;
+    for (const auto& [name, cpu] : s.cpu_s) total += cpu;
+    os << "  CPU (user + sys, every process): " << std::setprecision(1) << total << " s, "
+       << total / (s.rover_time_s / 3600.0) << " s per rover-hour\n" << std::setprecision(3);
+  }
   os << "  position error: " << s.position_error_m << " m (" << std::setprecision(2)
      << s.position_error_pct << " % of distance)\n" << std::setprecision(3);
   if (s.min_keepout_clearance_m) {

@@ -121,6 +121,9 @@ struct ScenarioSummary {
   std::optional<PoseHonesty> pose_honesty;
   double rover_time_s = 0;
   double wall_time_s = 0;
+  // User + sys CPU seconds of each process the run started (the set, the recorder and the
+  // runner itself), in start order: where a simulated hour's CPU goes.
+  std::vector<std::pair<std::string, double>> cpu_s;
   std::vector<std::string> process_events;
   // At each resume after a pause and each submission after an idle: the estimate against
   // truth (the runner fills it; heading and horizontal NEES against the pose's own sigma).

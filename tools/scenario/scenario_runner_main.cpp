@@ -21,6 +21,8 @@
 #include "hazards/hazard_assessor.hpp"
 #include "terrain/world.hpp"
 
+#include <sys/resource.h>
+
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/pose_t.hpp>
 #include <rover_msgs/sequence_control_t.hpp>
@@ -362,6 +364,17 @@ class Run {
   const std::vector<std::string>& process_events() const { return process_events_; }
   const std::optional<rover_msgs::sequence_status_t>& final_status() const { return final_status_; }
   const std::vector<rover::tools::ScenarioSummary::RestCheck>& rest_checks() const { return rest_checks_; }
+  // Each process's CPU seconds once stopped: the set, the recorder, and this runner so far
+  // (it decodes what it follows: its share is part of a run's cost).
+  std::vector<std::pair<std::string, double>> cpu_s() const {
+    auto cpu = set_.CpuSeconds();
+    for (const auto& c : recorder_.CpuSeconds()) cpu.push_back(c);
+    rusage self{};
+    getrusage(RUSAGE_SELF, &self);
+    auto seconds = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
+    cpu.emplace_back("scenario_runner", seconds(self.ru_utime) + seconds(self.ru_stime));
+    return cpu;
+  }
 
  private:
   void Note(const std::string& e) {
@@ -759,6 +772,7 @@ rover::tools::ScenarioSummary Summarize(const RunPlan& plan, const Run& run) {
   summary.scenario = plan.spec.name;
   summary.wall_time_s = run.wall();
   summary.process_events = run.process_events();
+  summary.cpu_s = run.cpu_s();
   summary.rest_checks = run.rest_checks();
   return summary;
 }
