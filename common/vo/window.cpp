@@ -118,20 +118,6 @@ Eigen::Matrix<double, 12, 12> LastTwoPoses(const Eigen::MatrixXd& cov, int a, in
   return joint;
 }
 
-// One point's rows' Jacobian with respect to the reduced variables (the free poses 1..M-1,
-// then the offset when held): the per-observation pose columns of Jp (keyframes `frames`)
-// moved to their keyframe's place, keyframe 0 (fixed) left out.
-Eigen::MatrixXd ReducedJacobian(const Eigen::MatrixXd& Jp, const Eigen::VectorXd& Jd, const std::vector<int>& frames,
-                                int nc, bool offset) {
-  Eigen::MatrixXd Jc = Eigen::MatrixXd::Zero(Jp.rows(), nc);
-  for (std::size_t a = 0; a < frames.size(); ++a) {
-    if (frames[a] == 0) continue;
-    Jc.middleCols<6>(6 * (frames[a] - 1)) += Jp.middleCols<6>(6 * static_cast<int>(a));
-  }
-  if (offset) Jc.col(nc - 1) = Jd;
-  return Jc;
-}
-
 // The covariance of a track's rows as the estimator weighed them, when its errors follow
 // the covariance's carry model (c, d) and the rows were taken to independent errors under
 // the weights' (a, b): the raw errors are A_cd^-1 e (e the matches' own, blockdiag
@@ -171,6 +157,204 @@ PointInfluence Influence(const Eigen::MatrixXd& Jc, const Eigen::MatrixXd& Jx, c
   const Eigen::MatrixXd WJx = W * Jx;
   out.expected_cost = (W * C).trace() - (Hxx_inv * WJx.transpose() * C * WJx).trace();
   return out;
+}
+
+
+// One observation of a point as the window linearises it: its keyframe, its index in the
+// point's observations, and, taken to independent errors (ToIndependentErrors), its four
+// residual rows and their Jacobians by the point (Jx), by its own keyframe's pose (Jcur)
+// and, when a track's left errors carry (track_carry), by the previous observation's
+// keyframe's pose (Jprev). Fixed-size blocks: a row block holds two keyframes' poses at
+// most, so the normal equations are built block by block with nothing allocated (the
+// dense 4m x 6m stacks of every point, rebuilt each iteration, cost more than the rest of
+// the window). The offset's Jacobian is e_2 in every block (the right x; carrying
+// subtracts left rows, whose offset column is zero).
+struct ObsTerm {
+  int frame = 0, k = 0;
+  Eigen::Vector4d r;
+  Eigen::Matrix<double, 4, 6> Jcur, Jprev;
+  Eigen::Matrix<double, 4, 3> Jx;
+};
+
+// ToIndependentErrors on the blocks: left_n - rho left_n-1, right_n - rho_s left_n, with
+// raw values on the right (block n-1 is taken after block n; top rows of Jcur never change).
+void Whiten(std::vector<ObsTerm>* terms, double rho, double rho_s, bool jacobians) {
+  if (rho == 0.0 && rho_s == 0.0) return;
+  std::vector<ObsTerm>& t = *terms;
+  for (int n = static_cast<int>(t.size()) - 1; n >= 0; --n) {
+    ObsTerm& o = t[static_cast<std::size_t>(n)];
+    o.r.tail<2>() -= rho_s * o.r.head<2>();
+    if (jacobians) {
+      o.Jx.bottomRows<2>() -= rho_s * o.Jx.topRows<2>();
+      o.Jcur.bottomRows<2>() -= rho_s * o.Jcur.topRows<2>();
+    }
+    if (n == 0) continue;
+    const ObsTerm& p = t[static_cast<std::size_t>(n - 1)];
+    o.r.head<2>() -= rho * p.r.head<2>();
+    if (jacobians) {
+      o.Jx.topRows<2>() -= rho * p.Jx.topRows<2>();
+      o.Jprev.topRows<2>() = -rho * p.Jcur.topRows<2>();
+      o.Jprev.bottomRows<2>().setZero();
+    }
+  }
+}
+
+// A point's observations that project, linearised at (poses, X, offset d) and whitened;
+// returns how many did not project (behind a camera).
+int LinearisePoint(const geometry::StereoRig& rig, const PointBlock& p, const std::vector<Eigen::Isometry3d>& poses,
+                   const Eigen::Vector3d& X, double d, bool jacobians, const WindowOptions& o,
+                   std::vector<ObsTerm>* out) {
+  out->clear();
+  int failed = 0;
+  for (std::size_t k = 0; k < p.obs.size(); ++k) {
+    const auto& [i, z] = p.obs[k];
+    ObsTerm t;
+    if (!Linearise(rig, poses[static_cast<std::size_t>(i)], X, *z, &t.r, jacobians ? &t.Jcur : nullptr,
+                   jacobians ? &t.Jx : nullptr)) {
+      ++failed;
+      continue;
+    }
+    t.r(2) -= d;
+    t.frame = i;
+    t.k = static_cast<int>(k);
+    out->push_back(t);
+  }
+  Whiten(out, o.track_carry, o.stereo_carry, jacobians);
+  return failed;
+}
+
+// The Huber cost of a point's linearised observations, with a large finite penalty per
+// observation behind a camera.
+double PointCost(const PointBlock& p, const std::vector<ObsTerm>& terms, int failed, double huber) {
+  double cost = failed * 2 * huber * 100.0;
+  for (const ObsTerm& t : terms) {
+    cost += HuberCost(t.r.dot(p.W[static_cast<std::size_t>(t.k)] * t.r), huber, nullptr);
+  }
+  return cost;
+}
+
+// The first observation whose pose block row block n holds: n - 1 when left errors carry.
+int FirstBlock(int n, double track_carry) { return track_carry != 0.0 && n > 0 ? n - 1 : n; }
+
+// One point's part of the normal equations: its 3x3 block (inverted, damped), its gradient,
+// and its coupling to the reduced variables: a 6x3 block per observation's keyframe (none
+// used for keyframe 0, the fixed pose) and a row for the offset.
+struct PointSystem {
+  Eigen::Matrix3d Hxx_inv = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d bx = Eigen::Vector3d::Zero();
+  std::vector<int> frames;
+  std::vector<Matrix63> Hc;
+  Eigen::RowVector3d Hd = Eigen::RowVector3d::Zero();
+
+  // Hcx^T c: the coupling times a step of the reduced variables.
+  Eigen::Vector3d CouplingTimes(const Eigen::VectorXd& c, bool offset, int id) const {
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    for (std::size_t a = 0; a < frames.size(); ++a) {
+      if (frames[a] > 0) v += Hc[a].transpose() * c.segment<6>(6 * (frames[a] - 1));
+    }
+    if (offset) v += Hd.transpose() * c(id);
+    return v;
+  }
+  // The coupling as one nc x 3 matrix (the sandwich's dense form).
+  Eigen::MatrixXd DenseCoupling(int nc, bool offset) const {
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(nc, 3);
+    for (std::size_t a = 0; a < frames.size(); ++a) {
+      if (frames[a] > 0) H.block<6, 3>(6 * (frames[a] - 1), 0) += Hc[a];
+    }
+    if (offset) H.row(nc - 1) = Hd;
+    return H;
+  }
+};
+
+// Adds a point's observations (IRLS-weighted by Huber) to the reduced system's Hcc and bc
+// and fills its PointSystem (before damping and inversion).
+void AccumulatePoint(const PointBlock& p, const std::vector<ObsTerm>& terms, const WindowOptions& o, bool offset,
+                     int id, Eigen::MatrixXd* Hcc, Eigen::VectorXd* bc, PointSystem* ps, Eigen::Matrix3d* Hxx) {
+  const int m = static_cast<int>(terms.size());
+  ps->frames.clear();
+  for (const ObsTerm& t : terms) ps->frames.push_back(t.frame);
+  ps->Hc.assign(static_cast<std::size_t>(m), Matrix63::Zero());
+  ps->Hd.setZero();
+  Hxx->setZero();
+  ps->bx.setZero();
+  for (int n = 0; n < m; ++n) {
+    const ObsTerm& t = terms[static_cast<std::size_t>(n)];
+    Eigen::Matrix4d W = p.W[static_cast<std::size_t>(t.k)];
+    double w = 1;
+    HuberCost(t.r.dot(W * t.r), o.huber_sigmas, &w);
+    W *= w;
+    const Eigen::Matrix<double, 4, 3> WJx = W * t.Jx;
+    const Eigen::Vector4d Wr = W * t.r;
+    const Eigen::Vector4d WJd = W.col(2);
+    *Hxx += t.Jx.transpose() * WJx;
+    ps->bx += t.Jx.transpose() * Wr;
+    if (offset) {
+      (*Hcc)(id, id) += WJd(2);
+      (*bc)(id) += Wr(2);
+      ps->Hd += WJx.row(2);
+    }
+    const int first = FirstBlock(n, o.track_carry);
+    for (int a = first; a <= n; ++a) {
+      const int ia = ps->frames[static_cast<std::size_t>(a)];
+      if (ia == 0) continue;
+      const int ka = 6 * (ia - 1);
+      const Eigen::Matrix<double, 4, 6>& Ja = a == n ? t.Jcur : t.Jprev;
+      bc->segment<6>(ka) += Ja.transpose() * Wr;
+      ps->Hc[static_cast<std::size_t>(a)] += Ja.transpose() * WJx;
+      if (offset) {
+        const Vector6d Hpd = Ja.transpose() * WJd;
+        Hcc->block<6, 1>(ka, id) += Hpd;
+        Hcc->block<1, 6>(id, ka) += Hpd.transpose();
+      }
+      const Eigen::Matrix<double, 6, 4> JaW = Ja.transpose() * W;
+      for (int c = first; c <= n; ++c) {
+        const int ic = ps->frames[static_cast<std::size_t>(c)];
+        if (ic == 0) continue;
+        Hcc->block<6, 6>(ka, 6 * (ic - 1)) += JaW * (c == n ? t.Jcur : t.Jprev);
+      }
+    }
+  }
+}
+
+// Eliminates a point: S -= Hcx Hxx^-1 Hcx^T, bs -= Hcx Hxx^-1 bx, block by block.
+void EliminatePoint(const PointSystem& ps, bool offset, int id, Eigen::MatrixXd* S, Eigen::VectorXd* bs) {
+  const Eigen::RowVector3d HHd = ps.Hd * ps.Hxx_inv;
+  for (std::size_t a = 0; a < ps.frames.size(); ++a) {
+    if (ps.frames[a] == 0) continue;
+    const int ka = 6 * (ps.frames[a] - 1);
+    const Matrix63 HH = ps.Hc[a] * ps.Hxx_inv;
+    bs->segment<6>(ka) -= HH * ps.bx;
+    for (std::size_t c = 0; c < ps.frames.size(); ++c) {
+      if (ps.frames[c] == 0) continue;
+      S->block<6, 6>(ka, 6 * (ps.frames[c] - 1)) -= HH * ps.Hc[c].transpose();
+    }
+    if (offset) {
+      S->block<6, 1>(ka, id) -= HH * ps.Hd.transpose();
+      S->block<1, 6>(id, ka) -= HHd * ps.Hc[a].transpose();
+    }
+  }
+  if (offset) {
+    (*bs)(id) -= HHd.dot(ps.bx);
+    (*S)(id, id) -= HHd.dot(ps.Hd);
+  }
+}
+
+// The dense, whitened stacks of a point's rows as the sandwich takes them: Jc (by the
+// reduced variables) and Jx (by the point).
+void DenseRows(const std::vector<ObsTerm>& terms, const WindowOptions& o, int nc, bool offset, Eigen::MatrixXd* Jc,
+               Eigen::MatrixXd* Jx) {
+  const int m = static_cast<int>(terms.size());
+  Jc->setZero(4 * m, nc);
+  Jx->resize(4 * m, 3);
+  for (int n = 0; n < m; ++n) {
+    const ObsTerm& t = terms[static_cast<std::size_t>(n)];
+    Jx->middleRows<4>(4 * n) = t.Jx;
+    if (offset) (*Jc)(4 * n + 2, nc - 1) = 1.0;
+    for (int a = FirstBlock(n, o.track_carry); a <= n; ++a) {
+      const int ia = terms[static_cast<std::size_t>(a)].frame;
+      if (ia > 0) Jc->block<4, 6>(4 * n, 6 * (ia - 1)) += a == n ? t.Jcur : t.Jprev;
+    }
+  }
 }
 
 }  // namespace
@@ -293,73 +477,12 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   const int redundancy = 4 * sol.observations - 3 * sol.points - dim;
   if (sol.points < 3 || redundancy <= 0) return sol;
 
-  // One point's observations that project (their keyframes), stacked residuals and, when
-  // asked, the prediction's Jacobians (poses of those keyframes, the point, the offset),
-  // taken to independent errors (ToIndependentErrors).
-  struct PointTerms {
-    std::vector<int> frames, obs;
-    Eigen::VectorXd r;
-    Eigen::MatrixXd Jp, Jx;
-    Eigen::VectorXd Jd;
-    int failed = 0;  // observations behind a camera
-  };
-  auto point_terms = [&](std::size_t j, const std::vector<Eigen::Isometry3d>& P, const Eigen::Vector3d& Xj, double d,
-                         bool jacobians) {
-    PointTerms t;
-    const auto& ob = used[j].obs;
-    const int m_all = static_cast<int>(ob.size());
-    t.r.resize(4 * m_all);
-    if (jacobians) {
-      t.Jp.setZero(4 * m_all, 6 * m_all);
-      t.Jx.resize(4 * m_all, 3);
-      t.Jd.setZero(4 * m_all);
-    }
-    int m = 0;
-    for (int k = 0; k < m_all; ++k) {
-      const auto& [i, z] = ob[static_cast<std::size_t>(k)];
-      Eigen::Vector4d r;
-      Eigen::Matrix<double, 4, 6> Jp;
-      Eigen::Matrix<double, 4, 3> Jx;
-      if (!Linearise(rig, P[static_cast<std::size_t>(i)], Xj, *z, &r, jacobians ? &Jp : nullptr,
-                     jacobians ? &Jx : nullptr)) {
-        ++t.failed;
-        continue;
-      }
-      r(2) -= d;
-      t.r.segment<4>(4 * m) = r;
-      if (jacobians) {
-        t.Jp.block<4, 6>(4 * m, 6 * m) = Jp;
-        t.Jx.middleRows<4>(4 * m) = Jx;
-        t.Jd(4 * m + 2) = 1.0;  // d(prediction)/d(offset) = e_2 (the right image's x)
-      }
-      t.frames.push_back(i);
-      t.obs.push_back(k);
-      ++m;
-    }
-    t.r.conservativeResize(4 * m);
-    if (jacobians) {
-      t.Jp.conservativeResize(4 * m, 6 * m);
-      t.Jx.conservativeResize(4 * m, 3);
-      t.Jd.conservativeResize(4 * m);
-    }
-    ToIndependentErrors(t.r, m, o_.track_carry, o_.stereo_carry);
-    if (jacobians) {
-      ToIndependentErrors(t.Jp, m, o_.track_carry, o_.stereo_carry);
-      ToIndependentErrors(t.Jx, m, o_.track_carry, o_.stereo_carry);
-      ToIndependentErrors(t.Jd, m, o_.track_carry, o_.stereo_carry);
-    }
-    return t;
-  };
-
+  std::vector<ObsTerm> terms;  // one point's, reused
   auto cost_of = [&](const std::vector<Eigen::Isometry3d>& poses, const std::vector<Eigen::Vector3d>& X, double d) {
     double cost = 0;
     for (std::size_t j = 0; j < used.size(); ++j) {
-      const PointTerms t = point_terms(j, poses, X[j], d, false);
-      cost += t.failed * 2 * o_.huber_sigmas * 100.0;  // behind a camera: a large, finite penalty
-      for (std::size_t n = 0; n < t.obs.size(); ++n) {
-        const Eigen::Vector4d r = t.r.segment<4>(4 * static_cast<int>(n));
-        cost += HuberCost(r.dot(used[j].W[static_cast<std::size_t>(t.obs[n])] * r), o_.huber_sigmas, nullptr);
-      }
+      const int failed = LinearisePoint(rig, used[j], poses, X[j], d, false, o_, &terms);
+      cost += PointCost(used[j], terms, failed, o_.huber_sigmas);
     }
     return cost;
   };
@@ -386,9 +509,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
   double delta = offset_mean;
   Eigen::MatrixXd S(nc, nc), Hcc(nc, nc);
   Eigen::VectorXd bs(nc), bc(nc);
-  std::vector<Eigen::Matrix3d> Hxx_inv(used.size());
-  std::vector<Eigen::Vector3d> bx(used.size());
-  std::vector<Eigen::MatrixXd> Hcx(used.size());
+  std::vector<PointSystem> sys(used.size());
 
   // Builds the normal equations at the current estimate with damping lambda and returns
   // the Schur complement on the reduced variables in S, bs.
@@ -396,54 +517,12 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
     Hcc.setZero();
     bc.setZero();
     for (std::size_t j = 0; j < used.size(); ++j) {
-      Eigen::Matrix3d Hxx = Eigen::Matrix3d::Zero();
-      Eigen::Vector3d b = Eigen::Vector3d::Zero();
-      Hcx[j].setZero(nc, 3);
-      const PointTerms t = point_terms(j, poses, X[j], delta, true);
-      const int m = static_cast<int>(t.obs.size());
-      for (int n = 0; n < m; ++n) {
-        const Eigen::Vector4d r = t.r.segment<4>(4 * n);
-        Eigen::Matrix4d W = used[j].W[static_cast<std::size_t>(t.obs[static_cast<std::size_t>(n)])];
-        double w = 1;
-        HuberCost(r.dot(W * r), o_.huber_sigmas, &w);
-        W *= w;
-        // This block's rows: after ToIndependentErrors they hold the poses of keyframes n-1 and n.
-        const auto Jp = t.Jp.middleRows<4>(4 * n);
-        const Eigen::Matrix<double, 4, 3> Jx = t.Jx.middleRows<4>(4 * n);
-        const Eigen::Vector4d Jd = t.Jd.segment<4>(4 * n);
-        const Eigen::Matrix<double, 4, 3> WJx = W * Jx;
-        const Eigen::Vector4d Wr = W * r;
-        const Eigen::Vector4d WJd = W * Jd;
-        Hxx += Jx.transpose() * WJx;
-        b += Jx.transpose() * Wr;
-        if (offset) {
-          Hcc(id, id) += Jd.dot(WJd);
-          bc(id) += Jd.dot(Wr);
-          Hcx[j].row(id) += Jd.transpose() * WJx;
-        }
-        for (int a = std::max(0, n - 1); a <= n; ++a) {
-          const int ia = t.frames[static_cast<std::size_t>(a)];
-          if (ia == 0) continue;
-          const int ka = 6 * (ia - 1);
-          const Eigen::Matrix<double, 4, 6> Ja = Jp.middleCols<6>(6 * a);
-          bc.segment<6>(ka) += Ja.transpose() * Wr;
-          Hcx[j].block<6, 3>(ka, 0) += Ja.transpose() * WJx;
-          if (offset) {
-            const Vector6d Hpd = Ja.transpose() * WJd;
-            Hcc.block<6, 1>(ka, id) += Hpd;
-            Hcc.block<1, 6>(id, ka) += Hpd.transpose();
-          }
-          for (int c = std::max(0, n - 1); c <= n; ++c) {
-            const int ic = t.frames[static_cast<std::size_t>(c)];
-            if (ic == 0) continue;
-            Hcc.block<6, 6>(ka, 6 * (ic - 1)) += Ja.transpose() * W * Jp.middleCols<6>(6 * c);
-          }
-        }
-      }
+      LinearisePoint(rig, used[j], poses, X[j], delta, true, o_, &terms);
+      Eigen::Matrix3d Hxx;
+      AccumulatePoint(used[j], terms, o_, offset, id, &Hcc, &bc, &sys[j], &Hxx);
       Hxx.diagonal() *= 1 + lambda;
       Hxx.diagonal().array() += 1e-12;
-      Hxx_inv[j] = Hxx.inverse();
-      bx[j] = b;
+      sys[j].Hxx_inv = Hxx.inverse();
     }
     if (offset) {
       Hcc(id, id) += hold_info;
@@ -452,11 +531,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
     S = Hcc;
     S.diagonal() *= 1 + lambda;
     bs = bc;
-    for (std::size_t j = 0; j < used.size(); ++j) {
-      const Eigen::MatrixXd HH = Hcx[j] * Hxx_inv[j];
-      bs.noalias() -= HH * bx[j];
-      S.noalias() -= HH * Hcx[j].transpose();
-    }
+    for (const PointSystem& ps : sys) EliminatePoint(ps, offset, id, &S, &bs);
   };
 
   auto total_cost = [&](const std::vector<Eigen::Isometry3d>& P, const std::vector<Eigen::Vector3d>& Xs, double d) {
@@ -480,7 +555,7 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
     const double new_delta = offset ? delta + dc(id) : delta;
     std::vector<Eigen::Vector3d> new_X = X;
     for (std::size_t j = 0; j < used.size(); ++j) {
-      new_X[j] = X[j] + Hxx_inv[j] * (bx[j] - Hcx[j].transpose() * dc);
+      new_X[j] = X[j] + sys[j].Hxx_inv * (sys[j].bx - sys[j].CouplingTimes(dc, offset, id));
     }
     const double new_cost = total_cost(new_poses, new_X, new_delta);
     if (new_cost < cost) {
@@ -514,24 +589,24 @@ WindowSolution SlidingWindow::Refine(const geometry::StereoRig& rig) {
     // independent, so M is the sum of G_j Cov(r_j) G_j^T.
     Eigen::MatrixXd Mg = Eigen::MatrixXd::Zero(nc, nc);
     double point_part = 0;  // sum over points of E[r^T W r] minus the point's own share
+    Eigen::MatrixXd Jc, Jx;
     for (std::size_t j = 0; j < used.size(); ++j) {
-      const PointTerms t = point_terms(j, poses, X[j], delta, true);
-      const int m = static_cast<int>(t.obs.size());
-      if (m == 0) continue;
+      LinearisePoint(rig, used[j], poses, X[j], delta, true, o_, &terms);
+      if (terms.empty()) continue;
       std::vector<Eigen::Matrix4d> W_used, Sigma_obs;
-      for (int n = 0; n < m; ++n) {
-        const Eigen::Vector4d r = t.r.segment<4>(4 * n);
-        const Eigen::Matrix4d W = used[j].W[static_cast<std::size_t>(t.obs[static_cast<std::size_t>(n)])];
+      for (const ObsTerm& t : terms) {
+        const Eigen::Matrix4d W = used[j].W[static_cast<std::size_t>(t.k)];
         double w = 1;
-        HuberCost(r.dot(W * r), o_.huber_sigmas, &w);
+        HuberCost(t.r.dot(W * t.r), o_.huber_sigmas, &w);
         // A row Huber down-weights lies beyond huber_sigmas: its error is taken as the IRLS
         // weight takes it, the match's covariance over w (taken at the match's own, the
         // outliers would make the sandwich smaller than S^-1).
         W_used.push_back(w * W);
         Sigma_obs.push_back(W.inverse() / w);
       }
-      const Eigen::MatrixXd Jc = ReducedJacobian(t.Jp, t.Jd, t.frames, nc, offset);
-      const PointInfluence f = Influence(Jc, t.Jx, W_used, Sigma_obs, Hcx[j], Hxx_inv[j], o_);
+      DenseRows(terms, o_, nc, offset, &Jc, &Jx);
+      const PointInfluence f =
+          Influence(Jc, Jx, W_used, Sigma_obs, sys[j].DenseCoupling(nc, offset), sys[j].Hxx_inv, o_);
       Mg += f.M;
       point_part += f.expected_cost;
     }
