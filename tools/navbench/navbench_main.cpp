@@ -52,7 +52,12 @@ constexpr const char* kUsage =
     "--set KEY=VALUE (repeatable): a rover-config setting tried on every run, by its dotted key\n"
     "(hazards.map.traversability.unframed_unknown=true, executor.avoid_margin_m=0.2), written\n"
     "to each run's scenario overrides; a misspelt key ends every run at once with the\n"
-    "process's \"unknown key\" error (runs/ID/runner.log).\n";
+    "process's \"unknown key\" error (runs/ID/runner.log).\n\n"
+    "On a Slurm cluster (docs/SCENARIOS.md, \"Campaigns on a Slurm cluster\"): --slurm writes the\n"
+    "runs and submits them as a job array, one task a run (scenario_campaign --each LIST\n"
+    "--slurm); sbatch options pass through: --partition P, --time T, --cpus-per-task N,\n"
+    "--account A, --sbatch-arg ARG. --merge DIR tables them as above once they ended and\n"
+    "names the runs missing or failed (exit 3); --resume DIR submits only those again.\n";
 
 std::vector<std::string> SplitCommas(const std::string& text) {
   std::vector<std::string> parts;
@@ -63,10 +68,10 @@ std::vector<std::string> SplitCommas(const std::string& text) {
   return parts;
 }
 
-// Runs the scenario campaign over the listed scenarios, its table on this stdout.
-int RunCampaign(const std::string& list, const std::string& out_dir, int jobs) {
-  const std::vector<std::string> argv = {rover::launch::BinDir() + "/scenario_campaign", "--each", list, "--out",
-                                         out_dir, "--jobs", std::to_string(jobs), "--no-plot", "--min-pass", "0"};
+// Runs scenario_campaign with `args`, its output on this stdout; returns its exit status.
+int RunCampaignTool(const std::vector<std::string>& args) {
+  std::vector<std::string> argv = {rover::launch::BinDir() + "/scenario_campaign"};
+  argv.insert(argv.end(), args.begin(), args.end());
   std::cout << std::flush;
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error("fork failed");
@@ -84,13 +89,68 @@ int RunCampaign(const std::string& list, const std::string& out_dir, int jobs) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+// The scenario campaign over the listed scenarios: run here (`jobs` at once), or with
+// `cluster` ("--slurm" or "--prepare") and sbatch options, as a Slurm job array.
+int RunCampaign(const std::string& list, const std::string& out_dir, int jobs, const std::string& cluster = "",
+                const std::vector<std::string>& sbatch_args = {}) {
+  std::vector<std::string> args = {"--each", list, "--out", out_dir, "--no-plot", "--min-pass", "0"};
+  if (cluster.empty()) {
+    args.insert(args.end(), {"--jobs", std::to_string(jobs)});
+  } else {
+    args.push_back(cluster);
+    args.insert(args.end(), sbatch_args.begin(), sbatch_args.end());
+  }
+  const int code = RunCampaignTool(args);
+  if (code == 2 || code >= 127) throw std::runtime_error("scenario_campaign failed (exit " + std::to_string(code) + ")");
+  return code;
+}
+
 // The command line, after --quick has filled in what was not given.
 struct Args {
   nb::BenchOptions options;
   int jobs = 1;
   bool plot = true, prepare_only = false, report_only = false, resume = false, help = false;
   std::string command = "navbench";
+  // Slurm: submit the runs as an array (scenario_campaign --slurm), or merge or resubmit one.
+  bool slurm = false;
+  std::string merge_dir, resume_dir;
+  std::vector<std::string> sbatch_args;  // scenario_campaign's sbatch options, as given
+  std::vector<std::string> plan_args;    // every other argument: what --merge plans again
 };
+
+// An sbatch option that scenario_campaign takes (and its value) at argv[i], into `out`.
+bool SbatchOption(int argc, char** argv, int& i, std::vector<std::string>* out) {
+  const std::string arg = argv[i];
+  const bool with_value = arg == "--partition" || arg == "--time" || arg == "--cpus-per-task" ||
+                          arg == "--account" || arg == "--sbatch-arg";
+  if (!with_value && arg.rfind("--sbatch-arg=", 0) != 0) return false;
+  out->push_back(arg);
+  if (with_value) {
+    if (i + 1 >= argc) throw ConfigError("navbench: " + arg + ": missing value");
+    out->push_back(argv[++i]);
+  }
+  return true;
+}
+
+// The Slurm options must make sense together.
+void CheckSlurmArgs(const Args& a) {
+  if (!a.merge_dir.empty() || !a.resume_dir.empty()) {
+    if (!a.plan_args.empty() || a.slurm) {
+      throw ConfigError("navbench: --merge DIR and --resume DIR take no other option (DIR has them): " +
+                        (a.slurm ? std::string("--slurm") : a.plan_args.front()));
+    }
+    if (!a.merge_dir.empty() && (!a.resume_dir.empty() || !a.sbatch_args.empty())) {
+      throw ConfigError("navbench: --merge DIR takes no --resume or sbatch option");
+    }
+    return;
+  }
+  if (!a.sbatch_args.empty() && !a.slurm && !a.prepare_only) {
+    throw ConfigError("navbench: " + a.sbatch_args.front() + ": an sbatch option needs --slurm, --prepare or --resume DIR");
+  }
+  if (a.slurm && (a.prepare_only || a.report_only || a.resume)) {
+    throw ConfigError("navbench: --slurm excludes --prepare, --report and --resume (--merge DIR, --resume DIR follow it)");
+  }
+}
 
 Args ParseArgs(int argc, char** argv) {
   Args a;
@@ -115,6 +175,18 @@ Args ParseArgs(int argc, char** argv) {
   };
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
+    const int first = i;
+    if (SbatchOption(argc, argv, i, &a.sbatch_args)) continue;
+    if (arg == "--slurm") {
+      a.slurm = true;
+      continue;
+    } else if (arg == "--merge") {
+      a.merge_dir = value(i, arg);
+      continue;
+    } else if (arg == "--resume" && i + 1 < argc && argv[i + 1][0] != '-') {
+      a.resume_dir = value(i, arg);  // --resume DIR: a Slurm array's; plain --resume: local
+      continue;
+    }
     if (arg == "--help" || arg == "-h") {
       a.help = true;
     } else if (arg == "--runs") {
@@ -174,6 +246,7 @@ Args ParseArgs(int argc, char** argv) {
     } else {
       throw ConfigError("navbench: argument " + arg + ": unexpected (see navbench --help)");
     }
+    for (int j = first; j <= i; ++j) a.plan_args.push_back(argv[j]);
   }
   // --quick fills in what was not given: one short run on one field.
   if (quick) {
@@ -185,6 +258,7 @@ Args ParseArgs(int argc, char** argv) {
   if (options.min_goal_m > options.max_goal_m) throw ConfigError("navbench: --min-goal is over --max-goal");
   if (a.prepare_only && a.report_only) throw ConfigError("navbench: --prepare and --report exclude each other");
   if (options.densities.empty() && options.worlds.empty()) throw ConfigError("navbench: no density and no world to run");
+  CheckSlurmArgs(a);
   return a;
 }
 
@@ -234,6 +308,28 @@ void Report(const std::vector<nb::RunPlan>& plans, const Args& args) {
   std::cout << "wrote " << out_dir << "/results.txt, results.json" << (args.plot ? " and plots/ID.png" : "") << "\n";
 }
 
+// The file in DIR with the arguments a Slurm benchmark was asked with (what --merge plans).
+std::string PlanArgsPath(const std::string& out_dir) { return out_dir + "/slurm/navbench_args.txt"; }
+
+// --merge DIR: the campaign's merge (its table, the tasks missing or failed), then this
+// benchmark's table and plots from the runs that finished. Exit 3 when one did not.
+int Merge(const std::string& dir) {
+  std::ifstream in(PlanArgsPath(dir));
+  if (!in) throw ConfigError("navbench: --merge " + dir + ": no Slurm benchmark here (expected " + PlanArgsPath(dir) + ", written by navbench --slurm)");
+  std::vector<std::string> words = {"navbench"};
+  for (std::string line; std::getline(in, line);) words.push_back(line);
+  words.push_back("--report");
+  std::vector<char*> argv;
+  for (auto& w : words) argv.push_back(w.data());
+  Args args = ParseArgs(static_cast<int>(argv.size()), argv.data());
+  args.options.out_dir = dir;
+  const int code = RunCampaignTool({"--merge", dir});
+  if (code == 2 || code >= 127) throw std::runtime_error("scenario_campaign --merge failed (exit " + std::to_string(code) + ")");
+  Report(nb::PlanRuns(args.options), args);
+  if (code == 3) std::cout << "navbench: runs missing or failed (above); ./rover navbench --resume " << dir << " submits them again\n";
+  return code == 3 ? 3 : 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -243,15 +339,25 @@ int main(int argc, char** argv) {
       std::cout << kUsage;
       return 0;
     }
+    if (!args.merge_dir.empty()) return Merge(args.merge_dir);
+    if (!args.resume_dir.empty()) {
+      std::vector<std::string> resume = {"--resume", args.resume_dir};
+      resume.insert(resume.end(), args.sbatch_args.begin(), args.sbatch_args.end());
+      return RunCampaignTool(resume);
+    }
     const std::vector<nb::RunPlan> plans = nb::PlanRuns(args.options);
     fs::create_directories(args.options.out_dir);
     if (!args.report_only) {
       const std::string list = PrepareRuns(plans, args.options, args.resume);
-      if (args.prepare_only) return 0;
-      if (!list.empty()) {
-        const int code = RunCampaign(list, args.options.out_dir, args.jobs);
-        if (code == 2 || code >= 127) throw std::runtime_error("scenario_campaign failed (exit " + std::to_string(code) + ")");
+      if ((args.prepare_only || args.slurm) && !list.empty()) {
+        RunCampaign(list, args.options.out_dir, 1, args.slurm ? "--slurm" : "--prepare", args.sbatch_args);
+        std::ofstream saved(PlanArgsPath(args.options.out_dir));
+        for (const auto& w : args.plan_args) {
+          if (w != "--prepare" && w != "--resume") saved << w << "\n";
+        }
       }
+      if (args.prepare_only || args.slurm) return 0;
+      if (!list.empty()) RunCampaign(list, args.options.out_dir, args.jobs);
     }
     Report(plans, args);
     return 0;

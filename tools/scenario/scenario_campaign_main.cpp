@@ -16,6 +16,7 @@
 #include "launch/process_set.hpp"
 #include "report/json_writer.hpp"
 #include "scenario/scenario.hpp"
+#include "scenario/slurm_array.hpp"
 
 #include <fcntl.h>
 #include <sys/wait.h>
@@ -27,11 +28,13 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <random>
 #include <sstream>
 
 namespace fs = std::filesystem;
 using rover::config::ConfigError;
+namespace slurm = rover::tools::slurm;
 
 namespace {
 
@@ -49,6 +52,7 @@ struct Variant {
   int vo_accepted = 0, false_updates = 0, steps = 0;
   std::string blind_slide;  // empty: none
   std::string log_digest;   // the run's log less its wall-time fields (README, "Simulated time")
+  std::string missing;      // a merged Slurm task that did not finish: why (empty: it did)
   bool passed() const { return exit_code == 0 && blind_slide.empty(); }
 };
 
@@ -239,8 +243,92 @@ struct CampaignArgs {
   std::uint64_t seed = 1;
   double min_pass_pct = 95.0, slide_pct = 10.0;
   bool plot = true, prepare_only = false;
+  // Slurm (slurm_array.hpp): submit as a job array; merge or resume one submitted before.
+  bool slurm = false;
+  std::string merge_dir, resume_dir;
+  std::vector<std::string> sbatch_args;  // --partition P ... --sbatch-arg ARG, in order
   bool each() const { return !each_list.empty(); }
 };
+
+constexpr const char* kUsage =
+    "usage: scenario_campaign SCENARIO.yaml --variants N [--out DIR] [--seed S] [--jobs N]\n"
+    "       scenario_campaign --each LIST [--out DIR] [--jobs N]\n"
+    "                         [--min-pass PCT] [--slide-window N] [--slide-progress PCT] [--no-plot]\n"
+    "       scenario_campaign SCENARIO.yaml --variants N | --each LIST  --slurm [SBATCH OPTIONS]\n"
+    "       scenario_campaign --merge DIR\n"
+    "       scenario_campaign --resume DIR [SBATCH OPTIONS]\n\n"
+    "Runs N seeded variants of a scenario (seeds, start pose, slope; the scenario's\n"
+    "`campaign:` section sets the jitter), prints a table and the pass rate, and\n"
+    "writes DIR/campaign.json (default DIR: out/campaign/NAME). Exit 1 when the\n"
+    "pass rate is below --min-pass (default 95 %) or a variant slid blind: drove on\n"
+    "after --slide-window (2) arc steps with true progress below --slide-progress\n"
+    "(10 %) of the commanded. --no-plot skips each variant's pictures (about 4 s each).\n"
+    "--jobs N runs N variants at once, each on its own private bus; in virtual time\n"
+    "each variant's result and log digest are the same as with --jobs 1.\n"
+    "--each LIST runs the scenario files listed in LIST (one path a line) once each,\n"
+    "as written, into the folder that holds each (./rover navbench uses it); DIR\n"
+    "(default: LIST's folder) gets campaign.json.\n\n"
+    "On a Slurm cluster (docs/SCENARIOS.md, \"Campaigns on a Slurm cluster\"):\n"
+    "--prepare writes DIR/vK/scenario.yaml for every variant and DIR/slurm/ (array.sbatch,\n"
+    "tasks.txt, plan.yaml) and runs nothing; --slurm does the same and submits the array\n"
+    "with sbatch, one task a variant (./rover scenario on its node, on a private bus).\n"
+    "SBATCH OPTIONS go to sbatch: --partition P, --time T, --cpus-per-task N, --account A,\n"
+    "and --sbatch-arg ARG (any sbatch option, repeatable: --sbatch-arg=--qos=long).\n"
+    "--merge DIR tables the tasks that finished as a local run does (campaign.json), and\n"
+    "names every task missing or failed and why (exit 3 when there is one).\n"
+    "--resume DIR submits again only the tasks missing or failed (not those still queued).\n";
+
+// A Slurm option at argv[i] (and its value): appended to a.sbatch_args or set in `a`.
+// False when argv[i] is none.
+bool ParseSlurmArg(int argc, char** argv, int& i, CampaignArgs& a) {
+  const std::string arg = argv[i];
+  auto value = [&]() -> std::string {
+    if (i + 1 >= argc) throw ConfigError("scenario_campaign: " + arg + ": missing value");
+    return argv[++i];
+  };
+  static const std::map<std::string, std::string> named = {
+      {"--partition", "--partition="}, {"--time", "--time="}, {"--cpus-per-task", "--cpus-per-task="},
+      {"--account", "--account="}};
+  if (const auto it = named.find(arg); it != named.end()) {
+    a.sbatch_args.push_back(it->second + value());
+  } else if (arg == "--sbatch-arg") {
+    a.sbatch_args.push_back(value());
+  } else if (arg.rfind("--sbatch-arg=", 0) == 0) {
+    a.sbatch_args.push_back(arg.substr(13));
+  } else if (arg == "--slurm") {
+    a.slurm = true;
+  } else if (arg == "--merge") {
+    a.merge_dir = value();
+  } else if (arg == "--resume") {
+    a.resume_dir = value();
+  } else {
+    return false;
+  }
+  return true;
+}
+
+// What the command line asks for must make sense together.
+void CheckArgs(const CampaignArgs& a) {
+  const bool cluster_dir = !a.merge_dir.empty() || !a.resume_dir.empty();
+  if (cluster_dir) {
+    if (!a.merge_dir.empty() && !a.resume_dir.empty()) throw ConfigError("scenario_campaign: --merge and --resume exclude each other");
+    if (a.each() || !a.scenario_path.empty() || a.variants != 0 || a.slurm || a.prepare_only) {
+      throw ConfigError("scenario_campaign: --merge DIR and --resume DIR take no SCENARIO.yaml, --each, --variants, "
+                        "--slurm or --prepare (DIR/slurm/plan.yaml has them)");
+    }
+    if (!a.merge_dir.empty() && !a.sbatch_args.empty()) throw ConfigError("scenario_campaign: --merge DIR takes no sbatch option");
+    return;
+  }
+  if (!a.sbatch_args.empty() && !a.slurm && !a.prepare_only) {
+    throw ConfigError("scenario_campaign: " + a.sbatch_args.front() + ": an sbatch option needs --slurm, --prepare or --resume DIR");
+  }
+  if (a.slurm && a.prepare_only) throw ConfigError("scenario_campaign: --slurm and --prepare exclude each other (--slurm prepares too)");
+  if (!a.each() && a.scenario_path.empty()) throw ConfigError("scenario_campaign: missing SCENARIO.yaml");
+  if (!a.each() && a.variants == 0) throw ConfigError("scenario_campaign: missing --variants N");
+  if (a.each() && (!a.scenario_path.empty() || a.variants != 0)) {
+    throw ConfigError("scenario_campaign: --each LIST takes no SCENARIO.yaml or --variants");
+  }
+}
 
 // The command line; nothing after --help (printed).
 std::optional<CampaignArgs> ParseArgs(int argc, char** argv) {
@@ -258,22 +346,7 @@ std::optional<CampaignArgs> ParseArgs(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
-      std::cout << "usage: scenario_campaign SCENARIO.yaml --variants N [--out DIR] [--seed S] [--jobs N]\n"
-                   "       scenario_campaign --each LIST [--out DIR] [--jobs N]\n"
-                   "                         [--min-pass PCT] [--slide-window N] [--slide-progress PCT] [--no-plot]\n\n"
-                   "Runs N seeded variants of a scenario (seeds, start pose, slope; the scenario's\n"
-                   "`campaign:` section sets the jitter), prints a table and the pass rate, and\n"
-                   "writes DIR/campaign.json (default DIR: out/campaign/NAME). Exit 1 when the\n"
-                   "pass rate is below --min-pass (default 95 %) or a variant slid blind: drove on\n"
-                   "after --slide-window (2) arc steps with true progress below --slide-progress\n"
-                   "(10 %) of the commanded. --no-plot skips each variant's pictures (about 4 s each).\n"
-                   "--jobs N runs N variants at once, each on its own private bus; in virtual time\n"
-                   "each variant's result and log digest are the same as with --jobs 1.\n"
-                   "--prepare writes DIR/vK/scenario.yaml for every variant and runs none (to spread\n"
-                   "a campaign over several machines: README, \"Campaigns scale out\").\n"
-                   "--each LIST runs the scenario files listed in LIST (one path a line) once each,\n"
-                   "as written, into the folder that holds each (./rover navbench uses it); DIR\n"
-                   "(default: LIST's folder) gets campaign.json.\n";
+      std::cout << kUsage;
       return std::nullopt;
     } else if (arg == "--variants") {
       const double n = number(i, arg);
@@ -306,6 +379,7 @@ std::optional<CampaignArgs> ParseArgs(int argc, char** argv) {
       a.jobs = static_cast<int>(n);
     } else if (arg == "--slide-progress") {
       a.slide_pct = number(i, arg);
+    } else if (ParseSlurmArg(argc, argv, i, a)) {
     } else if (a.scenario_path.empty() && arg.rfind("--", 0) != 0) {
       a.scenario_path = arg;
     } else {
@@ -313,11 +387,7 @@ std::optional<CampaignArgs> ParseArgs(int argc, char** argv) {
                         ": unexpected (expected SCENARIO.yaml --variants N [--out DIR])");
     }
   }
-  if (a.each() && (!a.scenario_path.empty() || a.variants != 0 || a.prepare_only)) {
-    throw ConfigError("scenario_campaign: --each LIST takes no SCENARIO.yaml, --variants or --prepare");
-  }
-  if (!a.each() && a.scenario_path.empty()) throw ConfigError("scenario_campaign: missing SCENARIO.yaml");
-  if (!a.each() && a.variants == 0) throw ConfigError("scenario_campaign: missing --variants N");
+  CheckArgs(a);
   return a;
 }
 
@@ -349,7 +419,9 @@ void PrintRow(int k, const Variant& v) {
             << Fixed(v.position_error_pct, 2) << " " << std::setw(9)
             << (std::to_string(v.vo_accepted) + "/" + std::to_string(v.false_updates)) << " "
             << std::setw(13) << (v.log_digest.empty() ? "-" : v.log_digest.substr(0, 12)) << " "
-            << (v.passed() ? "pass" : v.exit_code == 0 ? "FAIL (blind slide: " + v.blind_slide + ")"
+            << (!v.missing.empty() ? std::string("MISSING (below)")
+                : v.passed()       ? "pass"
+                : v.exit_code == 0 ? "FAIL (blind slide: " + v.blind_slide + ")"
                                                       : "FAIL (see " + v.dir + "/runner.log)")
             << "\n" << std::flush;
 }
@@ -468,9 +540,176 @@ void WriteCampaignJson(const CampaignArgs& a, const rover::tools::ScenarioSpec& 
     j.EndObject();
   }
   j.EndArray();
+  j.Key("tasks_missing").BeginArray();  // Slurm tasks a merge found unfinished (slurm_array.hpp)
+  for (const auto& v : results) {
+    if (!v.missing.empty()) j.BeginObject().Field("variant", v.index).Field("why", v.missing).EndObject();
+  }
+  j.EndArray();
   j.EndObject();
   std::ofstream(a.out_dir + "/campaign.json") << j.str();
   std::cout << "wrote " << a.out_dir << "/campaign.json\n";
+}
+
+// The pass-rate line and campaign.json; the exit status of a run (0: passed).
+int Conclude(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec, const std::vector<Variant>& results) {
+  const Totals t = Count(results);
+  std::cout << "pass rate: " << t.passed << "/" << a.variants << " (" << Fixed(t.pass_pct, 1) << " %, threshold "
+            << Fixed(a.min_pass_pct, 1) << " %); blind slides: " << t.slides << "; false VO updates: "
+            << t.false_updates << " of " << t.accepted << " accepted"
+            << (t.accepted > 0 ? " (" + Fixed(100.0 * t.false_updates / t.accepted, 2) + " %)" : std::string())
+            << "\n";
+  WriteCampaignJson(a, spec, results, t);
+  return t.pass_pct + 1e-9 >= a.min_pass_pct && t.slides == 0 ? 0 : 1;
+}
+
+std::string Absolute(const std::string& path) { return fs::absolute(path).lexically_normal().string(); }
+
+// The Slurm array of a campaign: one task a variant (or a listed scenario).
+slurm::ArrayPlan PlanFor(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec,
+                         const std::vector<std::string>& listed) {
+  slurm::ArrayPlan plan;
+  plan.out_dir = Absolute(a.out_dir);
+  plan.source_dir = ROVER_SOURCE_DIR;
+  plan.build_dir = fs::path(rover::launch::BinDir()).parent_path().string();
+  plan.job_name = "rover-" + (a.each() ? fs::path(plan.out_dir).filename().string() : spec.name);
+  plan.plot = a.plot;
+  for (int k = 1; k <= a.variants; ++k) {
+    plan.scenarios.push_back(a.each() ? Absolute(listed[static_cast<std::size_t>(k - 1)])
+                                      : plan.out_dir + "/v" + std::to_string(k) + "/scenario.yaml");
+  }
+  plan.sbatch_args = a.sbatch_args;
+  if (a.each()) {
+    plan.settings["each"] = Absolute(a.each_list);
+  } else {
+    plan.settings["scenario"] = Absolute(spec.source);
+    plan.settings["variants"] = std::to_string(a.variants);
+    plan.settings["seed"] = std::to_string(a.seed);
+  }
+  plan.settings["min_pass"] = Fixed(a.min_pass_pct, 6);
+  plan.settings["slide_window"] = std::to_string(a.window);
+  plan.settings["slide_progress"] = Fixed(a.slide_pct, 6);
+  return plan;
+}
+
+// The campaign's settings from its Slurm plan, as its command line gave them.
+CampaignArgs ArgsFromPlan(const slurm::ArrayPlan& plan) {
+  CampaignArgs a;
+  auto get = [&](const std::string& key) -> std::string {
+    const auto it = plan.settings.find(key);
+    if (it == plan.settings.end()) throw ConfigError(plan.slurm_dir() + "/plan.yaml: settings." + key + ": missing");
+    return it->second;
+  };
+  a.out_dir = plan.out_dir;
+  a.plot = plan.plot;
+  if (plan.settings.count("each")) {
+    a.each_list = get("each");
+    a.variants = static_cast<int>(plan.scenarios.size());
+    a.scenario_path = plan.scenarios.front();
+  } else {
+    a.scenario_path = get("scenario");
+    a.variants = std::stoi(get("variants"));
+    a.seed = std::stoull(get("seed"));
+  }
+  a.min_pass_pct = std::stod(get("min_pass"));
+  a.window = std::stoi(get("slide_window"));
+  a.slide_pct = std::stod(get("slide_progress"));
+  return a;
+}
+
+// --prepare and --slurm: the variants' scenario files and DIR/slurm/; --slurm submits it.
+int PrepareArray(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec, std::optional<double> slope,
+                 const std::vector<std::string>& listed) {
+  if (!a.each()) PrepareVariants(a, spec, slope);
+  const slurm::ArrayPlan plan = PlanFor(a, spec, listed);
+  slurm::WritePlan(plan);
+  const std::string script = plan.slurm_dir() + "/array.sbatch";
+  if (!a.slurm) {
+    std::cout << "wrote " << script << " (" << a.variants << " tasks); submit it with ./rover campaign --slurm, or: sbatch "
+              << script << "\n";
+    return 0;
+  }
+  std::vector<int> all;
+  for (int k = 1; k <= a.variants; ++k) all.push_back(k);
+  const std::string job = slurm::Submit(plan, all);
+  std::cout << "submitted Slurm job " << job << ": " << a.variants << " array tasks (" << script
+            << "); follow them with squeue -j " << job << ", then merge: ./rover campaign --merge " << plan.out_dir
+            << "\n";
+  return 0;
+}
+
+// The variant of task k, as the local run draws it (its results not read yet).
+Variant TaskVariant(const CampaignArgs& a, const slurm::ArrayPlan& plan, const rover::tools::ScenarioSpec& spec,
+                    std::optional<double> slope, int k) {
+  if (a.each()) return PreparedVariant(plan.scenarios[static_cast<std::size_t>(k - 1)], k);
+  Variant v = MakeVariant(spec, slope, a.seed, k);
+  v.dir = a.out_dir + "/v" + std::to_string(k);
+  return v;
+}
+
+// --merge DIR: the table and campaign.json of the tasks that finished, as a local run
+// writes them; every task that did not, named with why. Exit 3 when there is one.
+int MergeArray(const std::string& dir) {
+  const slurm::ArrayPlan plan = slurm::ReadPlan(dir);
+  fs::current_path(plan.source_dir);  // scenario files name their worlds from the root
+  CampaignArgs a = ArgsFromPlan(plan);
+  const auto spec = rover::tools::LoadScenario(a.scenario_path);
+  const std::optional<double> slope = a.each() ? std::nullopt : FirstSlope(spec);
+  PrintHeader(a, spec, slope);
+  const std::vector<slurm::TaskStatus> statuses = slurm::ReadStatuses(plan);
+  std::vector<Variant> results;
+  int missing = 0, queued = 0;
+  for (int k = 1; k <= a.variants; ++k) {
+    Variant v = TaskVariant(a, plan, spec, slope, k);
+    const slurm::TaskStatus& st = statuses[static_cast<std::size_t>(k - 1)];
+    if (st.done()) {
+      v.exit_code = st.exit_code;
+      ReadResults(v, a.window, a.slide_pct / 100.0);
+    } else {
+      v.missing = v.detail = st.why;
+      missing += st.resubmit();
+      queued += !st.resubmit();
+    }
+    PrintRow(k, v);
+    results.push_back(v);
+  }
+  const int code = Conclude(a, spec, results);
+  if (missing + queued == 0) return code;
+  std::cout << "merged " << a.variants - missing - queued << " of " << a.variants << " tasks; ";
+  if (queued > 0) std::cout << queued << " still in Slurm's queue (merge again when they end)" << (missing ? "; " : "");
+  if (missing > 0) std::cout << missing << " missing or failed: ./rover campaign --resume " << plan.out_dir << " submits them again";
+  std::cout << "\n";
+  for (const auto& st : statuses) {
+    if (!st.done()) std::cout << "  task " << st.task << ": " << st.why << "\n";
+  }
+  return 3;
+}
+
+// --resume DIR: the tasks missing or failed, submitted again (those queued are left).
+int ResumeArray(const std::string& dir, const std::vector<std::string>& sbatch_args) {
+  slurm::ArrayPlan plan = slurm::ReadPlan(dir);
+  std::vector<int> tasks;
+  int queued = 0;
+  for (const auto& st : slurm::ReadStatuses(plan)) {
+    if (st.resubmit()) {
+      tasks.push_back(st.task);
+      std::cout << "task " << st.task << ": " << st.why << "\n";
+    }
+    queued += st.state == slurm::TaskStatus::State::kQueued;
+  }
+  if (tasks.empty()) {
+    std::cout << "nothing to submit again: every task finished" << (queued ? " or is still in Slurm's queue" : "") << "\n";
+    return 0;
+  }
+  if (!sbatch_args.empty()) {
+    plan.sbatch_args.insert(plan.sbatch_args.end(), sbatch_args.begin(), sbatch_args.end());
+    slurm::WritePlan(plan);
+  }
+  for (int k : tasks) slurm::ClearTask(plan, k);
+  const std::string job = slurm::Submit(plan, tasks);
+  std::cout << "submitted Slurm job " << job << ": tasks " << slurm::ArraySpec(tasks) << " again"
+            << (queued ? " (" + std::to_string(queued) + " still queued, left as they are)" : "")
+            << "; then merge: ./rover campaign --merge " << plan.out_dir << "\n";
+  return 0;
 }
 
 }  // namespace
@@ -480,6 +719,8 @@ int main(int argc, char** argv) {
     auto parsed = ParseArgs(argc, argv);
     if (!parsed) return 0;
     CampaignArgs& a = *parsed;
+    if (!a.merge_dir.empty()) return MergeArray(a.merge_dir);
+    if (!a.resume_dir.empty()) return ResumeArray(a.resume_dir, a.sbatch_args);
     const std::vector<std::string> listed = a.each() ? ReadScenarioList(a.each_list) : std::vector<std::string>{};
     if (a.each()) {
       a.variants = static_cast<int>(listed.size());
@@ -493,18 +734,8 @@ int main(int argc, char** argv) {
     fs::create_directories(a.out_dir);
     const std::optional<double> slope = a.each() ? std::nullopt : FirstSlope(spec);
     PrintHeader(a, spec, slope);
-    if (a.prepare_only) {
-      PrepareVariants(a, spec, slope);
-      return 0;
-    }
+    if (a.prepare_only || a.slurm) return PrepareArray(a, spec, slope, listed);
     const std::vector<Variant> results = RunVariants(a, spec, slope, listed);
-    const Totals t = Count(results);
-    std::cout << "pass rate: " << t.passed << "/" << a.variants << " (" << Fixed(t.pass_pct, 1) << " %, threshold "
-              << Fixed(a.min_pass_pct, 1) << " %); blind slides: " << t.slides << "; false VO updates: "
-              << t.false_updates << " of " << t.accepted << " accepted"
-              << (t.accepted > 0 ? " (" + Fixed(100.0 * t.false_updates / t.accepted, 2) + " %)" : std::string())
-              << "\n";
-    WriteCampaignJson(a, spec, results, t);
-    return t.pass_pct + 1e-9 >= a.min_pass_pct && t.slides == 0 ? 0 : 1;
+    return Conclude(a, spec, results);
   });
 }
