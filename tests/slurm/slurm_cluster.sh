@@ -50,9 +50,11 @@ esac
 # In the cluster's namespaces, as "nobody".
 user="$(id -un)"
 pids=()
+watchdog=""
 stop() {
   local code=$? p
   trap - EXIT INT TERM
+  [ -z "$watchdog" ] || kill "$watchdog" 2>/dev/null
   if [ -n "${SLURM_CONF:-}" ] && squeue -h -o %i 2>/dev/null | grep -q .; then
     scancel -u "$user" 2>/dev/null
     for _ in $(seq 100); do squeue -h -o %i 2>/dev/null | grep -q . || break; sleep 0.2; done
@@ -121,6 +123,9 @@ slurmctld -D -i -f "$SLURM_CONF" >"$dir/slurmctld.out" 2>&1 &
 pids+=("$!")
 slurmd -D -f "$SLURM_CONF" -N localhost >"$dir/slurmd.out" 2>&1 &
 pids+=("$!")
+# Should this script be killed outright (no trap runs on SIGKILL), the daemons follow it.
+( while kill -0 $$ 2>/dev/null; do sleep 1; done; kill -TERM "${pids[@]}" 2>/dev/null ) &
+watchdog="$!"
 # The node is up when sinfo says idle; a daemon that exits before is one that cannot run here.
 state=""
 for _ in $(seq 300); do

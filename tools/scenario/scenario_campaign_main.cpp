@@ -700,12 +700,10 @@ int ResumeArray(const std::string& dir, const std::vector<std::string>& sbatch_a
     std::cout << "nothing to submit again: every task finished" << (queued ? " or is still in Slurm's queue" : "") << "\n";
     return 0;
   }
-  if (!sbatch_args.empty()) {
-    plan.sbatch_args.insert(plan.sbatch_args.end(), sbatch_args.begin(), sbatch_args.end());
-    slurm::WritePlan(plan);
-  }
+  plan.sbatch_args.insert(plan.sbatch_args.end(), sbatch_args.begin(), sbatch_args.end());
   for (int k : tasks) slurm::ClearTask(plan, k);
   const std::string job = slurm::Submit(plan, tasks);
+  if (!sbatch_args.empty()) slurm::WritePlan(plan);  // the next --resume passes them too
   std::cout << "submitted Slurm job " << job << ": tasks " << slurm::ArraySpec(tasks) << " again"
             << (queued ? " (" + std::to_string(queued) + " still queued, left as they are)" : "")
             << "; then merge: ./rover campaign --merge " << plan.out_dir << "\n";
