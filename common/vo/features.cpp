@@ -79,15 +79,22 @@ void HarrisResponse(const cv::Mat& image, int n, float k, cv::Mat* response) {
       }
     }
     float* __restrict s = sum.data();
-    std::fill(s, s + 3 * W, 0.0f);
+    const bool five = n == 5 && W > 4;
+    // Five taps write every column but the two at each edge, which stay 0 (inside the
+    // feature border); any other width adds into zeros.
+    if (five) {
+      for (int p = 0; p < 3; ++p) s[p * W] = s[p * W + 1] = s[p * W + W - 2] = s[p * W + W - 1] = 0.0f;
+    } else {
+      std::fill(s, s + 3 * W, 0.0f);
+    }
     for (int p = 0; p < 3; ++p) {
       const float* cp = column.data() + p * W;
       float* __restrict sp = s + p * W;
-      if (n == 5 && W > 4) {
+      if (five) {
         for (int x = 2; x < W - 2; ++x) {
           sp[x] = w[0] * (cp[x - 2] + cp[x + 2]) + w[1] * (cp[x - 1] + cp[x + 1]) + w[2] * cp[x];
         }
-        continue;  // the two columns at each edge stay 0: inside the feature border
+        continue;
       }
       for (int j = -h; j <= h; ++j) {
         const float wj = w[j + h];
@@ -107,36 +114,21 @@ void HarrisResponse(const cv::Mat& image, int n, float k, cv::Mat* response) {
   }
 }
 
-}  // namespace
-
-std::vector<Corner> DetectCorners(const cv::Mat& image, const CornerOptions& options,
-                                  cv::Mat* response_out) {
-  CV_Assert(image.type() == CV_32FC1);
-  // Harris: structure tensor of 3x3 Sobel gradients (intensity per pixel), weighted by
-  // a binomial (Gaussian-like) window of side harris_block, response det - k trace^2. Written out, fused
-  // and vectorised: cv::cornerHarris took ~11 ms on a 1226x370 float image on one core.
-  cv::Mat local_response;
-  cv::Mat& response = response_out ? *response_out : local_response;
-  HarrisResponse(image, options.harris_block | 1, static_cast<float>(options.harris_k), &response);
-
-  // Grid pass: the strongest 3x3 local maximum in each cell (the paper's grid, whose
-  // cells are smaller than the minimum distance, so no cell can hold two features).
-  // The local-maximum test is done row by row in registers (a dilation of the whole image
-  // and a branchy per-pixel scan each cost more than the Harris response).
-  const int cell = std::max(1, options.grid_cell_px);
-  const int border = std::max(options.border_px, 1);
-  const int x_begin = border, x_end = image.cols - border;  // exclusive
-  const int y_begin = border, y_end = image.rows - border;
-  std::vector<Corner> candidates;
-  if (x_end <= x_begin || y_end <= y_begin) return candidates;
-  const int gx = (x_end - x_begin + cell - 1) / cell, gy = (y_end - y_begin + cell - 1) / cell;
-  std::vector<Corner> best(static_cast<std::size_t>(gx) * gy);
-  const float floor = static_cast<float>(options.min_response);
+// Grid pass: the strongest 3x3 local maximum in each cell (the paper's grid, whose
+// cells are smaller than the minimum distance, so no cell can hold two features), in
+// `best` (gx by gy cells, row-major; a cell without a peak keeps response 0). The
+// local-maximum test is done row by row in registers (a dilation of the whole image and
+// a branchy per-pixel scan each cost more than the Harris response). Only comparisons:
+// every build gives the same cells.
+__attribute__((target_clones("avx2", "default")))
+void GridPeaks(const cv::Mat& response, int x_begin, int x_end, int y_begin, int y_end, int cell, int gx,
+               float floor, std::vector<Corner>* best_cells) {
+  Corner* const best = best_cells->data();
   // Per row, first (vectorised): a pixel's value where it is a 3x3 local maximum above the
   // floor, else 0. Then per cell run: the largest, first on ties (raster order, as a
   // pixel-by-pixel scan with a strict comparison would keep).
   thread_local std::vector<float> peak_value;
-  peak_value.assign(image.cols, 0.0f);
+  peak_value.assign(response.cols, 0.0f);
   for (int y = y_begin; y < y_end; ++y) {
     const float* row = response.ptr<float>(y);
     const float* above = response.ptr<float>(y - 1);
@@ -148,7 +140,7 @@ std::vector<Corner> DetectCorners(const cv::Mat& image, const CornerOptions& opt
       m = std::max(m, std::max(std::max(row[x + 1], below[x - 1]), std::max(below[x], below[x + 1])));
       pv[x] = (v >= m && v > floor) ? v : 0.0f;
     }
-    Corner* cell_row = best.data() + static_cast<std::size_t>((y - y_begin) / cell) * gx;
+    Corner* cell_row = best + static_cast<std::size_t>((y - y_begin) / cell) * gx;
     for (int i = 0, x0 = x_begin; x0 < x_end; ++i, x0 += cell) {
       Corner& b = cell_row[i];
       const int x1 = std::min(x0 + cell, x_end);
@@ -170,6 +162,29 @@ std::vector<Corner> DetectCorners(const cv::Mat& image, const CornerOptions& opt
       b.response = run_max;
     }
   }
+}
+
+}  // namespace
+
+std::vector<Corner> DetectCorners(const cv::Mat& image, const CornerOptions& options,
+                                  cv::Mat* response_out) {
+  CV_Assert(image.type() == CV_32FC1);
+  // Harris: structure tensor of 3x3 Sobel gradients (intensity per pixel), weighted by
+  // a binomial (Gaussian-like) window of side harris_block, response det - k trace^2. Written out, fused
+  // and vectorised: cv::cornerHarris took ~11 ms on a 1226x370 float image on one core.
+  cv::Mat local_response;
+  cv::Mat& response = response_out ? *response_out : local_response;
+  HarrisResponse(image, options.harris_block | 1, static_cast<float>(options.harris_k), &response);
+
+  const int cell = std::max(1, options.grid_cell_px);
+  const int border = std::max(options.border_px, 1);
+  const int x_begin = border, x_end = image.cols - border;  // exclusive
+  const int y_begin = border, y_end = image.rows - border;
+  std::vector<Corner> candidates;
+  if (x_end <= x_begin || y_end <= y_begin) return candidates;
+  const int gx = (x_end - x_begin + cell - 1) / cell, gy = (y_end - y_begin + cell - 1) / cell;
+  std::vector<Corner> best(static_cast<std::size_t>(gx) * gy);
+  GridPeaks(response, x_begin, x_end, y_begin, y_end, cell, gx, static_cast<float>(options.min_response), &best);
   for (const Corner& c : best) {
     if (c.response > 0) candidates.push_back(c);
   }
