@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
 
 namespace rover::tools {
@@ -35,6 +36,9 @@ std::optional<PoseHonesty> JudgePoses(const std::vector<rover_msgs::pose_t>& pos
     Eigen::LLT<Eigen::Matrix2d> llt(0.5 * (C + C.transpose()));
     if (llt.info() != Eigen::Success || !(C.determinant() > 1e-18)) continue;
     const double n_xy = e.dot(llt.solve(e));
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(0.5 * (C + C.transpose()));
+    h.final_horizontal_3sigma_m = 3.0 * std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
+    h.final_horizontal_error_m = e.norm();
     ++h.horizontal_poses;
     horizontal_sum += n_xy;
     horizontal_beyond += n_xy > kChi2Dof2ThreeSigma;

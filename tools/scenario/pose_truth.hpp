@@ -23,6 +23,11 @@ struct PoseHonesty {
   int horizontal_poses = 0;         // of them, with a horizontal covariance to judge
   double horizontal_nees_mean = 0;  // e' C^-1 e of x, y: 2 is honest
   double horizontal_beyond_pct = 0; // share beyond kChi2Dof2ThreeSigma
+  // The last judged horizontal pose: its claimed 3-sigma (3 x the square root of the
+  // horizontal covariance's largest eigenvalue, as a goto's disc and the keep-out zones
+  // use it) and its true horizontal error.
+  double final_horizontal_3sigma_m = 0;
+  double final_horizontal_error_m = 0;
 };
 
 // Every POSE of site 0 (the truth's frame) with a heading variance, against the truth

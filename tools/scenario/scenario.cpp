@@ -111,7 +111,7 @@ ScenarioSpec LoadScenario(const std::string& path) {
   if (root.Has("expect")) {
     const auto expect = root["expect"];
     expect.CheckKeys({"outcome", "abort_reason", "min_clearance_m", "max_position_error_pct",
-                      "max_false_updates"});
+                      "max_false_updates", "horizontal_nees", "heading_nees", "max_final_3sigma_m"});
     expect.GetEnum("outcome", s.expect_outcome, {"completed", "aborted", "rejected"});
     // One reason, or a list of acceptable ones.
     const auto reason = expect["abort_reason"];
@@ -138,6 +138,22 @@ ScenarioSpec LoadScenario(const std::string& path) {
       int v = 0;
       expect.Get("max_false_updates", v, 0);
       s.expect_max_false_updates = v;
+    }
+    // A NEES mean's range: [min, max].
+    auto range = [&expect](const char* key) -> std::optional<std::pair<double, double>> {
+      if (!expect.Has(key)) return std::nullopt;
+      const auto r = expect[key];
+      if (!r.IsSequence() || r.size() != 2) r.Fail("expected [min, max], two numbers");
+      const double lo = r.at(0).AsDouble(), hi = r.at(1).AsDouble();
+      if (!(lo >= 0.0 && hi >= lo)) r.Fail("expected 0 <= min <= max");
+      return std::make_pair(lo, hi);
+    };
+    s.expect_horizontal_nees = range("horizontal_nees");
+    s.expect_heading_nees = range("heading_nees");
+    if (expect.Has("max_final_3sigma_m")) {
+      double v = 0;
+      expect.Get("max_final_3sigma_m", v, 0.0);
+      s.expect_max_final_3sigma_m = v;
     }
   }
   return s;
@@ -646,6 +662,8 @@ std::string SummaryJson(const ScenarioSummary& s) {
     j.Field("heading_beyond_3_sigma_pct", h->heading_beyond_pct);
     j.Field("horizontal_poses", h->horizontal_poses).Field("horizontal_nees_mean", h->horizontal_nees_mean);
     j.Field("horizontal_beyond_3_sigma_pct", h->horizontal_beyond_pct);
+    j.Field("final_horizontal_3sigma_m", h->final_horizontal_3sigma_m);
+    j.Field("final_horizontal_error_m", h->final_horizontal_error_m);
     j.EndObject();
   } else {
     j.Null();
@@ -739,8 +757,9 @@ std::string SummaryText(const ScenarioSummary& s) {
     os << std::setprecision(2) << "  pose honesty (POSE against truth, " << h->poses << " poses): heading NEES mean "
        << h->heading_nees_mean << " (1 is honest), " << std::setprecision(1) << h->heading_beyond_pct
        << " % beyond 3 sigma; horizontal NEES mean " << std::setprecision(2) << h->horizontal_nees_mean
-       << " (2 is honest), " << std::setprecision(1) << h->horizontal_beyond_pct << " % beyond its 99.7 % bound\n"
-       << std::setprecision(3);
+       << " (2 is honest), " << std::setprecision(1) << h->horizontal_beyond_pct << " % beyond its 99.7 % bound; "
+       << std::setprecision(3) << "last pose: 3-sigma " << h->final_horizontal_3sigma_m << " m, error "
+       << h->final_horizontal_error_m << " m\n";
   }
   for (const auto& c : s.rest_checks) {
     os << std::setprecision(1) << "  after " << c.rested_s << " s " << (c.after == "pause" ? "paused" : "parked")
@@ -802,6 +821,29 @@ bool AsExpected(const ScenarioSpec& spec, const ScenarioSummary& s, std::string*
   }
   if (spec.expect_max_false_updates && s.false_updates > *spec.expect_max_false_updates) {
     miss << s.false_updates << " false VO updates, expected <= " << *spec.expect_max_false_updates << "; ";
+  }
+  auto nees = [&](const char* what, const std::optional<std::pair<double, double>>& range, double PoseHonesty::*mean) {
+    if (!range) return;
+    if (!s.pose_honesty) {
+      miss << what << " NEES unknown (no pose judged), expected in [" << range->first << ", " << range->second << "]; ";
+      return;
+    }
+    const double value = (*s.pose_honesty).*mean;
+    if (!(value >= range->first && value <= range->second)) {
+      miss << what << " NEES mean " << value << ", expected in [" << range->first << ", " << range->second << "]; ";
+    }
+  };
+  nees("horizontal", spec.expect_horizontal_nees, &PoseHonesty::horizontal_nees_mean);
+  nees("heading", spec.expect_heading_nees, &PoseHonesty::heading_nees_mean);
+  if (spec.expect_max_final_3sigma_m &&
+      !(s.pose_honesty && s.pose_honesty->final_horizontal_3sigma_m <= *spec.expect_max_final_3sigma_m)) {
+    miss << "final 3-sigma ";
+    if (s.pose_honesty) {
+      miss << s.pose_honesty->final_horizontal_3sigma_m << " m";
+    } else {
+      miss << "unknown (no pose judged)";
+    }
+    miss << ", expected <= " << *spec.expect_max_final_3sigma_m << " m; ";
   }
   std::string text = miss.str();
   if (text.size() >= 2) text.resize(text.size() - 2);

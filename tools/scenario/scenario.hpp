@@ -64,6 +64,10 @@ struct ScenarioSpec {
   std::optional<double> expect_min_clearance_m;    // truth clearance to every zone >= this
   std::optional<double> expect_max_position_error_pct;
   std::optional<int> expect_max_false_updates;
+  // Pose honesty (summary.json's pose_honesty): each NEES mean within [min, max], and the
+  // last pose's claimed horizontal 3-sigma at most this.
+  std::optional<std::pair<double, double>> expect_horizontal_nees, expect_heading_nees;
+  std::optional<double> expect_max_final_3sigma_m;
 };
 
 // Throws config::ConfigError naming the file and key.

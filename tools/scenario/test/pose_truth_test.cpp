@@ -57,6 +57,9 @@ TEST(PoseTruth, NeesOfKnownErrors) {
   EXPECT_NEAR(h->horizontal_nees_mean, (1.0 + 16.0) / 2, 1e-6);
   EXPECT_NEAR(h->heading_beyond_pct, 50.0, 1e-9);
   EXPECT_NEAR(h->horizontal_beyond_pct, 50.0, 1e-9);
+  // The last judged pose (1.5 s): 3 x sqrt(0.04) claimed, 0.4 m off in truth.
+  EXPECT_NEAR(h->final_horizontal_3sigma_m, 0.6, 1e-9);
+  EXPECT_NEAR(h->final_horizontal_error_m, 0.4, 1e-9);
 }
 
 TEST(PoseTruth, NothingToJudgeIsEmpty) {

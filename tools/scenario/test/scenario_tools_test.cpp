@@ -187,6 +187,46 @@ TEST(VoTruth, NeesOfAKnownErrorAndTheFalseUpdateBound) {
   EXPECT_FALSE(CheckVoUpdate(u, truth).accepted);
 }
 
+// expect: horizontal_nees and heading_nees as [min, max], max_final_3sigma_m: read from the
+// file, checked against summary.json's pose_honesty, and a bad range is one line.
+TEST(ScenarioExpectation, PoseHonestyIsChecked) {
+  const std::string dir = TempDir("honesty");
+  const std::string base = "name: t\nworld: w.yaml\nsequence: s.seq\ndeployment: d.yaml\n";
+  const ScenarioSpec spec = LoadScenario(Write(
+      dir, "h.yaml",
+      base + "expect: {outcome: completed, horizontal_nees: [1, 3], heading_nees: [0.5, 1.5], max_final_3sigma_m: 2}\n"));
+  ASSERT_TRUE(spec.expect_horizontal_nees && spec.expect_heading_nees && spec.expect_max_final_3sigma_m);
+  EXPECT_EQ(spec.expect_heading_nees->first, 0.5);
+  EXPECT_EQ(spec.expect_heading_nees->second, 1.5);
+  for (const char* bad : {"horizontal_nees: 2", "horizontal_nees: [3, 1]", "heading_nees: [1]"}) {
+    try {
+      LoadScenario(Write(dir, "bad.yaml", base + "expect: {" + std::string(bad) + "}\n"));
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("expect"), std::string::npos) << e.what();
+    }
+  }
+  ScenarioSummary s;
+  s.outcome = "completed";
+  std::string why;
+  EXPECT_FALSE(AsExpected(spec, s, &why));  // no pose judged: unknown is not honest
+  EXPECT_NE(why.find("horizontal NEES unknown"), std::string::npos) << why;
+  PoseHonesty h;
+  h.horizontal_nees_mean = 2.1;
+  h.heading_nees_mean = 0.9;
+  h.final_horizontal_3sigma_m = 1.2;
+  s.pose_honesty = h;
+  EXPECT_TRUE(AsExpected(spec, s, &why)) << why;
+  s.pose_honesty->horizontal_nees_mean = 0.30;
+  s.pose_honesty->heading_nees_mean = 1.72;
+  s.pose_honesty->final_horizontal_3sigma_m = 6.94;
+  EXPECT_FALSE(AsExpected(spec, s, &why));
+  EXPECT_NE(why.find("horizontal NEES mean 0.3, expected in [1, 3]"), std::string::npos) << why;
+  EXPECT_NE(why.find("heading NEES mean 1.72, expected in [0.5, 1.5]"), std::string::npos) << why;
+  EXPECT_NE(why.find("final 3-sigma 6.94 m, expected <= 2 m"), std::string::npos) << why;
+  fs::remove_all(dir);
+}
+
 TEST(ScenarioExpectation, EveryExpectEntryIsChecked) {
   ScenarioSpec spec;
   spec.expect_outcome = "aborted";
