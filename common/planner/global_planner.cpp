@@ -151,12 +151,19 @@ void Spread(const avoidance::Grid& g, const CostGrid& c, const PlannerOptions& o
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
   for (std::size_t k = 0; k < field->size(); ++k)
     if (std::isfinite((*field)[k])) open.push({(*field)[k], k});
-  auto passable = [&](int i, int j) {
-    if (i < 0 || j < 0 || i >= g.rows || j >= g.cols) return false;
-    const std::size_t k = static_cast<std::size_t>(i) * g.cols + j;
-    return !c.obstacle[k] && (allow_squeeze || !c.squeeze[k]);
-  };
-  auto factor = [&](std::size_t k) { return (c.squeeze[k] ? o.squeeze_cost : c.factor[k]) + c.extra[k]; };
+  // Whether each cell is passable, with a ring of impassable cells round the grid so that a
+  // neighbour needs no bounds check, and each cell's factor: looked up once, not per visit
+  // (the same values in the same order as asking each time, so the same field).
+  const int w = g.cols + 2;
+  std::vector<unsigned char> pass(static_cast<std::size_t>(g.rows + 2) * w, 0);
+  std::vector<double> factor(field->size());
+  for (int i = 0; i < g.rows; ++i) {
+    for (int j = 0; j < g.cols; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i) * g.cols + j;
+      pass[static_cast<std::size_t>(i + 1) * w + (j + 1)] = !c.obstacle[k] && (allow_squeeze || !c.squeeze[k]);
+      factor[k] = (c.squeeze[k] ? o.squeeze_cost : c.factor[k]) + c.extra[k];
+    }
+  }
   const double diagonal = g.cell_m * std::sqrt(2.0);
   while (!open.empty()) {
     const auto [d, k] = open.top();
@@ -164,13 +171,14 @@ void Spread(const avoidance::Grid& g, const CostGrid& c, const PlannerOptions& o
     if (d > (*field)[k]) continue;
     const int i = static_cast<int>(k / static_cast<std::size_t>(g.cols));
     const int j = static_cast<int>(k % static_cast<std::size_t>(g.cols));
+    const unsigned char* here = &pass[static_cast<std::size_t>(i + 1) * w + (j + 1)];
     for (int di = -1; di <= 1; ++di) {
       for (int dj = -1; dj <= 1; ++dj) {
-        if ((di == 0 && dj == 0) || !passable(i + di, j + dj)) continue;
-        if (di != 0 && dj != 0 && (!passable(i + di, j) || !passable(i, j + dj))) continue;
+        if ((di == 0 && dj == 0) || !here[di * w + dj]) continue;
+        if (di != 0 && dj != 0 && (!here[di * w] || !here[dj])) continue;
         const std::size_t next = static_cast<std::size_t>(i + di) * g.cols + (j + dj);
         if (frozen && (*frozen)[next]) continue;
-        const double step = (di != 0 && dj != 0 ? diagonal : g.cell_m) * 0.5 * (factor(k) + factor(next));
+        const double step = (di != 0 && dj != 0 ? diagonal : g.cell_m) * 0.5 * (factor[k] + factor[next]);
         if (d + step < (*field)[next]) {
           (*field)[next] = d + step;
           open.push({d + step, next});
