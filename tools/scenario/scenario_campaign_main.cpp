@@ -391,7 +391,8 @@ std::optional<CampaignArgs> ParseArgs(int argc, char** argv) {
   return a;
 }
 
-void PrintHeader(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec, std::optional<double> slope) {
+void PrintHeader(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec, std::optional<double> slope,
+                 bool columns = true) {
   if (a.each()) {
     std::cout << "campaign " << a.each_list << ": " << a.variants << " scenarios as written\n";
   } else {
@@ -402,6 +403,7 @@ void PrintHeader(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec, 
               << "; expected " << spec.expect_outcome
               << (spec.expect_abort_reason.empty() ? "" : " (" + spec.expect_abort_reason + ")") << "\n";
   }
+  if (!columns) return;
   std::cout << std::left << std::setw(4) << "var" << std::setw(22) << " seeds w/m/r" << std::setw(24)
             << " start x, y, yaw" << std::setw(7) << " slope" << std::setw(11) << " outcome" << std::setw(20)
             << " reason" << std::setw(10) << " clear m" << std::setw(8) << " err %" << std::setw(10)
@@ -624,8 +626,8 @@ int PrepareArray(const CampaignArgs& a, const rover::tools::ScenarioSpec& spec, 
   slurm::WritePlan(plan);
   const std::string script = plan.slurm_dir() + "/array.sbatch";
   if (!a.slurm) {
-    std::cout << "wrote " << script << " (" << a.variants << " tasks); submit it with ./rover campaign --slurm, or: sbatch "
-              << script << "\n";
+    std::cout << "wrote " << script << " (" << a.variants << " tasks); sbatch " << script
+              << " runs them (--slurm submits it too, so that --merge sees the queue)\n";
     return 0;
   }
   std::vector<int> all;
@@ -731,7 +733,7 @@ int main(int argc, char** argv) {
     }
     fs::create_directories(a.out_dir);
     const std::optional<double> slope = a.each() ? std::nullopt : FirstSlope(spec);
-    PrintHeader(a, spec, slope);
+    PrintHeader(a, spec, slope, !a.prepare_only && !a.slurm);
     if (a.prepare_only || a.slurm) return PrepareArray(a, spec, slope, listed);
     const std::vector<Variant> results = RunVariants(a, spec, slope, listed);
     return Conclude(a, spec, results);
