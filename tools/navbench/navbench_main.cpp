@@ -152,6 +152,50 @@ void CheckSlurmArgs(const Args& a) {
   }
 }
 
+// --densities K,...|none.
+std::vector<double> ParseDensities(const std::string& text) {
+  std::vector<double> densities;
+  for (const auto& part : text == "none" ? std::vector<std::string>{} : SplitCommas(text)) {
+    char* end = nullptr;
+    const double k = std::strtod(part.c_str(), &end);
+    if (*end != '\0' || !(k > 0 && k <= 0.5)) {
+      throw ConfigError("navbench: --densities \"" + text + "\": expected Golombek k values in (0, 0.5] separated by commas, or none");
+    }
+    densities.push_back(k);
+  }
+  return densities;
+}
+
+// --worlds NAME,...|none.
+std::vector<std::string> ParseWorlds(const std::string& text) {
+  std::vector<std::string> worlds;
+  if (text == "none") return worlds;
+  for (const auto& name : SplitCommas(text)) {
+    bool known = false;
+    for (const auto& w : nb::FixedWorlds()) known = known || w.name == name;
+    if (!known) throw ConfigError("navbench: --worlds: unknown world '" + name + "' (expected gap_wall, cul_de_sac or none)");
+    worlds.push_back(name);
+  }
+  return worlds;
+}
+
+// A Slurm option at argv[i] (and its value) into `a`; false when argv[i] is none.
+bool SlurmOption(int argc, char** argv, int& i, Args& a) {
+  const std::string arg = argv[i];
+  if (SbatchOption(argc, argv, i, &a.sbatch_args)) return true;
+  if (arg == "--slurm") {
+    a.slurm = true;
+  } else if (arg == "--merge") {
+    if (i + 1 >= argc) throw ConfigError("navbench: --merge: missing DIR (expected --merge DIR)");
+    a.merge_dir = argv[++i];
+  } else if (arg == "--resume" && i + 1 < argc && argv[i + 1][0] != '-') {
+    a.resume_dir = argv[++i];  // --resume DIR: a Slurm array's; plain --resume: local
+  } else {
+    return false;
+  }
+  return true;
+}
+
 Args ParseArgs(int argc, char** argv) {
   Args a;
   nb::BenchOptions& options = a.options;
@@ -176,17 +220,7 @@ Args ParseArgs(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const int first = i;
-    if (SbatchOption(argc, argv, i, &a.sbatch_args)) continue;
-    if (arg == "--slurm") {
-      a.slurm = true;
-      continue;
-    } else if (arg == "--merge") {
-      a.merge_dir = value(i, arg);
-      continue;
-    } else if (arg == "--resume" && i + 1 < argc && argv[i + 1][0] != '-') {
-      a.resume_dir = value(i, arg);  // --resume DIR: a Slurm array's; plain --resume: local
-      continue;
-    }
+    if (SlurmOption(argc, argv, i, a)) continue;
     if (arg == "--help" || arg == "-h") {
       a.help = true;
     } else if (arg == "--runs") {
@@ -199,28 +233,10 @@ Args ParseArgs(int argc, char** argv) {
     } else if (arg == "--out") {
       options.out_dir = value(i, arg);
     } else if (arg == "--densities") {
-      options.densities.clear();
-      const std::string text = value(i, arg);
-      for (const auto& part : text == "none" ? std::vector<std::string>{} : SplitCommas(text)) {
-        char* end = nullptr;
-        const double k = std::strtod(part.c_str(), &end);
-        if (*end != '\0' || !(k > 0 && k <= 0.5)) {
-          throw ConfigError("navbench: --densities \"" + text + "\": expected Golombek k values in (0, 0.5] separated by commas, or none");
-        }
-        options.densities.push_back(k);
-      }
+      options.densities = ParseDensities(value(i, arg));
       densities_set = true;
     } else if (arg == "--worlds") {
-      const std::string text = value(i, arg);
-      options.worlds.clear();
-      if (text != "none") {
-        for (const auto& name : SplitCommas(text)) {
-          bool known = false;
-          for (const auto& w : nb::FixedWorlds()) known = known || w.name == name;
-          if (!known) throw ConfigError("navbench: --worlds: unknown world '" + name + "' (expected gap_wall, cul_de_sac or none)");
-          options.worlds.push_back(name);
-        }
-      }
+      options.worlds = ParseWorlds(value(i, arg));
       worlds_set = true;
     } else if (arg == "--min-goal") {
       options.min_goal_m = number(i, arg, 1, 500, false);
