@@ -1,6 +1,7 @@
 #include "vo/correlation.hpp"
 
 #include <Eigen/LU>
+#include <immintrin.h>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -300,21 +301,9 @@ __attribute__((always_inline)) inline void CrossFew(const Template& t, const cv:
   }
 }
 
-// Compiled for AVX2+FMA as well as the baseline; the loader picks the best the CPU has.
-__attribute__((target_clones("avx2,fma", "default")))
-void ScoreRow(const Template& t, const cv::Mat& band, int y, int x0, int count, float* out) {
-  const int n = t.n, h = n / 2;
-  const int span = count + n - 1;
-  thread_local std::vector<float> column_sq_heap;
-  float column_sq_stack[512];
-  float* column_sq = column_sq_stack;
-  if (span > 512) {
-    column_sq_heap.resize(span);
-    column_sq = column_sq_heap.data();
-  }
-  std::fill(column_sq, column_sq + span, 0.0f);
-  // The cross term in blocks of adjacent centres whose sums stay in registers (a run of
-  // sums in memory was bound by its loads and stores); then the few left over.
+// The cross terms of one row of centres, blocks of 32 and 8, then the few left over.
+__attribute__((always_inline)) inline void CrossRow(const Template& t, const cv::Mat& band, int y, int x0,
+                                                    int count, float* out) {
   int k = 0;
   for (; k + 32 <= count; k += 32) CrossSmall<32>(t, band, y, x0 + k, out + k);
   for (; k + 8 <= count; k += 8) CrossFew<8>(t, band, y, x0 + k, out + k);
@@ -328,21 +317,149 @@ void ScoreRow(const Template& t, const cv::Mat& band, int y, int x0, int count, 
     case 7: CrossFew<7>(t, band, y, x0 + k, out + k); break;
     default: break;
   }
-  for (int r = 0; r < n; ++r) {
-    const float* row = band.ptr<float>(y - h + r) + (x0 - h);
-    float* __restrict cs = column_sq;
-    for (int j = 0; j < span; ++j) cs[j] += row[j] * row[j];
+}
+
+// One template row's products added into R x V sums (CrossBlockAvx2).
+template <int R, int V>
+__attribute__((target("avx2"), always_inline)) inline void AddRowAvx2(const Template& t, const cv::Mat& band, int y,
+                                                                    int x0, int r, __m256i mask,
+                                                                    __m256 (&acc)[R][V]) {
+  const int n = t.n, h = n / 2;
+  const float* tr = t.pixels.data() + r * n;
+  const float* b[R];
+  for (int q = 0; q < R; ++q) b[q] = band.ptr<float>(y + q - h + r) + (x0 - h);
+  for (int c = 0; c < n; ++c) {
+    const __m256 a = _mm256_broadcast_ss(tr + c);
+    for (int q = 0; q < R; ++q) {
+      for (int v = 0; v < V; ++v) {
+        const float* p = b[q] + c + 8 * v;
+        const __m256 x = v + 1 < V ? _mm256_loadu_ps(p) : _mm256_maskload_ps(p, mask);
+        acc[q][v] = _mm256_add_ps(acc[q][v], _mm256_mul_ps(a, x));
+      }
+    }
   }
-  // sum(b^2) over the window: slide n column sums along the row (double, no drift).
-  double window = 0;
-  for (int j = 0; j < n - 1; ++j) window += column_sq[j];
+}
+
+// The cross terms with AVX2 written out: R rows of centres by V vectors of 8 adjacent
+// centres, the last vector `last` centres wide (masked loads and stores, which never touch
+// the masked-off pixels). Every sum is formed exactly as CrossSmall forms it: a product
+// rounded, then added (no fused multiply-add: the build contracts none), template rows in
+// order into an even and an odd sum, columns in order, the two added at the end. So the
+// scores are bit for bit those of the portable path. What differs is that the 2 R V sums
+// are independent chains in flight together: the compiler's code for a few centres kept
+// two chains and broadcast the template through shuffles and the stack, about one
+// product per cycle.
+template <int R, int V>
+__attribute__((target("avx2"), always_inline)) inline void CrossBlockAvx2(const Template& t, const cv::Mat& band,
+                                                                        int y, int x0, int last, float* out,
+                                                                        int stride) {
+  const int n = t.n;
+  alignas(32) static constexpr int kLanes[16] = {-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0};
+  const __m256i mask = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kLanes + 8 - last));
+  __m256 even[R][V], odd[R][V];
+  for (int q = 0; q < R; ++q) {
+    for (int v = 0; v < V; ++v) even[q][v] = odd[q][v] = _mm256_setzero_ps();
+  }
+  int r = 0;
+  for (; r + 1 < n; r += 2) {
+    AddRowAvx2<R, V>(t, band, y, x0, r, mask, even);
+    AddRowAvx2<R, V>(t, band, y, x0, r + 1, mask, odd);
+  }
+  if (r < n) AddRowAvx2<R, V>(t, band, y, x0, r, mask, even);
+  for (int q = 0; q < R; ++q) {
+    for (int v = 0; v < V; ++v) {
+      const __m256 sum = _mm256_add_ps(even[q][v], odd[q][v]);
+      float* o = out + q * stride + 8 * v;
+      if (v + 1 < V) {
+        _mm256_storeu_ps(o, sum);
+      } else {
+        _mm256_maskstore_ps(o, mask, sum);
+      }
+    }
+  }
+}
+
+// The cross terms of rows y..y+rows-1 (row q's at out + q * count): four rows at a time
+// by vectors of 8 centres; a lone row (a stereo search along the epipolar line) by 32.
+__attribute__((target("avx2"))) void CrossRowsAvx2(const Template& t, const cv::Mat& band, int y, int rows, int x0,
+                                                   int count, float* out) {
+  int q = 0;
+  for (; q + 4 <= rows; q += 4) {
+    for (int k = 0; k < count; k += 8) {
+      CrossBlockAvx2<4, 1>(t, band, y + q, x0 + k, std::min(8, count - k), out + q * count + k, count);
+    }
+  }
+  if (rows - q > 1 && count <= 8) {  // two or three rows of a few centres: together
+    float* o = out + q * count;
+    if (rows - q == 2) {
+      CrossBlockAvx2<2, 1>(t, band, y + q, x0, count, o, count);
+    } else {
+      CrossBlockAvx2<3, 1>(t, band, y + q, x0, count, o, count);
+    }
+    return;
+  }
+  for (; q < rows; ++q) {
+    float* o = out + q * count;
+    int k = 0;
+    for (; k + 32 <= count; k += 32) CrossBlockAvx2<1, 4>(t, band, y + q, x0 + k, 8, o + k, count);
+    const int left = count - k;
+    if (left > 24) {
+      CrossBlockAvx2<1, 4>(t, band, y + q, x0 + k, left - 24, o + k, count);
+    } else if (left > 16) {
+      CrossBlockAvx2<1, 3>(t, band, y + q, x0 + k, left - 16, o + k, count);
+    } else if (left > 8) {
+      CrossBlockAvx2<1, 2>(t, band, y + q, x0 + k, left - 8, o + k, count);
+    } else if (left > 0) {
+      CrossBlockAvx2<1, 1>(t, band, y + q, x0 + k, left, o + k, count);
+    }
+  }
+}
+
+const bool kHaveAvx2 = __builtin_cpu_supports("avx2");
+
+// Compiled for AVX2+FMA as well as the baseline; the loader picks the best the CPU has.
+// Scores for centres (x0..x0+count-1) on rows y..y+rows-1, row q's at out + q * count.
+__attribute__((target_clones("avx2,fma", "default")))
+void ScoreRows(const Template& t, const cv::Mat& band, int y, int rows, int x0, int count, float* out) {
+  const int n = t.n, h = n / 2;
+  const int span = count + n - 1;
+  // The cross term in blocks of adjacent centres whose sums stay in registers (a run of
+  // sums in memory was bound by its loads and stores).
+  if (kHaveAvx2) {
+    CrossRowsAvx2(t, band, y, rows, x0, count, out);
+  } else {
+    for (int q = 0; q < rows; ++q) CrossRow(t, band, y + q, x0, count, out + q * count);
+  }
+  thread_local std::vector<float> column_sq_heap;
+  float column_sq_stack[512];
+  float* column_sq = column_sq_stack;
+  if (span > 512) {
+    column_sq_heap.resize(span);
+    column_sq = column_sq_heap.data();
+  }
   const double ta = t.sum_sq;
-  for (int i = 0; i < count; ++i) {
-    window += column_sq[i + n - 1];
-    const double den = ta + window;
-    out[i] = den > 1e-20 ? static_cast<float>(2.0 * out[i] / den) : 0.0f;
-    window -= column_sq[i];
+  for (int q = 0; q < rows; ++q) {
+    std::fill(column_sq, column_sq + span, 0.0f);
+    for (int r = 0; r < n; ++r) {
+      const float* row = band.ptr<float>(y + q - h + r) + (x0 - h);
+      float* __restrict cs = column_sq;
+      for (int j = 0; j < span; ++j) cs[j] += row[j] * row[j];
+    }
+    // sum(b^2) over the window: slide n column sums along the row (double, no drift).
+    double window = 0;
+    for (int j = 0; j < n - 1; ++j) window += column_sq[j];
+    float* o = out + q * count;
+    for (int i = 0; i < count; ++i) {
+      window += column_sq[i + n - 1];
+      const double den = ta + window;
+      o[i] = den > 1e-20 ? static_cast<float>(2.0 * o[i] / den) : 0.0f;
+      window -= column_sq[i];
+    }
   }
+}
+
+void ScoreRow(const Template& t, const cv::Mat& band, int y, int x0, int count, float* out) {
+  ScoreRows(t, band, y, 1, x0, count, out);
 }
 
 float ScoreAt(const Template& t, const cv::Mat& band, int x, int y) {
@@ -403,15 +520,17 @@ bool Correlator::SearchWindow(const Template& t, const cv::Mat& band,
   y_end = std::min(y_end, band.rows - 1 - h);
   if (x_end < x_begin || y_end < y_begin) return false;
   const int count = x_end - x_begin + 1;
-  row_.resize(count);
+  const int rows = y_end - y_begin + 1;
+  row_.resize(static_cast<std::size_t>(count) * rows);
+  ScoreRows(t, band, y_begin, rows, x_begin, count, row_.data());
   float best = -std::numeric_limits<float>::infinity();
-  for (int y = y_begin; y <= y_end; ++y) {
-    ScoreRow(t, band, y, x_begin, count, row_.data());
+  for (int q = 0; q < rows; ++q) {
+    const float* scores = row_.data() + static_cast<std::size_t>(q) * count;
     for (int k = 0; k < count; ++k) {
-      if (row_[k] > best) {
-        best = row_[k];
+      if (scores[k] > best) {
+        best = scores[k];
         *best_x = x_begin + k;
-        *best_y = y;
+        *best_y = y_begin + q;
       }
     }
   }
@@ -495,7 +614,7 @@ void Correlator::Iterate(const Template& t, const cv::Mat& band, int iterations,
     cv::getRectSubPix(band, cv::Size(t.n + 2, t.n + 2), cv::Point2f(float(p.x()), float(p.y())),
                       patch_, CV_32F);
     float s[3][3];
-    for (int r = 0; r < 3; ++r) ScoreRow(t, patch_, h + r, h, 3, s[r]);
+    ScoreRows(t, patch_, h, 3, h, 3, &s[0][0]);
     Eigen::Vector2d delta;
     Eigen::Matrix2d cov;
     if (!FitBiquadraticPeak(s, covariance_scale, min_sigma, &delta, &cov)) return;
@@ -519,7 +638,7 @@ MatchResult Correlator::Refine(const Template& t, const cv::Mat& band, int x, in
       return m;
     }
     const int x0 = x - 1;
-    for (int r = 0; r < 3; ++r) ScoreRow(t, band, y - 1 + r, x0, 3, s[r]);
+    ScoreRows(t, band, y - 1, 3, x0, 3, &s[0][0]);
     int br = 1, bc = 1;
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) {

@@ -42,6 +42,10 @@ struct Template {
 // the image (the caller clips). `out` receives count scores. sum(b^2) is formed from
 // column sums slid along the row, which costs 1/n of the cross term.
 void ScoreRow(const Template& t, const cv::Mat& band, int y, int x0, int count, float* out);
+// The same for rows y..y+rows-1 (row q's scores at out + q * count), each score exactly
+// as ScoreRow gives it; the rows' cross terms are formed together, which a small window
+// of centres (the tracker's 5x5, the refinement's 3x3) needs to keep the core busy.
+void ScoreRows(const Template& t, const cv::Mat& band, int y, int rows, int x0, int count, float* out);
 float ScoreAt(const Template& t, const cv::Mat& band, int x, int y);
 
 // Whether a template centred at (x, y) fits inside an image of the given size.

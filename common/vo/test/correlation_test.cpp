@@ -75,6 +75,66 @@ TEST(PseudoNormalizedCorrelation, VO3_ScoreIsOneForIdenticalAndLowerForScaledPat
   EXPECT_LT(ScoreAt(t, a, 35, 30), 0.8);
 }
 
+// The scores as ScoreRow's arithmetic defines them, written plainly: the cross term in
+// float, template rows alternately into two sums (columns in order) added at the end;
+// sum(b^2) from float column sums slid along the row in double.
+std::vector<float> ReferenceScores(const Template& t, const cv::Mat& band, int y, int rows, int x0, int count) {
+  const int n = t.n, h = n / 2;
+  std::vector<float> out(static_cast<std::size_t>(rows) * count);
+  for (int q = 0; q < rows; ++q) {
+    std::vector<float> column_sq(static_cast<std::size_t>(count + n - 1), 0.0f);
+    for (int r = 0; r < n; ++r) {
+      const float* row = band.ptr<float>(y + q - h + r) + (x0 - h);
+      for (int j = 0; j < count + n - 1; ++j) column_sq[j] += row[j] * row[j];
+    }
+    double window = 0;
+    for (int j = 0; j < n - 1; ++j) window += column_sq[j];
+    for (int i = 0; i < count; ++i) {
+      float even = 0, odd = 0;
+      for (int r = 0; r < n; ++r) {
+        const float* b = band.ptr<float>(y + q - h + r) + (x0 + i - h);
+        float& acc = r % 2 == 0 ? even : odd;
+        for (int c = 0; c < n; ++c) acc += t.pixels[static_cast<std::size_t>(r * n + c)] * b[c];
+      }
+      window += column_sq[i + n - 1];
+      const double den = t.sum_sq + window;
+      out[static_cast<std::size_t>(q * count + i)] = den > 1e-20 ? static_cast<float>(2.0 * double(even + odd) / den) : 0.0f;
+      window -= column_sq[i];
+    }
+  }
+  return out;
+}
+
+// Known answer, bit for bit: the vectorised scoring (ScoreRows, and ScoreRow row by row)
+// gives exactly the plain arithmetic's scores for the template sides VO uses (7, 11) and
+// another (9), windows of 1 to 40 centres by 1 to 9 rows, up to the image's right edge
+// (where the last vector's loads are masked).
+TEST(PseudoNormalizedCorrelation, VO3_RowsOfScoresAreBitForBitThePlainArithmetic) {
+  const cv::Mat band = BandPass(Texture(97, 61, 0, 0, 5), 0.8, 9);
+  for (const int n : {7, 9, 11}) {
+    Template t;
+    ASSERT_TRUE(t.Extract(band, 40, 30, n));
+    const int h = n / 2;
+    for (int rows = 1; rows <= 9; ++rows) {
+      for (int count = 1; count <= 40; ++count) {
+        const int x0 = band.cols - h - count;  // the last centre at the right edge
+        const int y = 20;
+        const std::vector<float> expected = ReferenceScores(t, band, y, rows, x0, count);
+        std::vector<float> got(expected.size()), one_row(static_cast<std::size_t>(count));
+        ScoreRows(t, band, y, rows, x0, count, got.data());
+        for (int q = 0; q < rows; ++q) {
+          ScoreRow(t, band, y + q, x0, count, one_row.data());
+          for (int i = 0; i < count; ++i) {
+            const std::size_t k = static_cast<std::size_t>(q * count + i);
+            ASSERT_EQ(got[k], expected[k]) << "n " << n << ", " << rows << " rows of " << count << ", at " << q << "," << i;
+            ASSERT_EQ(one_row[static_cast<std::size_t>(i)], expected[k]) << "n " << n << ", row " << q << " of " << count;
+          }
+        }
+      }
+    }
+  }
+}
+
 TEST(PseudoNormalizedCorrelation, VO3_SubpixelPeakOnShiftedTextureUnderATenthPixel) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> shift(-3.0, 3.0);
