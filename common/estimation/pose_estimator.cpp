@@ -534,6 +534,12 @@ VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
   to_new.P = model.P_to;
   to_new.odometer = from.odometer + t_vo.norm();
   to_new.turned = to_old.turned;
+  // The gyro's clock runs on through a VO update: the next update's interval is measured
+  // from here. (Left at zero, the next `from` made the gyro's noise and bias act over the
+  // whole drive so far, at every update: the gyro check then weighed VO's yaw alone and
+  // "measured" the bias over hours it had not been integrated.)
+  to_new.gyro_s = to_old.gyro_s;
+  to_new.at_rest = to_old.at_rest;
   double yaw_to = yaw_from + dyaw_gyro;
   switch (options_.vo_heading) {
     case VoHeadingMode::kReplace:
