@@ -379,15 +379,14 @@ __attribute__((target("avx2"), always_inline)) inline void CrossBlockAvx2(const 
   }
 }
 
-// The cross terms of rows y..y+rows-1 (row q's at out + q * count): four rows at a time
-// by vectors of 8 centres; a lone row (a stereo search along the epipolar line) by 32.
+// The cross terms of rows y..y+rows-1 (row q's at out + q * count): rows of up to 8
+// centres four at a time, longer rows (a stereo search along the epipolar line) one at a
+// time by up to 32 centres.
 __attribute__((target("avx2"))) void CrossRowsAvx2(const Template& t, const cv::Mat& band, int y, int rows, int x0,
                                                    int count, float* out) {
   int q = 0;
-  for (; q + 4 <= rows; q += 4) {
-    for (int k = 0; k < count; k += 8) {
-      CrossBlockAvx2<4, 1>(t, band, y + q, x0 + k, std::min(8, count - k), out + q * count + k, count);
-    }
+  if (count <= 8) {  // a few centres a row: four rows together
+    for (; q + 4 <= rows; q += 4) CrossBlockAvx2<4, 1>(t, band, y + q, x0, count, out + q * count, count);
   }
   if (rows - q > 1 && count <= 8) {  // two or three rows of a few centres: together
     float* o = out + q * count;
@@ -415,6 +414,60 @@ __attribute__((target("avx2"))) void CrossRowsAvx2(const Template& t, const cv::
   }
 }
 
+// The rest of ScoreRows with AVX2: each row's column sums of b^2 eight columns at a time
+// (masked at the end), slid along the row in double as the portable path slides them (a
+// serial chain, kept), then 2 sum(ab) / (sum(a^2) + sum(b^2)) four centres at a time.
+// Every value is formed by the same roundings as the portable path's.
+__attribute__((target("avx2"))) void NormaliseRowsAvx2(const Template& t, const cv::Mat& band, int y, int rows,
+                                                       int x0, int count, float* out) {
+  const int n = t.n, h = n / 2;
+  const int span = count + n - 1;
+  alignas(32) static constexpr int kLanes[16] = {-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0};
+  thread_local std::vector<float> column_sq_heap;
+  thread_local std::vector<double> den_heap;
+  float column_sq_stack[520];
+  double den_stack[512];
+  float* column_sq = column_sq_stack;
+  double* den = den_stack;
+  if (span + 8 > 520) {
+    column_sq_heap.resize(static_cast<std::size_t>(span) + 8);
+    column_sq = column_sq_heap.data();
+  }
+  if (count > 512) {
+    den_heap.resize(static_cast<std::size_t>(count));
+    den = den_heap.data();
+  }
+  const double ta = t.sum_sq;
+  const __m256d two = _mm256_set1_pd(2.0), tiny = _mm256_set1_pd(1e-20);
+  for (int q = 0; q < rows; ++q) {
+    for (int j = 0; j < span; j += 8) {
+      const __m256i mask = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kLanes + 8 - std::min(8, span - j)));
+      __m256 acc = _mm256_setzero_ps();
+      for (int r = 0; r < n; ++r) {
+        const __m256 x = _mm256_maskload_ps(band.ptr<float>(y + q - h + r) + (x0 - h) + j, mask);
+        acc = _mm256_add_ps(acc, _mm256_mul_ps(x, x));
+      }
+      _mm256_storeu_ps(column_sq + j, acc);
+    }
+    double window = 0;
+    for (int j = 0; j < n - 1; ++j) window += column_sq[j];
+    for (int i = 0; i < count; ++i) {
+      window += column_sq[i + n - 1];
+      den[i] = ta + window;
+      window -= column_sq[i];
+    }
+    float* o = out + q * count;
+    int i = 0;
+    for (; i + 4 <= count; i += 4) {
+      const __m256d d = _mm256_loadu_pd(den + i);
+      const __m256d score = _mm256_div_pd(_mm256_mul_pd(two, _mm256_cvtps_pd(_mm_loadu_ps(o + i))), d);
+      const __m256d keep = _mm256_cmp_pd(d, tiny, _CMP_GT_OQ);
+      _mm_storeu_ps(o + i, _mm256_cvtpd_ps(_mm256_and_pd(score, keep)));
+    }
+    for (; i < count; ++i) o[i] = den[i] > 1e-20 ? static_cast<float>(2.0 * o[i] / den[i]) : 0.0f;
+  }
+}
+
 const bool kHaveAvx2 = __builtin_cpu_supports("avx2");
 
 // Compiled for AVX2+FMA as well as the baseline; the loader picks the best the CPU has.
@@ -427,9 +480,10 @@ void ScoreRows(const Template& t, const cv::Mat& band, int y, int rows, int x0, 
   // sums in memory was bound by its loads and stores).
   if (kHaveAvx2) {
     CrossRowsAvx2(t, band, y, rows, x0, count, out);
-  } else {
-    for (int q = 0; q < rows; ++q) CrossRow(t, band, y + q, x0, count, out + q * count);
+    NormaliseRowsAvx2(t, band, y, rows, x0, count, out);
+    return;
   }
+  for (int q = 0; q < rows; ++q) CrossRow(t, band, y + q, x0, count, out + q * count);
   thread_local std::vector<float> column_sq_heap;
   float column_sq_stack[512];
   float* column_sq = column_sq_stack;
