@@ -5,9 +5,10 @@
 // whole set (user + sys of scenario_runner and every process it started: the children's
 // rusage, which counts every descendant that was waited for) per rover-hour, and the log
 // digest (virtual time: every rate must give the same one).
-// --against DIR runs the same with another build's programs (DIR/scenario_runner and the
-// processes beside it) in the same sitting, so that a change's CPU figure and the code
-// before it are measured under one load.
+// --against DIR runs the same in another checkout of the project, built (its
+// build/bin/scenario_runner and the processes beside it, its own scenarios and configs),
+// in the same sitting, so that a change's CPU figure and the code before it are measured
+// under one load.
 // Targets: at least 20x faster than real time at MER speed (~4 cm/s); the unlimited rate at
 // most half of 50x's wall time.
 #include "bus/process.hpp"
@@ -32,7 +33,7 @@ struct Options {
   std::vector<std::string> scenarios;
   int runs = 3;
   std::vector<std::string> rates = {"50", "max"};
-  std::string against;  // another build's bin folder, or empty
+  std::string against;  // another built checkout's root, or empty
 };
 
 // One run's figures.
@@ -61,9 +62,12 @@ double ChildrenCpuSeconds() {
   return seconds(ru.ru_utime) + seconds(ru.ru_stime);
 }
 
-Run RunOnce(const std::string& bin, const std::string& scenario, const std::string& rate, const std::string& out) {
-  const std::string cmd =
-      bin + "/scenario_runner " + scenario + " --quiet --no-plot --rate " + rate + " --out " + out + " > /dev/null";
+// Runs `scenario` (a path relative to `root`, the checkout whose configs it names) with
+// `bin`'s programs, into `out` (absolute).
+Run RunOnce(const std::string& root, const std::string& bin, const std::string& scenario, const std::string& rate,
+            const std::string& out) {
+  const std::string cmd = "cd '" + root + "' && '" + bin + "/scenario_runner' '" + scenario +
+                          "' --quiet --no-plot --rate " + rate + " --out '" + out + "' > /dev/null";
   const double cpu_before = ChildrenCpuSeconds();
   if (std::system(cmd.c_str()) != 0) throw std::runtime_error("scenario run failed: " + cmd);
   Run run;
@@ -80,14 +84,15 @@ Run RunOnce(const std::string& bin, const std::string& scenario, const std::stri
   return run;
 }
 
-RateFigures BenchRate(const Options& options, const std::string& bin, const std::string& label,
-                      const std::string& scenario, const std::string& rate) {
+RateFigures BenchRate(const Options& options, const std::string& root, const std::string& bin,
+                      const std::string& label, const std::string& scenario, const std::string& rate) {
   std::vector<double> wall, rover, distance, cpu, cpu_per_hour, times_real;
   RateFigures f;
   const std::string stem = std::filesystem::path(scenario).stem().string();
   for (int r = 0; r < options.runs; ++r) {
-    const std::string out = "out/bench_scenario_" + stem + "_" + label + "_" + rate + "_" + std::to_string(r);
-    const Run run = RunOnce(bin, scenario, rate, out);
+    const std::string out = std::filesystem::absolute("out/bench_scenario_" + stem + "_" + label + "_" + rate + "_" +
+                                                      std::to_string(r)).string();
+    const Run run = RunOnce(root, bin, scenario, rate, out);
     wall.push_back(run.wall_s);
     rover.push_back(run.rover_s);
     distance.push_back(run.distance_m);
@@ -117,11 +122,15 @@ void BenchScenario(const Options& options, const std::string& scenario) {
               "x realtime", "CPU s", "CPU s/rov-h", "log digest");
   std::vector<double> walls;
   for (const auto& rate : options.rates) {
-    const RateFigures now = BenchRate(options, rover::launch::BinDir(), "this", scenario, rate);
+    const RateFigures now =
+        BenchRate(options, std::filesystem::current_path().string(), rover::launch::BinDir(), "this", scenario, rate);
     PrintRow("this", rate, now);
     walls.push_back(now.wall_s);
     if (options.against.empty()) continue;
-    const RateFigures before = BenchRate(options, options.against, "against", scenario, rate);
+    // The other checkout's own copy of the scenario: the same path inside it.
+    const std::string there = std::filesystem::path(scenario).lexically_proximate(std::filesystem::current_path()).string();
+    const RateFigures before =
+        BenchRate(options, options.against, options.against + "/build/bin", "against", there, rate);
     PrintRow("against", rate, before);
     std::printf("  %-7s %-6s CPU per rover-hour: against / this = %.2f\n", "", rate.c_str(),
                 before.cpu_per_rover_hour / now.cpu_per_rover_hour);
@@ -151,10 +160,10 @@ Options ParseArguments(int argc, char** argv) {
         if (!r.empty()) o.rates.push_back(r);
       if (o.rates.empty()) throw std::runtime_error("scenario_benchmark: --rates: expected R1,R2,... (a number or max)");
     } else if (arg == "--against") {
-      o.against = value(i, arg);
-      if (!std::filesystem::is_regular_file(o.against + "/scenario_runner")) {
+      o.against = std::filesystem::absolute(value(i, arg)).lexically_normal().string();
+      if (!std::filesystem::is_regular_file(o.against + "/build/bin/scenario_runner")) {
         throw std::runtime_error("scenario_benchmark: --against " + o.against +
-                                 ": expected another build's bin folder, with scenario_runner in it");
+                                 ": expected another checkout of the project, built (build/bin/scenario_runner)");
       }
     } else if (!arg.empty() && arg[0] == '-') {
       throw std::runtime_error("scenario_benchmark: unknown option " + arg + " (see --help)");
@@ -172,11 +181,12 @@ int main(int argc, char** argv) {
   return rover::bus::RunMain("scenario_benchmark", [&]() -> int {
     for (int i = 1; i < argc; ++i) {
       if (std::string(argv[i]) == "--help") {
-        std::cout << "usage: scenario_benchmark [SCENARIO.yaml...] [--runs N] [--rates R1,R2,...] [--against BIN_DIR]\n"
+        std::cout << "usage: scenario_benchmark [SCENARIO.yaml...] [--runs N] [--rates R1,R2,...] [--against CHECKOUT]\n"
                      "  (default: configs/scenarios/bench_20m.yaml and demo.yaml, --runs 3 --rates 50,max;\n"
                      "  a rate is rover seconds per wall second, or max). CPU s is user + sys of the whole\n"
-                     "  process set; --against runs the same with another build's bin folder and prints\n"
-                     "  the ratio of CPU per rover-hour (the long drive: configs/scenarios/bench_long_field.yaml)\n";
+                     "  process set; --against runs the same in another built checkout (git worktree add\n"
+                     "  DIR COMMIT, then ./rover build there: the code before a change) and prints the\n"
+                     "  ratio of CPU per rover-hour (the long drive: configs/scenarios/bench_long_field.yaml)\n";
         return 0;
       }
     }
