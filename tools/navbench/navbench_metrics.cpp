@@ -261,6 +261,15 @@ std::optional<double> Median(std::vector<double> values) {
   return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
+std::string RunFigures::Verdict() const {
+  if (collided()) return "collision";
+  if (left_map()) return "left the map";
+  if (success()) return "success";
+  if (outcome == "completed") return "missed the goal";
+  if (outcome == "aborted") return "aborted (" + (abort_reason.empty() ? std::string("unknown") : abort_reason) + ")";
+  return outcome;
+}
+
 GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& runs) {
   GroupFigures g;
   g.group = group;
@@ -274,6 +283,7 @@ GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& 
     g.runs_with_collision += r.collided();
     g.contacts += r.rock_contacts + r.zone_contacts;
     g.runs_off_map += r.off_map_samples > 0;
+    g.runs_left_map += r.left_map();
     if (!r.collided() && r.off_map_samples == 0) {
       if (r.outcome == "aborted") ++g.safe_aborts[r.abort_reason.empty() ? "unknown" : r.abort_reason];
       if (r.outcome == "incomplete") ++g.safe_aborts["incomplete"];
@@ -315,18 +325,20 @@ GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& 
 
 std::string TableText(const std::vector<GroupFigures>& groups) {
   std::ostringstream os;
-  os << std::left << std::setw(11) << "world" << std::setw(6) << "runs" << std::setw(15) << "success"
-     << std::setw(10) << "completed" << std::setw(12) << "collisions" << std::setw(9) << "off map"
+  os << std::left << std::setw(11) << "world" << std::setw(6) << "runs" << std::setw(20) << "success"
+     << std::setw(10) << "completed" << std::setw(12) << "collisions" << std::setw(10) << "left map"
      << std::setw(11) << "path ratio" << std::setw(9) << "m/h" << std::setw(18) << "VO false/accepted"
      << "safe aborts\n";
   for (const auto& g : groups) {
     std::string aborts;
     for (const auto& [reason, n] : g.safe_aborts) aborts += (aborts.empty() ? "" : ", ") + reason + " " + std::to_string(n);
-    os << std::left << std::setw(11) << g.group << std::setw(6) << g.runs << std::setw(15)
-       << (std::to_string(g.successes) + " (" + Pct(g.successes, g.runs) + ")") << std::setw(10) << g.completed
+    os << std::left << std::setw(11) << g.group << std::setw(6) << g.runs << std::setw(20)
+       << (std::to_string(g.successes) + " of " + std::to_string(g.navigation_runs()) + " (" +
+           Pct(g.successes, g.navigation_runs()) + ")")
+       << std::setw(10) << g.completed
        << std::setw(12)
        << (std::to_string(g.runs_with_collision) + (g.contacts > 0 ? " (" + std::to_string(g.contacts) + " hits)" : ""))
-       << std::setw(9) << g.runs_off_map << std::setw(11)
+       << std::setw(10) << g.runs_left_map << std::setw(11)
        << (g.median_path_ratio ? Fixed(*g.median_path_ratio, 2) : "-") << std::setw(9)
        << (g.drive_rate_m_per_h ? Fixed(*g.drive_rate_m_per_h, 1) : "-") << std::setw(18)
        << (std::to_string(g.vo_false) + "/" + std::to_string(g.vo_accepted) + " (" + Pct(g.vo_false, g.vo_accepted) + ")")
@@ -385,7 +397,8 @@ std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vect
     j.BeginObject();
     j.Field("group", g.group).Field("runs", g.runs).Field("successes", g.successes).Field("success_pct", g.success_pct());
     j.Field("completed", g.completed).Field("runs_with_collision", g.runs_with_collision).Field("contacts", g.contacts);
-    j.Field("runs_off_map", g.runs_off_map);
+    j.Field("runs_off_map", g.runs_off_map).Field("runs_left_map", g.runs_left_map);
+    j.Field("navigation_runs", g.navigation_runs());
     j.Key("safe_aborts").BeginObject();
     for (const auto& [reason, n] : g.safe_aborts) j.Field(reason, n);
     j.EndObject();
@@ -411,6 +424,7 @@ std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vect
     j.BeginObject();
     j.Field("group", r.group).Field("id", r.id).Field("ran", r.ran).Field("outcome", r.outcome);
     j.Field("abort_reason", r.abort_reason).Field("in_goal_disc", r.in_goal_disc).Field("success", r.success());
+    j.Field("verdict", r.Verdict()).Field("left_map", r.left_map());
     j.Field("rock_contacts", r.rock_contacts).Field("zone_contacts", r.zone_contacts);
     j.Field("off_map_samples", r.off_map_samples);
     j.Field("goal_x", r.goal_x).Field("goal_y", r.goal_y).Field("goal_radius_m", r.goal_radius_m);

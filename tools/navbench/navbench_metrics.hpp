@@ -109,15 +109,25 @@ struct RunFigures {
   int horizontal_poses = 0;
   double horizontal_nees_mean = 0, horizontal_beyond_pct = 0;
   bool collided() const { return rock_contacts + zone_contacts > 0; }
+  // A wheel of the true track left the world's map, with no collision: the world was too
+  // small for the detour, which says nothing of the navigation. Counted apart from the
+  // navigation's runs (GroupFigures::navigation_runs). A run that also collided is a collision.
+  bool left_map() const { return off_map_samples > 0 && !collided(); }
   // Completed, truly inside the goal disc, no contact, no wheel off the map.
   bool success() const { return outcome == "completed" && in_goal_disc && !collided() && off_map_samples == 0; }
+  // The run in one word or phrase, first that applies: "collision", "left the map",
+  // "success", "missed the goal" (completed outside the goal disc by truth), "aborted
+  // (REASON)", "incomplete".
+  std::string Verdict() const;
 };
 
 // One row of the table: the runs of one world kind.
 struct GroupFigures {
   std::string group;
   int runs = 0, successes = 0, completed = 0;
-  int runs_with_collision = 0, contacts = 0, runs_off_map = 0;
+  int runs_with_collision = 0, contacts = 0;
+  int runs_off_map = 0;   // a wheel off the map, collision or not
+  int runs_left_map = 0;  // RunFigures::left_map(): off the map, no collision (not navigation's)
   // Aborts without a contact or a wheel off the map, by abort reason; runs that did not end
   // (no summary, or the wall-clock limit) under "incomplete".
   std::map<std::string, int> safe_aborts;
@@ -133,7 +143,9 @@ struct GroupFigures {
   // Pose honesty over every pose of every run that ran (each run weighted by its poses).
   int horizontal_poses = 0;
   std::optional<double> horizontal_nees_mean, horizontal_beyond_pct;
-  double success_pct() const { return runs > 0 ? 100.0 * successes / runs : 0.0; }
+  // The runs that judge the navigation: every run but those that left the map.
+  int navigation_runs() const { return runs - runs_left_map; }
+  double success_pct() const { return navigation_runs() > 0 ? 100.0 * successes / navigation_runs() : 0.0; }
 };
 
 GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& runs);

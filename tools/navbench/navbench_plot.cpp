@@ -88,10 +88,9 @@ std::string PlotRun(const RunPlan& plan, const RunFigures& figures, const RunTra
   e0 = std::max(e0 - 3, track.map.min_y), e1 = std::min(e1 + 3, track.map.max_y);
   n0 = std::max(n0 - 3, track.map.min_x), n1 = std::min(n1 + 3, track.map.max_x);
 
-  std::string result = figures.success() ? "success" : figures.outcome;
-  if (!figures.abort_reason.empty()) result += " (" + figures.abort_reason + ")";
-  if (figures.collided()) result += ", " + std::to_string(figures.rock_contacts + figures.zone_contacts) + " collision(s)";
-  if (figures.off_map_samples > 0) result += ", a wheel off the map";
+  std::string result = figures.Verdict();
+  if (figures.collided()) result += ": " + std::to_string(figures.rock_contacts + figures.zone_contacts) + " contact(s)";
+  if (figures.collided() && figures.off_map_samples > 0) result += ", a wheel off the map";
   std::ostringstream title;
   title << plan.id << ": " << result << "; straight " << Num(std::round(figures.straight_m * 10) / 10)
         << " m, driven " << Num(std::round(figures.driven_m * 10) / 10) << " m";

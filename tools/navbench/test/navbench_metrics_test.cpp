@@ -216,6 +216,9 @@ TEST(NavbenchTable, RowsCountWhatTheRunsSay) {
   EXPECT_EQ(g.completed, 4);
   EXPECT_EQ(g.runs_with_collision, 1);
   EXPECT_EQ(g.runs_off_map, 1);
+  EXPECT_EQ(g.runs_left_map, 1);  // off the map without a collision: apart from navigation
+  EXPECT_EQ(g.navigation_runs(), 7);
+  EXPECT_NEAR(g.success_pct(), 100.0 * 2 / 7, 1e-12);
   EXPECT_EQ(g.safe_aborts.size(), 3u);
   EXPECT_EQ(g.safe_aborts.at("goto_distance_limit"), 1);
   EXPECT_EQ(g.safe_aborts.at("hazard_map"), 1);
@@ -237,7 +240,7 @@ TEST(NavbenchTable, RowsCountWhatTheRunsSay) {
   EXPECT_NEAR(*g.horizontal_nees_mean, (3 * 4.0 + 4 * 1.0) / 7, 1e-12);
   EXPECT_NEAR(*g.horizontal_beyond_pct, 3 * 2.0 / 7, 1e-12);
   const std::string text = nb::TableText({g});
-  EXPECT_NE(text.find("2 (25.0 %)"), std::string::npos) << text;
+  EXPECT_NE(text.find("2 of 7 (28.6 %)"), std::string::npos) << text;
   EXPECT_NE(text.find("hazard_map 1"), std::string::npos) << text;
   EXPECT_NE(text.find("77.5"), std::string::npos) << text;  // 168 m in 7800 s: 77.5 m/h
   EXPECT_NE(text.find("50.0 %"), std::string::npos) << text;  // driving share
