@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <sstream>
 
 namespace rover::test {
@@ -229,6 +230,37 @@ void RunFreeze(const std::string& process) {
       << "the drive did not end aborted after " << process << " hung: " << Describe(final);
   EXPECT_TRUE(rig.deaths().empty()) << "a process died:" << Lines(rig.deaths());
   ExpectNewSequenceCompletes(rig, 1.0);
+  rig.Report();
+}
+
+// The time source itself falls silent on a real clock (rover_sim frozen for 3 s, longer than
+// bus.time_source_silent_s): the executor aborts the drive `time_source_lost` (a STOP), each
+// process says so in one line, and one more when the source speaks again; then a new
+// sequence completes.
+TEST(FaultFreeze, TimeSourceSilentAbortsTheDriveOnceAndWorkResumes) {
+  FaultRig rig(TestName());
+  ASSERT_TRUE(rig.StartAll(1));
+  const auto drive = rig.Submit(DriveSequence("drive 2 m", 50));
+  ASSERT_TRUE(rig.WaitMoving(120)) << "the rover was never seen moving";
+  rig.Freeze("rover_sim", true);
+  rig.Pump(3.0);
+  rig.Freeze("rover_sim", false);
+  const auto final = rig.WaitFinal(drive, 30);
+  ASSERT_TRUE(final.has_value()) << "the drive did not end after the time source fell silent";
+  EXPECT_EQ(final->state, kAborted) << Describe(final);
+  EXPECT_EQ(final->abort_reason, "time_source_lost") << Describe(final);
+  EXPECT_TRUE(rig.deaths().empty()) << "a process died:" << Lines(rig.deaths());
+  ExpectNewSequenceCompletes(rig, 1.0);
+  // One line for the silence and one for the return, in the executor's log.
+  std::ifstream in(rig.out() + "/run1/sequence_executor.log");
+  int silent = 0, back = 0;
+  for (std::string line; std::getline(in, line);) {
+    silent += line.find("the time source rover_sim fell silent") != std::string::npos &&
+              line.find("sequence_executor:") == 0;
+    back += line.find("the time source rover_sim speaks again") != std::string::npos;
+  }
+  EXPECT_EQ(silent, 1) << "lines saying the time source fell silent (see " << rig.out() << "/run1)";
+  EXPECT_EQ(back, 1) << "lines saying the time source speaks again (see " << rig.out() << "/run1)";
   rig.Report();
 }
 
