@@ -263,11 +263,15 @@ void ProcessSet::Signal(const std::string& name, int signal) {
   }
 }
 
+double CpuSeconds(const rusage& usage) {
+  auto seconds = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
+  return seconds(usage.ru_utime) + seconds(usage.ru_stime);
+}
+
 bool ProcessSet::Reap(Child& child, bool block, int* status) {
   rusage ru{};
   if (wait4(child.pid, status, block ? 0 : WNOHANG, &ru) != child.pid) return false;
-  auto seconds = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
-  child.cpu_s = seconds(ru.ru_utime) + seconds(ru.ru_stime);
+  child.cpu_s = CpuSeconds(ru);
   child.running = false;
   return true;
 }

@@ -2,6 +2,7 @@
 // scenario runner share this; systemd does the same job on a rover computer).
 #pragma once
 
+#include <sys/resource.h>
 #include <sys/types.h>
 
 #include <cstdio>
@@ -100,5 +101,8 @@ class ProcessSet {
 
 // "exited with code 3", "killed by signal 9".
 std::string DescribeWaitStatus(int status);
+
+// User + sys CPU seconds of a getrusage/wait4 result.
+double CpuSeconds(const rusage& usage);
 
 }  // namespace rover::launch

@@ -58,8 +58,7 @@ double Median(std::vector<double> v) {
 double ChildrenCpuSeconds() {
   rusage ru{};
   getrusage(RUSAGE_CHILDREN, &ru);
-  auto seconds = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
-  return seconds(ru.ru_utime) + seconds(ru.ru_stime);
+  return rover::launch::CpuSeconds(ru);
 }
 
 // Runs `scenario` (a path relative to `root`, the checkout whose configs it names) with

@@ -371,8 +371,7 @@ class Run {
     for (const auto& c : recorder_.CpuSeconds()) cpu.push_back(c);
     rusage self{};
     getrusage(RUSAGE_SELF, &self);
-    auto seconds = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
-    cpu.emplace_back("scenario_runner", seconds(self.ru_utime) + seconds(self.ru_stime));
+    cpu.emplace_back("scenario_runner", rover::launch::CpuSeconds(self));
     return cpu;
   }
 
