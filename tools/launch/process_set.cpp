@@ -271,7 +271,7 @@ double CpuSeconds(const rusage& usage) {
 bool ProcessSet::Reap(Child& child, bool block, int* status) {
   rusage ru{};
   if (wait4(child.pid, status, block ? 0 : WNOHANG, &ru) != child.pid) return false;
-  child.cpu_s = CpuSeconds(ru);
+  child.cpu_s = launch::CpuSeconds(ru);
   child.running = false;
   return true;
 }
