@@ -248,3 +248,71 @@ TEST(NavbenchTable, RowsCountWhatTheRunsSay) {
   EXPECT_NE(text.find("pose honesty"), std::string::npos) << text;
   EXPECT_NE(text.find("2.29"), std::string::npos) << text;    // the pooled NEES, 16 / 7
 }
+
+// The verdict of a run judged from synthetic truth tracks on a 20 x 10 m map (x -2 to 18,
+// y -5 to 5) from (0, 0) to (15, 0): a detour that swings its wheels past the map's east
+// edge and comes back to the goal left the map (not a navigation failure, and not in the
+// success figure's runs); a track that also drives through a rock over the limit is a
+// collision, whatever the map; a straight drive is a success.
+TEST(NavbenchVerdict, LeavingTheMapIsApartFromNavigation) {
+  const nb::MapBounds map{-2, 18, -5, 5};
+  const auto wheels = nb::SixWheels(1.1, 1.0);
+  const std::vector<KeepOutZone> rocks = {KeepOutZone::Circle("rock", 7.5, 4.0, 0.3)};
+  auto judge = [&](const std::vector<Pose2>& track) {
+    nb::RunFigures r;
+    r.group = "k=0.30";
+    r.ran = true;
+    r.outcome = "completed";
+    r.in_goal_disc = std::hypot(track.back().x - 15, track.back().y) <= 0.5;
+    r.rock_contacts = nb::JudgeCollisions(track, MerFootprint(), rocks).contacts;
+    r.off_map_samples = nb::WheelsOffMap(track, wheels, map).samples;
+    return r;
+  };
+  // Straight: 2.2 m clear of the rock's edge (3.7 m minus the footprint's half width 0.7 and
+  // the rock's 0.3 m), on the map.
+  const nb::RunFigures straight = judge(StraightNorth(0, 15, 0));
+  EXPECT_EQ(straight.Verdict(), "success");
+  // A detour out to y = 4.8 (wheels 0.5 m further, past 5) between x 9 and 12, then back.
+  std::vector<Pose2> detour;
+  for (const auto& p : StraightNorth(0, 15, 0)) detour.push_back({p.x, (p.x >= 9 && p.x <= 12) ? 4.8 : 0.0, 0.0});
+  const nb::RunFigures off = judge(detour);
+  EXPECT_GT(off.off_map_samples, 0);
+  EXPECT_EQ(off.rock_contacts, 0);
+  EXPECT_TRUE(off.left_map());
+  EXPECT_FALSE(off.success());
+  EXPECT_EQ(off.Verdict(), "left the map");
+  // The same detour begun at x 7 (through the rock at (7.5, 4)): a collision first.
+  std::vector<Pose2> through;
+  for (const auto& p : StraightNorth(0, 15, 0)) through.push_back({p.x, (p.x >= 7 && p.x <= 12) ? 4.8 : 0.0, 0.0});
+  const nb::RunFigures hit = judge(through);
+  EXPECT_GT(hit.rock_contacts, 0);
+  EXPECT_FALSE(hit.left_map());
+  EXPECT_EQ(hit.Verdict(), "collision");
+  // The group: three runs, one left the map, so success is 1 of the 2 that stayed on it.
+  const nb::GroupFigures g = nb::Aggregate("k=0.30", {straight, off, hit});
+  EXPECT_EQ(g.runs, 3);
+  EXPECT_EQ(g.runs_left_map, 1);
+  EXPECT_EQ(g.runs_off_map, 2);
+  EXPECT_EQ(g.navigation_runs(), 2);
+  EXPECT_EQ(g.successes, 1);
+  EXPECT_EQ(g.runs_with_collision, 1);
+  EXPECT_NEAR(g.success_pct(), 50.0, 1e-12);
+  EXPECT_NE(nb::TableText({g}).find("1 of 2 (50.0 %)"), std::string::npos) << nb::TableText({g});
+  // In results.json: each run's verdict, and the group's left-map and navigation runs.
+  const std::string json = nb::ResultsJson({g}, {straight, off, hit}, "navbench");
+  EXPECT_NE(json.find("\"verdict\": \"left the map\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"runs_left_map\": 1"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"navigation_runs\": 2"), std::string::npos) << json;
+}
+
+// The verdicts of runs that neither collided nor left the map.
+TEST(NavbenchVerdict, OtherOutcomes) {
+  nb::RunFigures r;
+  r.outcome = "completed";
+  EXPECT_EQ(r.Verdict(), "missed the goal");  // completed outside the goal disc by truth
+  r.outcome = "aborted";
+  r.abort_reason = "hazard_map";
+  EXPECT_EQ(r.Verdict(), "aborted (hazard_map)");
+  r.outcome = "incomplete";
+  EXPECT_EQ(r.Verdict(), "incomplete");
+}
