@@ -75,6 +75,7 @@ TraversabilityMap::TraversabilityMap(const MapOptions& options) : options_(optio
   n_ = std::max(1, static_cast<int>(std::lround(options_.extent_m / options_.cell_size_m)));
   acc_.assign(static_cast<std::size_t>(n_) * n_, Accumulator{});
   framed_.assign(acc_.size(), 0);
+  framed_acc_.assign(acc_.size(), FramedMoments{});
   Recentre(0, 0);
 }
 
@@ -139,6 +140,7 @@ void CheckMapOptions(const MapOptions& o) {
 void TraversabilityMap::Clear() {
   std::fill(acc_.begin(), acc_.end(), Accumulator{});
   std::fill(framed_.begin(), framed_.end(), 0);
+  std::fill(framed_acc_.begin(), framed_acc_.end(), FramedMoments{});
   MarkAllStale();
 }
 
@@ -165,6 +167,7 @@ void TraversabilityMap::Recentre(double x, double y) {
   std::vector<Cell> moved_cells(keep_ratings ? acc_.size() : 0);
   std::vector<char> moved_changed(keep_ratings ? acc_.size() : 0, 1);
   std::vector<std::uint8_t> moved_framed(framed_.size(), 0);
+  std::vector<FramedMoments> moved_framed_acc(framed_acc_.size());
   const long di = ox - old_x, dj = oy - old_y;
   for (int i = 0; i < n_; ++i) {
     const long si = i + di;
@@ -175,6 +178,7 @@ void TraversabilityMap::Recentre(double x, double y) {
       const std::size_t to = static_cast<std::size_t>(i) * n_ + j, from = static_cast<std::size_t>(si) * n_ + sj;
       moved[to] = acc_[from];
       moved_framed[to] = framed_[from];
+      moved_framed_acc[to] = framed_acc_[from];
       if (keep_ratings) {
         moved_cells[to] = cells_[from];
         moved_changed[to] = changed_[from];
@@ -183,6 +187,7 @@ void TraversabilityMap::Recentre(double x, double y) {
   }
   acc_ = std::move(moved);
   framed_ = std::move(moved_framed);
+  framed_acc_ = std::move(moved_framed_acc);
   origin_x_ = ox * cell;
   origin_y_ = oy * cell;
   if (keep_ratings) {
@@ -286,7 +291,7 @@ void TraversabilityMap::AddStereoPair(const cv::Mat& left, const cv::Mat& right,
   PlaceStereoPoints(sp, rig.left->Center(), T_site_rover, pose_cov, stereo, &pts, &sig);
   AddPoints(pts, sig);
   if (options_.crest_view_range_m > 0)
-    MarkFramedBy(*PairRectification(rig, left.cols, stereo), T_site_rover, stereo, pts);
+    MarkFramedBy(*PairRectification(rig, left.cols, stereo), T_site_rover, stereo, pts, sig);
   stats_.points = static_cast<int>(pts.size());
   Rate();
   stats_.seconds_grid = SecondsSince(t0);
@@ -298,9 +303,13 @@ void TraversabilityMap::AddStereoPair(const cv::Mat& left, const cv::Mat& right,
 // the horizon band that PlaceStereoPoints drops. Framed within crest_view_range_m: kFramed;
 // not framed but holding some of this pair's points (`points_site`): kCut.
 void TraversabilityMap::MarkFramedBy(const RectifiedRig& rect, const geometry::Pose& T_site_rover,
-                                     const MapOptions& stereo, const std::vector<Eigen::Vector3d>& points_site) {
+                                     const MapOptions& stereo, const std::vector<Eigen::Vector3d>& points_site,
+                                     const std::vector<double>& sigma_m) {
   const double cell = options_.cell_size_m;
   std::vector<std::uint8_t> touched(framed_.size(), 0);
+  // framed_height: the cells this pair framed, whether or not another pair had already.
+  const bool heights = options_.framed_height != MapOptions::FramedHeight::kOff;
+  std::vector<char> framed_now(heights ? framed_.size() : 0, 0);
   for (const Eigen::Vector3d& p : points_site) {
     const double fi = std::floor((p.x() - origin_x_) / cell), fj = std::floor((p.y() - origin_y_) / cell);
     if (fi >= 0 && fj >= 0 && fi < n_ && fj < n_) touched[static_cast<std::size_t>(fi) * n_ + static_cast<std::size_t>(fj)] = 1;
@@ -317,7 +326,7 @@ void TraversabilityMap::MarkFramedBy(const RectifiedRig& rect, const geometry::P
   for (long i = std::max(0L, ci - r); i <= std::min<long>(n_ - 1, ci + r); ++i) {
     for (long j = std::max(0L, cj - r); j <= std::min<long>(n_ - 1, cj + r); ++j) {
       const std::size_t k = static_cast<std::size_t>(i) * n_ + j;
-      if (framed_[k] & kFramed) continue;
+      if ((framed_[k] & kFramed) && !(heights && touched[k])) continue;
       const double x = origin_x_ + (i + 0.5) * cell, y = origin_y_ + (j + 0.5) * cell;
       const double range = std::hypot(x - at.x(), y - at.y());
       if (range > reach) continue;
@@ -328,15 +337,68 @@ void TraversabilityMap::MarkFramedBy(const RectifiedRig& rect, const geometry::P
       const double min_down = sin_min_depression * ray.norm();
       const bool frames =
           !(ray.z() < min_down || (R_site_rover * ray).z() < min_down) && PairFrames(rect, p, stereo);
-      if (frames && range <= options_.crest_view_range_m)
+      if (frames && range <= options_.crest_view_range_m) {
         framed_[k] |= kFramed;
-      else if (!frames && touched[k])
+        if (heights) framed_now[k] = 1;
+      } else if (!frames && touched[k]) {
         framed_[k] |= kCut;
+      }
     }
   }
+  if (heights) AddFramedMoments(points_site, sigma_m, framed_now);
   // The crest rule reads the view flags of a patch's cells and their 8-neighbours, which
   // the incremental rating's changed cells do not track: rate every cell after a view.
   MarkAllStale();
+}
+
+void TraversabilityMap::AddFramedMoments(const std::vector<Eigen::Vector3d>& points_site,
+                                         const std::vector<double>& sigma_m, const std::vector<char>& framed_now) {
+  // The same cells, points and weights as AddPoints; this pair's own moments apart.
+  const double inv_cell = 1.0 / options_.cell_size_m;
+  std::vector<FramedMoments> pair(framed_acc_.size());
+  std::vector<std::size_t> cells;
+  for (std::size_t k = 0; k < points_site.size() && k < sigma_m.size(); ++k) {
+    const Eigen::Vector3d& p = points_site[k];
+    const double s = sigma_m[k];
+    if (!p.allFinite() || !std::isfinite(s) || s <= 0) continue;
+    const double fi = std::floor((p.x() - origin_x_) * inv_cell);
+    const double fj = std::floor((p.y() - origin_y_) * inv_cell);
+    if (!(fi >= 0 && fj >= 0 && fi < n_ && fj < n_)) continue;
+    const std::size_t c = static_cast<std::size_t>(fi) * n_ + static_cast<std::size_t>(fj);
+    if (!framed_now[c]) continue;
+    const double w = 1.0 / (s * s);
+    FramedMoments& m = pair[c];
+    if (m.n == 0) cells.push_back(c);
+    m.n += 1;
+    m.sw += static_cast<float>(w);
+    m.sh += static_cast<float>(w * -p.z());
+  }
+  for (const std::size_t c : cells) {
+    const FramedMoments& m = pair[c];
+    FramedMoments& all = framed_acc_[c];
+    all.n += m.n;
+    all.sw += m.sw;
+    all.sh += m.sh;
+    // One pair's reading: its points' mean less their height sigma (the pair's pose share
+    // of it is common to them all, so it does not average down).
+    if (m.n >= options_.min_points && m.sw > 0) all.best = std::max(all.best, (m.sh - std::sqrt(m.n * m.sw)) / m.sw);
+  }
+}
+
+void TraversabilityMap::AddViewedPoints(const std::vector<Eigen::Vector3d>& points_site,
+                                        const std::vector<double>& sigma_m, bool framed) {
+  AddPoints(points_site, sigma_m);
+  const double inv_cell = 1.0 / options_.cell_size_m;
+  std::vector<char> cells(framed_.size(), 0);
+  for (const Eigen::Vector3d& p : points_site) {
+    const double fi = std::floor((p.x() - origin_x_) * inv_cell), fj = std::floor((p.y() - origin_y_) * inv_cell);
+    if (!p.allFinite() || !(fi >= 0 && fj >= 0 && fi < n_ && fj < n_)) continue;
+    const std::size_t c = static_cast<std::size_t>(fi) * n_ + static_cast<std::size_t>(fj);
+    cells[c] = 1;
+    framed_[c] |= framed ? kFramed : kCut;
+  }
+  if (framed && options_.framed_height != MapOptions::FramedHeight::kOff) AddFramedMoments(points_site, sigma_m, cells);
+  MarkAllStale();  // as after MarkFramedBy
 }
 
 void TraversabilityMap::MarkView(double x, double y, double radius_m, bool framed) {
@@ -410,6 +472,8 @@ void TraversabilityMap::Rate() const {
   std::vector<float> h(count, 0.0f), s(count, 0.0f), e(count, 0.0f), mx(count, 0.0f), my(count, 0.0f),
       relief(count, 0.0f), top(count, 0.0f);
   std::vector<char> known(count, 0);
+  const bool framed_mean = o.framed_height == MapOptions::FramedHeight::kMean && o.crest_view_range_m > 0;
+  const bool framed_max = o.framed_height == MapOptions::FramedHeight::kMax && o.crest_view_range_m > 0;
   for (std::size_t k = 0; k < count; ++k) {
     const Accumulator& a = acc_[k];
     if (a.n < o.min_points || a.sw <= 0) continue;
@@ -427,6 +491,10 @@ void TraversabilityMap::Rate() const {
     // The relief within the cell: the points' scatter beyond their own noise (relief_sigmas).
     relief[k] = static_cast<float>(std::sqrt(std::max(0.0, spread2 - static_cast<double>(s[k]) * s[k])));
     top[k] = static_cast<float>(h[k] + std::sqrt(spread2));
+    // framed_height: at least what the pairs that framed its top read.
+    const FramedMoments& f = framed_acc_[k];
+    if (framed_mean && f.n >= o.min_points && f.sw > 0) h[k] = std::max(h[k], f.sh / f.sw);
+    if (framed_max) h[k] = std::max(h[k], f.best);
   }
   // The patch: cell offsets within the footprint radius.
   const double cell = o.cell_size_m;
@@ -811,6 +879,13 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("open_cells_unknown", o.open_cells_unknown);
   node.Get("hole_unknown_m", o.hole_unknown_m, 0.0, 10.0);
   node.Get("unframed_unknown", o.unframed_unknown);
+  std::string framed = o.framed_height == MapOptions::FramedHeight::kMean  ? "mean"
+                       : o.framed_height == MapOptions::FramedHeight::kMax ? "max"
+                                                                           : "off";
+  node.GetEnum("framed_height", framed, {"off", "mean", "max"});
+  o.framed_height = framed == "mean" ? MapOptions::FramedHeight::kMean
+                    : framed == "max" ? MapOptions::FramedHeight::kMax
+                                      : MapOptions::FramedHeight::kOff;
   node.Get("drop_unseen_border", o.drop_unseen_border);
   node.Get("lr_max_diff_px", o.lr_max_diff_px, 0.0, 64.0);
   node.Get("ground_band_fraction", o.ground_band_fraction, 0.0, 0.5);
@@ -829,7 +904,7 @@ const std::vector<std::string> kMapOnlyKeys = {
     "cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
     "max_roughness_m", "min_points", "caution_fraction", "min_patch_fraction", "tilt_margin_sigmas", "dip_margin_sigmas",
     "roughness_margin_sigmas", "relief_sigmas", "ground_band_fraction", "crest_view_range_m", "crest_view_height_m",
-    "crest_rise_fraction", "open_cells_unknown", "hole_unknown_m", "unframed_unknown"};
+    "crest_rise_fraction", "open_cells_unknown", "hole_unknown_m", "unframed_unknown", "framed_height"};
 
 }  // namespace
 

@@ -146,6 +146,17 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // ground hidden behind a rock, bland sand) keeps its patch rating: a rock's top standing
   // there would have been in view. false: rated from the patch, as before.
   bool unframed_unknown = false;
+  // With crest_view_range_m: a cell's height in the step is at least what the pairs that
+  // framed its top read there, not only the mean of every point. A pair that cut the cell
+  // (its foot in view, its top not) put only the low flank's points there, and a far pair
+  // reads a rock low by its resolution; in the mean over every pair they pulled a rock's
+  // cell under what a near framing view read (issue 47: 0.23 m read for a 0.31 m rock).
+  // kMean: the weighted mean of the framing pairs' points (once they are min_points);
+  // kMax: the highest reading of one framing pair (its points' mean, of at least
+  // min_points, less their height sigma). Never lower than the mean of every point.
+  // kOff: every point alike. YAML: off, mean, max.
+  enum class FramedHeight : std::uint8_t { kOff, kMean, kMax };
+  FramedHeight framed_height = FramedHeight::kOff;
   double max_roughness_m = 0.05;
   // The roughness counts each cell's residual about the fitted plane only beyond this many
   // standard errors of its height (as dip_margin_sigmas does below the ground for the step):
@@ -268,6 +279,11 @@ class TraversabilityMap {
   // sigma (m): for tests and for other range sensors. Sizes must agree.
   void AddPoints(const std::vector<Eigen::Vector3d>& points_site,
                  const std::vector<double>& sigma_m);
+  // The same points from a view that framed (framed true) or cut (false) every cell they
+  // land in: marks those cells as MarkView does, and with framed_height counts framed
+  // points in the cells' framed height. For tests and for other range sensors.
+  void AddViewedPoints(const std::vector<Eigen::Vector3d>& points_site, const std::vector<double>& sigma_m,
+                       bool framed);
   // With crest_view_range_m: marks the cells within radius_m of site point (x, y) framed
   // (a pair within crest_view_range_m saw their tops) or, with framed false, cut (a pair saw
   // their feet and not their tops), as AddStereoPair does; for tests and for other range
@@ -323,8 +339,17 @@ class TraversabilityMap {
   // kCut when a pair put points in it without framing it.
   static constexpr std::uint8_t kFramed = 1, kCut = 2;
   std::vector<std::uint8_t> framed_;
+  // Per cell (framed_height): the moments of the points put in it by pairs that framed it.
+  struct FramedMoments {
+    float n = 0, sw = 0, sh = 0;
+    float best = -1e30f;  // the highest one pair's reading (kMax); -1e30: none yet
+  };
+  std::vector<FramedMoments> framed_acc_;
+  // Adds the points that land in cells `framed_now` flags to framed_acc_.
+  void AddFramedMoments(const std::vector<Eigen::Vector3d>& points_site, const std::vector<double>& sigma_m,
+                        const std::vector<char>& framed_now);
   void MarkFramedBy(const RectifiedRig& rect, const geometry::Pose& T_site_rover, const MapOptions& stereo,
-                    const std::vector<Eigen::Vector3d>& points_site);
+                    const std::vector<Eigen::Vector3d>& points_site, const std::vector<double>& sigma_m);
   std::uint8_t ViewAt(double x, double y) const;
   mutable std::vector<Cell> cells_;
   mutable bool dirty_ = true;
