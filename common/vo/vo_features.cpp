@@ -15,7 +15,7 @@ void VisualOdometry::State::DetectFeatures(Step* st) {
   co.min_response = o.feature_min_response;
   co.border_px = o.feature_border_px;
   Pair* pair = st->cur.get();
-  pair->corners = DetectCorners(pair->left, co, &pair->response);
+  pair->corners = DetectCorners(pair->left, co);
   st->res.num_detected = static_cast<int>(pair->corners.size());
   // Timed from the call's start: the input's conversion and pyramid count as detection.
   const auto now = Clock::now();

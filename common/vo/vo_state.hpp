@@ -111,7 +111,7 @@ struct Pair {
   cv::Mat right_band;
   cv::Mat right_band_half;  // level 1, for coarse-to-fine stereo of new features
   // Reused buffers (a Pair is recycled every other frame, so nothing is reallocated).
-  cv::Mat left, right, right_half, scratch, response;
+  cv::Mat left, right, right_half, scratch;
   std::vector<cv::Mat> left_levels;
   std::vector<Feature> features;
   std::vector<Corner> corners;  // windowed mode: VO-2's corners, stereo-matched later

@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <random>
+#include <tuple>
 
 namespace rover::vo {
 namespace {
@@ -205,6 +206,58 @@ TEST(Features, VO2_FixedCountSpreadAtMinimumDistance) {
   int quarter[4] = {0, 0, 0, 0};
   for (const Corner& k : c) ++quarter[(k.x >= 200) + 2 * (k.y >= 150)];
   for (int q : quarter) EXPECT_GT(q, 10);
+}
+
+// Known answer, exactly: the grid pass (made row by row with the response, vectorised)
+// finds in every cell the pixel a plain scan of the response image finds: the strongest
+// 3x3 local maximum above the floor, the first in raster order on ties. With a spacing of
+// 1 px every cell's peak is kept, so the corners are the cells' peaks; cells of 8 (the
+// default) and of 5, with the image's width not a whole number of cells.
+TEST(Features, VO2_GridPeaksAreThePlainScansOfTheResponse) {
+  cv::Mat img(123, 211, CV_32F);
+  cv::randu(img, 0, 1);
+  cv::GaussianBlur(img, img, cv::Size(0, 0), 1.2);
+  for (const int cell : {8, 5}) {
+    CornerOptions o;
+    o.count = 1 << 20;
+    o.min_distance_px = 1;
+    o.grid_cell_px = cell;
+    o.border_px = 7;
+    cv::Mat response;
+    std::vector<Corner> got = DetectCorners(img, o, &response);
+    const int x_begin = o.border_px, x_end = img.cols - o.border_px;
+    const int y_begin = o.border_px, y_end = img.rows - o.border_px;
+    const int gx = (x_end - x_begin + cell - 1) / cell, gy = (y_end - y_begin + cell - 1) / cell;
+    std::vector<Corner> best(static_cast<std::size_t>(gx * gy));
+    const float floor = static_cast<float>(o.min_response);
+    for (int y = y_begin; y < y_end; ++y) {
+      for (int x = x_begin; x < x_end; ++x) {
+        const float v = response.at<float>(y, x);
+        bool peak = v > floor;
+        for (int dy = -1; dy <= 1 && peak; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) peak = peak && v >= response.at<float>(y + dy, x + dx);
+        }
+        Corner& b = best[static_cast<std::size_t>((y - y_begin) / cell * gx + (x - x_begin) / cell)];
+        if (peak && v > b.response) b = Corner{x, y, v};
+      }
+    }
+    std::vector<Corner> expected;
+    for (const Corner& c : best) {
+      if (c.response > 0) expected.push_back(c);
+    }
+    auto order = [](const Corner& a, const Corner& b) {
+      return std::make_tuple(a.response, a.y, a.x) > std::make_tuple(b.response, b.y, b.x);
+    };
+    std::sort(got.begin(), got.end(), order);
+    std::sort(expected.begin(), expected.end(), order);
+    ASSERT_EQ(got.size(), expected.size()) << "cell " << cell;
+    ASSERT_GT(expected.size(), 100u);
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      EXPECT_EQ(got[i].x, expected[i].x) << "cell " << cell << ", corner " << i;
+      EXPECT_EQ(got[i].y, expected[i].y) << "cell " << cell << ", corner " << i;
+      EXPECT_EQ(got[i].response, expected[i].response) << "cell " << cell << ", corner " << i;
+    }
+  }
 }
 
 TEST(VoOptions, LoadsTheProjectConfigAndRejectsUnknownKeys) {
