@@ -37,6 +37,7 @@ void EstimatorOptions::Validate() const {
   RequireRange("history_s", history_s, 1e-3, 1e7);
   RequireRange("history_max_samples", history_max_samples, 2, 1e8);
   RequireRange("vo_future_tolerance_s", vo_future_tolerance_s, 0.0, 3600.0);
+  RequireRange("vo_yaw_sigma_factor", vo_yaw_sigma_factor, 1e-3, 1e3);
   RequireRange("zupt_settle_s", zupt_settle_s, 0.0, 3600.0);
   RequireRange("zupt_odometry_timeout_s", zupt_odometry_timeout_s, 1e-3, 3600.0);
   RequireRange("zupt_max_rate_rad_per_s", zupt_max_rate_rad_per_s, 0.0, 1.0);
@@ -64,6 +65,7 @@ EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
                                    "history_max_samples",
                                    "vo_heading",
                                    "vo_future_tolerance_s",
+                                   "vo_yaw_sigma_factor",
                                    "ignore_distance_while_turning_in_place",
                                    "zero_velocity_updates",
                                    "zupt_settle_s",
@@ -115,6 +117,7 @@ EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
                  : mode == "ignore" ? VoHeadingMode::kIgnore
                                     : VoHeadingMode::kFuse;
   section.Get("vo_future_tolerance_s", o.vo_future_tolerance_s, 0.0, 3600.0);
+  section.Get("vo_yaw_sigma_factor", o.vo_yaw_sigma_factor, 1e-3, 1e3);
   section.Get("slip_memory_updates", o.slip_memory_updates, 0, 1000);
   section.Get("slip_min_distance_m", o.slip_min_distance_m, 1e-3, 1e3);
   section.Get("ignore_distance_while_turning_in_place", o.ignore_distance_while_turning_in_place);

@@ -60,6 +60,11 @@ struct EstimatorOptions {
   int history_max_samples = 50000;
 
   VoHeadingMode vo_heading = VoHeadingMode::kFuse;
+  // VO's yaw sigma as the estimator weighs it: VO's own (its covariance's yaw row and
+  // column) times this factor. VO's yaw errors persist from step to step (a bias of a few
+  // thousandths of a degree per step over a leg) while its covariance is of one step: summed
+  // over 10 to 30 updates they were 1.1 to 1.6 times the sigma it claimed (README, "VO's yaw").
+  double vo_yaw_sigma_factor = 1.0;
   // A VO update whose `to` is at most this far after the latest IMU/odometry message is
   // applied at the latest message, as if the rover stood still since then (captures happen
   // with the rover stopped); further in the future it is refused (kToInFuture) and the
@@ -96,7 +101,7 @@ struct EstimatorOptions {
 //   initial_position_sigma_m, initial_yaw_sigma_deg
 //   history_s, history_max_samples
 //   vo_heading: fuse | replace | ignore
-//   vo_future_tolerance_s, ignore_distance_while_turning_in_place
+//   vo_future_tolerance_s, vo_yaw_sigma_factor, ignore_distance_while_turning_in_place
 //   zero_velocity_updates, zupt_settle_s, zupt_odometry_timeout_s, zupt_max_rate_deg_s,
 //   zupt_bias_segment_s, zupt_yaw_reading_sigma_deg
 // `extra_keys` are keys the caller (the process shell) reads itself from the same section;

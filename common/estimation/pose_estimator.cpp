@@ -401,9 +401,14 @@ PoseEstimator::VoCloneModel PoseEstimator::CloneToVoEnd(const Sample& from, cons
   S.topLeftCorner<5, 5>() = from.P;
   S(kW, kW) = arw * arw * dt + scale * scale;
   S(kV, kV) = walk * walk * dt_walk;
-  const int vo_index[4] = {0, 1, 2, 5};  // x y z yaw of VO's x y z roll pitch yaw
+  // x y z yaw of VO's x y z roll pitch yaw; VO's yaw weighed at vo_yaw_sigma_factor times
+  // its sigma (EstimatorOptions).
+  const int vo_index[4] = {0, 1, 2, 5};
+  const double vo_scale[4] = {1.0, 1.0, 1.0, options_.vo_yaw_sigma_factor};
   for (int i = 0; i < 4; ++i) {
-    for (int j = 0; j < 4; ++j) S(kVoT + i, kVoT + j) = vo_covariance(vo_index[i], vo_index[j]);
+    for (int j = 0; j < 4; ++j) {
+      S(kVoT + i, kVoT + j) = vo_scale[i] * vo_scale[j] * vo_covariance(vo_index[i], vo_index[j]);
+    }
   }
 
   // Outputs: the errors at `to` [x y z heading bias] and the gyro check.
@@ -442,8 +447,16 @@ PoseEstimator::Vector5d PoseEstimator::FuseGyroCheck(const VoCloneModel& m, doub
     e(kHeading) = -0.5 * check;
     return e;
   }
-  const Vector5d K = m.cov_to_check / m.check_variance;
-  P_to -= K * m.cov_to_check.transpose();
+  // The check corrects the heading and the bias only. The position is a considered state
+  // (a Schmidt update: its gain is zero, its covariance with them is updated as such a gain
+  // leaves it): the check's bearing on the position runs through the correlations a bias
+  // leaves on past headings, and VO's yaw errors that persist over steps, which no one
+  // step's covariance holds, moved the position by them, 0.3 m over a 513 m drive
+  // (README, "The gyro check corrects no position").
+  Vector5d K = m.cov_to_check / m.check_variance;
+  K.head<3>().setZero();
+  P_to += -K * m.cov_to_check.transpose() - m.cov_to_check * K.transpose() +
+          K * m.check_variance * K.transpose();
   P_to = NearestPsd(Matrix5d(0.5 * (P_to + P_to.transpose())));
   return K * check;
 }

@@ -31,8 +31,9 @@
 //   - VO update: the state at `from` is cloned to `to` twice, along the VO motion (position)
 //     and along the gyro (heading, bias). The VO yaw change minus the gyro's is then a
 //     measurement of the gyro's error over [from, to] (its bias times the interval plus its
-//     noise); with vo_heading: fuse, one Kalman update on it corrects the heading at `to`,
-//     the position, and the gyro bias estimate, which the IMU path subtracts from then on.
+//     noise); with vo_heading: fuse, one Kalman update on it corrects the heading at `to`
+//     and the gyro bias estimate, which the IMU path subtracts from then on (the position
+//     is a considered state: the check does not move it).
 //     The wheel growth over [from, to] is gone; the growth added after `to` is added back on
 //     top (an approximation: the later growth keeps its earlier correlations).
 //
@@ -213,8 +214,10 @@ class PoseEstimator {
   };
   VoCloneModel CloneToVoEnd(const Sample& from, const Sample& to, const Eigen::Vector3d& t_site,
                             const geometry::Matrix6d& vo_covariance) const;
-  // The Kalman update on the gyro check `check`: returns the estimated errors at `to`
-  // (estimate minus truth; the bias entry is the bias still left in the gyro) and lowers P_to.
+  // The Kalman update on the gyro check `check` of the heading and the bias (the position
+  // is considered, not corrected): returns the estimated errors at `to` (estimate minus
+  // truth; the bias entry is the bias still left in the gyro; position entries zero) and
+  // lowers P_to.
   Vector5d FuseGyroCheck(const VoCloneModel& model, double check, Matrix5d& P_to) const;
   void PropagateHeading(double dt, double abs_dyaw);
   // At rest: holds the heading against the IMU's yaw change `dyaw` over `dt`, and feeds the

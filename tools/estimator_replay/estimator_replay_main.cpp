@@ -1,4 +1,4 @@
-// estimator_replay LOG.lcm [--config ROVER.yaml] [--set KEY=VALUE]... [--every S]
+// estimator_replay LOG.lcm [--config ROVER.yaml] [--set KEY=VALUE]... [--every S] [--csv FILE]
 //
 // Runs the pose estimator (common/estimation) again, offline, over a recorded run's inputs
 // (IMU, WHEEL_ODOMETRY, VO_UPDATE, NEW_SITE, in the log's order) as the state_estimator
@@ -7,9 +7,11 @@
 // against SIM_TRUTH as the scenario summary judges POSE (tools/scenario/pose_truth.hpp).
 // With the run's own configuration the replayed poses are the logged ones (the tool says
 // by how much they differ); with `--set estimator.KEY=VALUE` it shows what a change to the
-// estimator would have claimed on the same inputs, without driving again.
-// `--every S` prints a line every S seconds of rover time: distance, error and claimed
-// sigma (horizontal, heading) and the NEES means so far.
+// estimator would have claimed on the same inputs, without driving again (the inputs are
+// the run's: a drive the changed estimate would have steered differently is not redone).
+// `--csv FILE` writes every replayed pose against truth. `--every S` prints a line every S
+// seconds of rover time: distance, error and claimed sigma (horizontal, heading) and the
+// NEES means so far.
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "config/yaml_config.hpp"
@@ -32,6 +34,7 @@
 #include <cmath>
 #include <deque>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <optional>
@@ -43,13 +46,14 @@ using namespace rover;
 namespace {
 
 const char* kUsage =
-    "usage: estimator_replay LOG.lcm [--config ROVER.yaml] [--set estimator.KEY=VALUE]... [--every S]\n"
+    "usage: estimator_replay LOG.lcm [--config ROVER.yaml] [--set estimator.KEY=VALUE]... [--every S] [--csv FILE]\n"
     "  --config: the rover config the run used (default: rover.yaml beside the log, else configs/rover.yaml)\n";
 
 struct Args {
   std::string log, config;
   std::vector<std::pair<std::string, std::string>> sets;  // estimator keys
   double every_s = 0;
+  std::string csv;  // every replayed pose against truth
 };
 
 Args ParseArgs(int argc, char** argv) {
@@ -70,6 +74,8 @@ Args ParseArgs(int argc, char** argv) {
         throw std::invalid_argument("estimator_replay: --set \"" + kv + "\": expected estimator.KEY=VALUE");
       }
       a.sets.emplace_back(kv.substr(prefix.size(), eq - prefix.size()), kv.substr(eq + 1));
+    } else if (s == "--csv") {
+      a.csv = value();
     } else if (s == "--every") {
       a.every_s = std::stod(value());
     } else if (s == "-h" || s == "--help") {
@@ -149,6 +155,7 @@ class Replay {
 
   const std::vector<rover_msgs::pose_t>& poses() const { return poses_; }
   int refused() const { return refused_; }
+  const estimation::PoseEstimator& estimator() const { return estimator_; }
 
  private:
   void Begin(std::int64_t utime) {
@@ -232,6 +239,30 @@ void PrintTrace(const std::vector<rover_msgs::pose_t>& poses, const std::vector<
   }
 }
 
+// One line per pose of site 0 that truth covers: rover seconds, odometer, source, the
+// horizontal error (site x, y), the heading error (rad), the covariance's x-y block and
+// heading variance, and the true heading and position.
+void WriteCsv(const std::string& path, const std::vector<rover_msgs::pose_t>& poses,
+              const std::vector<rover_msgs::sim_truth_t>& truth) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("estimator_replay: --csv " + path + ": cannot write");
+  out << "t_s,odometer_m,source,ex_m,ey_m,eyaw_rad,pxx,pxy,pyy,pyawyaw,true_yaw_rad,true_x_m,true_y_m\n"
+      << std::setprecision(9);
+  const std::int64_t t0 = poses.empty() ? 0 : poses.front().utime;
+  for (const auto& p : poses) {
+    const auto T = tools::TruthPoseAt(truth, p.utime);
+    if (!T || p.site_index != 0) continue;
+    const Eigen::Quaterniond q(p.orientation[0], p.orientation[1], p.orientation[2], p.orientation[3]);
+    const double yaw_true = geometry::RpyFromRotation(T->linear()).z();
+    const double e_yaw =
+        geometry::WrapAngle(geometry::RpyFromRotation(q.normalized().toRotationMatrix()).z() - yaw_true);
+    out << static_cast<double>(p.utime - t0) * 1e-6 << "," << p.odometer_m << "," << int(p.source) << ","
+        << p.position[0] - T->translation().x() << "," << p.position[1] - T->translation().y() << "," << e_yaw << ","
+        << p.covariance[0][0] << "," << p.covariance[0][1] << "," << p.covariance[1][1] << "," << p.covariance[5][5]
+        << "," << yaw_true << "," << T->translation().x() << "," << T->translation().y() << "\n";
+  }
+}
+
 int Run(const Args& args) {
   // The run's estimator section, with --set applied.
   YAML::Node root = YAML::LoadFile(args.config);
@@ -302,6 +333,7 @@ int Run(const Args& args) {
             << replay.refused() << " VO updates refused); largest position difference from the log over the first "
             << n << ": " << max_dp << " m\n";
   if (args.every_s > 0) PrintTrace(poses, truth, args.every_s);
+  if (!args.csv.empty()) WriteCsv(args.csv, poses, truth);
   auto report = [&](const char* what, const std::vector<rover_msgs::pose_t>& p) {
     const auto h = tools::JudgePoses(p, truth);
     if (!h || p.empty()) {
@@ -316,6 +348,9 @@ int Run(const Args& args) {
   };
   report("logged  ", logged);
   report("replayed", poses);
+  const double kDegPerHour = 180.0 / M_PI * 3600.0;
+  std::cout << "replayed: gyro bias " << replay.estimator().gyro_bias_rad_per_s() * kDegPerHour << " deg/h, sigma "
+            << replay.estimator().gyro_bias_sigma_rad_per_s() * kDegPerHour << " deg/h\n";
   return 0;
 }
 

@@ -23,19 +23,21 @@ TEST(EstimatorOptions, ExampleFileLoadsToTheDefaults) {
   EXPECT_EQ(o.slip_memory_updates, d.slip_memory_updates);
   EXPECT_NEAR(o.slip_min_distance_m, d.slip_min_distance_m, 1e-15);
   EXPECT_EQ(o.vo_heading, VoHeadingMode::kFuse);
+  EXPECT_EQ(o.vo_yaw_sigma_factor, d.vo_yaw_sigma_factor);
   EXPECT_NO_THROW(o.Validate());
 }
 
 TEST(EstimatorOptions, ValuesAndUnitsAreConverted) {
   const ConfigNode root = ConfigNode::FromString(
       "estimator:\n  along_track_sigma_pct: 5\n  gyro_drift_deg_per_hour: 36\n"
-      "  vo_heading: replace\n  history_s: 30\n  publish_hz: 8\n",
+      "  vo_heading: replace\n  history_s: 30\n  publish_hz: 8\n  vo_yaw_sigma_factor: 2\n",
       "test.yaml");
   const EstimatorOptions o = LoadEstimatorOptions(root["estimator"], {"publish_hz"});
   EXPECT_NEAR(o.along_track_sigma_fraction, 0.05, 1e-15);
   EXPECT_NEAR(o.gyro_drift_rad_per_s, 36.0 * M_PI / 180.0 / 3600.0, 1e-15);
   EXPECT_EQ(o.vo_heading, VoHeadingMode::kReplace);
   EXPECT_NEAR(o.history_s, 30.0, 1e-15);
+  EXPECT_EQ(o.vo_yaw_sigma_factor, 2.0);
 }
 
 TEST(EstimatorOptions, ErrorsNameFileAndKey) {
@@ -59,4 +61,6 @@ TEST(EstimatorOptions, ErrorsNameFileAndKey) {
   EXPECT_NE(memory.find("estimator.slip_memory_updates"), std::string::npos) << memory;
   const std::string travel = message("estimator:\n  slip_min_distance_m: 0\n");
   EXPECT_NE(travel.find("estimator.slip_min_distance_m"), std::string::npos) << travel;
+  const std::string factor = message("estimator:\n  vo_yaw_sigma_factor: 0\n");
+  EXPECT_NE(factor.find("estimator.vo_yaw_sigma_factor"), std::string::npos) << factor;
 }

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <random>
 
 using namespace rover::estimation;
@@ -55,6 +56,7 @@ struct DriftingDrive {
   double bias = 0.0;
   double arw = 0.0;
   double vo_yaw_sigma = 0.0;
+  double claimed_yaw_factor = 1.0;  // VO claims this times vo_yaw_sigma
   double step_s = 20.0;
   std::mt19937 rng{1};
   double imu_yaw_error = 0.0;
@@ -77,7 +79,8 @@ struct DriftingDrive {
     }
     const double yaw_noise = vo_yaw_sigma * normal(rng);
     const Pose T = PoseFromXyzRpy(0.05 * step_s, 0, 0, 0, 0, yaw_noise);
-    const VoUpdateResult r = est.ApplyVoUpdate(Vo(last_capture, t, T, 0.001, std::max(vo_yaw_sigma, 1e-9)));
+    const double claimed = std::max(claimed_yaw_factor * vo_yaw_sigma, 1e-9);
+    const VoUpdateResult r = est.ApplyVoUpdate(Vo(last_capture, t, T, 0.001, claimed));
     ASSERT_TRUE(r.applied()) << r.reason;
     last_capture = t;
   }
@@ -133,6 +136,33 @@ TEST(GyroBias, HeadingSigmaGrowsInProportionToTimeWhenUpdatesArriveLate) {
   // growth after each `to` is added back as the difference of the old covariances, which
   // a projection onto the PSD cone raises by 0.5 % here; with the clock at zero: 5.5 times).
   EXPECT_NEAR(std::sqrt(est.covariance()(5, 5)), 3.0 * kDegPerHour * 205.0, 1e-2 * 3.0 * kDegPerHour * 205.0);
+}
+
+// vo_yaw_sigma_factor weighs VO's yaw at that multiple of its own sigma: a drive whose VO
+// claims 0.0005 rad with the factor 2 is estimated exactly as one whose VO claims 0.001 rad,
+// and the heading then leans less on VO (its sigma after the drive is larger).
+TEST(GyroBias, VoYawSigmaFactorWeighsVoYawAsAWiderSigma) {
+  EstimatorOptions o = Quiet();
+  o.gyro_drift_rad_per_s = 3.0 * kDegPerHour;
+  o.gyro_random_walk_rad_per_sqrt_s = 0.15 * M_PI / 180.0 / 60.0;
+  auto run = [&](double factor, double claimed_factor) {
+    EstimatorOptions oo = o;
+    oo.vo_yaw_sigma_factor = factor;
+    auto est = std::make_unique<PoseEstimator>(oo);
+    DriftingDrive drive;
+    drive.bias = 3.0 * kDegPerHour;
+    drive.arw = o.gyro_random_walk_rad_per_sqrt_s;
+    drive.vo_yaw_sigma = 0.0005;
+    drive.claimed_yaw_factor = claimed_factor;
+    drive.Start(*est);
+    for (int i = 0; i < 30; ++i) drive.Step(*est);
+    return est;
+  };
+  const auto scaled = run(2.0, 1.0), wide = run(1.0, 2.0), own = run(1.0, 1.0);
+  EXPECT_NEAR(Yaw(scaled->pose()), Yaw(wide->pose()), 1e-12);
+  EXPECT_NEAR(scaled->covariance()(5, 5), wide->covariance()(5, 5), 1e-15);
+  EXPECT_NEAR(scaled->gyro_bias_rad_per_s(), wide->gyro_bias_rad_per_s(), 1e-15);
+  EXPECT_GT(scaled->covariance()(5, 5), 1.2 * own->covariance()(5, 5));
 }
 
 // A heading error at the start swings every later step the same way, so the cross-track

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 #include <random>
 
@@ -632,4 +634,35 @@ TEST(PoseEstimator, AQuietGyroAndStillWheelsAreBothNeededForRest) {
     est.OnWheelOdometry(t, 0.5);
   }
   EXPECT_TRUE(est.at_rest());
+}
+
+// The gyro check (VO's yaw change against the gyro's) corrects the heading and the bias,
+// never the position: after a drive whose heading error has swung the path (so position,
+// heading and bias are correlated), an update whose yaw disagrees with the gyro's puts the
+// rover exactly where VO's translation from `from` says, turns the heading, and leaves a
+// covariance that is symmetric and positive semi-definite.
+TEST(PoseEstimator, TheGyroCheckCorrectsNoPosition) {
+  EstimatorOptions o = Exact();
+  o.gyro_drift_rad_per_s = 3.0 * M_PI / 180.0 / 3600.0;
+  o.gyro_random_walk_rad_per_sqrt_s = 0.15 * M_PI / 180.0 / 60.0;
+  o.initial_yaw_sigma_rad = 0.01;
+  PoseEstimator est(o);
+  Drive(est, 0, 20 * kSecond, 0.0, 1.0, Q(0, 0, 0));
+  Drive(est, 20 * kSecond, 40 * kSecond, 1.0, 1.0, Q(0, 0, 0));
+  const Matrix6d before = est.covariance();
+  ASSERT_GT(std::abs(before(1, 5)), 1e-6);  // the heading's swing of the path
+  // VO: 1 m ahead and 0.2 deg of yaw the gyro did not see, over the second step.
+  const VoUpdate u =
+      Vo(20 * kSecond, 40 * kSecond, PoseFromXyzRpy(1.0, 0.0, 0.0, 0, 0, 0.2 * M_PI / 180.0), 0.001);
+  const Pose from = *est.PoseAt(20 * kSecond);
+  const VoUpdateResult r = est.ApplyVoUpdate(u);
+  ASSERT_TRUE(r.applied()) << r.reason;
+  const Eigen::Vector3d expected = from.translation() + from.linear() * Eigen::Vector3d(1.0, 0.0, 0.0);
+  EXPECT_NEAR((est.pose().translation() - expected).norm(), 0.0, 1e-12);
+  EXPECT_GT(r.yaw_correction_rad, 0.0);  // toward VO's yaw: the gyro's bias took some
+  EXPECT_LT(r.yaw_correction_rad, 0.2 * M_PI / 180.0);
+  const Matrix6d P = est.covariance();
+  EXPECT_NEAR((P - P.transpose()).cwiseAbs().maxCoeff(), 0.0, 1e-15);
+  Eigen::SelfAdjointEigenSolver<Matrix6d> es(P);
+  EXPECT_GE(es.eigenvalues().minCoeff(), -1e-15);
 }
