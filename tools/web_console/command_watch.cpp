@@ -12,6 +12,9 @@ namespace {
 // The detail is set on the executor's tick, so the first heartbeat after a drop may
 // still carry the detail from before it; three are past any such lag.
 constexpr std::int64_t kHeartbeatsToTake = 3;
+// ... and this much wall time: heartbeats come every 0.25 s of rover time, which in virtual
+// time at a high rate is a few milliseconds, less than a command takes to be judged.
+constexpr double kWallSecondsToTake = 1.0;
 
 std::string StateName(int state) {
   static const char* names[] = {"idle", "running", "paused", "completed", "aborted", "rejected"};
@@ -35,8 +38,16 @@ std::pair<std::int64_t, std::string> CommandWatch::DropsOn(const std::string& de
   return {n, detail.substr(end + 2, next == std::string::npos ? std::string::npos : next - end - 2)};
 }
 
-CommandWatch::CommandWatch(bool holds_key, std::string executor)
-    : holds_key_(holds_key), executor_(std::move(executor)) {}
+CommandWatch::CommandWatch(bool holds_key, std::string executor, std::string sender)
+    : holds_key_(holds_key), executor_(std::move(executor)), sender_(std::move(sender)) {}
+
+bool CommandWatch::DropCouldBeOurs(const std::string& reason) const {
+  const bool unsigned_drop = reason.find("no authentication tag") != std::string::npos;
+  if (!holds_key_) return unsigned_drop;
+  if (unsigned_drop) return false;
+  // A signed command's refusal names its sender ("wrong tag from \"rover_web@host:pid\"").
+  return sender_.empty() || reason.find("\"" + sender_ + "\"") != std::string::npos;
+}
 
 void CommandWatch::OnHeartbeat(const rover_msgs::heartbeat_t& hb) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -79,6 +90,7 @@ CommandWatch::Ticket CommandWatch::Expect(const std::string& channel, std::int64
   t.submission_id = submission_id;
   t.heartbeats = heartbeats_;
   t.dropped = last_ ? DropsOn(last_->detail, channel).first : -1;
+  t.sent = std::chrono::steady_clock::now();
   return t;
 }
 
@@ -100,10 +112,12 @@ std::optional<CommandWatch::Verdict> CommandWatch::JudgeLocked(const Ticket& tic
   if (!last_ || heartbeats_ <= ticket.heartbeats) return std::nullopt;
   // A drop on the command's channel since it was sent.
   const auto [dropped, reason] = DropsOn(last_->detail, ticket.channel);
-  if (dropped > std::max<std::int64_t>(ticket.dropped, 0)) {
+  if (dropped > std::max<std::int64_t>(ticket.dropped, 0) && DropCouldBeOurs(reason)) {
     return Verdict{Verdict::kRefused, ticket.channel + ": " + reason};
   }
-  if (ticket.submission_id < 0 && heartbeats_ - ticket.heartbeats >= kHeartbeatsToTake) {
+  const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - ticket.sent).count();
+  if (ticket.submission_id < 0 && heartbeats_ - ticket.heartbeats >= kHeartbeatsToTake &&
+      waited_s >= kWallSecondsToTake) {
     return Verdict{Verdict::kAccepted, "taken: " + std::to_string(heartbeats_ - ticket.heartbeats) +
                                            " heartbeats of " + executor_ + " since, and it dropped none of them"};
   }

@@ -4,9 +4,12 @@
 //   - a command the executor drops (unsigned on a signed stack, a wrong key) shows in the
 //     executor's HEARTBEAT, whose detail counts the drops of each command channel with the
 //     last reason ("idle; SEQUENCE_SUBMIT dropped 2: rejected: no authentication tag ...",
-//     processes/sequence_executor): the count going up after the command is its refusal;
-//   - pause, resume and abort have no answer of their own: three executor heartbeats after
-//     the command with no drop of it say it was taken.
+//     processes/sequence_executor): the count going up after the command, with a reason
+//     that fits how this console sent it (DropCouldBeOurs), is its refusal;
+//   - pause, resume and abort have no answer of their own: three executor heartbeats and a
+//     second of wall time after the command with no drop of it say it was taken (in
+//     virtual time at 50x three heartbeats pass in 15 ms, before the executor may have
+//     taken the command's instant at all).
 // And whether this console can command the stack at all: a stack whose heartbeats are
 // signed while the console holds no key, or whose messages the console's key does not
 // verify, refuses its commands. That is said once it is heard (KeyProblem).
@@ -20,6 +23,7 @@
 #include <rover_msgs/heartbeat_t.hpp>
 #include <rover_msgs/sequence_status_t.hpp>
 
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -42,10 +46,18 @@ class CommandWatch {
     std::int64_t submission_id = -1;  // a submit's
     std::int64_t heartbeats = 0;    // executor heartbeats heard before
     std::int64_t dropped = -1;      // the executor's count of drops on `channel` then (-1: not heard yet)
+    std::chrono::steady_clock::time_point sent{};  // when it was sent
   };
 
-  // `holds_key`: this console signs its commands. `executor`: the process that obeys them.
-  explicit CommandWatch(bool holds_key, std::string executor = "sequence_executor");
+  // `holds_key`: this console signs its commands, as `sender` (its auth::InstanceName).
+  // `executor`: the process that obeys them.
+  explicit CommandWatch(bool holds_key, std::string executor = "sequence_executor", std::string sender = "");
+
+  // Whether a drop whose last reason is `reason` can be this console's command: an
+  // unsigned command is dropped for having no tag; a signed one for its tag, naming its
+  // sender. Another console's drop in the meantime (one without the key, or with another
+  // key) is not this one's refusal.
+  bool DropCouldBeOurs(const std::string& reason) const;
 
   // The bus thread: every heartbeat (unverified), every sequence status, and each message
   // the console's own bus refused for its authentication ("CHANNEL: reason").
@@ -76,6 +88,7 @@ class CommandWatch {
 
   const bool holds_key_;
   const std::string executor_;
+  const std::string sender_;
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;
   std::int64_t heartbeats_ = 0;  // the executor's, heard so far

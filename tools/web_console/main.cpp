@@ -34,6 +34,7 @@
 // and every command is refused.
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
+#include "auth/auth.hpp"
 #include "bus/process.hpp"
 #include "config/file_read.hpp"
 #include "config/yaml_config.hpp"
@@ -356,7 +357,8 @@ void FeedStateFromBus(rover::bus::Bus& bus, rover::web::WebState& state) {
 class WebConsole {
  public:
   WebConsole(rover::bus::Process& proc, ConsoleArgs args, rover::web::WebStateOptions options)
-      : proc_(proc), args_(std::move(args)), options_(options), state_(options_), watch_(options_.signing) {
+      : proc_(proc), args_(std::move(args)), options_(options), state_(options_),
+        watch_(options_.signing, "sequence_executor", options_.signing ? rover::auth::InstanceName(proc.name()) : "") {
     if (args_.log_path) playback_ = OpenPlayback(*args_.log_path, options_);
     FeedStateFromBus(proc_.bus(), state_);
     if (!playback_) WatchCommands();

@@ -88,8 +88,8 @@ TEST(CommandWatch, ASubmitIsAnsweredByItsStatusAndARejectionSaysWhy) {
   EXPECT_EQ(watch.KeyProblem(), "");
 }
 
-TEST(CommandWatch, AControlIsTakenAfterThreeHeartbeatsWithoutItsDrop) {
-  CommandWatch watch(true);
+TEST(CommandWatch, AControlIsTakenAfterThreeHeartbeatsAndASecondWithoutItsDrop) {
+  CommandWatch watch(true, "sequence_executor", "rover_web@h:1");
   watch.OnHeartbeat(Beat("sequence_executor", 2, "running; SEQUENCE_CONTROL dropped 1: rejected: wrong tag"));
   const auto ticket = watch.Expect(kControl);
   watch.OnHeartbeat(Beat("sequence_executor", 2, "running; SEQUENCE_CONTROL dropped 1: rejected: wrong tag"));
@@ -101,19 +101,51 @@ TEST(CommandWatch, AControlIsTakenAfterThreeHeartbeatsWithoutItsDrop) {
                          "dropped 1: rejected: wrong tag"));
   EXPECT_FALSE(watch.Judge(ticket)) << "two heartbeats are not enough";
   watch.OnHeartbeat(Beat("sequence_executor", 3, "paused; SEQUENCE_CONTROL dropped 1: rejected: wrong tag"));
+  // Three heartbeats, but within a second of wall time (at 50x in virtual time three come
+  // in 15 ms): not yet.
+  EXPECT_FALSE(watch.Judge(ticket)) << "three heartbeats within a second are not enough";
+  std::this_thread::sleep_for(std::chrono::milliseconds(1050));
   const auto verdict = watch.Judge(ticket);
   ASSERT_TRUE(verdict);
   EXPECT_EQ(verdict->kind, CommandWatch::Verdict::kAccepted);
 
   const auto refused = watch.Expect(kControl);
   watch.OnHeartbeat(Beat("sequence_executor", 4,
-                         "paused; SEQUENCE_CONTROL dropped 2: rejected: wrong tag from rover_web@h:1 (not signed "
+                         "paused; SEQUENCE_CONTROL dropped 2: rejected: wrong tag from \"rover_web@h:1\" (not signed "
                          "with this deployment's key, or altered)"));
   ASSERT_TRUE(watch.Judge(refused));
   EXPECT_EQ(watch.Judge(refused)->kind, CommandWatch::Verdict::kRefused);
   EXPECT_EQ(watch.Judge(refused)->text,
-            "SEQUENCE_CONTROL: rejected: wrong tag from rover_web@h:1 (not signed with this deployment's key, or "
+            "SEQUENCE_CONTROL: rejected: wrong tag from \"rover_web@h:1\" (not signed with this deployment's key, or "
             "altered)");
+}
+
+// Another console beside this one, whose commands the executor drops (one without the key,
+// or with another key): its drops in the meantime are not this console's refusals.
+TEST(CommandWatch, AnotherConsolesDropIsNotThisOnesRefusal) {
+  CommandWatch keyed(true, "sequence_executor", "rover_web@h:1");
+  keyed.OnHeartbeat(Beat("sequence_executor", 0, "idle"));
+  const auto submit = keyed.Expect(kSubmit, 11);
+  keyed.OnHeartbeat(Beat("sequence_executor", 1, std::string("idle; SEQUENCE_SUBMIT dropped 1: ") + kNoTag));
+  EXPECT_FALSE(keyed.Judge(submit)) << "an unsigned submit's drop is not a signed console's";
+  keyed.OnHeartbeat(Beat("sequence_executor", 2,
+                         "idle; SEQUENCE_SUBMIT dropped 2: rejected: wrong tag from \"rover_web@h:2\" (not signed "
+                         "with this deployment's key, or altered)"));
+  EXPECT_FALSE(keyed.Judge(submit)) << "another signer's drop is not this console's";
+  keyed.OnStatus(Status(11, rover_msgs::sequence_status_t::STATE_RUNNING));
+  ASSERT_TRUE(keyed.Judge(submit));
+  EXPECT_EQ(keyed.Judge(submit)->kind, CommandWatch::Verdict::kAccepted);
+
+  // A console without the key: a signed console's drop is not its own; an unsigned one may be.
+  CommandWatch keyless(false);
+  keyless.OnHeartbeat(Beat("sequence_executor", 0, "idle"));
+  const auto pause = keyless.Expect(kControl);
+  keyless.OnHeartbeat(Beat("sequence_executor", 1,
+                           "idle; SEQUENCE_CONTROL dropped 1: rejected: wrong tag from \"rover_web@h:2\" (...)"));
+  EXPECT_FALSE(keyless.Judge(pause));
+  keyless.OnHeartbeat(Beat("sequence_executor", 2, std::string("idle; SEQUENCE_CONTROL dropped 2: ") + kNoTag));
+  ASSERT_TRUE(keyless.Judge(pause));
+  EXPECT_EQ(keyless.Judge(pause)->kind, CommandWatch::Verdict::kRefused);
 }
 
 TEST(CommandWatch, TheExecutorsDetailIsReadPerChannel) {

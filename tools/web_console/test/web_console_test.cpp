@@ -354,11 +354,10 @@ TEST(WebConsole, WithoutTheStacksKeyCommandsShowAsRefusedWithTheExecutorsReason)
   std::vector<Console> consoles = {
       {"rover_web_nokey", "rover_web: this stack signs its messages (a signed HEARTBEAT from ",
        "refused by sequence_executor: SEQUENCE_SUBMIT: rejected: no authentication tag (a key is required on this bus)",
-       start_console("rover_web_nokey", {})}};
-  // (A console with another key beside the keyed one is not run here: the executor's drop
-  // count cannot tell whose command it dropped, and the keyed console's submit was then
-  // answered 403. Open; see the closing note of issue 44.)
-  (void)other_key;
+       start_console("rover_web_nokey", {})},
+      {"rover_web_otherkey", "rover_web: rover_web's key does not verify this bus's messages (",
+       "refused by sequence_executor: SEQUENCE_SUBMIT: rejected: wrong tag from \"rover_web@",
+       start_console("rover_web_otherkey", {"--key", other_key})}};
   const httplib::Headers with_secret = {{"X-Rover-Secret", stack.secret}};
   for (const Console& c : consoles) {
     SCOPED_TRACE(c.name);
@@ -387,8 +386,19 @@ TEST(WebConsole, WithoutTheStacksKeyCommandsShowAsRefusedWithTheExecutorsReason)
     ASSERT_TRUE(submitted);
     EXPECT_EQ(submitted->status, 403) << submitted->body;
     EXPECT_EQ(submitted->body.rfind(c.refused, 0), 0u) << submitted->body;
-    // (A pause from such a console answered 403 in some runs and 200 in others: not yet
-    // asserted here; see the closing note of issue 44.)
+    // Pause: refused the same way (nothing runs, so a taken pause would change nothing).
+    auto paused = http.Post("/api/pause", with_secret, "", "text/plain");
+    ASSERT_TRUE(paused);
+    EXPECT_EQ(paused->status, 403) << paused->body;
+    EXPECT_EQ(paused->body.rfind("refused by sequence_executor: SEQUENCE_CONTROL: rejected: ", 0), 0u) << paused->body;
+    // Its log says so too (written just after the answer: waited for).
+    EXPECT_TRUE(stack.WaitFor(
+        [&] {
+          return ReadText(stack.dir + "/" + c.name + ".log").find("rover_web: pause: refused by sequence_executor: ") !=
+                 std::string::npos;
+        },
+        10))
+        << ReadText(stack.dir + "/" + c.name + ".log");
   }
   {
     std::lock_guard<std::mutex> lock(stack.heard.mutex);
