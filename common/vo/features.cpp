@@ -25,12 +25,6 @@ struct PeakScan {
   float* peak_value = nullptr;  // one row's scratch, the image's width
 };
 
-// Row y of the grid pass, from the response rows above, at and below it. Per row, first
-// (vectorised): a pixel's value where it is a 3x3 local maximum above the floor, else 0.
-// Then per cell run: the largest, first on ties (raster order, as a pixel-by-pixel scan
-// with a strict comparison would keep). Only comparisons: every build gives the same
-// cells. (A dilation of the whole image and a branchy per-pixel scan each cost more than
-// the Harris response.)
 // The local-maximum test of one row, eight pixels at a time from x, as many as fit before
 // x_end; returns where it stopped. std::max(p, q) is (p < q) ? q : p, which is
 // _mm256_max_ps(q, p) exactly (NaN and signed zeros included), so the values are the
@@ -80,6 +74,12 @@ bool CpuHasAvx2() {
   return yes;
 }
 
+// Row y of the grid pass, from the response rows above, at and below it. Per row, first
+// (vectorised): a pixel's value where it is a 3x3 local maximum above the floor, else 0.
+// Then per cell run: the largest, first on ties (raster order, as a pixel-by-pixel scan
+// with a strict comparison would keep). Only comparisons: every build gives the same
+// cells. (A dilation of the whole image and a branchy per-pixel scan each cost more than
+// the Harris response.)
 __attribute__((target_clones("avx2", "default")))
 void PeakRow(const float* above, const float* row, const float* below, int y, const PeakScan& s) {
   float* __restrict pv = s.peak_value;
