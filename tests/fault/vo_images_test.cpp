@@ -48,7 +48,10 @@ TEST(FaultImages, VisualOdometryAnswersEveryBadFrameAndPairsTheNextGoodOneWithTh
   };
   ASSERT_TRUE(pump_until(20, [&] { return heard.has_value(); })) << "visual_odometry sent no heartbeat";
 
-  const std::int64_t t0 = 1000000000;  // rover time of the frames (VO's clock anchors on the first)
+  // Rover time of the frames: the system clock's, as on a rover. VO hears no time source,
+  // so 2 s after its start it takes the system clock for rover time (bus.time: auto), and a
+  // frame stamped far from it would then be dropped as too old, whenever the test got there.
+  const std::int64_t t0 = bus::RoverClock::SystemUtime();
   fault::PacketOptions options;
   options.now_utime = t0 + 1000;
   options.bomb_side = 8192;  // 64 MiB of zeros claimed; the header is what matters
