@@ -17,7 +17,7 @@ mkdir -p "$out"
 rover="$root/rover"
 name="s$$"
 fail=0
-check() { if eval "$2"; then echo "ok: $1"; else echo "FAIL: $1"; cat "$3" 2>/dev/null; fail=1; fi; }
+check() { if eval "$2"; then echo "ok: $1"; else echo "FAIL: $1"; [ -n "${3:-}" ] && cat "$3" 2>/dev/null; fail=1; fi; }
 cleanup() { "$rover" private --name "$name" --stop >/dev/null 2>&1; }
 trap cleanup EXIT
 on_bus() { "$rover" private --name "$name" "$@"; }
