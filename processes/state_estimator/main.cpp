@@ -6,6 +6,7 @@
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
 #include "estimation/pose_estimator.hpp"
+#include "state_estimator/estimator_messages.hpp"
 #include "terrain/world.hpp"
 
 #include <rover_msgs/imu_t.hpp>
@@ -21,6 +22,8 @@
 using namespace rover;
 
 namespace {
+
+using state_estimator::FromMsg;
 
 // The initial pose: --start, else the world's start on its ground (--world), else the origin.
 geometry::Pose StartPose(const bus::Process& proc) {
@@ -40,28 +43,6 @@ geometry::Pose StartPose(const bus::Process& proc) {
                                     p.yaw_deg * M_PI / 180.0);
   }
   return geometry::Pose::Identity();
-}
-
-estimation::WheelOdometrySample FromMsg(const rover_msgs::wheel_odometry_t& m) {
-  estimation::WheelOdometrySample s;
-  s.utime = m.utime;
-  s.distance_m = m.distance_m;
-  s.wheel_distance_m = m.wheel_distance_m;
-  s.curvature_per_m = m.curvature_per_m;
-  s.turning_in_place = m.turning_in_place != 0;
-  return s;
-}
-
-estimation::VoUpdate FromMsg(const rover_msgs::vo_update_t& m) {
-  estimation::VoUpdate u;
-  u.from_utime = m.from_utime;
-  u.to_utime = m.to_utime;
-  u.from_frame_id = m.from_frame_id;
-  u.to_frame_id = m.to_frame_id;
-  u.T_from_to.linear() = bus::QuaternionFromArray(m.delta_orientation).toRotationMatrix();
-  u.T_from_to.translation() = Eigen::Vector3d(m.delta_position[0], m.delta_position[1], m.delta_position[2]);
-  u.covariance = bus::CovarianceFromArray(m.covariance);
-  return u;
 }
 
 // The estimator on the bus. POSE goes out on a rover-time schedule set by the inputs' own

@@ -18,6 +18,7 @@
 #include "estimation/pose_estimator.hpp"
 #include "scenario/pose_truth.hpp"
 #include "scenario/vo_truth.hpp"
+#include "state_estimator/estimator_messages.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/imu_t.hpp>
@@ -97,18 +98,6 @@ Args ParseArgs(int argc, char** argv) {
   return a;
 }
 
-estimation::VoUpdate FromMsg(const rover_msgs::vo_update_t& m) {
-  estimation::VoUpdate u;
-  u.from_utime = m.from_utime;
-  u.to_utime = m.to_utime;
-  u.from_frame_id = m.from_frame_id;
-  u.to_frame_id = m.to_frame_id;
-  u.T_from_to.linear() = bus::QuaternionFromArray(m.delta_orientation).toRotationMatrix();
-  u.T_from_to.translation() = Eigen::Vector3d(m.delta_position[0], m.delta_position[1], m.delta_position[2]);
-  u.covariance = bus::CovarianceFromArray(m.covariance);
-  return u;
-}
-
 double HorizontalSigma(const double c[6][6]) {
   Eigen::Matrix2d P;
   P << c[0][0], c[0][1], c[1][0], c[1][1];
@@ -133,18 +122,12 @@ class Replay {
   }
   void Odometry(const rover_msgs::wheel_odometry_t& m) {
     Begin(m.utime);
-    estimation::WheelOdometrySample s;
-    s.utime = m.utime;
-    s.distance_m = m.distance_m;
-    s.wheel_distance_m = m.wheel_distance_m;
-    s.curvature_per_m = m.curvature_per_m;
-    s.turning_in_place = m.turning_in_place != 0;
-    estimator_.OnWheelOdometry(s);
+    estimator_.OnWheelOdometry(state_estimator::FromMsg(m));
     After(m.utime);
   }
   void Vo(const rover_msgs::vo_update_t& m) {
     if (m.status != rover_msgs::vo_update_t::STATUS_OK || !started_) return;
-    waiting_.push_back(FromMsg(m));
+    waiting_.push_back(state_estimator::FromMsg(m));
     TryVo();
   }
   void NewSite(const rover_msgs::new_site_t& m) {
