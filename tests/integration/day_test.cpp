@@ -81,10 +81,11 @@ TEST(RoverOnTheSystemClock, ATwoMetreDriveWithVoOnRoverSimAsHardware) {
   std::filesystem::current_path(SourceDir());  // the deployment's paths are relative to the repository root
   bus::Bus bus(url);
   // A message's time is on the system clock when it is never ahead of its arrival and, as a
-  // rule (the median), behind it by less than 1 s: the worst is the work done since the
-  // exposure, VO's above all, and a busy machine makes that longer (1.003 s was seen). A
-  // virtual clock, or a stamp of 0, would be off by years. A VO update carries its pair's
-  // exposure time, so it must name a pair that was heard.
+  // rule (the median), behind it by seconds, not years: a virtual clock, or a stamp of 0,
+  // would be off by years. How far behind is the work done since the exposure, VO's above
+  // all, and a busy machine makes that longer (a median of 1.08 s for VO beside two
+  // burners and a build), so the bound is 5 s, not a bet on the scheduler. A VO update
+  // carries its pair's exposure time, so it must name a pair that was heard.
   struct Lag {
     int count = 0;
     std::vector<double> behind_s;  // arrival - utime
@@ -147,7 +148,7 @@ TEST(RoverOnTheSystemClock, ATwoMetreDriveWithVoOnRoverSimAsHardware) {
     EXPECT_GT(lag[channel].count, 0) << "no " << channel;
     if (lag[channel].count == 0) continue;
     EXPECT_LT(lag[channel].most_ahead_s, 0.1) << channel << " times are ahead of the system clock";
-    EXPECT_LT(median(lag[channel].behind_s), 1.0) << channel << " times are behind the system clock";
+    EXPECT_LT(median(lag[channel].behind_s), 5.0) << channel << " times are behind the system clock";
   }
   EXPECT_EQ(vo_off_the_frames, 0) << "VO updates whose time is no pair's exposure";
   EXPECT_GE(lag["VO_UPDATE ok"].count, 3) << "VO measured too few of the drive's steps";
