@@ -1,4 +1,5 @@
 #include "vo/correlation.hpp"
+#include "vo/simd.hpp"
 
 #include <Eigen/LU>
 #include <immintrin.h>
@@ -468,12 +469,6 @@ __attribute__((target("avx2"))) void NormaliseRowsAvx2(const Template& t, const 
   }
 }
 
-// Whether the CPU (and the OS) runs AVX2: asked once, on first use.
-bool HaveAvx2() {
-  static const bool yes = (__builtin_cpu_init(), __builtin_cpu_supports("avx2"));
-  return yes;
-}
-
 // Compiled for AVX2+FMA as well as the baseline; the loader picks the best the CPU has.
 // Scores for centres (x0..x0+count-1) on rows y..y+rows-1, row q's at out + q * count.
 __attribute__((target_clones("avx2,fma", "default")))
@@ -482,7 +477,7 @@ void ScoreRows(const Template& t, const cv::Mat& band, int y, int rows, int x0, 
   const int span = count + n - 1;
   // The cross term in blocks of adjacent centres whose sums stay in registers (a run of
   // sums in memory was bound by its loads and stores).
-  if (HaveAvx2()) {
+  if (UseAvx2()) {
     CrossRowsAvx2(t, band, y, rows, x0, count, out);
     NormaliseRowsAvx2(t, band, y, rows, x0, count, out);
     return;

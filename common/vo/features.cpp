@@ -1,4 +1,5 @@
 #include "vo/features.hpp"
+#include "vo/simd.hpp"
 
 #include <opencv2/imgproc.hpp>
 
@@ -69,11 +70,6 @@ __attribute__((target("avx2"))) int CellsOfEightAvx2(const float* pv, int y, int
   return i;
 }
 
-bool CpuHasAvx2() {
-  static const bool yes = (__builtin_cpu_init(), __builtin_cpu_supports("avx2"));
-  return yes;
-}
-
 // Row y of the grid pass, from the response rows above, at and below it. Per row, first
 // (vectorised): a pixel's value where it is a 3x3 local maximum above the floor, else 0.
 // Then per cell run: the largest, first on ties (raster order, as a pixel-by-pixel scan
@@ -84,7 +80,7 @@ __attribute__((target_clones("avx2", "default")))
 void PeakRow(const float* above, const float* row, const float* below, int y, const PeakScan& s) {
   float* __restrict pv = s.peak_value;
   int x = s.x_begin;
-  if (CpuHasAvx2()) x = PeakValuesAvx2(above, row, below, x, s.x_end, s.floor, pv);
+  if (UseAvx2()) x = PeakValuesAvx2(above, row, below, x, s.x_end, s.floor, pv);
   for (; x < s.x_end; ++x) {
     const float v = row[x];
     float m = std::max(std::max(above[x - 1], above[x]), std::max(above[x + 1], row[x - 1]));
@@ -93,7 +89,7 @@ void PeakRow(const float* above, const float* row, const float* below, int y, co
   }
   Corner* cell_row = s.best + static_cast<std::size_t>((y - s.y_begin) / s.cell) * s.gx;
   int i = 0, x0 = s.x_begin;
-  if (s.cell == 8 && CpuHasAvx2()) i = CellsOfEightAvx2(pv, y, s.x_end, cell_row, &x0);
+  if (s.cell == 8 && UseAvx2()) i = CellsOfEightAvx2(pv, y, s.x_end, cell_row, &x0);
   for (; x0 < s.x_end; ++i, x0 += s.cell) {
     Corner& b = cell_row[i];
     const int x1 = std::min(x0 + s.cell, s.x_end);

@@ -1,5 +1,6 @@
 // VO-3: pseudo-normalized correlation and the biquadratic sub-pixel peak.
 #include "vo/correlation.hpp"
+#include "vo/simd.hpp"
 
 #include <Eigen/LU>
 #include <gtest/gtest.h>
@@ -108,26 +109,31 @@ std::vector<float> ReferenceScores(const Template& t, const cv::Mat& band, int y
 // Known answer, bit for bit: the vectorised scoring (ScoreRows, and ScoreRow row by row)
 // gives exactly the plain arithmetic's scores for the template sides VO uses (7, 11) and
 // another (9), windows of 1 to 40 centres by 1 to 9 rows, up to the image's right edge
-// (where the last vector's loads are masked).
+// (where the last vector's loads are masked). On each path (vo/simd.hpp): the CPU's best
+// (AVX2 here) and the portable loops an older CPU takes.
 TEST(PseudoNormalizedCorrelation, VO3_RowsOfScoresAreBitForBitThePlainArithmetic) {
   const cv::Mat band = BandPass(Texture(97, 61, 0, 0, 5), 0.8, 9);
-  for (const int n : {7, 9, 11}) {
-    Template t;
-    ASSERT_TRUE(t.Extract(band, 40, 30, n));
-    const int h = n / 2;
-    for (int rows = 1; rows <= 9; ++rows) {
-      for (int count = 1; count <= 40; ++count) {
-        const int x0 = band.cols - h - count;  // the last centre at the right edge
-        const int y = 20;
-        const std::vector<float> expected = ReferenceScores(t, band, y, rows, x0, count);
-        std::vector<float> got(expected.size()), one_row(static_cast<std::size_t>(count));
-        ScoreRows(t, band, y, rows, x0, count, got.data());
-        for (int q = 0; q < rows; ++q) {
-          ScoreRow(t, band, y + q, x0, count, one_row.data());
-          for (int i = 0; i < count; ++i) {
-            const std::size_t k = static_cast<std::size_t>(q * count + i);
-            ASSERT_EQ(got[k], expected[k]) << "n " << n << ", " << rows << " rows of " << count << ", at " << q << "," << i;
-            ASSERT_EQ(one_row[static_cast<std::size_t>(i)], expected[k]) << "n " << n << ", row " << q << " of " << count;
+  for (const bool portable : {false, true}) {
+    SCOPED_TRACE(portable ? "the portable loops" : "the CPU's best loops");
+    const PathForScope path(portable);
+    for (const int n : {7, 9, 11}) {
+      Template t;
+      ASSERT_TRUE(t.Extract(band, 40, 30, n));
+      const int h = n / 2;
+      for (int rows = 1; rows <= 9; ++rows) {
+        for (int count = 1; count <= 40; ++count) {
+          const int x0 = band.cols - h - count;  // the last centre at the right edge
+          const int y = 20;
+          const std::vector<float> expected = ReferenceScores(t, band, y, rows, x0, count);
+          std::vector<float> got(expected.size()), one_row(static_cast<std::size_t>(count));
+          ScoreRows(t, band, y, rows, x0, count, got.data());
+          for (int q = 0; q < rows; ++q) {
+            ScoreRow(t, band, y + q, x0, count, one_row.data());
+            for (int i = 0; i < count; ++i) {
+              const std::size_t k = static_cast<std::size_t>(q * count + i);
+              ASSERT_EQ(got[k], expected[k]) << "n " << n << ", " << rows << " rows of " << count << ", at " << q << "," << i;
+              ASSERT_EQ(one_row[static_cast<std::size_t>(i)], expected[k]) << "n " << n << ", row " << q << " of " << count;
+            }
           }
         }
       }

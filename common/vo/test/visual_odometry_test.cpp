@@ -2,6 +2,7 @@
 #include "geometry/pose.hpp"
 #include "test_rig.hpp"
 #include "vo/features.hpp"
+#include "vo/simd.hpp"
 #include "vo/visual_odometry.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -112,6 +113,31 @@ TEST(VisualOdometry, VO1_VO10_RecoversKnownMotionFromRenderedStereoPairs) {
   EXPECT_GE(r.times.total_ms, r.times.track_ms);
 }
 
+// The portable loops (vo/simd.hpp, what a CPU without AVX2 takes) and the CPU's best give
+// the same motion, covariance and counts to the bit over a pair of rendered pairs.
+TEST(VisualOdometry, VO1_ThePortableLoopsGiveTheSameMotionBitForBit) {
+  const PlaneScene scene;
+  const Eigen::Isometry3d motion = geometry::PoseFromXyzRpy(0.06, -0.02, 0.35, 0.01, 0.03, -0.015);
+  const Eigen::Isometry3d prior = geometry::PoseFromXyzRpy(0.0, 0.0, 0.25, 0.0, 0.015, 0.0);
+  const auto first_pair = scene.Render(Eigen::Isometry3d::Identity(), 0);
+  const auto second_pair = scene.Render(motion, 1);
+  VoResult results[2];
+  for (const bool portable : {false, true}) {
+    const PathForScope path(portable);
+    VisualOdometry vo(VoOptions{});
+    vo.Process(first_pair, Eigen::Isometry3d::Identity(), WidePrior());
+    results[portable ? 1 : 0] = vo.Process(second_pair, prior, WidePrior());
+  }
+  const VoResult& best = results[0];
+  const VoResult& portable = results[1];
+  ASSERT_EQ(best.status, VoStatus::kOk) << best.reason;
+  ASSERT_EQ(portable.status, best.status) << portable.reason;
+  EXPECT_EQ(portable.num_matched, best.num_matched);
+  EXPECT_EQ(portable.num_inliers, best.num_inliers);
+  EXPECT_EQ(portable.T_prev_curr.matrix(), best.T_prev_curr.matrix());
+  EXPECT_EQ(portable.covariance, best.covariance);
+}
+
 TEST(VisualOdometry, VO10_MotionTooLargeReinitialisesTracking) {
   const PlaneScene scene;
   VisualOdometry vo(VoOptions{});
@@ -217,7 +243,11 @@ TEST(Features, VO2_GridPeaksAreThePlainScansOfTheResponse) {
   cv::Mat img(123, 211, CV_32F);
   cv::randu(img, 0, 1);
   cv::GaussianBlur(img, img, cv::Size(0, 0), 1.2);
+  // On each path (vo/simd.hpp): the CPU's best (AVX2 here) and the portable loops.
+  for (const bool portable : {false, true})
   for (const int cell : {8, 5}) {
+    SCOPED_TRACE(portable ? "the portable loops" : "the CPU's best loops");
+    const PathForScope path(portable);
     CornerOptions o;
     o.count = 1 << 20;
     o.min_distance_px = 1;
