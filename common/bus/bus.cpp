@@ -1,5 +1,6 @@
 #include "bus/bus.hpp"
 #include "bus/lcm_url_check.hpp"
+#include "bus/channels.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -67,6 +68,18 @@ std::string LcmUrlProblem(const std::string& url) {
     start = end + 1;
   }
   return "";
+}
+
+std::string SmallReceiveBufferWarning(const std::string& who, const std::string& url,
+                                      const std::set<std::string>& subscribed, bool all) {
+  if (url.rfind("udpm://", 0) != 0) return "";
+  const std::size_t q = url.find('?');
+  const std::string options = q == std::string::npos ? "" : url.substr(q + 1);
+  if (options.rfind("recv_buf_size=", 0) == 0 || options.find("&recv_buf_size=") != std::string::npos) return "";
+  if (!all && !subscribed.count(channels::kStereoFrame) && !subscribed.count(channels::kHazcamFrame)) return "";
+  return who + ": warning: the bus URL " + url +
+         " names no recv_buf_size, so stereo pairs can overflow the socket's default buffer and be lost "
+         "(expected &recv_buf_size=8388608 in the URL, as the default bus has; docs/DEPLOYING.md)";
 }
 
 void RequireBus(lcm::LCM& lcm, const std::string& url, const std::string& what) {

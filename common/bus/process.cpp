@@ -453,6 +453,9 @@ void Process::Run(const std::function<void()>& on_tick, int tick_ms) {
     std::_Exit(2);
   }
   AnnounceTime();
+  if (const std::string w = SmallReceiveBufferWarning(name_, bus_.url(), bus_.subscribed()); !w.empty()) {
+    std::cerr << w << "\n";
+  }
   if (virtual_) return RunVirtual(on_tick, tick_ms);
   using Clock = std::chrono::steady_clock;
   auto next_heartbeat = Clock::now();

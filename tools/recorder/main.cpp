@@ -465,6 +465,9 @@ int main(int argc, char** argv) {
     }
     lcm::LCM lcm(args->url);
     rover::bus::RequireBus(lcm, args->url, "LCM bus");
+    if (const std::string w = rover::bus::SmallReceiveBufferWarning("rover_recorder", args->url, {}, true); !w.empty()) {
+      std::cerr << w << "\n";
+    }
     EventQueue queue;
     Writer writer(args->output, queue);
     const char* time_env = std::getenv("ROVER_TIME");

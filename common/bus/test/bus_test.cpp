@@ -1,4 +1,5 @@
 #include "bus/bus.hpp"
+#include "bus/lcm_url_check.hpp"
 #include "bus/channels.hpp"
 #include "bus/process.hpp"
 
@@ -553,4 +554,24 @@ TEST(Bus, AHeldUdpPortIsToldApartFromAFreeOrSharedOne) {
   const int shared = open_on(port, true);
   EXPECT_TRUE(rover::bus::UdpPortReceivable(port));
   close(shared);
+}
+
+// A udpm URL without recv_buf_size is said at start by a process that takes stereo pairs
+// (or every channel), naming the URL and what to add; one that names it, another
+// provider, or a process without image channels says nothing.
+TEST(LcmUrl, NoReceiveBufferIsSaidByAProcessThatTakesImages) {
+  const std::set<std::string> images = {"STEREO_FRAME", "POSE"};
+  const std::set<std::string> hazcam = {"HAZCAM_FRAME"};
+  const std::set<std::string> no_images = {"POSE", "IMU"};
+  const std::string bare = "udpm://239.255.76.67:7667?ttl=1";
+  const std::string w = rover::bus::SmallReceiveBufferWarning("visual_odometry", bare, images);
+  EXPECT_EQ(w.rfind("visual_odometry: warning: the bus URL " + bare + " names no recv_buf_size", 0), 0u) << w;
+  EXPECT_NE(w.find("expected &recv_buf_size=8388608"), std::string::npos) << w;
+  EXPECT_EQ(w.find('\n'), std::string::npos) << "one line";
+  EXPECT_FALSE(rover::bus::SmallReceiveBufferWarning("hazard_monitor", "udpm://239.255.76.67:7667", hazcam).empty());
+  EXPECT_FALSE(rover::bus::SmallReceiveBufferWarning("rover_recorder", bare, {}, true).empty());
+  EXPECT_TRUE(rover::bus::SmallReceiveBufferWarning("state_estimator", bare, no_images).empty());
+  EXPECT_TRUE(rover::bus::SmallReceiveBufferWarning("visual_odometry", rover::bus::kDefaultLcmUrl, images).empty());
+  EXPECT_TRUE(rover::bus::SmallReceiveBufferWarning("visual_odometry", "udpm://239.255.76.67:7667?recv_buf_size=4194304&ttl=1", images).empty());
+  EXPECT_TRUE(rover::bus::SmallReceiveBufferWarning("visual_odometry", "memq://", images).empty());
 }
