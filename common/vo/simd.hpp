@@ -1,9 +1,10 @@
 // Which vector instructions VO's inner loops take (correlation.cpp's scores, features.cpp's
 // grid of corner peaks): AVX2 where the CPU runs it, else the portable loops. Both give the
-// same numbers bit for bit (tests: VO3_RowsOfScoresAreBitForBitThePlainArithmetic and
-// VO2_CornersAreTheSameOnThePortablePath run each path). ROVER_VO_SIMD=portable in the
-// environment takes the portable loops on any CPU, so that a run can be checked on the path
-// an older computer takes (any other value, or none: the best the CPU has).
+// same numbers bit for bit (tests run each path: VO3_RowsOfScoresAreBitForBitThePlainArithmetic,
+// VO2_GridPeaksAreThePlainScansOfTheResponse, VO1_ThePortableLoopsGiveTheSameMotionBitForBit).
+// ROVER_VO_SIMD=portable in the environment takes the portable loops on any CPU, so that a
+// run can be checked on the path an older computer takes (any other value, or none: the
+// best the CPU has).
 #pragma once
 
 namespace rover::vo {

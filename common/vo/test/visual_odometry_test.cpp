@@ -244,8 +244,7 @@ TEST(Features, VO2_GridPeaksAreThePlainScansOfTheResponse) {
   cv::randu(img, 0, 1);
   cv::GaussianBlur(img, img, cv::Size(0, 0), 1.2);
   // On each path (vo/simd.hpp): the CPU's best (AVX2 here) and the portable loops.
-  for (const bool portable : {false, true})
-  for (const int cell : {8, 5}) {
+  for (const auto& [portable, cell] : std::vector<std::pair<bool, int>>{{false, 8}, {false, 5}, {true, 8}, {true, 5}}) {
     SCOPED_TRACE(portable ? "the portable loops" : "the CPU's best loops");
     const PathForScope path(portable);
     CornerOptions o;
