@@ -38,6 +38,8 @@ void EstimatorOptions::Validate() const {
   RequireRange("history_max_samples", history_max_samples, 2, 1e8);
   RequireRange("vo_future_tolerance_s", vo_future_tolerance_s, 0.0, 3600.0);
   RequireRange("vo_yaw_sigma_factor", vo_yaw_sigma_factor, 1e-3, 1e3);
+  RequireRange("vo_yaw_bias_sigma_rad_per_m", vo_yaw_bias_sigma_rad_per_m, 0.0, 0.1);
+  RequireRange("vo_yaw_bias_length_m", vo_yaw_bias_length_m, 0.0, 1e6);
   RequireRange("zupt_settle_s", zupt_settle_s, 0.0, 3600.0);
   RequireRange("zupt_odometry_timeout_s", zupt_odometry_timeout_s, 1e-3, 3600.0);
   RequireRange("zupt_max_rate_rad_per_s", zupt_max_rate_rad_per_s, 0.0, 1.0);
@@ -66,6 +68,8 @@ EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
                                    "vo_heading",
                                    "vo_future_tolerance_s",
                                    "vo_yaw_sigma_factor",
+                                   "vo_yaw_bias_sigma_deg_per_m",
+                                   "vo_yaw_bias_length_m",
                                    "ignore_distance_while_turning_in_place",
                                    "zero_velocity_updates",
                                    "zupt_settle_s",
@@ -118,6 +122,10 @@ EstimatorOptions LoadEstimatorOptions(const config::ConfigNode& section,
                                     : VoHeadingMode::kFuse;
   section.Get("vo_future_tolerance_s", o.vo_future_tolerance_s, 0.0, 3600.0);
   section.Get("vo_yaw_sigma_factor", o.vo_yaw_sigma_factor, 1e-3, 1e3);
+  double vo_bias_deg_m = o.vo_yaw_bias_sigma_rad_per_m / kDeg;
+  section.Get("vo_yaw_bias_sigma_deg_per_m", vo_bias_deg_m, 0.0, 5.0);
+  o.vo_yaw_bias_sigma_rad_per_m = vo_bias_deg_m * kDeg;
+  section.Get("vo_yaw_bias_length_m", o.vo_yaw_bias_length_m, 0.0, 1e6);
   section.Get("slip_memory_updates", o.slip_memory_updates, 0, 1000);
   section.Get("slip_min_distance_m", o.slip_min_distance_m, 1e-3, 1e3);
   section.Get("ignore_distance_while_turning_in_place", o.ignore_distance_while_turning_in_place);

@@ -65,6 +65,13 @@ struct EstimatorOptions {
   // thousandths of a degree per step over a leg) while its covariance is of one step: summed
   // over 10 to 30 updates they were 1.1 to 1.6 times the sigma it claimed (README, "VO's yaw").
   double vo_yaw_sigma_factor = 1.0;
+  // VO's yaw bias: a yaw error VO makes in proportion to the distance it measures (rad per
+  // metre), a state of its own learnt against the gyro (README, "VO's yaw bias"): its
+  // 1-sigma, and the distance over which it is correlated (a first-order Gauss-Markov
+  // process in VO's travel; 0: one constant bias). sigma 0: no such state (VO's yaw errors
+  // are taken as independent from step to step).
+  double vo_yaw_bias_sigma_rad_per_m = 0.0;
+  double vo_yaw_bias_length_m = 0.0;
   // A VO update whose `to` is at most this far after the latest IMU/odometry message is
   // applied at the latest message, as if the rover stood still since then (captures happen
   // with the rover stopped); further in the future it is refused (kToInFuture) and the
@@ -102,6 +109,7 @@ struct EstimatorOptions {
 //   history_s, history_max_samples
 //   vo_heading: fuse | replace | ignore
 //   vo_future_tolerance_s, vo_yaw_sigma_factor, ignore_distance_while_turning_in_place
+//   vo_yaw_bias_sigma_deg_per_m, vo_yaw_bias_length_m
 //   zero_velocity_updates, zupt_settle_s, zupt_odometry_timeout_s, zupt_max_rate_deg_s,
 //   zupt_bias_segment_s, zupt_yaw_reading_sigma_deg
 // `extra_keys` are keys the caller (the process shell) reads itself from the same section;

@@ -57,13 +57,23 @@ PoseEstimator::PoseEstimator(const EstimatorOptions& options) : options_(options
   P_ = InitialCovariance();
 }
 
-PoseEstimator::Matrix5d PoseEstimator::InitialCovariance() const {
-  Matrix5d P = Matrix5d::Zero();
+PoseEstimator::StateMatrix PoseEstimator::InitialCovariance() const {
+  StateMatrix P = StateMatrix::Zero();
   const double s0 = options_.initial_position_sigma_m;
   P.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() * s0 * s0;
   P(kHeading, kHeading) = options_.initial_yaw_sigma_rad * options_.initial_yaw_sigma_rad;
   P(kBias, kBias) = options_.gyro_drift_rad_per_s * options_.gyro_drift_rad_per_s;
+  P(kVoBias, kVoBias) = options_.vo_yaw_bias_sigma_rad_per_m * options_.vo_yaw_bias_sigma_rad_per_m;
   return P;
+}
+
+double PoseEstimator::VoBiasKept(double distance_m) const {
+  const double length = options_.vo_yaw_bias_length_m;
+  return length > 0.0 ? std::exp(-distance_m / length) : 1.0;
+}
+
+double PoseEstimator::vo_yaw_bias_sigma_rad_per_m() const {
+  return std::sqrt(std::max(0.0, P_(kVoBias, kVoBias)));
 }
 
 double PoseEstimator::gyro_bias_sigma_rad_per_s() const {
@@ -72,7 +82,7 @@ double PoseEstimator::gyro_bias_sigma_rad_per_s() const {
 
 void PoseEstimator::PropagateHeading(double dt, double abs_dyaw) {
   // The heading error grows by the bias error over dt: F = I + dt e_heading e_bias^T.
-  Matrix5d F = Matrix5d::Identity();
+  StateMatrix F = StateMatrix::Identity();
   F(kHeading, kBias) = dt;
   P_ = F * P_ * F.transpose();
   const double arw = options_.gyro_random_walk_rad_per_sqrt_s;
@@ -129,13 +139,25 @@ void PoseEstimator::FuseRestBias(double segment_s, double segment_dyaw) {
   if (!(S > 0.0)) return;
   const double gain = P_(kBias, kBias) / S;
   gyro_bias_ += gain * (segment_dyaw / segment_s - gyro_bias_);
+  ConsiderRestBias(R, P_);
+  // The bias is one bias before the rest and in it (up to its walk): the samples a VO update
+  // will clone from learn it too. Else the next update that spans the rest starts from a
+  // `from` that never heard of it, and the measurement is lost (with a VO yaw bias state,
+  // the rests are what tell the gyro's bias from VO's).
+  for (Sample& h : history_) ConsiderRestBias(R, h.P);
+}
+
+// The covariance a bias measurement of noise variance R leaves (its gain on the bias only).
+void PoseEstimator::ConsiderRestBias(double R, StateMatrix& P) const {
+  const double S = P(kBias, kBias) + R;
+  if (!(S > 0.0)) return;
   const double keep = R / S;
-  for (int i = 0; i < 5; ++i) {
+  for (int i = 0; i < kStates; ++i) {
     if (i == kBias) continue;
-    P_(i, kBias) *= keep;
-    P_(kBias, i) *= keep;
+    P(i, kBias) *= keep;
+    P(kBias, i) *= keep;
   }
-  P_(kBias, kBias) *= keep;
+  P(kBias, kBias) *= keep;
 }
 
 bool PoseEstimator::AdvanceTime(int64_t utime) {
@@ -254,7 +276,7 @@ void PoseEstimator::GrowPositionCovariance(const Eigen::Vector3d& displacement) 
   const double distance = displacement.norm();
   if (distance <= 0.0) return;
   // A heading error swings the displacement about the vertical: dp = (z x d) dpsi.
-  Matrix5d F = Matrix5d::Identity();
+  StateMatrix F = StateMatrix::Identity();
   F.block<3, 1>(0, kHeading) = Eigen::Vector3d::UnitZ().cross(displacement);
   P_ = F * P_ * F.transpose();
 
@@ -386,21 +408,27 @@ std::optional<geometry::Pose> PoseEstimator::PoseAt(int64_t utime) const {
 PoseEstimator::VoCloneModel PoseEstimator::CloneToVoEnd(const Sample& from, const Sample& to,
                                                         const Eigen::Vector3d& t_site,
                                                         const geometry::Matrix6d& vo_covariance) const {
-  // Inputs: the errors at `from` [x y z heading bias], the gyro's white noise w over the
-  // interval, the bias walk v, and VO's noise on its translation (rover frame at `from`) and
-  // on its yaw change.
-  enum { kW = 5, kV = 6, kVoT = 7, kVoYaw = 10, kInputs = 11 };
+  // Inputs: the errors at `from` [x y z heading bias vo_bias], the gyro's white noise w over
+  // the interval, the bias walk v, the VO yaw bias's driving noise u, and VO's noise on its
+  // translation (rover frame at `from`) and on its yaw change.
+  enum { kW = kStates, kV, kU, kVoT, kVoYaw = kVoT + 3, kInputs };
   // The gyro's bias and noise act on the heading only while it was integrated (not at
   // rest, where it was held); the bias wanders all the time.
   const double dt = std::max(0.0, to.gyro_s - from.gyro_s);
   const double dt_walk = static_cast<double>(to.utime - from.utime) * 1e-6;
+  const double distance = t_site.norm();
   const double arw = options_.gyro_random_walk_rad_per_sqrt_s;
   const double scale = options_.gyro_scale_sigma_fraction * std::max(0.0, to.turned - from.turned);
   const double walk = options_.gyro_bias_walk_rad_per_s_per_sqrt_s;
+  // VO's yaw bias over the distance: a first-order Gauss-Markov process (its correlation
+  // decays as exp(-distance / length) and its variance stays sigma^2), or a constant.
+  const double vo_sigma = options_.vo_yaw_bias_sigma_rad_per_m;
+  const double vo_keep = VoBiasKept(distance);
   Eigen::Matrix<double, kInputs, kInputs> S = Eigen::Matrix<double, kInputs, kInputs>::Zero();
-  S.topLeftCorner<5, 5>() = from.P;
+  S.topLeftCorner<kStates, kStates>() = from.P;
   S(kW, kW) = arw * arw * dt + scale * scale;
   S(kV, kV) = walk * walk * dt_walk;
+  S(kU, kU) = vo_sigma * vo_sigma * (1.0 - vo_keep * vo_keep);
   // x y z yaw of VO's x y z roll pitch yaw; VO's yaw weighed at vo_yaw_sigma_factor times
   // its sigma (EstimatorOptions).
   const int vo_index[4] = {0, 1, 2, 5};
@@ -411,8 +439,10 @@ PoseEstimator::VoCloneModel PoseEstimator::CloneToVoEnd(const Sample& from, cons
     }
   }
 
-  // Outputs: the errors at `to` [x y z heading bias] and the gyro check.
-  enum { kCheck = 5, kOutputs = 6 };
+  // Outputs: the errors at `to` [x y z heading bias vo_bias] and the gyro check. VO's yaw
+  // change has the VO yaw bias learnt so far times its distance taken off; what is left of
+  // that bias (the state) errs it by its residue times the distance.
+  enum { kCheck = kStates, kOutputs };
   Eigen::Matrix<double, kOutputs, kInputs> A = Eigen::Matrix<double, kOutputs, kInputs>::Zero();
   A.block<3, 3>(0, 0).setIdentity();                                   // p(from)
   A.block<3, 1>(0, kHeading) = Eigen::Vector3d::UnitZ().cross(t_site);  // heading swings t
@@ -420,30 +450,34 @@ PoseEstimator::VoCloneModel PoseEstimator::CloneToVoEnd(const Sample& from, cons
   A(kHeading, kHeading) = 1.0;
   if (options_.vo_heading == VoHeadingMode::kReplace) {
     A(kHeading, kVoYaw) = 1.0;  // heading(to) = heading(from) + VO's yaw change
+    A(kHeading, kVoBias) = distance;
   } else {
     A(kHeading, kBias) = dt;    // heading(to) = heading(from) + the gyro's
     A(kHeading, kW) = 1.0;
   }
   A(kBias, kBias) = 1.0;
   A(kBias, kV) = 1.0;
+  A(kVoBias, kVoBias) = vo_keep;
+  A(kVoBias, kU) = 1.0;
   // check = VO's yaw change - the gyro's = VO's yaw error - (bias * dt + w).
   A(kCheck, kVoYaw) = 1.0;
+  A(kCheck, kVoBias) = distance;
   A(kCheck, kBias) = -dt;
   A(kCheck, kW) = -1.0;
 
   const Eigen::Matrix<double, kOutputs, kOutputs> C = A * S * A.transpose();
   VoCloneModel m;
-  m.P_to = C.topLeftCorner<5, 5>();
-  m.cov_to_check = C.block<5, 1>(0, kCheck);
+  m.P_to = C.topLeftCorner<kStates, kStates>();
+  m.cov_to_check = C.block<kStates, 1>(0, kCheck);
   m.check_variance = C(kCheck, kCheck);
   return m;
 }
 
-PoseEstimator::Vector5d PoseEstimator::FuseGyroCheck(const VoCloneModel& m, double check,
-                                                     Matrix5d& P_to) const {
+PoseEstimator::StateVector PoseEstimator::FuseGyroCheck(const VoCloneModel& m, double check,
+                                                     StateMatrix& P_to) const {
   if (!(m.check_variance > 0.0)) {
     // Neither VO nor the gyro claims any error: take the mean of the two yaw changes.
-    Vector5d e = Vector5d::Zero();
+    StateVector e = StateVector::Zero();
     e(kHeading) = -0.5 * check;
     return e;
   }
@@ -453,11 +487,11 @@ PoseEstimator::Vector5d PoseEstimator::FuseGyroCheck(const VoCloneModel& m, doub
   // leaves on past headings, and VO's yaw errors that persist over steps, which no one
   // step's covariance holds, moved the position by them: (0.14, 0.26) m over a 516 m drive
   // (README, "Honest over a long day").
-  Vector5d K = m.cov_to_check / m.check_variance;
+  StateVector K = m.cov_to_check / m.check_variance;
   K.head<3>().setZero();
   P_to += -K * m.cov_to_check.transpose() - m.cov_to_check * K.transpose() +
           K * m.check_variance * K.transpose();
-  P_to = NearestPsd(Matrix5d(0.5 * (P_to + P_to.transpose())));
+  P_to = NearestPsd(StateMatrix(0.5 * (P_to + P_to.transpose())));
   return K * check;
 }
 
@@ -537,7 +571,8 @@ VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
   const double yaw_from = YawOf(R_from);
   const double yaw_to_old = YawOf(to_old.q.toRotationMatrix());
   const double dyaw_gyro = WrapAngle(yaw_to_old - yaw_from);
-  const double dyaw_vo = WrapAngle(YawOf(R_from * R_vo) - yaw_from);
+  // VO's: less the yaw bias learnt for it over the distance it measured.
+  const double dyaw_vo = WrapAngle(YawOf(R_from * R_vo) - yaw_from - vo_yaw_bias_ * t_vo.norm());
 
   // The errors at `to` as a linear map of the errors at `from` and the new noises.
   const VoCloneModel model = CloneToVoEnd(from, to_old, t_site, u.covariance);
@@ -560,10 +595,11 @@ VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
       break;
     case VoHeadingMode::kFuse: {
       // VO's yaw change minus the gyro's measures the gyro's error over the interval.
-      const Vector5d e = FuseGyroCheck(model, WrapAngle(dyaw_vo - dyaw_gyro), to_new.P);
+      const StateVector e = FuseGyroCheck(model, WrapAngle(dyaw_vo - dyaw_gyro), to_new.P);
       to_new.p -= e.head<3>();
       yaw_to -= e(kHeading);
       gyro_bias_ += e(kBias);
+      vo_yaw_bias_ = vo_yaw_bias_ * VoBiasKept(t_vo.norm()) + e(kVoBias);
       break;
     }
     case VoHeadingMode::kIgnore:
@@ -577,7 +613,7 @@ VoUpdateResult PoseEstimator::ApplyVoUpdate(const VoUpdate& u) {
     Sample s = old;
     s.p = to_new.p + Rz_dpsi * (old.p - to_old.p);
     s.q = Eigen::Quaterniond(Rz_dpsi * old.q.toRotationMatrix()).normalized();
-    s.P = to_new.P + NearestPsd(Matrix5d(old.P - to_old.P));
+    s.P = to_new.P + NearestPsd(StateMatrix(old.P - to_old.P));
     s.odometer = to_new.odometer + (old.odometer - to_old.odometer);
     return s;
   };
@@ -620,10 +656,11 @@ void PoseEstimator::Reset(const geometry::Pose& T_site_rover, int64_t utime) {
   } else {
     pending_reset_yaw_ = yaw;
   }
-  // The gyro's bias belongs to the gyro, not to the pose: its estimate and sigma are kept.
-  const double bias_variance = P_(kBias, kBias);
+  // The gyro's bias belongs to the gyro and VO's yaw bias to VO, not to the pose: their
+  // estimates and sigmas are kept.
+  const Eigen::Matrix2d bias_covariance = P_.block<2, 2>(kBias, kBias);
   P_ = InitialCovariance();
-  P_(kBias, kBias) = bias_variance;
+  P_.block<2, 2>(kBias, kBias) = bias_covariance;
   R_at_last_odometry_ = T_site_rover.linear();
   source_ = PoseSource::kWheelImu;
   utime_ = utime;
@@ -639,10 +676,10 @@ void PoseEstimator::NewSite(std::optional<int32_t> site_index) {
   // Past positions relative to the new origin are uncertain by the growth between them and
   // now; that keeps a VO update spanning the new site meaningful. At the origin the position
   // error is P0 and no longer tied to the heading or the bias.
-  auto restart = [&](Matrix5d& P, const Eigen::Matrix3d& P_pos) {
+  auto restart = [&](StateMatrix& P, const Eigen::Matrix3d& P_pos) {
     P.topLeftCorner<3, 3>() = P_pos;
-    P.topRightCorner<3, 2>().setZero();
-    P.bottomLeftCorner<2, 3>().setZero();
+    P.topRightCorner<3, kStates - 3>().setZero();
+    P.bottomLeftCorner<kStates - 3, 3>().setZero();
   };
   const Eigen::Matrix3d P_now = P_.topLeftCorner<3, 3>();
   for (Sample& s : history_) {

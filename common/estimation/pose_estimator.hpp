@@ -20,8 +20,8 @@
 //      correction: p(t) = p_new(to) + Rz(dyaw) * (p_old(t) - p_old(to)),
 //   4. drops the history samples strictly between from and to (the VO motion replaced
 //      them; later look-ups there interpolate between the corrected ends).
-// Covariance. The estimator carries one 5x5 covariance over the errors of
-// [x, y, z, heading, gyro bias] (site frame), so a heading error and the position error it
+// Covariance. The estimator carries one covariance over the errors of
+// [x, y, z, heading, gyro bias, VO yaw bias] (site frame), so a heading error and the position error it
 // causes stay correlated, and a gyro bias makes the heading error grow in proportion to time,
 // not to its square root:
 //   - IMU: the heading error grows by bias error * dt, plus angle random walk and the
@@ -164,6 +164,10 @@ class PoseEstimator {
   // IMU's heading), and its 1-sigma.
   double gyro_bias_rad_per_s() const { return gyro_bias_; }
   double gyro_bias_sigma_rad_per_s() const;
+  // VO's yaw bias as learnt against the gyro (rad per metre VO measured, taken off VO's yaw
+  // change; EstimatorOptions::vo_yaw_bias_sigma_rad_per_m), and its 1-sigma.
+  double vo_yaw_bias_rad_per_m() const { return vo_yaw_bias_; }
+  double vo_yaw_bias_sigma_rad_per_m() const;
   bool has_attitude() const { return has_imu_; }
   // Has any input been received (is pose() meaningful)?
   bool initialized() const { return has_imu_ || has_odometry_; }
@@ -181,16 +185,18 @@ class PoseEstimator {
   const EstimatorOptions& options() const { return options_; }
 
  private:
-  // Error covariance over [x, y, z, heading, gyro bias].
-  using Matrix5d = Eigen::Matrix<double, 5, 5>;
+  // Error covariance over [x, y, z, heading, gyro bias, VO yaw bias].
+  static constexpr int kStates = 6;
+  using StateMatrix = Eigen::Matrix<double, kStates, kStates>;
   static constexpr int kHeading = 3;
   static constexpr int kBias = 4;
+  static constexpr int kVoBias = 5;
 
   struct Sample {
     int64_t utime = 0;
     Eigen::Vector3d p = Eigen::Vector3d::Zero();
     Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-    Matrix5d P = Matrix5d::Zero();
+    StateMatrix P = StateMatrix::Zero();
     double odometer = 0.0;
     double turned = 0.0;  // cumulative |yaw change| the gyro measured (rad)
     // Cumulative seconds the gyro's heading was integrated (not at rest): its bias acts on
@@ -203,13 +209,13 @@ class PoseEstimator {
   Sample Interpolate(int64_t utime) const;  // requires utime within the history
   void SetCurrent(const Sample& s);
   void Record();  // appends the current state and prunes
-  using Vector5d = Eigen::Matrix<double, 5, 1>;
+  using StateVector = Eigen::Matrix<double, kStates, 1>;
   // The errors at a VO update's `to`, cloned from `from` along the VO motion and the gyro
   // (see the file comment): their covariance, and how they covary with the gyro check (the
   // VO yaw change minus the gyro's), whose variance is check_variance.
   struct VoCloneModel {
-    Matrix5d P_to = Matrix5d::Zero();
-    Vector5d cov_to_check = Vector5d::Zero();
+    StateMatrix P_to = StateMatrix::Zero();
+    StateVector cov_to_check = StateVector::Zero();
     double check_variance = 0.0;
   };
   VoCloneModel CloneToVoEnd(const Sample& from, const Sample& to, const Eigen::Vector3d& t_site,
@@ -218,18 +224,21 @@ class PoseEstimator {
   // is considered, not corrected): returns the estimated errors at `to` (estimate minus
   // truth; the bias entry is the bias still left in the gyro; position entries zero) and
   // lowers P_to.
-  Vector5d FuseGyroCheck(const VoCloneModel& model, double check, Matrix5d& P_to) const;
+  StateVector FuseGyroCheck(const VoCloneModel& model, double check, StateMatrix& P_to) const;
   void PropagateHeading(double dt, double abs_dyaw);
   // At rest: holds the heading against the IMU's yaw change `dyaw` over `dt`, and feeds the
   // rest segment's bias measurement (FuseRestBias).
   void HoldHeadingAtRest(double dt, double dyaw);
   void FuseRestBias(double segment_s, double segment_dyaw);
+  void ConsiderRestBias(double R, StateMatrix& P) const;
+  // How much of VO's yaw bias is still correlated after `distance_m` of VO's travel.
+  double VoBiasKept(double distance_m) const;
   void EndRest();
   bool StandingStill(int64_t utime, const Eigen::Vector3d& angular_rate) const;
   void GrowPositionCovariance(const Eigen::Vector3d& displacement);
   // The wheels' error VO measured over [from, to] (EstimatorOptions::slip_memory_updates).
   void MeasureWheelSlip(const Sample& from, const Sample& to_wheels, const Eigen::Vector3d& t_site_vo);
-  Matrix5d InitialCovariance() const;
+  StateMatrix InitialCovariance() const;
   bool AdvanceTime(int64_t utime);
 
   EstimatorOptions options_;
@@ -237,11 +246,12 @@ class PoseEstimator {
   int64_t utime_ = 0;
   bool has_time_ = false;
   geometry::Pose T_site_rover_ = geometry::Pose::Identity();
-  Matrix5d P_ = Matrix5d::Zero();
+  StateMatrix P_ = StateMatrix::Zero();
   double odometer_m_ = 0.0;
   double turned_rad_ = 0.0;
   double yaw_offset_ = 0.0;
   double gyro_bias_ = 0.0;
+  double vo_yaw_bias_ = 0.0;
   double gyro_s_ = 0.0;  // seconds the gyro's heading was integrated (Sample::gyro_s)
   bool at_rest_ = false;
   double rest_segment_s_ = 0.0, rest_segment_dyaw_ = 0.0;  // the rest segment so far

@@ -333,7 +333,9 @@ int Run(const Args& args) {
   report("replayed", poses);
   const double kDegPerHour = 180.0 / M_PI * 3600.0;
   std::cout << "replayed: gyro bias " << replay.estimator().gyro_bias_rad_per_s() * kDegPerHour << " deg/h, sigma "
-            << replay.estimator().gyro_bias_sigma_rad_per_s() * kDegPerHour << " deg/h\n";
+            << replay.estimator().gyro_bias_sigma_rad_per_s() * kDegPerHour << " deg/h; VO yaw bias "
+            << replay.estimator().vo_yaw_bias_rad_per_m() * 180.0 / M_PI << " deg/m, sigma "
+            << replay.estimator().vo_yaw_bias_sigma_rad_per_m() * 180.0 / M_PI << " deg/m\n";
   return 0;
 }
 
