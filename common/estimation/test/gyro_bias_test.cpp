@@ -101,6 +101,22 @@ struct DriftingDrive {
   double HeadingError(const PoseEstimator& est) const { return Yaw(est.pose()); }
 };
 
+// The gyro of the simulated rover (3 deg/h of bias, 0.15 deg/sqrt(h) of white noise) and
+// nothing else, and a drive with that bias whose VO errs its yaw by 0.0005 rad a step.
+EstimatorOptions MerGyro() {
+  EstimatorOptions o = Quiet();
+  o.gyro_drift_rad_per_s = 3.0 * kDegPerHour;
+  o.gyro_random_walk_rad_per_sqrt_s = 0.15 * M_PI / 180.0 / 60.0;
+  return o;
+}
+DriftingDrive MerGyroDrive() {
+  DriftingDrive drive;
+  drive.bias = 3.0 * kDegPerHour;
+  drive.arw = MerGyro().gyro_random_walk_rad_per_sqrt_s;
+  drive.vo_yaw_sigma = 0.0005;
+  return drive;
+}
+
 }  // namespace
 
 // The defect this model mends: with fuse, each VO update used to add the gyro's error over
@@ -156,17 +172,12 @@ TEST(GyroBias, HeadingSigmaGrowsInProportionToTimeWhenUpdatesArriveLate) {
 // claims 0.0005 rad with the factor 2 is estimated exactly as one whose VO claims 0.001 rad,
 // and the heading then leans less on VO (its sigma after the drive is larger).
 TEST(GyroBias, VoYawSigmaFactorWeighsVoYawAsAWiderSigma) {
-  EstimatorOptions o = Quiet();
-  o.gyro_drift_rad_per_s = 3.0 * kDegPerHour;
-  o.gyro_random_walk_rad_per_sqrt_s = 0.15 * M_PI / 180.0 / 60.0;
+  const EstimatorOptions o = MerGyro();
   auto run = [&](double factor, double claimed_factor) {
     EstimatorOptions oo = o;
     oo.vo_yaw_sigma_factor = factor;
     auto est = std::make_unique<PoseEstimator>(oo);
-    DriftingDrive drive;
-    drive.bias = 3.0 * kDegPerHour;
-    drive.arw = o.gyro_random_walk_rad_per_sqrt_s;
-    drive.vo_yaw_sigma = 0.0005;
+    DriftingDrive drive = MerGyroDrive();
     drive.claimed_yaw_factor = claimed_factor;
     drive.Start(*est);
     for (int i = 0; i < 30; ++i) drive.Step(*est);
@@ -291,18 +302,12 @@ TEST(GyroBias, ResetKeepsTheBiasLearnt) {
 // the check takes VO's drift for the gyro's and the heading follows it, claiming a sigma far
 // under its error; with it the bias is learnt and the heading stays within its sigma.
 TEST(VoYawBias, VosDriftIsLearntApartFromTheGyrosAndTheHeadingStaysHonest) {
-  EstimatorOptions o = Quiet();
-  o.gyro_drift_rad_per_s = 3.0 * kDegPerHour;
-  o.gyro_random_walk_rad_per_sqrt_s = 0.15 * M_PI / 180.0 / 60.0;
   const double vo_bias = 0.02 * M_PI / 180.0;  // rad per metre
   auto run = [&](double prior_sigma, double* heading_z) {
-    EstimatorOptions oo = o;
+    EstimatorOptions oo = MerGyro();
     oo.vo_yaw_bias_sigma_rad_per_m = prior_sigma;
     auto est = std::make_unique<PoseEstimator>(oo);
-    DriftingDrive drive;
-    drive.bias = 3.0 * kDegPerHour;
-    drive.arw = o.gyro_random_walk_rad_per_sqrt_s;
-    drive.vo_yaw_sigma = 0.0005;
+    DriftingDrive drive = MerGyroDrive();
     drive.vo_yaw_bias_per_m = vo_bias;
     drive.Start(*est);
     for (int i = 0; i < 180; ++i) {  // 180 m
@@ -361,13 +366,8 @@ TEST(VoYawBias, HeadingSigmaIsConsistentWhenTheBiasesCannotBeToldApart) {
 // clones its `from`, taken before the rest; the rest's measurement now reaches the history
 // too (before, the update restored the bias sigma of `from`: 3 deg/h here, the prior).
 TEST(GyroBias, ARestsBiasMeasurementSurvivesTheVoUpdateThatSpansIt) {
-  EstimatorOptions o = Quiet();
-  o.gyro_drift_rad_per_s = 3.0 * kDegPerHour;
-  o.gyro_random_walk_rad_per_sqrt_s = 0.15 * M_PI / 180.0 / 60.0;
-  PoseEstimator est(o);
-  DriftingDrive drive;
-  drive.bias = 3.0 * kDegPerHour;
-  drive.arw = o.gyro_random_walk_rad_per_sqrt_s;
+  PoseEstimator est(MerGyro());
+  DriftingDrive drive = MerGyroDrive();
   drive.vo_yaw_sigma = 1.0;  // VO says nothing about yaw: only the rest measures the bias
   drive.Start(est);
   drive.Step(est);
