@@ -24,13 +24,16 @@ TEST(EstimatorOptions, ExampleFileLoadsToTheDefaults) {
   EXPECT_NEAR(o.slip_min_distance_m, d.slip_min_distance_m, 1e-15);
   EXPECT_EQ(o.vo_heading, VoHeadingMode::kFuse);
   EXPECT_EQ(o.vo_yaw_sigma_factor, d.vo_yaw_sigma_factor);
+  EXPECT_EQ(o.vo_yaw_bias_sigma_rad_per_m, d.vo_yaw_bias_sigma_rad_per_m);
+  EXPECT_EQ(o.vo_yaw_bias_length_m, d.vo_yaw_bias_length_m);
   EXPECT_NO_THROW(o.Validate());
 }
 
 TEST(EstimatorOptions, ValuesAndUnitsAreConverted) {
   const ConfigNode root = ConfigNode::FromString(
       "estimator:\n  along_track_sigma_pct: 5\n  gyro_drift_deg_per_hour: 36\n"
-      "  vo_heading: replace\n  history_s: 30\n  publish_hz: 8\n  vo_yaw_sigma_factor: 2\n",
+      "  vo_heading: replace\n  history_s: 30\n  publish_hz: 8\n  vo_yaw_sigma_factor: 2\n"
+      "  vo_yaw_bias_sigma_deg_per_m: 0.01\n  vo_yaw_bias_length_m: 20\n",
       "test.yaml");
   const EstimatorOptions o = LoadEstimatorOptions(root["estimator"], {"publish_hz"});
   EXPECT_NEAR(o.along_track_sigma_fraction, 0.05, 1e-15);
@@ -38,6 +41,8 @@ TEST(EstimatorOptions, ValuesAndUnitsAreConverted) {
   EXPECT_EQ(o.vo_heading, VoHeadingMode::kReplace);
   EXPECT_NEAR(o.history_s, 30.0, 1e-15);
   EXPECT_EQ(o.vo_yaw_sigma_factor, 2.0);
+  EXPECT_NEAR(o.vo_yaw_bias_sigma_rad_per_m, 0.01 * M_PI / 180.0, 1e-15);
+  EXPECT_EQ(o.vo_yaw_bias_length_m, 20.0);
 }
 
 TEST(EstimatorOptions, ErrorsNameFileAndKey) {
@@ -63,4 +68,8 @@ TEST(EstimatorOptions, ErrorsNameFileAndKey) {
   EXPECT_NE(travel.find("estimator.slip_min_distance_m"), std::string::npos) << travel;
   const std::string factor = message("estimator:\n  vo_yaw_sigma_factor: 0\n");
   EXPECT_NE(factor.find("estimator.vo_yaw_sigma_factor"), std::string::npos) << factor;
+  const std::string bias = message("estimator:\n  vo_yaw_bias_sigma_deg_per_m: -0.01\n");
+  EXPECT_NE(bias.find("estimator.vo_yaw_bias_sigma_deg_per_m"), std::string::npos) << bias;
+  const std::string length = message("estimator:\n  vo_yaw_bias_length_m: -5\n");
+  EXPECT_NE(length.find("estimator.vo_yaw_bias_length_m"), std::string::npos) << length;
 }
