@@ -130,7 +130,8 @@ void Probe::Spin(double seconds, const std::function<bool()>& done) {
       hb.seq = heartbeat_seq_++;
       hb.detail = kOwnHeartbeat;
       bus_.Publish(channels::kHeartbeat, hb);
-      next_heartbeat_s_ = Wall() + 0.25;  // as sequence_executor: 4 a second
+      last_heartbeat_s_ = Wall();
+      next_heartbeat_s_ = last_heartbeat_s_ + 0.25;  // as sequence_executor: 4 a second
     }
     const int ms = static_cast<int>(std::max(1.0, std::min(20.0, (until - Wall()) * 1000.0)));
     bus_.lcm().handleTimeout(ms);
@@ -201,7 +202,10 @@ void Probe::RunMobility(const MobilityLimits& limits, Report& report) {
   const std::int64_t watched = Command(mobility_command_t::TYPE_ARC, 2.0, 0, 0, 0.05, 0);
   Spin(limits.deadman_s + 1.0);
   commander_alive_ = false;
-  mobility_.silent_from_s = Wall();
+  // Silent since the last heartbeat sent, not since now: on a busy machine this loop may
+  // have come round late, and the driver's dead-man counts from what it last heard (a
+  // driver seen stopping 1.25 s after "now" was 1.5 s after the last heartbeat).
+  mobility_.silent_from_s = last_heartbeat_s_ > 0 ? last_heartbeat_s_ : Wall();
   Spin(limits.deadman_s + limits.deadman_margin_s + 1.0, [&] { return Ended(watched); });
   Spin(0.3);
   mobility_.silent_until_s = Wall();

@@ -78,6 +78,7 @@ class Probe {
   // The commander
   bool commander_alive_ = false;
   double next_heartbeat_s_ = 0;
+  double last_heartbeat_s_ = 0;  // wall s of the last commander heartbeat sent
   std::int64_t heartbeat_seq_ = 0, next_command_id_ = 0;
   std::vector<std::int64_t> own_heartbeats_;
   std::string other_commander_;
