@@ -72,12 +72,7 @@ struct DriftingDrive {
   void Step(PoseEstimator& est) {
     std::normal_distribution<double> normal;
     const int ticks = static_cast<int>(step_s * 10);
-    for (int i = 0; i < ticks; ++i) {
-      t += kSecond / 10;
-      imu_yaw_error += bias * 0.1 + arw * std::sqrt(0.1) * normal(rng);
-      ASSERT_EQ(est.OnImu(t, YawQ(imu_yaw_error), Eigen::Vector3d::Zero()), InputResult::kAccepted);
-      ASSERT_EQ(est.OnWheelOdometry(t, 0.05 * static_cast<double>(t) * 1e-6 - parked_m), InputResult::kAccepted);
-    }
+    for (int i = 0; i < ticks; ++i) Tick(est, 0.05 * static_cast<double>(t + kSecond / 10) * 1e-6 - parked_m, normal);
     const double yaw_noise = vo_yaw_sigma * normal(rng) + vo_yaw_bias_per_m * 0.05 * step_s;
     const Pose T = PoseFromXyzRpy(0.05 * step_s, 0, 0, 0, 0, yaw_noise);
     const double claimed = std::max(claimed_yaw_factor * vo_yaw_sigma, 1e-9);
@@ -89,13 +84,15 @@ struct DriftingDrive {
   void Park(PoseEstimator& est, double seconds) {
     std::normal_distribution<double> normal;
     const double distance = 0.05 * static_cast<double>(t) * 1e-6 - parked_m;
-    for (int i = 0; i < static_cast<int>(seconds * 10); ++i) {
-      t += kSecond / 10;
-      imu_yaw_error += bias * 0.1 + arw * std::sqrt(0.1) * normal(rng);
-      ASSERT_EQ(est.OnImu(t, YawQ(imu_yaw_error), Eigen::Vector3d::Zero()), InputResult::kAccepted);
-      ASSERT_EQ(est.OnWheelOdometry(t, distance), InputResult::kAccepted);
-    }
+    for (int i = 0; i < static_cast<int>(seconds * 10); ++i) Tick(est, distance, normal);
     parked_m += 0.05 * seconds;
+  }
+  // One 0.1 s tick: the gyro drifts on, the odometer reads `distance_m`.
+  void Tick(PoseEstimator& est, double distance_m, std::normal_distribution<double>& normal) {
+    t += kSecond / 10;
+    imu_yaw_error += bias * 0.1 + arw * std::sqrt(0.1) * normal(rng);
+    ASSERT_EQ(est.OnImu(t, YawQ(imu_yaw_error), Eigen::Vector3d::Zero()), InputResult::kAccepted);
+    ASSERT_EQ(est.OnWheelOdometry(t, distance_m), InputResult::kAccepted);
   }
   double parked_m = 0.0;  // what the odometer did not run while parked
   double HeadingError(const PoseEstimator& est) const { return Yaw(est.pose()); }
@@ -335,9 +332,7 @@ TEST(VoYawBias, VosDriftIsLearntApartFromTheGyrosAndTheHeadingStaysHonest) {
 // with no parks: the two biases are then told apart by nothing (VO's distance runs with the
 // gyro's time), so the heading's sigma must hold what neither can tell.
 TEST(VoYawBias, HeadingSigmaIsConsistentWhenTheBiasesCannotBeToldApart) {
-  EstimatorOptions o = Quiet();
-  o.gyro_drift_rad_per_s = 3.0 * kDegPerHour;
-  o.gyro_random_walk_rad_per_sqrt_s = 0.15 * M_PI / 180.0 / 60.0;
+  EstimatorOptions o = MerGyro();
   o.vo_yaw_bias_sigma_rad_per_m = 0.01 * M_PI / 180.0;
   std::mt19937 bias_rng(11);
   std::normal_distribution<double> normal;
@@ -345,12 +340,10 @@ TEST(VoYawBias, HeadingSigmaIsConsistentWhenTheBiasesCannotBeToldApart) {
   double nees = 0.0;
   for (int k = 0; k < kDrives; ++k) {
     PoseEstimator est(o);
-    DriftingDrive drive;
+    DriftingDrive drive = MerGyroDrive();
     drive.rng.seed(500 + k);
     drive.bias = o.gyro_drift_rad_per_s * normal(bias_rng);
     drive.vo_yaw_bias_per_m = o.vo_yaw_bias_sigma_rad_per_m * normal(bias_rng);
-    drive.arw = o.gyro_random_walk_rad_per_sqrt_s;
-    drive.vo_yaw_sigma = 0.0005;
     drive.Start(est);
     for (int i = 0; i < 60; ++i) drive.Step(est);
     const double e = drive.HeadingError(est);
