@@ -106,16 +106,68 @@ bool PoseEstimator::StandingStill(int64_t utime, const Eigen::Vector3d& angular_
 // Zero-velocity update on heading: the wheels stand and the gyro is quiet, so the rover's
 // heading has not changed, whatever the IMU's integrated yaw says (its drift). The heading
 // error therefore does not grow; only the bias's own walk does.
-void PoseEstimator::HoldHeadingAtRest(double dt, double dyaw) {
+//
+// The wheels' word on rest is the last odometry message's: an IMU sample newer than it is held
+// provisionally (kept in unconfirmed_rest_) until the next one says whether the wheels stood
+// through it (ConfirmRest) or had started to turn (ResumeHeldMotion). A gentle arc, slower
+// than zupt_max_rate, starts with such samples, and their yaw is the arc's, not drift.
+void PoseEstimator::HoldHeadingAtRest(int64_t utime, double dt, double dyaw) {
   yaw_offset_ = WrapAngle(yaw_offset_ - dyaw);
   const double walk = options_.gyro_bias_walk_rad_per_s_per_sqrt_s;
   P_(kBias, kBias) += walk * walk * dt;
+  if (utime > last_odometry_utime_) {
+    unconfirmed_rest_.push_back({utime, dt, dyaw});
+  } else {
+    AddToRestSegment(dt, dyaw);
+  }
+}
+
+void PoseEstimator::AddToRestSegment(double dt, double dyaw) {
   rest_segment_s_ += dt;
   rest_segment_dyaw_ += dyaw;
   if (rest_segment_s_ >= options_.zupt_bias_segment_s) {
     FuseRestBias(rest_segment_s_, rest_segment_dyaw_);
     rest_segment_s_ = rest_segment_dyaw_ = 0.0;
   }
+}
+
+// Odometry says the wheels stood: the samples held since the last one were at rest. They
+// measure the bias only while the rest they belong to goes on.
+void PoseEstimator::ConfirmRest() {
+  if (at_rest_) {
+    for (const HeldSample& h : unconfirmed_rest_) AddToRestSegment(h.dt, h.dyaw);
+  }
+  unconfirmed_rest_.clear();
+}
+
+// Odometry says the wheels turned since the last message: the yaw held since then was the
+// start of the motion. It is given back, with the gyro's bias taken off and the heading's
+// sigma grown as if it had been integrated, to the pose now and to the history's samples
+// of those instants (a VO update may clone from them).
+void PoseEstimator::ResumeHeldMotion() {
+  if (unconfirmed_rest_.empty()) return;
+  const double walk = options_.gyro_bias_walk_rad_per_s_per_sqrt_s;
+  double yaw = 0.0, seconds = 0.0, turned = 0.0;
+  for (const HeldSample& h : unconfirmed_rest_) {
+    P_(kBias, kBias) -= walk * walk * h.dt;  // PropagateHeading walks the bias again
+    PropagateHeading(h.dt, std::abs(h.dyaw));
+    yaw += h.dyaw - gyro_bias_ * h.dt;
+    seconds += h.dt;
+    turned += std::abs(h.dyaw);
+    const auto it = std::lower_bound(history_.begin(), history_.end(), h.utime,
+                                     [](const Sample& s, int64_t t) { return s.utime < t; });
+    if (it == history_.end() || it->utime != h.utime) continue;  // replaced by a VO update
+    it->q = Eigen::Quaterniond(Rz(yaw) * it->q.toRotationMatrix()).normalized();
+    it->P = P_;
+    it->gyro_s += seconds;
+    it->turned += turned;
+    it->at_rest = false;
+  }
+  yaw_offset_ = WrapAngle(yaw_offset_ + yaw);
+  gyro_s_ += seconds;
+  turned_rad_ += turned;
+  T_site_rover_.linear() = Rz(yaw_offset_) * q_imu_.toRotationMatrix();
+  unconfirmed_rest_.clear();
 }
 
 // The rest ends: its last segment counts when it is at least a quarter of a full one.
@@ -198,7 +250,7 @@ InputResult PoseEstimator::OnImu(const ImuSample& imu) {
     if (at_rest_ && !still) EndRest();
     at_rest_ = still;
     if (at_rest_) {
-      HoldHeadingAtRest(dt, dyaw);
+      HoldHeadingAtRest(imu.utime, dt, dyaw);
     } else {
       // The IMU's heading drifts by the gyro's bias: take off the bias VO has measured.
       yaw_offset_ = WrapAngle(yaw_offset_ - gyro_bias_ * dt);
@@ -239,11 +291,14 @@ InputResult PoseEstimator::OnWheelOdometry(const WheelOdometrySample& odo) {
   // Any wheel that turned (or a turn in place) ends a rest (EstimatorOptions, "At rest").
   const bool wheels_turned = !has_odometry_ || odo.distance_m != last_distance_m_ || odo.turning_in_place ||
                              odo.wheel_distance_m != wheel_distance_m_;
-  last_odometry_utime_ = odo.utime;
   if (wheels_turned) {
+    ResumeHeldMotion();
     last_wheel_motion_utime_ = odo.utime;
     if (at_rest_) EndRest();  // this sample starts the motion: not one of the rest's
+  } else {
+    ConfirmRest();
   }
+  last_odometry_utime_ = odo.utime;
   wheel_distance_m_ = odo.wheel_distance_m;
   const Eigen::Matrix3d R_now = T_site_rover_.linear();
   if (!has_odometry_) {
@@ -350,15 +405,19 @@ void PoseEstimator::SetCurrent(const Sample& s) {
 
 void PoseEstimator::Record() {
   const Sample s = Current();
-  // A stretch at rest is kept as its two ends: the pose between them is the same, so an
-  // hour or a night parked costs two samples, and a VO update from before it still finds
-  // its `from` (a pause is not a reason to refuse a VO update for age).
-  const bool resting = s.at_rest && history_.size() >= 2 && history_.back().at_rest &&
-                       history_[history_.size() - 2].at_rest;
-  if (!history_.empty() && (history_.back().utime == s.utime || resting)) {
+  if (!history_.empty() && history_.back().utime == s.utime) {
     history_.back() = s;
   } else {
     history_.push_back(s);
+  }
+  // A stretch at rest is kept as its two ends: the pose between them is the same, so an
+  // hour or a night parked costs two samples, and a VO update from before it still finds
+  // its `from` (a pause is not a reason to refuse a VO update for age). Samples held only
+  // provisionally (newer than the last odometry) are kept until odometry confirms them.
+  if (s.at_rest && s.utime <= last_odometry_utime_) {
+    while (history_.size() >= 3 && history_[history_.size() - 2].at_rest && history_[history_.size() - 3].at_rest) {
+      history_.erase(history_.end() - 2);
+    }
   }
   while (history_.size() > static_cast<std::size_t>(options_.history_max_samples)) {
     history_.pop_front();
@@ -666,6 +725,7 @@ void PoseEstimator::Reset(const geometry::Pose& T_site_rover, int64_t utime) {
   utime_ = utime;
   has_time_ = true;
   history_.clear();
+  unconfirmed_rest_.clear();
   measured_slip_.clear();
   Record();
 }

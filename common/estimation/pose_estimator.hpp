@@ -227,8 +227,12 @@ class PoseEstimator {
   StateVector FuseGyroCheck(const VoCloneModel& model, double check, StateMatrix& P_to) const;
   void PropagateHeading(double dt, double abs_dyaw);
   // At rest: holds the heading against the IMU's yaw change `dyaw` over `dt`, and feeds the
-  // rest segment's bias measurement (FuseRestBias).
-  void HoldHeadingAtRest(double dt, double dyaw);
+  // rest segment's bias measurement (FuseRestBias), provisionally while the sample is newer
+  // than the last odometry (ConfirmRest, ResumeHeldMotion).
+  void HoldHeadingAtRest(int64_t utime, double dt, double dyaw);
+  void AddToRestSegment(double dt, double dyaw);
+  void ConfirmRest();
+  void ResumeHeldMotion();
   void FuseRestBias(double segment_s, double segment_dyaw);
   void ConsiderRestBias(double R, StateMatrix& P) const;
   // How much of VO's yaw bias is still correlated after `distance_m` of VO's travel.
@@ -255,6 +259,13 @@ class PoseEstimator {
   double gyro_s_ = 0.0;  // seconds the gyro's heading was integrated (Sample::gyro_s)
   bool at_rest_ = false;
   double rest_segment_s_ = 0.0, rest_segment_dyaw_ = 0.0;  // the rest segment so far
+  // IMU samples held at rest that are newer than the last odometry message: the next one
+  // says whether the wheels stood through them.
+  struct HeldSample {
+    int64_t utime = 0;
+    double dt = 0.0, dyaw = 0.0;
+  };
+  std::vector<HeldSample> unconfirmed_rest_;
   int64_t last_odometry_utime_ = 0, last_wheel_motion_utime_ = 0;
   std::optional<double> pending_reset_yaw_;  // Reset() before the first IMU sample
 

@@ -666,3 +666,55 @@ TEST(PoseEstimator, TheGyroCheckCorrectsNoPosition) {
   Eigen::SelfAdjointEigenSolver<Matrix6d> es(P);
   EXPECT_GE(es.eigenvalues().minCoeff(), -1e-15);
 }
+
+namespace {
+
+// One 10 Hz tick at `t` (the IMU first, then the odometry at half its rate, on even ticks):
+// the rover at yaw `yaw` (rate `rate` rad/s) with `distance` on its odometer.
+void HalfRateOdometryTick(PoseEstimator& est, int i, double yaw, double rate, double distance) {
+  const int64_t t = i * (kSecond / 10);
+  ASSERT_EQ(est.OnImu(t, Q(0, 0, yaw), Eigen::Vector3d(0, 0, rate)), InputResult::kAccepted);
+  if (i % 2 == 0) {
+    ASSERT_EQ(est.OnWheelOdometry(t, distance), InputResult::kAccepted);
+  }
+}
+
+}  // namespace
+
+// An arc slower than the rest's gyro limit (0.3 deg/s against 0.5) starting from rest: the
+// IMU samples after the last odometry look like rest, but the next odometry shows the wheels
+// turning, so their yaw is the arc's. The heading ends where the IMU says, to the bit, and the
+// history holds the arc's first instants as turned (a VO update may clone from them).
+TEST(PoseEstimator, TheStartOfAnArcSlowerThanTheRestLimitIsKept) {
+  const double rate = 0.3 * M_PI / 180.0;
+  PoseEstimator est(Exact());
+  for (int i = 0; i <= 100; ++i) HalfRateOdometryTick(est, i, 0.0, 0.0, 0.0);  // 10 s parked
+  ASSERT_TRUE(est.at_rest());
+  for (int i = 101; i <= 200; ++i) {  // the arc, from t = 10 s
+    const double s = (i - 100) * 0.1;
+    HalfRateOdometryTick(est, i, rate * s, rate, 0.04 * s);
+  }
+  EXPECT_FALSE(est.at_rest());
+  EXPECT_NEAR(Yaw(est.pose()), rate * 10.0, 1e-12);
+  const auto first = est.PoseAt(10 * kSecond + kSecond / 10);
+  ASSERT_TRUE(first.has_value());
+  EXPECT_NEAR(Yaw(*first), rate * 0.1, 1e-12);
+}
+
+// Parked for an hour with the odometry at half the IMU's rate (half the IMU samples newer than
+// the last odometry, held until it confirms them): the heading is still held against a drift
+// of 3 deg/h, the drift still measures the bias, and the history stays a few samples long.
+TEST(PoseEstimator, ParkedWithOdometryAtHalfTheImuRateTheHeadingIsHeld) {
+  EstimatorOptions o;
+  const double bias = 3.0 * M_PI / 180.0 / 3600.0;
+  PoseEstimator est(o);
+  for (int i = 0; i <= 20; ++i) HalfRateOdometryTick(est, i, 0.0, 0.0, 0.0);
+  ASSERT_TRUE(est.at_rest());
+  const std::size_t history_before = est.history_size();
+  const int ticks = 36000;
+  for (int i = 21; i <= 20 + ticks; ++i) HalfRateOdometryTick(est, i, bias * (i - 20) * 0.1, bias, 0.0);
+  EXPECT_TRUE(est.at_rest());
+  EXPECT_NEAR(Yaw(est.pose()), 0.0, 1e-9);
+  EXPECT_NEAR(est.gyro_bias_rad_per_s(), bias, 0.05 * bias);
+  EXPECT_LE(est.history_size(), history_before + 3);
+}
