@@ -85,6 +85,9 @@ struct EstimatorOptions {
   // (a night). The drift it reads meanwhile measures the gyro's bias: every
   // zupt_bias_segment_s of rest is one measurement (its yaw change over its length, noise
   // arw^2/T + 2 zupt_yaw_reading_sigma^2/T^2), fused into the bias estimate and its sigma.
+  // The wheels' word is the last odometry message's: an IMU sample newer than it is held
+  // provisionally, and the next message decides (wheels still: it was rest; wheels turned:
+  // its yaw was the start of the motion and is given back to the heading).
   bool zero_velocity_updates = true;
   double zupt_settle_s = 0.5;
   double zupt_odometry_timeout_s = 3.0;

@@ -299,6 +299,7 @@ InputResult PoseEstimator::OnWheelOdometry(const WheelOdometrySample& odo) {
     ConfirmRest();
   }
   last_odometry_utime_ = odo.utime;
+  const double turn_travel = odo.turning_in_place ? WheelTravelSinceLast(odo.wheel_distance_m) : 0.0;
   wheel_distance_m_ = odo.wheel_distance_m;
   const Eigen::Matrix3d R_now = T_site_rover_.linear();
   if (!has_odometry_) {
@@ -311,6 +312,7 @@ InputResult PoseEstimator::OnWheelOdometry(const WheelOdometrySample& odo) {
   double delta = odo.distance_m - last_distance_m_;
   last_distance_m_ = odo.distance_m;
   if (odo.turning_in_place && options_.ignore_distance_while_turning_in_place) delta = 0.0;
+  GrowPositionCovarianceInTurn(turn_travel);
 
   if (delta != 0.0) {
     // Midpoint rule: the mean of the forward axes at both ends follows an arc or a change
@@ -348,12 +350,34 @@ void PoseEstimator::GrowPositionCovariance(const Eigen::Vector3d& displacement) 
   const Eigen::Vector2d fraction = wheel_sigma_fractions();
   const double growth[3] = {fraction.x() * distance, fraction.y() * distance,
                             options_.vertical_sigma_fraction * distance};
+  for (int i = 0; i < 3; ++i) GrowPositionSigmaAlong(axes[i], growth[i]);
+}
+
+// P += ((s + g)^2 - s^2) e e^T, with s the position's sigma along the unit vector e now.
+void PoseEstimator::GrowPositionSigmaAlong(const Eigen::Vector3d& e, double g) {
   auto P_pos = P_.topLeftCorner<3, 3>();
-  for (int i = 0; i < 3; ++i) {
-    const double s = std::sqrt(std::max(0.0, axes[i].dot(P_pos * axes[i])));
-    const double g = growth[i];
-    P_pos += (2.0 * s * g + g * g) * axes[i] * axes[i].transpose();
-  }
+  const double s = std::sqrt(std::max(0.0, e.dot(P_pos * e)));
+  P_pos += (2.0 * s * g + g * g) * e * e.transpose();
+}
+
+// The mean distance the wheels rolled since the last odometry message (0 when it does not
+// carry them, or carries a different number of wheels).
+double PoseEstimator::WheelTravelSinceLast(const std::vector<double>& wheel_distance_m) const {
+  if (wheel_distance_m.empty() || wheel_distance_m.size() != wheel_distance_m_.size()) return 0.0;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < wheel_distance_m.size(); ++i) sum += std::abs(wheel_distance_m[i] - wheel_distance_m_[i]);
+  return sum / static_cast<double>(wheel_distance_m.size());
+}
+
+// A turn in place moves the body too: the wheels scrub and, on a slope, creep downhill. The
+// position's sigma grows in both horizontal directions by the cross-track fraction of the
+// distance the wheels rolled (the direction of the creep is the slope's, which the
+// estimator does not know).
+void PoseEstimator::GrowPositionCovarianceInTurn(double wheel_travel_m) {
+  if (!(wheel_travel_m > 0.0)) return;
+  const double g = wheel_sigma_fractions().y() * wheel_travel_m;
+  GrowPositionSigmaAlong(Eigen::Vector3d::UnitX(), g);
+  GrowPositionSigmaAlong(Eigen::Vector3d::UnitY(), g);
 }
 
 Eigen::Vector2d PoseEstimator::wheel_sigma_fractions() const {

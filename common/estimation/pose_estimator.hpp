@@ -87,7 +87,9 @@ struct ImuSample {
 struct WheelOdometrySample {
   int64_t utime = 0;
   double distance_m = 0.0;  // cumulative, signed path length of the body
-  std::vector<double> wheel_distance_m;  // optional, cumulative per wheel (kept, not fused)
+  // Optional, cumulative per wheel: kept, and in a turn in place the distance they rolled
+  // grows the position's sigma (the body scrubs and creeps).
+  std::vector<double> wheel_distance_m;
   double curvature_per_m = 0.0;
   bool turning_in_place = false;
 };
@@ -240,6 +242,9 @@ class PoseEstimator {
   void EndRest();
   bool StandingStill(int64_t utime, const Eigen::Vector3d& angular_rate) const;
   void GrowPositionCovariance(const Eigen::Vector3d& displacement);
+  void GrowPositionCovarianceInTurn(double wheel_travel_m);
+  void GrowPositionSigmaAlong(const Eigen::Vector3d& e, double g);
+  double WheelTravelSinceLast(const std::vector<double>& wheel_distance_m) const;
   // The wheels' error VO measured over [from, to] (EstimatorOptions::slip_memory_updates).
   void MeasureWheelSlip(const Sample& from, const Sample& to_wheels, const Eigen::Vector3d& t_site_vo);
   StateMatrix InitialCovariance() const;

@@ -148,6 +148,27 @@ TEST(PoseEstimator, TurnInPlaceDoesNotMoveThePosition) {
   EXPECT_NEAR(est.pose().translation().norm(), 1.0, 1e-9);
 }
 
+// A turn in place scrubs and, on a slope, creeps: the position stays where it was, and its
+// sigma grows in both horizontal directions by the cross-track fraction (2 %) of what the
+// wheels rolled (six wheels, 0.3 m each, either way).
+TEST(PoseEstimator, TurnInPlaceGrowsThePositionSigmaByTheWheelsTravel) {
+  PoseEstimator est(Exact());
+  WheelOdometrySample odo;
+  odo.wheel_distance_m.assign(6, 0.0);
+  est.OnImu(0, Q(0, 0, 0), Eigen::Vector3d::Zero());
+  ASSERT_EQ(est.OnWheelOdometry(odo), InputResult::kAccepted);
+  odo.utime = kSecond;
+  odo.turning_in_place = true;
+  odo.wheel_distance_m = {-0.3, -0.3, -0.3, 0.3, 0.3, 0.3};
+  est.OnImu(kSecond, Q(0, 0, 0.5), Eigen::Vector3d::Zero());
+  ASSERT_EQ(est.OnWheelOdometry(odo), InputResult::kAccepted);
+  EXPECT_NEAR(est.pose().translation().norm(), 0.0, 1e-12);
+  const Matrix6d P = est.covariance();
+  EXPECT_NEAR(std::sqrt(P(0, 0)), 0.02 * 0.3, 1e-12);
+  EXPECT_NEAR(std::sqrt(P(1, 1)), 0.02 * 0.3, 1e-12);
+  EXPECT_NEAR(P(2, 2), 0.0, 1e-15);
+}
+
 TEST(PoseEstimator, OutOfOrderAndNonFiniteInputsAreIgnored) {
   PoseEstimator est(Exact());
   est.OnWheelOdometry(2 * kSecond, 0.0);
