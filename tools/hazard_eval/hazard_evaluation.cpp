@@ -25,6 +25,9 @@ void BandCounts::Add(const BandCounts& o) {
   unsafe_found_cells += o.unsafe_found_cells;
   crest_cells += o.crest_cells;
   crest_truly_unsafe += o.crest_truly_unsafe;
+  tall_cells += o.tall_cells;
+  tall_read_low += o.tall_read_low;
+  tall_step_error_sum += o.tall_step_error_sum;
 }
 
 BandCounts EvalResult::Within4m() const {
@@ -74,7 +77,10 @@ bool InHazcamView(const geometry::StereoRig& rig, const tv::MapOptions& stereo, 
 // exact surface in it (a rock reaching into a cell counts at its top there, as a wheel
 // would meet it; the map's own cells hold the mean of the points the cameras see, which
 // lie on rocks' visible faces and tops).
-void FillTruth(const terrain::World& world, tv::TraversabilityMap* truth) {
+// Cells this tall or more in truth: how the map reads steps near the limit.
+constexpr float kTallStepM = 0.15f;
+
+void FillTruth(const terrain::World& world, bool at_mean, tv::TraversabilityMap* truth) {
   truth->Clear();
   const int k = 5;
   const double cell = truth->cell_size();
@@ -82,11 +88,15 @@ void FillTruth(const terrain::World& world, tv::TraversabilityMap* truth) {
   pts.reserve(static_cast<std::size_t>(truth->rows()) * truth->cols() * 3);
   for (int i = 0; i < truth->rows(); ++i)
     for (int j = 0; j < truth->cols(); ++j) {
-      double top = -1e9;
+      double top = -1e9, sum = 0;
       for (int a = 0; a < k; ++a)
-        for (int b = 0; b < k; ++b)
-          top = std::max(top, world.ElevationDetailed(truth->origin_x() + (i + (a + 0.5) / k) * cell,
-                                                      truth->origin_y() + (j + (b + 0.5) / k) * cell));
+        for (int b = 0; b < k; ++b) {
+          const double e = world.ElevationDetailed(truth->origin_x() + (i + (a + 0.5) / k) * cell,
+                                                   truth->origin_y() + (j + (b + 0.5) / k) * cell);
+          top = std::max(top, e);
+          sum += e;
+        }
+      if (at_mean) top = sum / (k * k);
       // min_points copies at the cell centre.
       const Eigen::Vector3d p(truth->origin_x() + (i + 0.5) * cell, truth->origin_y() + (j + 0.5) * cell, -top);
       for (int c = 0; c < truth->options().min_points; ++c) pts.push_back(p);
@@ -154,7 +164,7 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 
     truth.Recentre(ep.x, ep.y);
-    FillTruth(world, &truth);
+    FillTruth(world, options.truth_at_cell_mean, &truth);
     const Eigen::Isometry3d T_rover_site = T.inverse();
     const auto& mc = map.cells();
     const auto& tc = truth.cells();
@@ -179,6 +189,12 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
         if (mc[idx].crest_unseen) {
           ++b.crest_cells;
           b.crest_truly_unsafe += tc[idx].state == tv::CellState::kUnsafe;
+        }
+        if (mc[idx].state != tv::CellState::kUnknown && mc[idx].height_sigma_m >= 0 &&
+            tc[idx].state != tv::CellState::kUnknown && tc[idx].step_m >= kTallStepM) {
+          ++b.tall_cells;
+          b.tall_step_error_sum += mc[idx].step_m - tc[idx].step_m;
+          b.tall_read_low += mc[idx].step_m <= tc[idx].step_m - 0.08f;
         }
         if (tc[idx].state == tv::CellState::kUnsafe) {
           ++b.unsafe_cells;
@@ -261,6 +277,14 @@ std::string FormatTable(const EvalResult& r, double rock_limit_m) {
                 near.unsafe_cells, near.unsafe_found_cells,
                 pct(near.unsafe_found_cells, near.unsafe_cells).c_str());
   out << line;
+  if (near.tall_cells > 0) {
+    std::snprintf(line, sizeof line,
+                  "steps of cells 0.15 m or more in truth, rated by both (0-4 m): %d, map less truth %+.3f m on "
+                  "average, %d %s read 0.08 m or more low\n",
+                  near.tall_cells, near.tall_step_error_sum / near.tall_cells, near.tall_read_low,
+                  pct(near.tall_read_low, near.tall_cells).c_str());
+    out << line;
+  }
   if (near.crest_cells > 0) {
     std::snprintf(line, sizeof line, "cells read at the step limit for an unseen crest (0-4 m): %d, unsafe in truth: %d %s\n",
                   near.crest_cells, near.crest_truly_unsafe, pct(near.crest_truly_unsafe, near.crest_cells).c_str());

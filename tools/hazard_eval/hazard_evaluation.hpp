@@ -59,6 +59,10 @@ struct EvalOptions {
   std::array<double, 6> pose_error = {0, 0, 0, 0, 0, 0};
   std::int64_t first_frame_seed = 1;  // the render noise seed of the first pose's pairs
   double dump_range_m = 0;         // > 0: EvalResult::dumped gets the rated cells this near
+  // The truth's height of a cell: its highest point (what the rover's body meets; the
+  // default), or its mean (what the map's cells measure: the mean of their points), which
+  // tells the map's reading of the surface apart from a cell's size.
+  bool truth_at_cell_mean = false;
 };
 
 struct BandCounts {
@@ -69,6 +73,10 @@ struct BandCounts {
   // Cells the map rates caution at its step limit for an unseen crest (crest_view_range_m),
   // and those of them that are unsafe in truth.
   int crest_cells = 0, crest_truly_unsafe = 0;
+  // Cells rated by both with a true step of 0.15 m or more (rocks near the limit): the sum of
+  // the map's step less the truth's, and how many read 0.08 m or more under it.
+  int tall_cells = 0, tall_read_low = 0;
+  double tall_step_error_sum = 0;
   void Add(const BandCounts& o);
 };
 

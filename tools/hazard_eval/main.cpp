@@ -5,9 +5,13 @@
 //               [--poses "x,y,yaw_deg;x,y,yaw_deg;..."] [--steps 5] [--step-m 0.5]
 //               [--min-detection 0.95] [--max-false-unsafe 0.05] [--verbose]
 //               [--hazcam configs/cameras/hazcam_front.yaml] [--dump-cells R]
+//               [--truth-height max|mean]
 // --hazcam: the front HAZCAM pair as well, rendered at 256 px at each pose and mapped with the
 // rover config's hazards.map.hazcam options before the main pair (as hazard_monitor gets it).
-// --dump-cells R: every rated in-view cell within R m, the map's and the truth's ratings.
+// --dump-cells R: every rated in-view cell within R m, the map's and the truth's ratings
+// and tops (the map's: its points' mean height plus one standard deviation).
+// --truth-height max|mean: a cell's true height is its highest point (max, the default:
+// what the body meets) or its mean (what the map's cells measure).
 // --poses items may add that pair's own pose error: x,y,yaw,ex,ey,ez,eroll,epitch,eyaw.
 // --pose-error x,y,z,roll,pitch,yaw: the map gets each pair at the true pose moved by these
 // (metres, degrees), as an estimate's error at capture.
@@ -55,7 +59,7 @@ int main(int argc, char** argv) {
   std::string rover_path = "configs/rover.yaml", map_path, poses_text, hazcam_path;
   double size = 512, steps = 5, step_m = 0.5, min_detection = -1, max_false_unsafe = -1, dump_m = 0,
          frame_seed = 1;
-  bool verbose = false;
+  bool verbose = false, truth_at_mean = false;
   std::array<double, 6> pose_error = {0, 0, 0, 0, 0, 0};
   std::optional<std::array<double, 2>> attitude, pose_sigma;
   for (int i = 1; i < argc; ++i) {
@@ -67,7 +71,7 @@ int main(int argc, char** argv) {
                    "       [--min-detection F] [--max-false-unsafe F] [--verbose]\n"
                    "       [--hazcam HAZCAM_RIG.yaml] [--dump-cells R] [--frame-seed S]\n"
                    "       [--pose-error x,y,z,roll,pitch,yaw] [--attitude roll,pitch]\n"
-                   "       [--pose-sigma m,deg]\n";
+                   "       [--pose-sigma m,deg] [--truth-height max|mean]\n";
       return 0;
     } else if (a == "--rig") {
       if (!has) return Usage("--rig: expected a stereo rig YAML file");
@@ -118,6 +122,10 @@ int main(int argc, char** argv) {
     } else if (a == "--frame-seed") {
       if (!has || !config::ParseNumberInRange(argv[++i], 1, 1e9, &frame_seed) || frame_seed != std::floor(frame_seed))
         return Usage("--frame-seed: expected the first pair's noise seed, an integer in [1, 1e9]");
+    } else if (a == "--truth-height") {
+      const std::string v = has ? argv[++i] : "";
+      if (v != "max" && v != "mean") return Usage("--truth-height: expected max or mean");
+      truth_at_mean = v == "mean";
     } else if (a == "--dump-cells") {
       if (!has || !config::ParseNumberInRange(argv[++i], 0.1, 10, &dump_m))
         return Usage("--dump-cells: expected a range in metres, in [0.1, 10]");
@@ -190,6 +198,7 @@ int main(int argc, char** argv) {
       options.hazcam_rig = geometry::LoadStereoRigFile(hazcam_path);
     }
     options.dump_range_m = dump_m;
+    options.truth_at_cell_mean = truth_at_mean;
     options.first_frame_seed = static_cast<std::int64_t>(frame_seed);
     options.pose_error = pose_error;
     if (attitude) {
@@ -229,13 +238,13 @@ int main(int argc, char** argv) {
                     f.truth.roughness_m, traversability::CellStateName(f.truth.state));
     }
     for (const auto& d : r.dumped)
-      std::printf("  cell from pose %d at %.1f m (%.1f, %.1f): map %s step %.2f tilt %.1f rough %.3f sigma %.3f%s; "
-                  "truth %s step %.2f tilt %.1f rough %.3f\n",
+      std::printf("  cell from pose %d at %.1f m (%.1f, %.1f): map %s step %.2f tilt %.1f rough %.3f sigma %.3f top %.2f%s; "
+                  "truth %s step %.2f tilt %.1f rough %.3f top %.2f\n",
                   d.pose, d.range_m, d.x, d.y, d.map.crest_unseen ? "unknown (crest unseen)" : traversability::CellStateName(d.map.state), d.map.step_m,
-                  d.map.tilt_rad * 180 / M_PI, d.map.roughness_m, d.map.sigma_m,
+                  d.map.tilt_rad * 180 / M_PI, d.map.roughness_m, d.map.sigma_m, d.map.elevation_m,
                   d.map.height_sigma_m < 0 ? " (no points of its own)" : "",
                   traversability::CellStateName(d.truth.state), d.truth.step_m, d.truth.tilt_rad * 180 / M_PI,
-                  d.truth.roughness_m);
+                  d.truth.roughness_m, d.truth.elevation_m);
     const hazard_eval::BandCounts near = r.Within4m();
     int status = 0;
     if (min_detection >= 0) {
