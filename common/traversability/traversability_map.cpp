@@ -130,6 +130,8 @@ void CheckMapOptions(const MapOptions& o) {
     Bad("dip_margin_sigmas must be in [0, 10]");
   if (!std::isfinite(o.relief_sigmas) || o.relief_sigmas < 0 || o.relief_sigmas > 10)
     Bad("relief_sigmas must be in [0, 10]");
+  if (!std::isfinite(o.cell_plane_sigmas) || o.cell_plane_sigmas < 0 || o.cell_plane_sigmas > 10)
+    Bad("cell_plane_sigmas must be in [0, 10]");
   if (!(o.crest_view_range_m >= 0 && o.crest_view_range_m <= 100) || !(o.crest_view_height_m > 0 && o.crest_view_height_m <= 10) ||
       !(o.crest_rise_fraction > 0 && o.crest_rise_fraction <= 1))
     Bad("crest_view_range_m must be in [0, 100], crest_view_height_m in (0, 10] and crest_rise_fraction in (0, 1]");
@@ -235,8 +237,15 @@ void TraversabilityMap::AddPoints(const std::vector<Eigen::Vector3d>& points_sit
     a.sw += static_cast<float>(w);
     a.sh += static_cast<float>(w * h);
     a.shh += static_cast<float>(w * h * h);
-    a.sx += static_cast<float>(w * (p.x() - origin_x_ - (fi + 0.5) * options_.cell_size_m));
-    a.sy += static_cast<float>(w * (p.y() - origin_y_ - (fj + 0.5) * options_.cell_size_m));
+    const double dx = p.x() - origin_x_ - (fi + 0.5) * options_.cell_size_m;
+    const double dy = p.y() - origin_y_ - (fj + 0.5) * options_.cell_size_m;
+    a.sx += static_cast<float>(w * dx);
+    a.sy += static_cast<float>(w * dy);
+    a.sxx += static_cast<float>(w * dx * dx);
+    a.sxy += static_cast<float>(w * dx * dy);
+    a.syy += static_cast<float>(w * dy * dy);
+    a.sxh += static_cast<float>(w * dx * h);
+    a.syh += static_cast<float>(w * dy * h);
   }
   dirty_ = true;
 }
@@ -441,6 +450,41 @@ const std::vector<Cell>& TraversabilityMap::cells() const {
   return cells_;
 }
 
+// How far a cell's top stands over its mean (cell_plane_sigmas): the plane through the
+// cell's own points, from their moments, its gradient shrunk by `k_sigmas` standard errors
+// along itself, at the corner of the cell where it is highest, less its value at the
+// points' centroid (where the mean lies). The gradient's covariance is (sum w x x^T)^-1
+// times the fit's reduced chi-square when over 1 (the points scatter about the plane more
+// than their sigmas say: pairs that disagree, a mismatched streak). At most twice the
+// points' height spread: a plane is no model of a cell holding a wall and its foot, and a
+// ramp sampled evenly has its top 1.7 spreads over its mean. Written by hand: a weighted
+// least-squares plane from running moments, which the map keeps per cell anyway.
+double TraversabilityMap::CellPlaneRise(const Accumulator& a, double cell_m, double k_sigmas) {
+  if (a.n < 6 || !(a.sw > 0)) return 0.0;
+  const double sw = a.sw, mx = a.sx / sw, my = a.sy / sw, h = a.sh / sw;
+  const double cxx = a.sxx / sw - mx * mx, cxy = a.sxy / sw - mx * my, cyy = a.syy / sw - my * my;
+  const double cxh = a.sxh / sw - mx * h, cyh = a.syh / sw - my * h;
+  const double spread2 = std::max(0.0, static_cast<double>(a.shh) / sw - h * h);
+  const double det = cxx * cyy - cxy * cxy;
+  // Points on a line (or one spot) across the cell: no plane.
+  const double extent2 = 0.25 * cell_m * cell_m;
+  if (!(det > 1e-4 * extent2 * extent2)) return 0.0;
+  const Eigen::Vector2d g((cyy * cxh - cxy * cyh) / det, (cxx * cyh - cxy * cxh) / det);
+  const double g_norm = g.norm();
+  if (!(g_norm > 0) || !std::isfinite(g_norm)) return 0.0;
+  const double residual2 = std::max(0.0, spread2 - (g.x() * cxh + g.y() * cyh));  // weighted mean r^2
+  const double chi2 = residual2 * sw / std::max(1.0, static_cast<double>(a.n) - 3.0);
+  const Eigen::Vector2d dir = g / g_norm;
+  // (sum w x x^T)^-1 = C^-1 / sw, along dir.
+  const double var_along = (dir.x() * dir.x() * cyy - 2 * dir.x() * dir.y() * cxy + dir.y() * dir.y() * cxx) /
+                           (det * sw) * std::max(1.0, chi2);
+  const double rated = std::max(0.0, g_norm - k_sigmas * std::sqrt(std::max(0.0, var_along)));
+  if (rated <= 0) return 0.0;
+  const Eigen::Vector2d gr = dir * rated;
+  const double rise = 0.5 * cell_m * (std::abs(gr.x()) + std::abs(gr.y())) - (gr.x() * mx + gr.y() * my);
+  return std::clamp(rise, 0.0, 2.0 * std::sqrt(spread2));
+}
+
 std::vector<char> TraversabilityMap::CellsInHoles(const std::vector<char>& has_points, double diameter_cells) const {
   if (!(diameter_cells > 0.0)) return {};
   // The disc's offsets, as avoidance's hidden ground: radius half the width, in cells.
@@ -477,7 +521,7 @@ void TraversabilityMap::Rate() const {
   const std::size_t count = static_cast<std::size_t>(n_) * n_;
   // Cell heights (weighted means) and sigmas.
   std::vector<float> h(count, 0.0f), s(count, 0.0f), e(count, 0.0f), mx(count, 0.0f), my(count, 0.0f),
-      relief(count, 0.0f), top(count, 0.0f);
+      relief(count, 0.0f), top(count, 0.0f), rise(count, 0.0f);
   std::vector<char> known(count, 0);
   const bool framed_mean = o.framed_height == MapOptions::FramedHeight::kMean && o.crest_view_range_m > 0;
   const bool framed_max = o.framed_height == MapOptions::FramedHeight::kMax && o.crest_view_range_m > 0;
@@ -498,6 +542,7 @@ void TraversabilityMap::Rate() const {
     // The relief within the cell: the points' scatter beyond their own noise (relief_sigmas).
     relief[k] = static_cast<float>(std::sqrt(std::max(0.0, spread2 - static_cast<double>(s[k]) * s[k])));
     top[k] = static_cast<float>(h[k] + std::sqrt(spread2));
+    if (o.cell_plane_sigmas > 0) rise[k] = static_cast<float>(CellPlaneRise(a, o.cell_size_m, o.cell_plane_sigmas));
     // framed_height: at least what the pairs that framed its top read.
     const FramedMoments& f = framed_acc_[k];
     if (framed_mean && f.n >= o.min_points && f.sw > 0) h[k] = std::max(h[k], f.sh / f.sw);
@@ -789,7 +834,7 @@ void TraversabilityMap::Rate() const {
         // Rising toward a side no pair framed: the crest may stand there, higher.
         if (crests && above >= crest_rise && open_side[xi[k]]) crest_unseen = true;
         lo = std::min(lo, above + o.dip_margin_sigmas * se[k]);
-        hi = std::max(hi, above + o.relief_sigmas * sr[k]);
+        hi = std::max(hi, above + o.relief_sigmas * sr[k] + rise[xi[k]]);
         // The roughness: how far each cell lies off the plane beyond what its own height
         // error explains (roughness_margin_sigmas of it).
         const double off = std::max(0.0, std::abs(res) - o.roughness_margin_sigmas * se[k]);
@@ -880,6 +925,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
   node.Get("dip_margin_sigmas", o.dip_margin_sigmas, 0.0, 10.0);
   node.Get("roughness_margin_sigmas", o.roughness_margin_sigmas, 0.0, 10.0);
   node.Get("relief_sigmas", o.relief_sigmas, 0.0, 10.0);
+  node.Get("cell_plane_sigmas", o.cell_plane_sigmas, 0.0, 10.0);
   node.Get("crest_view_range_m", o.crest_view_range_m, 0.0, 100.0);
   node.Get("crest_view_height_m", o.crest_view_height_m, 1e-3, 10.0);
   node.Get("crest_rise_fraction", o.crest_rise_fraction, 1e-3, 1.0);
@@ -910,7 +956,7 @@ MapOptions ReadMapOptions(const config::ConfigNode& node, MapOptions o) {
 const std::vector<std::string> kMapOnlyKeys = {
     "cell_size_m", "extent_m", "footprint_radius_m", "tilt_radius_m", "max_step_m", "max_tilt_deg", "max_face_deg",
     "max_roughness_m", "min_points", "caution_fraction", "min_patch_fraction", "tilt_margin_sigmas", "dip_margin_sigmas",
-    "roughness_margin_sigmas", "relief_sigmas", "ground_band_fraction", "crest_view_range_m", "crest_view_height_m",
+    "roughness_margin_sigmas", "relief_sigmas", "cell_plane_sigmas", "ground_band_fraction", "crest_view_range_m", "crest_view_height_m",
     "crest_rise_fraction", "open_cells_unknown", "hole_unknown_m", "unframed_unknown", "framed_height"};
 
 }  // namespace

@@ -102,6 +102,16 @@ struct MapOptions {           // read from YAML by LoadMapOptions (key names = f
   // 1.7 m straight on, and 0.16 to 0.20 m from the HAZCAM's edge, which saw only its near
   // flank); noise alone adds no relief, so level ground reads as before. 0: the mean.
   double relief_sigmas = 0.0;
+  // The step counts each cell above the ground plane at its top: its highest point as the
+  // plane through the cell's own points places it, at the cell's corner where that plane
+  // is highest. A cell's mean lies under its top by half the rise across it; on a rock's
+  // flank that is most of what the map reads low (hazard-eval against the cells' mean true
+  // height: steps of 0.15 m or more right to 0.01 m on average; against their highest
+  // points, 0.06 to 0.10 m low). The cell's gradient is shrunk by this many of its standard
+  // errors (from the points' scatter about the cell's plane, at least their stereo sigma),
+  // so noise and a few points in one corner add nothing; a rounded crest has no gradient
+  // and reads at its mean. 0: off (the mean, or relief_sigmas).
+  double cell_plane_sigmas = 0.0;
   // Crests out of frame. A rock at the edge of a camera's view shows its near flank and not
   // its top: a vertical edge leans outward toward the image's sides (the cameras look
   // down), so the top leaves the frame first, and the flank's cells read well under the
@@ -319,6 +329,9 @@ class TraversabilityMap {
     float sh = 0;        // weighted sum of elevation (m, up)
     float shh = 0;       // weighted sum of elevation^2
     float sx = 0, sy = 0;  // weighted sums of the offset from the cell centre (m)
+    // Weighted second moments of the offset (dx, dy), and of the offset with the elevation:
+    // the plane through the cell's own points (cell_plane_sigmas).
+    float sxx = 0, sxy = 0, syy = 0, sxh = 0, syh = 0;
   };
 
  private:
@@ -330,6 +343,9 @@ class TraversabilityMap {
   // cells (off the grid counts as without); empty when diameter_cells is 0 (hole_unknown_m).
   std::vector<char> CellsInHoles(const std::vector<char>& has_points, double diameter_cells) const;
   void MarkAllStale() const;
+  // How far a cell's top stands over its mean (MapOptions::cell_plane_sigmas), from its
+  // points' moments; 0 without a determined plane.
+  static double CellPlaneRise(const Accumulator& a, double cell_m, double k_sigmas);
 
   MapOptions options_;
   int n_ = 0;  // cells per side

@@ -325,12 +325,56 @@ TEST(HeightUncertainty, ACellOnARocksFlankCountsItsRelief) {
   }
 }
 
+// The same flank read at its top (cell_plane_sigmas): the plane through the cell's points
+// rises 1 m per metre, so at the cell's far edge it stands at 0.30 m; its gradient's
+// standard error (0.01 m points, 140 of them across 0.19 m) is about 0.015, so two of them
+// leave 0.97 of it and the step reads 0.297 m: unsafe. A rounded crest (a cap 0.19 m high at
+// the cell's centre, 0.11 m at its corners: a cobble's top) has no gradient and reads at its
+// mean, never over its 0.19 m; level ground's noise adds nothing.
+TEST(HeightUncertainty, ACellOnARocksFlankReadsAtItsTopAndACrestAtItsMean) {
+  auto cell = [](double k_sigmas, bool crest) {
+    MapOptions o = HazardMonitorRating();
+    o.relief_sigmas = 0;  // the mean, and the cell's plane alone
+    o.cell_plane_sigmas = k_sigmas;
+    TraversabilityMap map(o);
+    std::vector<Eigen::Vector3d> pts;
+    std::vector<double> sig;
+    int n = 0;
+    for (double x = 0.51; x < 3.5; x += 0.06)
+      for (double y = -1.49; y < 1.5; y += 0.06) {
+        if (x >= 2.0 && x < 2.2 && y >= 0.0 && y < 0.2) continue;
+        pts.emplace_back(x, y, (n++ % 2 == 0) ? 0.02 : -0.02);
+        sig.push_back(0.02);
+      }
+    for (double x = 2.005; x < 2.2; x += 0.01)
+      for (double y = 0.01; y < 0.2; y += 0.03) {
+        const double dx = x - 2.1, dy = y - 0.1;
+        pts.emplace_back(x, y, crest ? -(0.19 - 4.0 * (dx * dx + dy * dy)) : -(0.10 + (x - 2.0)));
+        sig.push_back(0.01);
+      }
+    map.AddPoints(pts, sig);
+    return map;
+  };
+  const TraversabilityMap mean = cell(0.0, false), top = cell(2.0, false);
+  EXPECT_NEAR(WorstStep(mean, 2.1, 0.1, 1), 0.20, 0.015);
+  EXPECT_NEAR(WorstStep(top, 2.1, 0.1, 1), 0.297, 0.01);
+  EXPECT_EQ(top.At(2.1, 0.1).state, CellState::kUnsafe);
+  const TraversabilityMap crest_mean = cell(0.0, true), crest_top = cell(2.0, true);
+  EXPECT_LE(WorstStep(crest_top, 2.1, 0.1, 1), 0.19);
+  EXPECT_NEAR(WorstStep(crest_top, 2.1, 0.1, 1), WorstStep(crest_mean, 2.1, 0.1, 1), 0.005);
+  for (double x : {0.9, 3.1}) {
+    EXPECT_LT(top.At(x, -1.0).step_m, 0.02) << x;
+    EXPECT_NEAR(top.At(x, -1.0).step_m, mean.At(x, -1.0).step_m, 1e-3) << x;
+  }
+}
+
 // The two margins of a cell's height error, each read, range-checked, and refused in a
 // camera's own section: they rate the map, not one camera's stereo.
 TEST(HeightUncertainty, MarginsAreReadAndChecked) {
   for (const auto& [key, member] : {std::pair{"dip_margin_sigmas", &MapOptions::dip_margin_sigmas},
                                     std::pair{"roughness_margin_sigmas", &MapOptions::roughness_margin_sigmas},
-                                    std::pair{"relief_sigmas", &MapOptions::relief_sigmas}}) {
+                                    std::pair{"relief_sigmas", &MapOptions::relief_sigmas},
+                                    std::pair{"cell_plane_sigmas", &MapOptions::cell_plane_sigmas}}) {
     SCOPED_TRACE(key);
     const std::string k(key);
     EXPECT_DOUBLE_EQ(LoadMapOptions(YAML::Load(k + ": 2"), "test").*member, 2.0);
