@@ -285,6 +285,28 @@ TEST(HeightUncertainty, TwoPairsThatDisagreeByAPlausiblePoseErrorMakeNoFalseStep
   EXPECT_GT(WorstStep(map, 2.1, 0.1), 0.15);  // the cobble is seen
 }
 
+// Level ground (points +-0.02 m, sigma 0.02 m) round one cell, [2.0, 2.2) x [0.0, 0.2),
+// whose points (sigma 0.01 m) stand at height(x, y) m.
+TraversabilityMap GroundWithOneCell(const MapOptions& o, const std::function<double(double, double)>& height) {
+  TraversabilityMap map(o);
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<double> sig;
+  int n = 0;
+  for (double x = 0.51; x < 3.5; x += 0.06)
+    for (double y = -1.49; y < 1.5; y += 0.06) {
+      if (x >= 2.0 && x < 2.2 && y >= 0.0 && y < 0.2) continue;
+      pts.emplace_back(x, y, (n++ % 2 == 0) ? 0.02 : -0.02);
+      sig.push_back(0.02);
+    }
+  for (double x = 2.005; x < 2.2; x += 0.01)
+    for (double y = 0.01; y < 0.2; y += 0.03) {
+      pts.emplace_back(x, y, -height(x, y));
+      sig.push_back(0.01);
+    }
+  map.AddPoints(pts, sig);
+  return map;
+}
+
 // A rock's near flank, seen without its crest (a rock at the edge of the HAZCAM's view):
 // one cell whose points rise evenly from 0.10 to 0.30 m across it, on flat ground. Its mean
 // is 0.20 m, under the 0.25 m limit (caution); its points scatter 0.2 / sqrt(12) = 0.058 m
@@ -295,23 +317,8 @@ TEST(HeightUncertainty, ACellOnARocksFlankCountsItsRelief) {
   auto flank = [](double relief_sigmas) {
     MapOptions o = HazardMonitorRating();
     o.relief_sigmas = relief_sigmas;
-    TraversabilityMap map(o);
-    std::vector<Eigen::Vector3d> pts;
-    std::vector<double> sig;
-    int n = 0;
-    for (double x = 0.51; x < 3.5; x += 0.06)
-      for (double y = -1.49; y < 1.5; y += 0.06) {
-        if (x >= 2.0 && x < 2.2 && y >= 0.0 && y < 0.2) continue;
-        pts.emplace_back(x, y, (n++ % 2 == 0) ? 0.02 : -0.02);
-        sig.push_back(0.02);
-      }
-    for (double x = 2.005; x < 2.2; x += 0.01)
-      for (double y = 0.01; y < 0.2; y += 0.03) {
-        pts.emplace_back(x, y, -(0.10 + (x - 2.0)));  // 0.10 m at the near edge, 0.30 m at the far
-        sig.push_back(0.01);
-      }
-    map.AddPoints(pts, sig);
-    return map;
+    // 0.10 m at the near edge, 0.30 m at the far.
+    return GroundWithOneCell(o, [](double x, double) { return 0.10 + (x - 2.0); });
   };
   const TraversabilityMap mean = flank(0.0), relief = flank(1.0);
   EXPECT_NEAR(WorstStep(mean, 2.1, 0.1, 1), 0.20, 0.015);
@@ -336,24 +343,10 @@ TEST(HeightUncertainty, ACellOnARocksFlankReadsAtItsTopAndACrestAtItsMean) {
     MapOptions o = HazardMonitorRating();
     o.relief_sigmas = 0;  // the mean, and the cell's plane alone
     o.cell_plane_sigmas = k_sigmas;
-    TraversabilityMap map(o);
-    std::vector<Eigen::Vector3d> pts;
-    std::vector<double> sig;
-    int n = 0;
-    for (double x = 0.51; x < 3.5; x += 0.06)
-      for (double y = -1.49; y < 1.5; y += 0.06) {
-        if (x >= 2.0 && x < 2.2 && y >= 0.0 && y < 0.2) continue;
-        pts.emplace_back(x, y, (n++ % 2 == 0) ? 0.02 : -0.02);
-        sig.push_back(0.02);
-      }
-    for (double x = 2.005; x < 2.2; x += 0.01)
-      for (double y = 0.01; y < 0.2; y += 0.03) {
-        const double dx = x - 2.1, dy = y - 0.1;
-        pts.emplace_back(x, y, crest ? -(0.19 - 4.0 * (dx * dx + dy * dy)) : -(0.10 + (x - 2.0)));
-        sig.push_back(0.01);
-      }
-    map.AddPoints(pts, sig);
-    return map;
+    return GroundWithOneCell(o, [crest](double x, double y) {
+      const double dx = x - 2.1, dy = y - 0.1;
+      return crest ? 0.19 - 4.0 * (dx * dx + dy * dy) : 0.10 + (x - 2.0);
+    });
   };
   const TraversabilityMap mean = cell(0.0, false), top = cell(2.0, false);
   EXPECT_NEAR(WorstStep(mean, 2.1, 0.1, 1), 0.20, 0.015);
