@@ -361,6 +361,34 @@ TEST(HeightUncertainty, ACellOnARocksFlankReadsAtItsTopAndACrestAtItsMean) {
   }
 }
 
+// A cell whose points lie on one line across it (a single image row's worth) determines no
+// plane: it reads at its mean, however its points rise along the line.
+TEST(HeightUncertainty, ACellWhosePointsLieOnALineReadsAtItsMean) {
+  MapOptions o = HazardMonitorRating();
+  o.relief_sigmas = 0;
+  auto line = [](double x, double) { return 0.10 + (x - 2.0); };
+  auto with = [&](double k_sigmas) {
+    o.cell_plane_sigmas = k_sigmas;
+    TraversabilityMap map(o);
+    std::vector<Eigen::Vector3d> pts;
+    std::vector<double> sig;
+    for (double x = 0.51; x < 3.5; x += 0.06)
+      for (double y = -1.49; y < 1.5; y += 0.06) {
+        if (x >= 2.0 && x < 2.2 && y >= 0.0 && y < 0.2) continue;
+        pts.emplace_back(x, y, 0.0);
+        sig.push_back(0.02);
+      }
+    for (double x = 2.005; x < 2.2; x += 0.01) {
+      pts.emplace_back(x, 0.1, -line(x, 0.1));
+      sig.push_back(0.01);
+    }
+    map.AddPoints(pts, sig);
+    return WorstStep(map, 2.1, 0.1, 1);
+  };
+  EXPECT_NEAR(with(2.0), with(0.0), 1e-4);
+  EXPECT_NEAR(with(0.0), 0.20, 0.015);
+}
+
 // The two margins of a cell's height error, each read, range-checked, and refused in a
 // camera's own section: they rate the map, not one camera's stereo.
 TEST(HeightUncertainty, MarginsAreReadAndChecked) {
