@@ -201,12 +201,17 @@ class Receiver {
   }
   // Writes the held batch below `cut`, sorted, stamped with its instant, and moves to
   // `next`; what the cut says was sent after it (it overtook the clock) waits for `next`.
+  // The first clock message writes nothing: what came before it (processes starting, not
+  // yet held by the barrier) waits for the first instant's batch, so that which of those
+  // messages beat the first clock message decides neither the log's order nor the count in
+  // the first heartbeat (a demo campaign's digest differed between two runs so).
   void FlushInstant(std::int64_t next, const rover::simtime::Cut& cut) {
+    const bool first = instant_ == 0;
     std::vector<Held> after;
     std::vector<Held> batch;
     for (auto& h : held_) {
       const auto& [channel, publisher, count, arrival] = h.key;
-      if (cut.After(channel, publisher, count)) {
+      if (first || cut.After(channel, publisher, count)) {
         after.push_back(std::move(h));
       } else {
         batch.push_back(std::move(h));
