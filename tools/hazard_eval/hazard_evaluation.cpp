@@ -73,13 +73,15 @@ bool InHazcamView(const geometry::StereoRig& rig, const tv::MapOptions& stereo, 
   return InView(rig, T_rover_site, p_site);
 }
 
+// Cells this tall or more in truth, and a reading this much under the truth: how the map
+// reads steps near the limit (the table's "steps of cells ..." line).
+constexpr float kTallStepM = 0.15f, kReadLowM = 0.08f;
+
 // The true terrain on the map's grid: each cell holds the highest of 5x5 samples of the
 // exact surface in it (a rock reaching into a cell counts at its top there, as a wheel
 // would meet it; the map's own cells hold the mean of the points the cameras see, which
-// lie on rocks' visible faces and tops).
-// Cells this tall or more in truth: how the map reads steps near the limit.
-constexpr float kTallStepM = 0.15f;
-
+// lie on rocks' visible faces and tops). at_mean: each cell at the mean of the surface in
+// it instead (EvalOptions::truth_at_cell_mean).
 void FillTruth(const terrain::World& world, bool at_mean, tv::TraversabilityMap* truth) {
   truth->Clear();
   const int k = 5;
@@ -194,7 +196,7 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
             tc[idx].state != tv::CellState::kUnknown && tc[idx].step_m >= kTallStepM) {
           ++b.tall_cells;
           b.tall_step_error_sum += mc[idx].step_m - tc[idx].step_m;
-          b.tall_read_low += mc[idx].step_m <= tc[idx].step_m - 0.08f;
+          b.tall_read_low += mc[idx].step_m <= tc[idx].step_m - kReadLowM;
         }
         if (tc[idx].state == tv::CellState::kUnsafe) {
           ++b.unsafe_cells;
@@ -279,10 +281,10 @@ std::string FormatTable(const EvalResult& r, double rock_limit_m) {
   out << line;
   if (near.tall_cells > 0) {
     std::snprintf(line, sizeof line,
-                  "steps of cells 0.15 m or more in truth, rated by both (0-4 m): %d, map less truth %+.3f m on "
-                  "average, %d %s read 0.08 m or more low\n",
-                  near.tall_cells, near.tall_step_error_sum / near.tall_cells, near.tall_read_low,
-                  pct(near.tall_read_low, near.tall_cells).c_str());
+                  "steps of cells %.2f m or more in truth, rated by both (0-4 m): %d, map less truth %+.3f m on "
+                  "average, %d %s read %.2f m or more low\n",
+                  kTallStepM, near.tall_cells, near.tall_step_error_sum / near.tall_cells, near.tall_read_low,
+                  pct(near.tall_read_low, near.tall_cells).c_str(), kReadLowM);
     out << line;
   }
   if (near.crest_cells > 0) {

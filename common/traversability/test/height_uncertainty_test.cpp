@@ -286,8 +286,10 @@ TEST(HeightUncertainty, TwoPairsThatDisagreeByAPlausiblePoseErrorMakeNoFalseStep
 }
 
 // Level ground (points +-0.02 m, sigma 0.02 m) round one cell, [2.0, 2.2) x [0.0, 0.2),
-// whose points (sigma 0.01 m) stand at height(x, y) m.
-TraversabilityMap GroundWithOneCell(const MapOptions& o, const std::function<double(double, double)>& height) {
+// whose points (sigma 0.01 m) stand at height(x, y) m: seven rows of them across the cell,
+// or one (y = 0.1) when one_row.
+TraversabilityMap GroundWithOneCell(const MapOptions& o, const std::function<double(double, double)>& height,
+                                    bool one_row = false) {
   TraversabilityMap map(o);
   std::vector<Eigen::Vector3d> pts;
   std::vector<double> sig;
@@ -299,7 +301,7 @@ TraversabilityMap GroundWithOneCell(const MapOptions& o, const std::function<dou
       sig.push_back(0.02);
     }
   for (double x = 2.005; x < 2.2; x += 0.01)
-    for (double y = 0.01; y < 0.2; y += 0.03) {
+    for (double y = one_row ? 0.1 : 0.01; y < 0.2; y += one_row ? 1.0 : 0.03) {
       pts.emplace_back(x, y, -height(x, y));
       sig.push_back(0.01);
     }
@@ -364,25 +366,12 @@ TEST(HeightUncertainty, ACellOnARocksFlankReadsAtItsTopAndACrestAtItsMean) {
 // A cell whose points lie on one line across it (a single image row's worth) determines no
 // plane: it reads at its mean, however its points rise along the line.
 TEST(HeightUncertainty, ACellWhosePointsLieOnALineReadsAtItsMean) {
-  MapOptions o = HazardMonitorRating();
-  o.relief_sigmas = 0;
-  auto line = [](double x, double) { return 0.10 + (x - 2.0); };
-  auto with = [&](double k_sigmas) {
+  auto with = [](double k_sigmas) {
+    MapOptions o = HazardMonitorRating();
+    o.relief_sigmas = 0;
     o.cell_plane_sigmas = k_sigmas;
-    TraversabilityMap map(o);
-    std::vector<Eigen::Vector3d> pts;
-    std::vector<double> sig;
-    for (double x = 0.51; x < 3.5; x += 0.06)
-      for (double y = -1.49; y < 1.5; y += 0.06) {
-        if (x >= 2.0 && x < 2.2 && y >= 0.0 && y < 0.2) continue;
-        pts.emplace_back(x, y, 0.0);
-        sig.push_back(0.02);
-      }
-    for (double x = 2.005; x < 2.2; x += 0.01) {
-      pts.emplace_back(x, 0.1, -line(x, 0.1));
-      sig.push_back(0.01);
-    }
-    map.AddPoints(pts, sig);
+    const TraversabilityMap map =
+        GroundWithOneCell(o, [](double x, double) { return 0.10 + (x - 2.0); }, /*one_row=*/true);
     return WorstStep(map, 2.1, 0.1, 1);
   };
   EXPECT_NEAR(with(2.0), with(0.0), 1e-4);
