@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <system_error>
+#include <vector>
 
 namespace fs = std::filesystem;
 using rover::config::CheckRegularFile;
@@ -26,11 +28,23 @@ std::string ErrorOf(const std::function<void()>& f) {
   return "";
 }
 
+// The directories TempDir made, removed when the test process exits: each ctest entry is a
+// process of its own, so nothing is left behind in the temporary folder.
+struct TempDirs {
+  std::vector<fs::path> dirs;
+  ~TempDirs() {
+    std::error_code ignored;
+    for (const fs::path& d : dirs) fs::remove_all(d, ignored);
+  }
+};
+
 // A fresh directory per test.
 std::string TempDir(const std::string& name) {
   const fs::path dir = fs::path(testing::TempDir()) / ("file_read_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
+  static TempDirs made;
+  made.dirs.push_back(dir);
   return dir.string();
 }
 
