@@ -243,6 +243,10 @@ struct CampaignArgs {
   std::uint64_t seed = 1;
   double min_pass_pct = 95.0, slide_pct = 10.0;
   bool plot = true, prepare_only = false;
+  // Every run's --rate: max (no pacing: in virtual time a run's outcome and log are the
+  // same at any rate), a number of rover seconds per wall second, or empty for each
+  // scenario's own sim_rate.
+  std::string rate = "max";
   // Slurm (slurm_array.hpp): submit as a job array; merge or resume one submitted before.
   bool slurm = false;
   std::string merge_dir, resume_dir;
@@ -254,6 +258,7 @@ constexpr const char* kUsage =
     "usage: scenario_campaign SCENARIO.yaml --variants N [--out DIR] [--seed S] [--jobs N]\n"
     "       scenario_campaign --each LIST [--out DIR] [--jobs N]\n"
     "                         [--min-pass PCT] [--slide-window N] [--slide-progress PCT] [--no-plot]\n"
+    "                         [--rate R|max|scenario]\n"
     "       scenario_campaign SCENARIO.yaml --variants N | --each LIST  --slurm [SBATCH OPTIONS]\n"
     "       scenario_campaign --merge DIR\n"
     "       scenario_campaign --resume DIR [SBATCH OPTIONS]\n\n"
@@ -265,6 +270,10 @@ constexpr const char* kUsage =
     "(10 %) of the commanded. --no-plot skips each variant's pictures (about 4 s each).\n"
     "--jobs N runs N variants at once, each on its own private bus; in virtual time\n"
     "each variant's result and log digest are the same as with --jobs 1.\n"
+    "--rate R|max|scenario: every run's pace (default max: as fast as the CPU goes; in\n"
+    "virtual time the result and log digest are the same at any rate; scenario: each\n"
+    "scenario's own sim_rate, as ./rover scenario runs it). A night parked at the\n"
+    "scenario's 50x takes 15 min of wall time, at max about a minute.\n"
     "--each LIST runs the scenario files listed in LIST (one path a line) once each,\n"
     "as written, into the folder that holds each (./rover navbench uses it); DIR\n"
     "(default: LIST's folder) gets campaign.json.\n\n"
@@ -277,6 +286,20 @@ constexpr const char* kUsage =
     "--merge DIR tables the tasks that finished as a local run does (campaign.json), and\n"
     "names every task missing or failed and why (exit 3 when there is one).\n"
     "--resume DIR submits again only the tasks missing or failed (not those still queued).\n";
+
+// --rate's value as scenario_runner takes it: max, or rover seconds per wall second in
+// rover_sim's range; "scenario" (each scenario's own sim_rate) as empty.
+std::string ParseRate(const std::string& v) {
+  if (v == "max") return v;
+  if (v == "scenario") return "";
+  char* end = nullptr;
+  const double r = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0' || !(r >= 0.1 && r <= 10000.0)) {
+    throw ConfigError("scenario_campaign: argument --rate \"" + v +
+                      "\": expected max, scenario or a number in [0.1, 10000] (rover seconds per wall second)");
+  }
+  return v;
+}
 
 // A Slurm option at argv[i] (and its value): appended to a.sbatch_args or set in `a`.
 // False when argv[i] is none.
@@ -371,6 +394,9 @@ std::optional<CampaignArgs> ParseArgs(int argc, char** argv) {
       a.each_list = argv[++i];
     } else if (arg == "--no-plot") {
       a.plot = false;
+    } else if (arg == "--rate") {
+      if (i + 1 >= argc) throw ConfigError("scenario_campaign: --rate: missing value (expected max, scenario or a number)");
+      a.rate = ParseRate(argv[++i]);
     } else if (arg == "--prepare") {
       a.prepare_only = true;
     } else if (arg == "--jobs") {
@@ -470,6 +496,7 @@ std::vector<Variant> RunVariants(const CampaignArgs& a, const rover::tools::Scen
       const Variant v = NextVariant(a, spec, slope, listed, next + 1, &variant_yaml);
       std::vector<std::string> runner_args = {runner, variant_yaml, "--out", v.dir, "--quiet"};
       if (!a.plot) runner_args.push_back("--no-plot");
+      if (!a.rate.empty()) runner_args.insert(runner_args.end(), {"--rate", a.rate});
       results[static_cast<std::size_t>(next)] = v;
       running[StartLogged(runner_args, v.dir + "/runner.log")] = next;
       ++next;
@@ -575,6 +602,7 @@ slurm::ArrayPlan PlanFor(const CampaignArgs& a, const rover::tools::ScenarioSpec
   plan.build_dir = fs::path(rover::launch::BinDir()).parent_path().string();
   plan.job_name = "rover-" + (a.each() ? fs::path(plan.out_dir).filename().string() : spec.name);
   plan.plot = a.plot;
+  plan.rate = a.rate;
   for (int k = 1; k <= a.variants; ++k) {
     plan.scenarios.push_back(a.each() ? Absolute(listed[static_cast<std::size_t>(k - 1)])
                                       : plan.out_dir + "/v" + std::to_string(k) + "/scenario.yaml");
@@ -603,6 +631,7 @@ CampaignArgs ArgsFromPlan(const slurm::ArrayPlan& plan) {
   };
   a.out_dir = plan.out_dir;
   a.plot = plan.plot;
+  a.rate = plan.rate;
   if (plan.settings.count("each")) {
     a.each_list = get("each");
     a.variants = static_cast<int>(plan.scenarios.size());

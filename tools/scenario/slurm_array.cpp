@@ -108,6 +108,7 @@ std::string ArrayScript(const ArrayPlan& plan) {
        "rm -f \"$SLURM_DIR/status/$k.exit\" \"$dir/summary.json\"\n"
        "echo \"job ${SLURM_ARRAY_JOB_ID:-?}_$k on $(hostname) at $(date -u +%FT%TZ)\" > \"$SLURM_DIR/status/$k.start\"\n"
     << "\"$ROOT/rover\" scenario \"$scenario\" --out \"$dir\" --quiet" << (plan.plot ? "" : " --no-plot")
+    << (plan.rate.empty() ? "" : " --rate " + ShellQuote(plan.rate))
     << " > \"$dir/runner.log\" 2>&1\n"
        "code=$?\n"
        "echo \"$code\" > \"$SLURM_DIR/status/$k.exit\"\n"
@@ -126,6 +127,7 @@ void WritePlan(const ArrayPlan& plan) {
   y << YAML::Key << "build_dir" << YAML::Value << plan.build_dir;
   y << YAML::Key << "job_name" << YAML::Value << plan.job_name;
   y << YAML::Key << "plot" << YAML::Value << plan.plot;
+  y << YAML::Key << "rate" << YAML::Value << plan.rate;
   y << YAML::Key << "sbatch_args" << YAML::Value << YAML::BeginSeq;
   for (const auto& a : plan.sbatch_args) y << a;
   y << YAML::EndSeq;
@@ -158,6 +160,8 @@ ArrayPlan ReadPlan(const std::string& out_dir) {
     plan.build_dir = y["build_dir"].as<std::string>();
     plan.job_name = y["job_name"].as<std::string>();
     plan.plot = y["plot"].as<bool>();
+    // A plan written before --rate ran each scenario at its own sim_rate.
+    plan.rate = y["rate"] ? y["rate"].as<std::string>() : std::string();
     for (const auto& a : y["sbatch_args"]) plan.sbatch_args.push_back(a.as<std::string>());
     for (const auto& kv : y["settings"]) plan.settings[kv.first.as<std::string>()] = kv.second.as<std::string>();
   } catch (const YAML::Exception& e) {

@@ -24,6 +24,7 @@ struct ArrayPlan {
   std::string build_dir;   // absolute: the build (bin/scenario_runner) as every node sees it
   std::string job_name = "rover-campaign";
   bool plot = true;                      // the runs draw their pictures (else --no-plot)
+  std::string rate = "max";             // every run's --rate (a number or max); empty: its scenario's sim_rate
   std::vector<std::string> scenarios;    // task K runs scenarios[K - 1] (absolute paths)
   std::vector<std::string> sbatch_args;  // passed to sbatch at every submission
   // How the campaign was asked for (its SCENARIO, --variants, --seed, ...), for the merge.

@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 namespace fs = std::filesystem;
 namespace slurm = rover::tools::slurm;
@@ -51,7 +52,29 @@ TEST(SlurmArray, PlanRoundTrip) {
   EXPECT_EQ(back.sbatch_args, plan.sbatch_args);
   EXPECT_EQ(back.settings, plan.settings);
   EXPECT_FALSE(back.plot);
+  EXPECT_EQ(back.rate, "max");
   EXPECT_THROW(slurm::ReadPlan(plan.out_dir + "/v1"), rover::config::ConfigError);
+  fs::remove_all(plan.out_dir);
+}
+
+// Each task runs at the campaign's --rate; a plan written before the rate was kept (no `rate`
+// key) ran each scenario at its own sim_rate, and a resume of it still does.
+TEST(SlurmArray, TasksRunAtTheCampaignsRate) {
+  auto plan = MakePlan("rate", 2);
+  EXPECT_NE(slurm::ArrayScript(plan).find("--quiet --no-plot --rate 'max' >"), std::string::npos)
+      << slurm::ArrayScript(plan);
+  plan.rate = "25";
+  EXPECT_NE(slurm::ArrayScript(plan).find("--no-plot --rate '25' >"), std::string::npos);
+  plan.rate = "";
+  EXPECT_EQ(slurm::ArrayScript(plan).find("--rate"), std::string::npos);
+  const std::string path = plan.out_dir + "/slurm/plan.yaml";
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t at = text.find("rate: max\n");
+  ASSERT_NE(at, std::string::npos) << text;
+  text.erase(at, std::string("rate: max\n").size());
+  Write(path, text);
+  EXPECT_EQ(slurm::ReadPlan(plan.out_dir).rate, "");
   fs::remove_all(plan.out_dir);
 }
 
