@@ -19,6 +19,7 @@
 #include "mobility/deadman.hpp"
 #include "mobility/rover_simulator.hpp"
 #include "simtime/barrier.hpp"
+#include "simtime/rate.hpp"
 #include "terrain/world.hpp"
 
 #include <rover_msgs/heartbeat_t.hpp>
@@ -46,7 +47,8 @@ using namespace rover;
 namespace {
 
 // sim.rate and --rate: rover seconds per wall second.
-constexpr double kMinRate = 0.1, kMaxRate = 10000.0;
+using simtime::kMaxRate;
+using simtime::kMinRate;
 
 struct SimOptions {
   double rate = 50.0;        // rover seconds per wall second; 0: as fast as the barrier allows
@@ -127,13 +129,9 @@ struct SyncListener {
 
 // --rate R|max: the same range as sim.rate; max is 0.
 double ParseRate(const std::string& r) {
-  if (r == "max") return 0;
-  const double rate = bus::ParseNumberList(r, 1, "rover_sim: argument --rate")[0];
-  if (!(rate >= kMinRate && rate <= kMaxRate)) {
-    std::ostringstream range;
-    range << "[" << kMinRate << ", " << kMaxRate << "]";
-    throw config::ConfigError("rover_sim: argument --rate: \"" + r + "\": expected max or a number in " +
-                              range.str());
+  double rate = 0;
+  if (!simtime::ParseRate(r, &rate)) {
+    throw config::ConfigError("rover_sim: argument --rate: \"" + r + "\": expected " + simtime::kRateExpected);
   }
   return rate;
 }

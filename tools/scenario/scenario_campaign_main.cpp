@@ -17,6 +17,7 @@
 #include "report/json_writer.hpp"
 #include "scenario/scenario.hpp"
 #include "scenario/slurm_array.hpp"
+#include "simtime/rate.hpp"
 
 #include <fcntl.h>
 #include <sys/wait.h>
@@ -287,16 +288,14 @@ constexpr const char* kUsage =
     "names every task missing or failed and why (exit 3 when there is one).\n"
     "--resume DIR submits again only the tasks missing or failed (not those still queued).\n";
 
-// --rate's value as scenario_runner takes it: max, or rover seconds per wall second in
-// rover_sim's range; "scenario" (each scenario's own sim_rate) as empty.
+// --rate's value as scenario_runner takes it (rover_sim's, simtime/rate.hpp); "scenario"
+// (each scenario's own sim_rate) as empty.
 std::string ParseRate(const std::string& v) {
-  if (v == "max") return v;
   if (v == "scenario") return "";
-  char* end = nullptr;
-  const double r = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end != '\0' || !(r >= 0.1 && r <= 10000.0)) {
-    throw ConfigError("scenario_campaign: argument --rate \"" + v +
-                      "\": expected max, scenario or a number in [0.1, 10000] (rover seconds per wall second)");
+  double rate = 0;
+  if (!rover::simtime::ParseRate(v, &rate)) {
+    throw ConfigError("scenario_campaign: argument --rate \"" + v + "\": expected scenario, " +
+                      rover::simtime::kRateExpected + " (rover seconds per wall second)");
   }
   return v;
 }
