@@ -121,8 +121,10 @@ struct EncoderOptions {
 };
 
 struct RockCollision {
-  // A rock taller than this under the footprint stops the rover with a fault (the belly
-  // would hit it). Disabled when fault is false.
+  // A rock whose surface under the footprint rises higher than this stops the rover with a
+  // fault: the belly would hit it. Its top counts when the body comes over its centre, only
+  // its rim's height when the footprint's edge grazes it (terrain::RockHeightAt). Disabled
+  // when fault is false.
   bool fault = true;
   double max_height_m = 0.3;
 };

@@ -19,9 +19,10 @@ void RequireFinite(double v, const char* name, std::int64_t id) {
   }
 }
 
-std::string Format(const char* fmt, double a, double b = 0.0, double c = 0.0) {
-  char buf[160];
-  std::snprintf(buf, sizeof(buf), fmt, a, b, c);
+template <typename... Numbers>
+std::string Format(const char* fmt, Numbers... numbers) {
+  char buf[200];
+  std::snprintf(buf, sizeof(buf), fmt, static_cast<double>(numbers)...);
   return buf;
 }
 
@@ -370,19 +371,24 @@ void RoverSimulator::Advance(double dt) {
 void RoverSimulator::Fault(const std::string& detail) { SetStatus(MobilityState::kFault, detail); }
 
 void RoverSimulator::CheckRocks(const Eigen::Vector3d& p_prev) {
-  // A tall rock under the footprint stops the rover if this substep moved it closer.
+  // A rock whose surface under the footprint rises over the belly's clearance stops the
+  // rover if this substep moved it closer. The rock's highest point under the footprint is
+  // where the footprint comes nearest its centre (a half-ellipsoid falls away from there):
+  // its top when the centre is under the body, only its low rim when a corner grazes it.
   const double hl = 0.5 * options_.geometry.footprint_length_m;
   const double hw = 0.5 * options_.geometry.footprint_width_m;
+  const double clearance = options_.rock_collision.max_height_m;
   const double c = std::cos(yaw_), s = std::sin(yaw_);
   for (const terrain::Rock* r : tall_rocks_) {
     const Eigen::Vector2d d = r->position - Eigen::Vector2d(x_, y_);
     const double u = c * d.x() + s * d.y(), v = -s * d.x() + c * d.y();
     const double gap = std::hypot(std::max(std::abs(u) - hl, 0.0), std::max(std::abs(v) - hw, 0.0));
-    if (gap >= 0.5 * r->diameter_m) continue;
+    const double under = terrain::RockHeightAt(*r, gap);
+    if (under <= clearance) continue;
     const double before = (r->position - p_prev.head<2>()).norm();
     if (d.norm() < before) {
-      Fault("rock " + r->name + Format(" (%.2f m tall) under the footprint at (%.2f, %.2f)",
-                                       r->height_m, x_, y_));
+      Fault("rock " + r->name + Format(" (%.2f m tall) %.2f m high under the footprint, over the %.2f m clearance, at (%.2f, %.2f)",
+                                       r->height_m, under, clearance, x_, y_));
       return;
     }
   }

@@ -361,6 +361,13 @@ void World::BuildRocks() {
   }
 }
 
+double RockHeightAt(const Rock& rock, double distance_m) {
+  const double R = 0.5 * rock.diameter_m;
+  if (!(R > 0.0) || !(rock.height_m > 0.0)) return 0.0;
+  const double u = (distance_m * distance_m) / (R * R);  // as StampRocks and ElevationDetailed
+  return u < 1.0 ? rock.height_m * std::sqrt(1.0 - u) : 0.0;
+}
+
 void World::StampRocks() {
   // Rocks are half-ellipsoid bumps on the ground; where two overlap the higher one wins.
   std::vector<float> bump(ground_.size(), 0.0f);

@@ -101,6 +101,11 @@ struct Rock {
   double albedo = 0.3;    // mean albedo of this rock's surface
 };
 
+// How far `rock`'s half-ellipsoid rises above the ground around it at a horizontal distance
+// `distance_m` from its centre: height_m * sqrt(1 - (2 d / diameter_m)^2), 0 at its rim and
+// beyond. A body passing over the rock's edge meets this height, not the top's.
+double RockHeightAt(const Rock& rock, double distance_m);
+
 // Random rocks from the Golombek size-frequency model: the fraction of ground covered by
 // rocks of diameter >= D is F(D) = k exp(-q D), q = 1.79 + 0.152 / k (Golombek & Rapp 1997).
 struct RockFieldOptions {

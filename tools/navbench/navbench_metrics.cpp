@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <iomanip>
 #include <sstream>
 #include <limits>
@@ -63,15 +64,20 @@ std::string Pct(int part, int whole) { return whole > 0 ? Fixed(100.0 * part / w
 
 }  // namespace
 
-CollisionReport JudgeCollisions(const std::vector<hazards::Pose2>& track, const hazards::Footprint& footprint,
-                                const std::vector<hazards::KeepOutZone>& obstacles) {
+namespace {
+
+// JudgeCollisions with an overlap judged by `hits` (obstacle index, clearance < 0): contacts
+// are entries into a hit; overlaps never hit are the report's grazes.
+CollisionReport Judge(const std::vector<hazards::Pose2>& track, const hazards::Footprint& footprint,
+                      const std::vector<hazards::KeepOutZone>& obstacles,
+                      const std::function<bool(std::size_t, double)>& hits) {
   CollisionReport report;
   // The farthest a footprint point lies from the rover origin, margin included.
   const double reach = std::abs(footprint.center_forward_m) +
                        std::hypot(0.5 * footprint.length_m, 0.5 * footprint.width_m) + footprint.margin_m;
   const ObstacleGrid grid(obstacles, reach);
-  std::vector<char> inside(obstacles.size(), 0), seen(obstacles.size(), 0);
-  std::vector<std::size_t> was_inside;
+  std::vector<char> inside(obstacles.size(), 0), seen(obstacles.size(), 0), overlapped(obstacles.size(), 0);
+  std::vector<std::size_t> was_inside, overlap_order;
   for (std::size_t k = 0; k < track.size(); ++k) {
     const auto& pose = track[k];
     std::vector<std::size_t> now_inside;
@@ -81,21 +87,43 @@ CollisionReport JudgeCollisions(const std::vector<hazards::Pose2>& track, const 
         report.min_clearance_m = c;
         report.closest = obstacles[i].name;
       }
-      if (c < 0) {
-        if (!inside[i]) {
-          ++report.contacts;
-          report.contact_samples.push_back(k);
-          if (!seen[i]) report.touched.push_back(obstacles[i].name);
-          seen[i] = 1;
-        }
-        now_inside.push_back(i);
+      if (c >= 0) continue;
+      if (!overlapped[i]) overlap_order.push_back(i);
+      overlapped[i] = 1;
+      if (!hits(i, c)) continue;
+      if (!inside[i]) {
+        ++report.contacts;
+        report.contact_samples.push_back(k);
+        if (!seen[i]) report.touched.push_back(obstacles[i].name);
+        seen[i] = 1;
       }
+      now_inside.push_back(i);
     }
     for (const std::size_t i : was_inside) inside[i] = 0;
     for (const std::size_t i : now_inside) inside[i] = 1;
     was_inside = std::move(now_inside);
   }
+  for (const std::size_t i : overlap_order)
+    if (!seen[i]) report.grazed.push_back(obstacles[i].name);
   return report;
+}
+
+}  // namespace
+
+CollisionReport JudgeCollisions(const std::vector<hazards::Pose2>& track, const hazards::Footprint& footprint,
+                                const std::vector<hazards::KeepOutZone>& obstacles) {
+  return Judge(track, footprint, obstacles, [](std::size_t, double) { return true; });
+}
+
+CollisionReport JudgeRockCollisions(const std::vector<hazards::Pose2>& track, const hazards::Footprint& footprint,
+                                    const std::vector<hazards::KeepOutZone>& rocks, const SurfaceHeight& surface,
+                                    double clearance_m) {
+  // For a circle, Clearance is the footprint's distance from the centre less the radius
+  // (negative inside the footprint as well), so the footprint's point nearest the centre
+  // lies max(0, c + radius) from it.
+  return Judge(track, footprint, rocks, [&](std::size_t i, double c) {
+    return surface(i, std::max(0.0, c + rocks[i].radius_m)) > clearance_m;
+  });
 }
 
 std::vector<Eigen::Vector2d> SixWheels(double wheelbase_m, double track_m) {
@@ -282,6 +310,7 @@ GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& 
     g.completed += r.outcome == "completed";
     g.runs_with_collision += r.collided();
     g.contacts += r.rock_contacts + r.zone_contacts;
+    g.runs_with_graze += r.rock_grazes > 0;
     g.runs_off_map += r.off_map_samples > 0;
     g.runs_left_map += r.left_map();
     if (!r.collided() && r.off_map_samples == 0) {
@@ -344,6 +373,14 @@ std::string TableText(const std::vector<GroupFigures>& groups) {
        << (std::to_string(g.vo_false) + "/" + std::to_string(g.vo_accepted) + " (" + Pct(g.vo_false, g.vo_accepted) + ")")
        << (aborts.empty() ? "-" : aborts) << "\n";
   }
+  std::string grazed;
+  for (const auto& g : groups)
+    if (g.runs_with_graze > 0) grazed += (grazed.empty() ? "" : ", ") + g.group + " " + std::to_string(g.runs_with_graze);
+  if (!grazed.empty()) {
+    os << "\nruns whose footprint grazed a rock over the collision height (its rim under the footprint,\n"
+          "lower there than the belly's clearance: no collision; in the runs above): "
+       << grazed << "\n";
+  }
   bool any_shortest = false;
   for (const auto& g : groups) any_shortest |= g.median_shortest_ratio.has_value();
   if (any_shortest) {
@@ -397,6 +434,7 @@ std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vect
     j.BeginObject();
     j.Field("group", g.group).Field("runs", g.runs).Field("successes", g.successes).Field("success_pct", g.success_pct());
     j.Field("completed", g.completed).Field("runs_with_collision", g.runs_with_collision).Field("contacts", g.contacts);
+    j.Field("runs_with_graze", g.runs_with_graze);
     j.Field("runs_off_map", g.runs_off_map).Field("runs_left_map", g.runs_left_map);
     j.Field("navigation_runs", g.navigation_runs());
     j.Key("safe_aborts").BeginObject();
@@ -425,7 +463,7 @@ std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vect
     j.Field("group", r.group).Field("id", r.id).Field("ran", r.ran).Field("outcome", r.outcome);
     j.Field("abort_reason", r.abort_reason).Field("in_goal_disc", r.in_goal_disc).Field("success", r.success());
     j.Field("verdict", r.Verdict()).Field("left_map", r.left_map());
-    j.Field("rock_contacts", r.rock_contacts).Field("zone_contacts", r.zone_contacts);
+    j.Field("rock_contacts", r.rock_contacts).Field("rock_grazes", r.rock_grazes).Field("zone_contacts", r.zone_contacts);
     j.Field("off_map_samples", r.off_map_samples);
     j.Field("goal_x", r.goal_x).Field("goal_y", r.goal_y).Field("goal_radius_m", r.goal_radius_m);
     j.Key("final_truth");

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -25,14 +26,30 @@ struct CollisionReport {
   std::string closest;                    // the obstacle at min_clearance_m
   std::vector<std::string> touched;       // each obstacle with a contact, once, in order of first contact
   std::vector<std::size_t> contact_samples;  // the track index at which each contact began
+  // With a surface (JudgeRockCollisions): each obstacle whose disc the footprint overlapped
+  // without its surface there ever rising over the clearance, once, in order (a corner over
+  // a tall rock's low rim). Not contacts.
+  std::vector<std::string> grazed;
 };
 
-// The footprint at every pose of `track` against every obstacle (rocks over the step limit as
-// circles, keep-out zones as they are), by hazards::Clearance (negative: overlap). Only the
-// obstacles within reach of a pose are measured (a grid of their bounding circles), so a
-// field of thousands of rocks is judged in one pass.
+// The footprint at every pose of `track` against every obstacle (keep-out zones as they are,
+// rocks as circles), by hazards::Clearance (negative: overlap); any overlap is a contact.
+// Only the obstacles within reach of a pose are measured (a grid of their bounding circles),
+// so a field of thousands of rocks is judged in one pass.
 CollisionReport JudgeCollisions(const std::vector<hazards::Pose2>& track, const hazards::Footprint& footprint,
                                 const std::vector<hazards::KeepOutZone>& obstacles);
+
+// How high obstacle `index`'s surface stands `gap_m` from its centre (a rock's
+// terrain::RockHeightAt).
+using SurfaceHeight = std::function<double(std::size_t index, double gap_m)>;
+
+// As JudgeCollisions for circular obstacles with a surface (rocks over the collision
+// height), as the simulator judges them: an overlap is a contact only while the surface
+// under the footprint, at the footprint's point nearest the centre, rises over
+// `clearance_m` (the belly's, mobility.rock_collision.max_height_m); the rest are grazes.
+CollisionReport JudgeRockCollisions(const std::vector<hazards::Pose2>& track, const hazards::Footprint& footprint,
+                                    const std::vector<hazards::KeepOutZone>& rocks, const SurfaceHeight& surface,
+                                    double clearance_m);
 
 // The world's map as an axis-aligned rectangle in the site plane.
 struct MapBounds {
@@ -86,7 +103,8 @@ struct RunFigures {
   std::string outcome = "incomplete";  // completed, aborted, rejected, incomplete
   std::string abort_reason;          // empty unless aborted
   bool in_goal_disc = false;         // the TRUE final position lies inside the goal disc
-  int rock_contacts = 0;             // JudgeCollisions against rocks over the limit
+  int rock_contacts = 0;             // JudgeRockCollisions against rocks over the limit
+  int rock_grazes = 0;               // its grazes: tall rocks' rims under the footprint, no contact
   int zone_contacts = 0;             // and against keep-out zones
   int off_map_samples = 0;
   double goal_x = 0, goal_y = 0, goal_radius_m = 0.5;
@@ -126,6 +144,7 @@ struct GroupFigures {
   std::string group;
   int runs = 0, successes = 0, completed = 0;
   int runs_with_collision = 0, contacts = 0;
+  int runs_with_graze = 0;  // a tall rock's rim under the footprint (RunFigures::rock_grazes), collision or not
   int runs_off_map = 0;   // a wheel off the map, collision or not
   int runs_left_map = 0;  // RunFigures::left_map(): off the map, no collision (not navigation's)
   // Aborts without a contact or a wheel off the map, by abort reason; runs that did not end

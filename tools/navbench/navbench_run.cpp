@@ -323,17 +323,24 @@ RunFigures ReadRun(const RunPlan& p, RunTrack* track) {
   const auto& o = world.options();
   t.map = {o.map_center.x() - 0.5 * o.map_size_m.x(), o.map_center.x() + 0.5 * o.map_size_m.x(),
            o.map_center.y() - 0.5 * o.map_size_m.y(), o.map_center.y() + 0.5 * o.map_size_m.y()};
+  std::vector<const terrain::Rock*> tall;  // parallel to t.rocks_over_limit
   for (const auto& rock : world.rocks()) {
     const auto disc = hazards::KeepOutZone::Circle(rock.name.empty() ? "rock" : rock.name, rock.position.x(),
                                                    rock.position.y(), 0.5 * rock.diameter_m);
     (rock.height_m > max_height_m ? t.rocks_over_limit : t.small_rocks).push_back(disc);
+    if (rock.height_m > max_height_m) tall.push_back(&rock);
   }
   ReadLog(p.dir + "/log.lcm", &t.truth, &t.zones);
 
   t.footprint = footprint;
-  const CollisionReport rocks = JudgeCollisions(t.truth, footprint, t.rocks_over_limit);
+  // Rocks as the simulator judges them (mobility.rock_collision): a contact when the surface
+  // under the footprint rises over the belly's clearance; a corner over a rim is a graze.
+  const CollisionReport rocks = JudgeRockCollisions(
+      t.truth, footprint, t.rocks_over_limit,
+      [&](std::size_t i, double gap_m) { return terrain::RockHeightAt(*tall[i], gap_m); }, max_height_m);
   const CollisionReport zones = JudgeCollisions(t.truth, footprint, t.zones);
   r.rock_contacts = rocks.contacts;
+  r.rock_grazes = static_cast<int>(rocks.grazed.size());
   r.zone_contacts = zones.contacts;
   for (const auto* c : {&rocks, &zones}) {
     for (const std::size_t k : c->contact_samples) t.contact_poses.push_back(t.truth[k]);

@@ -419,11 +419,13 @@ TEST(RoverSimulator, StatusStopPreemptAndFaults) {
   EXPECT_DOUBLE_EQ(sim.Truth().position.x(), x_stopped);
   EXPECT_NEAR(x_stopped, 0.2, 1e-6);  // 5 s at 4 cm/s
 
-  // Backing into the 0.5 m boulder: a fault, the rover stops.
+  // Backing into the 0.5 m boulder: a fault, the rover stops where the boulder's surface
+  // under the rear edge rises over the 0.3 m clearance, 0.32 m from its centre
+  // (0.5 sqrt(1 - (0.32 / 0.4)^2) = 0.3), with the origin 0.8 m ahead of that edge.
   sim.Command(MotionCommand::Arc(4, -3.0));
   EXPECT_EQ(sim.RunUntilIdle().state, MobilityState::kFault);
   EXPECT_NE(sim.status().detail.find("Boulder"), std::string::npos) << sim.status().detail;
-  EXPECT_GT(sim.Truth().position.x(), -2.5 + 0.4 + 0.8 - 0.05);
+  EXPECT_NEAR(sim.Truth().position.x(), -2.5 + 0.32 + 0.8, 0.005);
 
   // Driving off the map: a fault.
   sim.Command(MotionCommand::Arc(5, 6.0));
@@ -434,6 +436,40 @@ TEST(RoverSimulator, StatusStopPreemptAndFaults) {
   EXPECT_THROW(sim.Command(MotionCommand::Arc(6, 1.0, 50.0)), std::invalid_argument);
   EXPECT_THROW(sim.Step(0.0), std::invalid_argument);
   EXPECT_THROW(RoverSimulator(world, Quiet(), 20.0, 0.0, 0.0), std::invalid_argument);
+}
+
+// A rock over the clearance whose low rim a footprint's side passes over is no collision; the
+// same rock 0.3 m nearer the line, its surface under the side 0.307 m high, is. Both 0.31 m
+// tall and 0.78 m across (navbench's rock_1877), beside a 6 m drive north along y = 0.
+TEST(RoverSimulator, ARockCollidesWhereItRisesOverTheBellyNotWhereItsRimIsGrazed) {
+  auto drive_past = [](double rock_y) {
+    WorldOptions wo = Plane(Soil::kBedrock, 0.0, 0.0);
+    wo.map_size_m = {16.0, 16.0};
+    terrain::Rock rock;
+    rock.name = "Rim";
+    rock.position = {3.0, rock_y};
+    rock.diameter_m = 0.78;
+    rock.height_m = 0.31;
+    wo.placed_rocks.push_back(rock);
+    const World world(wo);
+    RoverSimulator sim(world, Quiet(), 0.0, 0.0, 0.0);
+    sim.Command(MotionCommand::Arc(1, 6.0));
+    const MobilityStatus st = sim.RunUntilIdle();
+    return std::make_pair(st, sim.Truth());
+  };
+  // Centre 1.05 m off the line: 0.35 m beyond the footprint's side (half width 0.7), 0.04 m
+  // inside the rock's 0.39 m radius, where it stands 0.31 sqrt(1 - (0.35 / 0.39)^2) = 0.14 m.
+  const auto [grazed, grazed_truth] = drive_past(1.05);
+  EXPECT_EQ(grazed.state, MobilityState::kDone) << grazed.detail;
+  EXPECT_NEAR(grazed_truth.position.x(), 6.0, 0.05);
+  // Centre 0.75 m off: 0.05 m beyond the side, 0.31 sqrt(1 - (0.05 / 0.39)^2) = 0.307 m.
+  const auto [hit, hit_truth] = drive_past(-0.75);
+  EXPECT_EQ(hit.state, MobilityState::kFault);
+  EXPECT_NE(hit.detail.find("rock Rim (0.31 m tall) 0.30 m high under the footprint"), std::string::npos) << hit.detail;
+  // Stopped as the front edge (0.8 m ahead) came within 0.085 m of the centre's x, where
+  // the surface under the corner first rose over 0.3 m: 0.098 m from the centre
+  // (0.39 sqrt(1 - (0.3 / 0.31)^2)), hypot(0.085, 0.05).
+  EXPECT_NEAR(hit_truth.position.x(), 3.0 - 0.8 - 0.085, 0.01);
 }
 
 // 20 m at 4 cm/s is 500 s of rover time; at 100 Hz it must take well under a second.

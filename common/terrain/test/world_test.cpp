@@ -104,6 +104,14 @@ TEST(World, PlacedRockIsAHalfEllipsoidBumpOfItsHeight) {
   EXPECT_NEAR(w.ElevationDetailed(3.013, 2.27), 0.45 * std::sqrt(1.0 - (0.013 * 0.013 + 0.27 * 0.27) / 0.25),
               1e-6);
   EXPECT_NEAR(w.ElevationDetailed(3.05, 2.1), w.Elevation(3.05, 2.1), 1e-6);
+  // RockHeightAt is the same shape by distance from the centre: the top, sqrt(0.75) of it
+  // halfway out, nothing at the rim and beyond; where the detailed surface has it.
+  EXPECT_DOUBLE_EQ(RockHeightAt(r, 0.0), 0.45);
+  EXPECT_NEAR(RockHeightAt(r, 0.25), 0.45 * std::sqrt(0.75), 1e-12);
+  EXPECT_EQ(RockHeightAt(r, 0.5), 0.0);
+  EXPECT_EQ(RockHeightAt(r, 3.0), 0.0);
+  EXPECT_NEAR(RockHeightAt(r, std::hypot(0.013, 0.27)),
+              w.ElevationDetailed(3.013, 2.27) - w.GroundElevation(3.013, 2.27), 1e-9);
   ASSERT_NE(w.FindRock("Wopmay"), nullptr);
   EXPECT_TRUE(w.FindRock("Wopmay")->keepout);
   std::vector<int> near;

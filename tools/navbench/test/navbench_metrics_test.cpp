@@ -56,6 +56,52 @@ TEST(NavbenchJudge, PassingBesideARockKeepsItsExactGap) {
   EXPECT_EQ(report.closest, "boulder");
 }
 
+// Rocks as the simulator judges them: a contact only where the surface under the footprint
+// rises over the 0.3 m clearance. Rocks 0.31 m tall and 0.39 m in radius (half-ellipsoids)
+// beside a drive north along y = 0, the footprint's side at y = -0.7: one whose centre lies
+// 0.35 m beyond the side is grazed (0.14 m of rim under it), one 0.05 m beyond is hit
+// (0.307 m); any overlap counts for JudgeCollisions.
+TEST(NavbenchJudge, ARocksRimUnderTheFootprintIsAGrazeNotAContact) {
+  const std::vector<KeepOutZone> rocks = {KeepOutZone::Circle("rim", 2, -1.05, 0.39),
+                                          KeepOutZone::Circle("side", 5, -0.75, 0.39),
+                                          KeepOutZone::Circle("far", 8, -1.3, 0.39)};
+  const nb::SurfaceHeight dome = [](std::size_t, double gap_m) {
+    const double u = gap_m * gap_m / (0.39 * 0.39);
+    return u < 1 ? 0.31 * std::sqrt(1 - u) : 0.0;
+  };
+  const auto track = StraightNorth(0, 9, 0);
+  const auto report = nb::JudgeRockCollisions(track, MerFootprint(), rocks, dome, 0.3);
+  EXPECT_EQ(report.contacts, 1);
+  ASSERT_EQ(report.touched.size(), 1u);
+  EXPECT_EQ(report.touched[0], "side");
+  ASSERT_EQ(report.grazed.size(), 1u);
+  EXPECT_EQ(report.grazed[0], "rim");
+  // The side rock is hit from where the front edge comes within 0.085 m of its centre's x
+  // (its surface 0.098 m from the centre is 0.3 m high): the pose at x = 4.2.
+  ASSERT_EQ(report.contact_samples.size(), 1u);
+  EXPECT_NEAR(track[report.contact_samples[0]].x, 4.2, 0.051);
+  // Any overlap: both rims and the side rock are contacts.
+  EXPECT_EQ(nb::JudgeCollisions(track, MerFootprint(), rocks).contacts, 2);
+  // A lower rock under the same corner: no contact, a graze.
+  const nb::SurfaceHeight low = [&](std::size_t i, double gap_m) { return 0.9 * dome(i, gap_m); };
+  const auto lower = nb::JudgeRockCollisions(track, MerFootprint(), rocks, low, 0.3);
+  EXPECT_EQ(lower.contacts, 0);
+  EXPECT_EQ(lower.grazed.size(), 2u);
+  // In the run's figures the graze is no collision, and the table names the runs with one.
+  nb::RunFigures r;
+  r.group = "k=0.30";
+  r.ran = true;
+  r.outcome = "completed";
+  r.in_goal_disc = true;
+  r.rock_grazes = static_cast<int>(report.grazed.size());
+  EXPECT_EQ(r.Verdict(), "success");
+  const nb::GroupFigures g = nb::Aggregate("k=0.30", {r});
+  EXPECT_EQ(g.runs_with_collision, 0);
+  EXPECT_EQ(g.runs_with_graze, 1);
+  EXPECT_NE(nb::TableText({g}).find("grazed a rock over the collision height"), std::string::npos);
+  EXPECT_NE(nb::ResultsJson({g}, {r}, "navbench").find("\"rock_grazes\": 1"), std::string::npos);
+}
+
 TEST(NavbenchJudge, EachEntryIsAContactAndZonesCount) {
   // North through the rock, back south out of it, north into it again: two contacts. A
   // square zone beside the start, overlapped at the first pose (one contact), is left at
