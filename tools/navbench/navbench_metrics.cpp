@@ -62,10 +62,6 @@ std::string Fixed(double v, int digits) {
 
 std::string Pct(int part, int whole) { return whole > 0 ? Fixed(100.0 * part / whole, 1) + " %" : "-"; }
 
-}  // namespace
-
-namespace {
-
 // JudgeCollisions with an overlap judged by `hits` (obstacle index, clearance < 0): contacts
 // are entries into a hit; overlaps never hit are the report's grazes.
 CollisionReport Judge(const std::vector<hazards::Pose2>& track, const hazards::Footprint& footprint,
