@@ -103,7 +103,7 @@ std::string PlotRun(const RunPlan& plan, const RunFigures& figures, const RunTra
      << "set object 1 rect from " << Num(track.map.min_y) << "," << Num(track.map.min_x) << " to "
      << Num(track.map.max_y) << "," << Num(track.map.max_x) << " fs empty border lc rgb '#000000' lw 2 back\n"
      << "plot 'rocks_small.dat' using 1:2:3 with circles lc rgb '#999999' fs empty title 'rocks under the step limit (>= 0.2 m)', \\\n"
-     << "     'rocks_over_limit.dat' using 1:2:3 with circles lc rgb '#cc2222' title 'rocks over the step limit', \\\n"
+     << "     'rocks_over_limit.dat' using 1:2:3 with circles lc rgb '#cc2222' title 'rocks over the collision height', \\\n"
      << "     'zone_circles.dat' using 1:2:3 with circles fs transparent solid 0.3 lc rgb '#e69f00' title 'keep-out zones', \\\n"
      << "     'zone_polygons.dat' using 1:2 with lines lw 2 lc rgb '#e69f00' notitle, \\\n"
      << "     'goal.dat' using 1:2:3 with circles fs transparent solid 0.25 border lc rgb '#009e73' title 'goal disc', \\\n"

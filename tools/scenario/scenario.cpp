@@ -744,7 +744,7 @@ std::string SummaryText(const ScenarioSummary& s) {
     os << "  closest approach to a keep-out zone (truth): " << *s.min_keepout_clearance_m << " m\n";
   }
   if (s.min_rock_clearance_m) {
-    os << "  closest approach to a rock over the step limit (truth): " << *s.min_rock_clearance_m << " m ("
+    os << "  closest approach to a rock over the collision height (truth): " << *s.min_rock_clearance_m << " m ("
        << s.min_rock_clearance_rock << ", " << s.rocks_over_limit << " such rocks)\n";
   }
   if (s.vo_updates > 0) {

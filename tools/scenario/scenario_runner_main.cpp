@@ -760,7 +760,8 @@ rover::tools::ScenarioSummary Summarize(const RunPlan& plan, const Run& run) {
   auto summary = rover::tools::SummarizeLog(plan.log_path, plan.footprint);
   summary.log_digest = rover::logcheck::DigestLog(plan.log_path).sha256_hex;
   summary.rover_time = rover::tools::BreakdownFromLog(plan.log_path);
-  // Truth clearance to the rocks the rover cannot drive over (the simulator faults on them).
+  // Truth clearance to the discs of the rocks over the collision height (the simulator faults
+  // where one rises over the belly's clearance under the footprint; under 0 may be a graze).
   double max_height_m = 0.3;
   plan.rover_config["mobility"]["rock_collision"].Get("max_height_m", max_height_m);
   std::vector<rover::tools::RockDisc> rocks;

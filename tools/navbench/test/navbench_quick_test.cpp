@@ -47,7 +47,7 @@ TEST(NavbenchQuick, TheTableIsTheLogs) {
   EXPECT_NEAR(run["path_ratio"].as<double>(), run["driven_m"].as<double>() / run["straight_m"].as<double>(), 1e-4);
 
   // Collisions: the table's contacts and grazes against the runner's closest true approach
-  // to a rock over the step limit (an independent computation over every rock and sample):
+  // to a rock over the collision height (an independent computation over every rock and sample):
   // the footprint overlapped a disc exactly when it met a rock or grazed one.
   ASSERT_TRUE(summary["min_rock_clearance_m"].IsScalar()) << "the field has rocks over the limit";
   const bool touched = summary["min_rock_clearance_m"].as<double>() < 0;
