@@ -175,6 +175,8 @@ std::string Problem(const rover_msgs::rover_clock_t& m) {
   for (int i = 0; i < m.n_cut; ++i) {
     if (m.cut_count[static_cast<std::size_t>(i)] < 0) return "cut_count is negative (expected a message count)";
   }
+  if (m.n_complete < 0 || m.n_complete > 4096)
+    return "n_complete is out of range (expected 0 to 4096 publishers)";
   return Enum("mode", m.mode, 0, 1);
 }
 

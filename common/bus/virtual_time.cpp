@@ -85,6 +85,8 @@ void SetCut(const simtime::Cut& cut, rover_msgs::rover_clock_t* m) {
     m->cut_publisher.push_back(static_cast<std::int32_t>(key.second));
     m->cut_count.push_back(count);
   }
+  m->cut_complete.assign(cut.complete().begin(), cut.complete().end());
+  m->n_complete = static_cast<std::int32_t>(m->cut_complete.size());
 }
 
 simtime::Cut CutOf(const rover_msgs::rover_clock_t& m) {
@@ -92,6 +94,9 @@ simtime::Cut CutOf(const rover_msgs::rover_clock_t& m) {
   for (std::size_t i = 0; i < static_cast<std::size_t>(m.n_cut) && i < m.cut_count.size(); ++i) {
     cut.Set(static_cast<std::uint32_t>(m.cut_channel[i]), static_cast<std::uint32_t>(m.cut_publisher[i]),
             m.cut_count[i]);
+  }
+  for (std::size_t i = 0; i < static_cast<std::size_t>(m.n_complete) && i < m.cut_complete.size(); ++i) {
+    cut.SetComplete(static_cast<std::uint32_t>(m.cut_complete[i]));
   }
   return cut;
 }

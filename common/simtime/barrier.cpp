@@ -163,6 +163,9 @@ Cut Barrier::Published() const {
   for (const auto& [name, m] : members_) {
     if (!m.heard || m.lost) continue;
     for (const auto& [channel, count] : m.last.published) cut.Set(channel, m.id, count);
+    // A report lists every channel its member has published on, so a message of the
+    // member's on any other channel came after it. The clock owner adds its own counts.
+    if (name != clock_owner_) cut.SetComplete(m.id);
   }
   return cut;
 }

@@ -82,7 +82,8 @@ class Barrier {
   // does this (a member is otherwise at most one instant behind).
   bool FarBehind(std::int64_t utime, std::int64_t by_us) const;
   // What the members that are not lost have published, as their last reports say: the
-  // cut the next clock message carries (simtime/cut.hpp).
+  // cut the next clock message carries (simtime/cut.hpp), complete for each of them but
+  // the clock owner.
   Cut Published() const;
   // Members currently lost.
   std::vector<std::string> Lost() const;

@@ -17,7 +17,8 @@ void Cut::Set(std::uint32_t channel_id, std::uint32_t publisher, std::int64_t co
 
 bool Cut::After(std::uint32_t channel_id, std::uint32_t publisher, std::int64_t count) const {
   const auto it = counts_.find({channel_id, publisher});
-  return it != counts_.end() && count >= it->second;
+  if (it == counts_.end()) return complete_.count(publisher) > 0;
+  return count >= it->second;
 }
 
 bool Cut::Reached(const std::function<std::int64_t(std::uint32_t, std::uint32_t)>& received) const {

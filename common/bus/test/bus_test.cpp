@@ -2,6 +2,7 @@
 #include "bus/lcm_url_check.hpp"
 #include "bus/channels.hpp"
 #include "bus/process.hpp"
+#include "bus/virtual_time.hpp"
 
 #include <gtest/gtest.h>
 #include <rover_msgs/heartbeat_t.hpp>
@@ -527,6 +528,40 @@ TEST(Bus, TheClocksCutDecidesTheBatchNotTheArrival) {
   std::string missing;
   EXPECT_TRUE(bus.SealWhenReady(true, &missing));
   EXPECT_EQ(missing, "3 on IMU from publisher id " + std::to_string(sim));
+}
+
+// A member's first message on a channel, sent after the clock moved on and arriving before
+// the batch is sealed, waits for the next batch, as its later ones do: the clock message
+// says the cut is complete for its publisher. (Without it, a run's first MOBILITY_COMMAND
+// was handed over in either of two instants, by arrival.)
+TEST(Bus, AMembersFirstMessageOnAChannelWaitsForTheNextBatchWhenItOvertakesTheClock) {
+  Bus bus("memq://");
+  bus.set_deferred(true, {rover::channels::kClock});
+  std::vector<std::string> delivered;
+  bus.Subscribe<rover_msgs::pose_t>(rover::channels::kPose, [&](const rover_msgs::pose_t& m) {
+    delivered.push_back("POSE " + std::to_string(m.pub_seq & 0xffffffff));
+  });
+  bus.set_publisher("state_estimator");
+  rover_msgs::pose_t pose{};
+  pose.orientation[0] = 1;
+  bus.Publish(rover::channels::kPose, pose);  // POSE 0, published after the clock below
+  while (bus.Handle(0)) {
+  }
+  rover::simtime::Cut cut;  // the estimator had published nothing when the clock moved on
+  cut.SetComplete(rover::bus::PublisherId("state_estimator"));
+  rover_msgs::rover_clock_t clock{};
+  rover::bus::SetCut(cut, &clock);  // as rover_sim sends it, and a receiver reads it
+  bus.ClockMoved(100, rover::bus::CutOf(clock));
+  EXPECT_TRUE(bus.SealWhenReady(false));
+  bus.DispatchBatch();
+  EXPECT_TRUE(delivered.empty()) << "POSE 0 was published after this instant's cut";
+  rover::simtime::Cut next;
+  next.Set(rover::channels::kPose, rover::bus::PublisherId("state_estimator"), 1);
+  next.SetComplete(rover::bus::PublisherId("state_estimator"));
+  bus.ClockMoved(200, next);
+  EXPECT_TRUE(bus.SealWhenReady(false));
+  bus.DispatchBatch();
+  EXPECT_EQ(delivered, (std::vector<std::string>{"POSE 0"}));
 }
 
 // A port another program holds without sharing it (CI met an outgoing socket on a test

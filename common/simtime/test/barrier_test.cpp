@@ -218,6 +218,10 @@ TEST(Barrier, WithAClockOwnerOnlyTheOwnersReceiptsHoldTheClock) {
   // What the members published is still the cut the next clock message carries.
   EXPECT_FALSE(b.Published().After("POSE", PublisherIdOf("estimator"), 2));
   EXPECT_TRUE(b.Published().After("POSE", PublisherIdOf("estimator"), 3));
+  // A member's first message on a channel it had not published on is after the cut; the
+  // clock owner's own are its to add (it sends them before the clock).
+  EXPECT_TRUE(b.Published().After("HAZARD_QUERY", PublisherIdOf("executor"), 0));
+  EXPECT_FALSE(b.Published().After("IMU", PublisherIdOf("sim"), 0));
   // A member that has not finished the instant still holds it.
   exe.utime = 200;
   b.Report(exe, 0.0);

@@ -20,6 +20,21 @@ TEST(Cut, AMessageAtOrAboveTheCutWasPublishedAfterIt) {
   EXPECT_FALSE(cut.After("POSE", 7u, 0));
 }
 
+// A member's first message on a channel, published after the clock moved on, belongs to
+// the next batch like any other: the first MOBILITY_COMMAND of a run went into whichever
+// batch was open when it arrived before the cut was complete for its publisher.
+TEST(Cut, AMembersFirstMessageOnAChannelTheCutDoesNotNameIsAfterIt) {
+  Cut cut;
+  cut.Set("HAZARD_QUERY", 7u, 1);
+  EXPECT_FALSE(cut.After("MOBILITY_COMMAND", 7u, 0));  // not known complete: unconstrained
+  cut.SetComplete(7u);
+  EXPECT_FALSE(cut.empty());
+  EXPECT_TRUE(cut.After("MOBILITY_COMMAND", 7u, 0));  // it had published nothing there
+  EXPECT_FALSE(cut.After("HAZARD_QUERY", 7u, 0));     // below the count it reported
+  EXPECT_TRUE(cut.After("HAZARD_QUERY", 7u, 1));
+  EXPECT_FALSE(cut.After("MOBILITY_COMMAND", 8u, 0));  // not a member: unconstrained
+}
+
 TEST(Cut, IsReachedWhenEveryMessageBelowItOnAChannelTakenHasCome) {
   Cut cut;
   cut.Set("IMU", 1u, 10);
