@@ -252,6 +252,9 @@ void VoteOptions::Validate() const {
   };
   positive(footprint.length_m, "footprint length_m");
   positive(footprint.width_m, "footprint width_m");
+  if (!(footprint_margin_m >= 0.0) || 2.0 * footprint_margin_m >= std::min(footprint.length_m, footprint.width_m))
+    throw std::invalid_argument("avoidance: footprint_margin_m " + std::to_string(footprint_margin_m) +
+                                " must be >= 0 and leave the footprint a body");
   positive(max_curvature_per_m, "max_curvature_per_m");
   positive(lookahead_m, "lookahead_m");
   positive(step_m, "step_m");
@@ -382,30 +385,42 @@ Choice VoteArcs(const Grid& grid, const Pose2& pose, double gx, double gy, const
   // and not into a rock beside the way it turned from.
   VoteOptions behind = o;
   behind.blind_margin_m = 0.0;
+  // Back along the arc just driven the body sweeps the ground it has just covered: judged
+  // on the body alone, without the margin the vote's footprint carries beyond it.
+  VoteOptions retracing = behind;
+  retracing.footprint.length_m -= 2.0 * o.footprint_margin_m;
+  retracing.footprint.width_m -= 2.0 * o.footprint_margin_m;
   auto backup = [&](double distance_m, double curvature_per_m) {
     Candidate c;
     c.kind = Candidate::Kind::kBackup;
     c.distance_m = -distance_m;
     c.curvature_per_m = curvature_per_m;
     const auto step = SamplePath(pose, 0.0, -distance_m, curvature_per_m);
-    Judge(grid, heights, field, pose, gx, gy, behind, step, step, &c);
+    Judge(grid, heights, field, pose, gx, gy, curvature_per_m != 0.0 ? retracing : behind, step, step, &c);
     Score(o, scale, &c);
     choice.candidates.push_back(c);
   };
-  if (way_behind && o.backup_m > 0.0) backup(o.backup_m, 0.0);
-  const Candidate* best = pick(false, false);
-  // The last-resort backups judged, by their index in choice.candidates: straight back,
-  // then, if that is not allowed, back along the arc just driven.
-  std::vector<std::size_t> last_resort;
-  if (!best && o.backup_m > 0.0 && !way_behind) {
+  // The backups, by their index in choice.candidates: straight back, then, if that is not
+  // allowed, back along the arc just driven (the body retraces its own ground).
+  auto backups = [&] {
+    std::vector<std::size_t> judged;
     backup(o.backup_m, 0.0);
-    last_resort.push_back(choice.candidates.size() - 1);
+    judged.push_back(choice.candidates.size() - 1);
     const double retrace_m = std::min(o.backup_m, o.previous_arc_m);
     const Candidate& straight = choice.candidates.back();
     if ((straight.vetoed || straight.near_limit) && retrace_m > 0.0 && o.previous_arc_curvature_per_m != 0.0) {
       backup(retrace_m, o.previous_arc_curvature_per_m);
-      last_resort.push_back(choice.candidates.size() - 1);
+      judged.push_back(choice.candidates.size() - 1);
     }
+    return judged;
+  };
+  // With the plan's way behind, the backups are voted on with the rest.
+  if (way_behind && o.backup_m > 0.0) backups();
+  const Candidate* best = pick(false, false);
+  // Otherwise they are the last resort.
+  std::vector<std::size_t> last_resort;
+  if (!best && o.backup_m > 0.0 && !way_behind) {
+    last_resort = backups();
     for (std::size_t k : last_resort)
       if (!best && !choice.candidates[k].vetoed && !choice.candidates[k].near_limit) best = &choice.candidates[k];
   }

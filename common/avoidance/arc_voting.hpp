@@ -21,7 +21,7 @@
 //
 // Backing up is the last resort (or a candidate like the others when the global plan's
 // way lies behind): straight back by backup_m, or, when that is not allowed, back along the
-// arc the previous step drove (VoteOptions::previous_arc_m).
+// arc the previous step drove (VoteOptions::previous_arc_m), in either case.
 //
 // A turn in place after which the rover could not drive even one step straight ahead
 // leads nowhere: it is chosen only when neither an arc, another turn nor backing up is
@@ -85,6 +85,11 @@ struct VoteOptions {
   // judged next (up to backup_m, and no further than the arc ran).
   double previous_arc_m = 0.0;
   double previous_arc_curvature_per_m = 0.0;
+  // How much `footprint` is grown beyond the body all round (the executor's avoid_margin_m).
+  // Backing up along the previous arc is judged on the body alone: it sweeps the ground the
+  // body has just driven over, and the margin's ring beside it may have been rated unsafe
+  // since (navbench seed 7 k0.30_r01 stopped "no safe step" so, in a pocket).
+  double footprint_margin_m = 0.0;
   // The goal vote counts progress along the path round the hazards the map knows
   // (goal_field.hpp), not in a straight line; the rover's centre keeps half the footprint's
   // width from an unsafe cell's centre there. false: straight-line progress only.

@@ -135,8 +135,9 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, d
   o.suspension = map_->suspension;
   o.backup_m = std::min(options_.avoid_backup_m, StepLength());
   o.previous_turn_rad = last_turn_rad_;
-  o.previous_arc_m = last_arc_m_;
-  o.previous_arc_curvature_per_m = last_arc_curvature_per_m_;
+  o.previous_arc_m = arcs_to_retrace_.Last().length_m;
+  o.previous_arc_curvature_per_m = arcs_to_retrace_.Last().curvature_per_m;
+  o.footprint_margin_m = margin;
   // Keep-out zones are obstacles: their cells, grown by the position uncertainty as the
   // hazard monitor grows them (and a cell, since a cell counts when its centre is under the
   // footprint grown by half a cell), are unsafe to the vote.

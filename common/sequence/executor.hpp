@@ -10,6 +10,7 @@
 
 #include "avoidance/grid.hpp"
 #include "avoidance/loop_breaker.hpp"
+#include "avoidance/retrace_trail.hpp"
 #include "config/yaml_config.hpp"
 #include "planner/blocked_ways.hpp"
 #include "planner/global_planner.hpp"
@@ -736,10 +737,9 @@ class SequenceExecutor {
   bool looks_unanswered_ = false;  // a look went unanswered in this sequence: no more
   bool avoid_refused_ = false;
   double last_turn_rad_ = 0.0;    // the last commanded step's turn in place (0: not a turn)
-  // The last commanded step's arc when it drove forward (length 0: it did not), which the
-  // vote may back up along (avoidance::VoteOptions::previous_arc_m).
-  double last_arc_m_ = 0.0;
-  double last_arc_curvature_per_m_ = 0.0;
+  // The forward arcs driven one after another up to the last commanded step: the vote may
+  // back up along the last, arc by arc (avoidance/retrace_trail.hpp).
+  avoidance::RetraceTrail arcs_to_retrace_;
   // The site map merged from every map the monitor sends, and where the rover has been
   // (common/planner), in the site frame of map_site_; it starts again with a new site.
   planner::SiteMap site_map_;

@@ -44,7 +44,7 @@ void SequenceExecutor::PlanMotion(const Command& c) {
     blocked_ways_.Reset();
     refused_ways_.Reset();
     last_turn_rad_ = 0.0;
-    last_arc_m_ = 0.0;
+    arcs_to_retrace_.Clear();
     goto_start_utime_ = now_utime_;
     goto_start_pose_.reset();
     if (PoseFinite()) {

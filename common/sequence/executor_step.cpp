@@ -159,9 +159,7 @@ void SequenceExecutor::CommandStep() {
   if (thought_ahead_) ++steps_thought_ahead_;
   avoid_refused_ = false;
   last_turn_rad_ = step_.kind == PlannedStep::Kind::kTurn ? step_.turn_rad : 0.0;
-  const bool forward_arc = step_.kind == PlannedStep::Kind::kArc && step_.distance_m > 0.0;
-  last_arc_m_ = forward_arc ? step_.distance_m : 0.0;
-  last_arc_curvature_per_m_ = forward_arc ? step_.curvature_per_m : 0.0;
+  arcs_to_retrace_.Driven(step_.kind == PlannedStep::Kind::kArc, step_.distance_m, step_.curvature_per_m);
   mobility_deadline_utime_ =
       now_utime_ + static_cast<int64_t>((expected_s * options_.mobility_timeout_factor +
                                          options_.mobility_timeout_margin_s) * 1e6);

@@ -710,6 +710,64 @@ TEST(ArcVoting, BoxedInAfterAnArcBacksUpAlongTheArcItDrove) {
   EXPECT_NEAR(shorter.best.distance_m, -0.2, 1e-9);
   o.previous_arc_m = -0.1;
   EXPECT_THROW(VoteArcs(g, here, 5.0, 0.0, o), std::invalid_argument);
+  // With the plan's way behind, backing up is voted on with the arcs and turns; the arc is
+  // retraced then too (navbench seed 7 k0.30_r01 stopped "no safe step" so, its straight
+  // backup's corner over unseen ground and the arc it drove never judged).
+  o.previous_arc_m = arc;
+  o.way_heading_rad = M_PI;
+  const Choice behind = VoteArcs(g, here, 5.0, 0.0, o);
+  ASSERT_TRUE(behind.found) << behind.detail;
+  EXPECT_EQ(behind.best.kind, Candidate::Kind::kBackup);
+  EXPECT_NEAR(behind.best.distance_m, -o.backup_m, 1e-9);
+  EXPECT_NEAR(behind.best.curvature_per_m, k, 1e-9);
+}
+
+// The vote's footprint carries a margin beyond the body; backing up along the arc just
+// driven sweeps only the ground the body covered, and is judged on the body alone: the
+// margin's ring beside the arc, rated unsafe since, does not box the rover in.
+TEST(ArcVoting, BoxedInItRetracesTheArcOnTheBodyAloneNotTheMarginsRing) {
+  const double k = 1.0, arc = 0.6, margin = 0.1;
+  const Pose2 here{0, 0, 0};
+  const auto came = SamplePath(here, 0.0, -arc, k);
+  Grid g = Open();
+  for (int i = 0; i < g.rows; ++i)
+    for (int j = 0; j < g.cols; ++j) {
+      const double x = g.CellCentreX(i), y = g.CellCentreY(j);
+      bool driven = false;
+      for (const Pose2& p : came) {
+        const double dx = x - p.x, dy = y - p.y;
+        const double along = dx * std::cos(p.yaw) + dy * std::sin(p.yaw);
+        const double across = -dx * std::sin(p.yaw) + dy * std::cos(p.yaw);
+        driven = driven || (std::abs(along) <= 0.8 + 0.1 && std::abs(across) <= 0.7 + 0.1);
+      }
+      if (!driven) {
+        const std::size_t c = static_cast<std::size_t>(i) * g.cols + j;
+        g.state[c] = CellClass::kUnsafe;
+        g.goodness[c] = 0.0f;
+        g.step_m[c] = 0.4f;
+      }
+    }
+  VoteOptions o;
+  o.footprint.length_m += 2.0 * margin;
+  o.footprint.width_m += 2.0 * margin;
+  o.previous_arc_m = arc;
+  o.previous_arc_curvature_per_m = k;
+  // Judged with the margin, every backup crosses the ring.
+  const Choice with_margin = VoteArcs(g, here, 5.0, 0.0, o);
+  EXPECT_FALSE(with_margin.found) << ToString(with_margin.best.kind) << " " << with_margin.best.distance_m;
+  o.footprint_margin_m = margin;
+  const Choice c = VoteArcs(g, here, 5.0, 0.0, o);
+  ASSERT_TRUE(c.found) << c.detail;
+  EXPECT_EQ(c.best.kind, Candidate::Kind::kBackup);
+  EXPECT_NEAR(c.best.curvature_per_m, k, 1e-9);
+  // The straight backup keeps the margin: it leaves the ground driven.
+  for (const Candidate& b : c.candidates) {
+    if (b.kind == Candidate::Kind::kBackup && b.curvature_per_m == 0.0) {
+      EXPECT_TRUE(b.vetoed);
+    }
+  }
+  o.footprint_margin_m = 0.8;  // as wide as the body: no body left
+  EXPECT_THROW(VoteArcs(g, here, 5.0, 0.0, o), std::invalid_argument);
 }
 
 // With the rover's suspension, ACE's clearance bounds from the grid's heights, not the
