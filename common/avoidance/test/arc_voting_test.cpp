@@ -661,23 +661,20 @@ TEST(ArcVoting, ARoverWhoseEveryWayOnIsBlockedBacksAwayRatherThanTurning) {
 // and every turn is refused, and backing up straight would swing the body's rear over
 // ground beside the way it came (rock here; on a rover, as often ground the cameras facing
 // ahead never saw). Backing up along the arc just driven retraces the ground it drove.
-TEST(ArcVoting, BoxedInAfterAnArcBacksUpAlongTheArcItDrove) {
-  const double k = 1.0, arc = 0.6;
-  const Pose2 here{0, 0, 0};
-  const auto came = SamplePath(here, 0.0, -arc, k);  // back along the arc: where it was
-  ASSERT_GT(std::abs(came.back().yaw), 20.0 * kDeg);
-  auto under_body = [](const Pose2& p, double x, double y, double margin) {
-    const double dx = x - p.x, dy = y - p.y;
-    const double along = dx * std::cos(p.yaw) + dy * std::sin(p.yaw);
-    const double across = -dx * std::sin(p.yaw) + dy * std::cos(p.yaw);
-    return std::abs(along) <= 0.8 + margin && std::abs(across) <= 0.7 + margin;
-  };
+// Rock (0.4 m) everywhere but the cells a 1.6 x 1.4 m body covered (within 0.1 m) along
+// `came`.
+Grid RockBeyondTheGroundDriven(const std::vector<Pose2>& came) {
   Grid g = Open();
   for (int i = 0; i < g.rows; ++i)
     for (int j = 0; j < g.cols; ++j) {
       const double x = g.CellCentreX(i), y = g.CellCentreY(j);
       bool driven = false;
-      for (const Pose2& p : came) driven = driven || under_body(p, x, y, 0.1);
+      for (const Pose2& p : came) {
+        const double dx = x - p.x, dy = y - p.y;
+        const double along = dx * std::cos(p.yaw) + dy * std::sin(p.yaw);
+        const double across = -dx * std::sin(p.yaw) + dy * std::cos(p.yaw);
+        driven = driven || (std::abs(along) <= 0.8 + 0.1 && std::abs(across) <= 0.7 + 0.1);
+      }
       if (!driven) {
         const std::size_t c = static_cast<std::size_t>(i) * g.cols + j;
         g.state[c] = CellClass::kUnsafe;
@@ -685,16 +682,29 @@ TEST(ArcVoting, BoxedInAfterAnArcBacksUpAlongTheArcItDrove) {
         g.step_m[c] = 0.4f;
       }
     }
+  return g;
+}
+
+void ExpectBacksUpAlong(const Choice& c, double distance_m, double curvature_per_m) {
+  ASSERT_TRUE(c.found) << c.detail;
+  EXPECT_EQ(c.best.kind, Candidate::Kind::kBackup);
+  EXPECT_NEAR(c.best.distance_m, -distance_m, 1e-9);
+  EXPECT_NEAR(c.best.curvature_per_m, curvature_per_m, 1e-9);
+}
+
+TEST(ArcVoting, BoxedInAfterAnArcBacksUpAlongTheArcItDrove) {
+  const double k = 1.0, arc = 0.6;
+  const Pose2 here{0, 0, 0};
+  const auto came = SamplePath(here, 0.0, -arc, k);  // back along the arc: where it was
+  ASSERT_GT(std::abs(came.back().yaw), 20.0 * kDeg);
+  const Grid g = RockBeyondTheGroundDriven(came);
   VoteOptions o;
   const Choice stuck = VoteArcs(g, here, 5.0, 0.0, o);
   EXPECT_FALSE(stuck.found) << ToString(stuck.best.kind) << " " << stuck.best.distance_m;
   o.previous_arc_m = arc;
   o.previous_arc_curvature_per_m = k;
   const Choice c = VoteArcs(g, here, 5.0, 0.0, o);
-  ASSERT_TRUE(c.found) << c.detail;
-  EXPECT_EQ(c.best.kind, Candidate::Kind::kBackup);
-  EXPECT_NEAR(c.best.distance_m, -o.backup_m, 1e-9);
-  EXPECT_NEAR(c.best.curvature_per_m, k, 1e-9);
+  ExpectBacksUpAlong(c, o.backup_m, k);
   // The straight backup was judged first, and refused.
   int straight = 0;
   for (const Candidate& b : c.candidates)
@@ -715,11 +725,7 @@ TEST(ArcVoting, BoxedInAfterAnArcBacksUpAlongTheArcItDrove) {
   // backup's corner over unseen ground and the arc it drove never judged).
   o.previous_arc_m = arc;
   o.way_heading_rad = M_PI;
-  const Choice behind = VoteArcs(g, here, 5.0, 0.0, o);
-  ASSERT_TRUE(behind.found) << behind.detail;
-  EXPECT_EQ(behind.best.kind, Candidate::Kind::kBackup);
-  EXPECT_NEAR(behind.best.distance_m, -o.backup_m, 1e-9);
-  EXPECT_NEAR(behind.best.curvature_per_m, k, 1e-9);
+  ExpectBacksUpAlong(VoteArcs(g, here, 5.0, 0.0, o), o.backup_m, k);
 }
 
 // The vote's footprint carries a margin beyond the body; backing up along the arc just
@@ -728,25 +734,7 @@ TEST(ArcVoting, BoxedInAfterAnArcBacksUpAlongTheArcItDrove) {
 TEST(ArcVoting, BoxedInItRetracesTheArcOnTheBodyAloneNotTheMarginsRing) {
   const double k = 1.0, arc = 0.6, margin = 0.1;
   const Pose2 here{0, 0, 0};
-  const auto came = SamplePath(here, 0.0, -arc, k);
-  Grid g = Open();
-  for (int i = 0; i < g.rows; ++i)
-    for (int j = 0; j < g.cols; ++j) {
-      const double x = g.CellCentreX(i), y = g.CellCentreY(j);
-      bool driven = false;
-      for (const Pose2& p : came) {
-        const double dx = x - p.x, dy = y - p.y;
-        const double along = dx * std::cos(p.yaw) + dy * std::sin(p.yaw);
-        const double across = -dx * std::sin(p.yaw) + dy * std::cos(p.yaw);
-        driven = driven || (std::abs(along) <= 0.8 + 0.1 && std::abs(across) <= 0.7 + 0.1);
-      }
-      if (!driven) {
-        const std::size_t c = static_cast<std::size_t>(i) * g.cols + j;
-        g.state[c] = CellClass::kUnsafe;
-        g.goodness[c] = 0.0f;
-        g.step_m[c] = 0.4f;
-      }
-    }
+  const Grid g = RockBeyondTheGroundDriven(SamplePath(here, 0.0, -arc, k));
   VoteOptions o;
   o.footprint.length_m += 2.0 * margin;
   o.footprint.width_m += 2.0 * margin;
@@ -757,9 +745,7 @@ TEST(ArcVoting, BoxedInItRetracesTheArcOnTheBodyAloneNotTheMarginsRing) {
   EXPECT_FALSE(with_margin.found) << ToString(with_margin.best.kind) << " " << with_margin.best.distance_m;
   o.footprint_margin_m = margin;
   const Choice c = VoteArcs(g, here, 5.0, 0.0, o);
-  ASSERT_TRUE(c.found) << c.detail;
-  EXPECT_EQ(c.best.kind, Candidate::Kind::kBackup);
-  EXPECT_NEAR(c.best.curvature_per_m, k, 1e-9);
+  ExpectBacksUpAlong(c, o.backup_m, k);
   // The straight backup keeps the margin: it leaves the ground driven.
   for (const Candidate& b : c.candidates) {
     if (b.kind == Candidate::Kind::kBackup && b.curvature_per_m == 0.0) {
