@@ -489,7 +489,7 @@ namespace {
 // its pages and unmap it again: glibc maps blocks over its threshold (128 KiB at first,
 // rising only with what was freed) and trims the heap's free top over 128 KiB. Keeping
 // blocks up to 32 MiB (glibc's ceiling) in the heap, and up to 64 MiB of its free top,
-// lets the next pair reuse the pages: the demo's hazard_monitor took about 11 % less CPU
+// lets the next pair reuse the pages: the demo's hazard_monitor took about 15 % less CPU
 // (docs/SIMTIME_LOG.md, "Freed buffers kept"). The bytes computed are the same.
 void KeepFreedBuffers() {
   mallopt(M_MMAP_THRESHOLD, 32 * 1024 * 1024);
