@@ -36,6 +36,15 @@ std::vector<hazards::KeepOutZone> HazardZones(const std::vector<KeepOutZone>& zo
   return out;
 }
 
+// The vote's options with the footprint's margin narrowed from o's to `margin_m`.
+avoidance::VoteOptions Narrowed(const avoidance::VoteOptions& o, double margin_m) {
+  avoidance::VoteOptions n = o;
+  n.footprint.length_m -= 2.0 * (o.footprint_margin_m - margin_m);
+  n.footprint.width_m -= 2.0 * (o.footprint_margin_m - margin_m);
+  n.footprint_margin_m = margin_m;
+  return n;
+}
+
 }  // namespace
 
 void SequenceExecutor::OnTraversabilityMap(const TraversabilityMap& map) {
@@ -169,7 +178,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, d
   const bool going_round = looked_here_ == 0 && avoidance::BackWhereItWas(avoid_history_, here);
   std::optional<planner::GlobalPlan> plan;
   if (options_.planner_enabled) {
-    switch (PlanAhead(p, disc, o.footprint, zone_grow, going_round, &plan)) {
+    switch (PlanAhead(p, disc, &o.footprint, &o.footprint_margin_m, zone_grow, going_round, &plan)) {
       case PlanVerdict::kFollow: break;
       case PlanVerdict::kAborted: return AvoidOutcome::kAborted;
       case PlanVerdict::kDeclined: return AvoidOutcome::kDeclined;
@@ -224,6 +233,22 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, d
   //    first look aside at the ground a turn would sweep, if no view from here has framed
   //    it (behind, with no step at all), then vote again on the map with it.
   if (LookAside(grid, o.footprint, o.backup_m, here, choice)) return AvoidOutcome::kWait;
+  // Boxed in with the vote's margin (and looked round): the vote again with the squeeze's.
+  if (!choice.found && SqueezeMargin(o.footprint_margin_m) >= 0.0) {
+    const avoidance::VoteOptions narrow = Narrowed(o, SqueezeMargin(o.footprint_margin_m));
+    try {
+      avoidance::Choice squeezed = avoidance::VoteArcs(grid, {p.x, p.y, p.yaw}, goto_.target.x(), goto_.target.y(), narrow);
+      if (squeezed.found) {
+        avoid_note_ += "no step keeps the vote's margin (" + choice.detail + "): squeezing through with " +
+                       Fixed(narrow.footprint_margin_m) + " m; ";
+        choice = std::move(squeezed);
+        o = narrow;
+      }
+    } catch (const std::invalid_argument& e) {
+      AbortWith(abort_reason::kHazardUnknown, std::string("arc voting cannot decide: ") + e.what());
+      return AvoidOutcome::kAborted;
+    }
+  }
   if (!choice.found) {
     AbortWith(abort_reason::kHazardMap,
               "hazard_map: " + choice.detail +
@@ -294,32 +319,14 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, d
 // row aborts the goto; until then the vote follows the plan's field, which is defined
 // round obstacles even when the way is shut (global_planner.hpp).
 SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, const ArrivalDisc& disc,
-                                                          const avoidance::Footprint& footprint, double zone_grow,
-                                                          bool going_round, std::optional<planner::GlobalPlan>* plan) {
-  planner::PlannerOptions po;
-  // The vote counts a cell under the body when its centre is within half a cell of it, and
-  // marks a zone's cells out to a cell past its grown edge (AvoidStep): the plan keeps the
-  // rover's centre as far off both, or it leads into gaps no step will cross.
-  const double cell = site_map_.cell_m();
-  const bool vote_clearance = options_.planner_vote_clearance && cell > 0.0;
-  po.SetRadiiFrom(footprint, vote_clearance ? 0.5 * cell : 0.0);
-  po.unknown_cost = options_.planner_unknown_cost;
-  po.caution_cost = options_.planner_caution_cost;
-  po.near_cost = options_.planner_near_cost;
-  po.margin_m = options_.planner_margin_m;
-  planner::PlanRequest r;
-  r.start_x = p.x, r.start_y = p.y;
-  r.goal_x = goto_.target.x(), r.goal_y = goto_.target.y();
-  r.goal_radius_m = disc.radius_m;
-  r.zone_grow_m = zone_grow + (vote_clearance ? cell : 0.0);
-  r.prior = prior_ ? &*prior_ : nullptr;
+                                                          avoidance::Footprint* footprint, double* margin_m,
+                                                          double zone_grow, bool going_round,
+                                                          std::optional<planner::GlobalPlan>* plan) {
   // Keep-out zones and the ways this goto could not follow (planner/blocked_ways.hpp).
   auto plan_once = [&] {
-    r.zones = HazardZones(zones_);
-    r.zones.insert(r.zones.end(), blocked_ways_.zones().begin(), blocked_ways_.zones().end());
+    const auto [po, r] = PlanSetUp(p, disc, *footprint, zone_grow);
     *plan = planner::PlanOnSiteMap(site_map_, r, po);
   };
-  r.costly = refused_ways_.discs();
   try {
     plan_once();
     // Back where it stood a few steps ago (avoidance::BackWhereItWas): the way the plan
@@ -327,10 +334,7 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
     if (going_round && (*plan)->reachable()) {
       const std::size_t n = refused_ways_.discs().size();
       RefuseWay(**plan, "back where it stood a few steps ago");
-      if (refused_ways_.discs().size() > n) {
-        r.costly = refused_ways_.discs();
-        plan_once();
-      }
+      if (refused_ways_.discs().size() > n) plan_once();
     }
     if (blocked_ways_.Update(**plan, refused_ways_.discs().size())) {
       const hazards::KeepOutZone& z = blocked_ways_.zones().back();
@@ -349,18 +353,84 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
     return PlanVerdict::kFollow;
   }
   if (thinking_ahead_) return PlanVerdict::kDeclined;  // no way on the old map: see the new one
+  avoidance::Footprint narrower;
+  if (auto squeezed = SqueezeThrough(p, disc, *footprint, *margin_m, zone_grow, &narrower)) {
+    avoid_note_ += "no way keeps the vote's margin (" + (*plan)->why_unreachable() + "): squeezing through with " +
+                   Fixed(options_.avoid_squeeze_margin_m) + " m; ";
+    *plan = std::move(squeezed);
+    *footprint = narrower;
+    *margin_m = options_.avoid_squeeze_margin_m;
+    unreachable_plans_ = 0;
+    return PlanVerdict::kFollow;
+  }
+  const std::string squeeze_too =
+      SqueezeMargin(*margin_m) >= 0.0 ? " (nor with the vote's margin narrowed to " + Fixed(options_.avoid_squeeze_margin_m) + " m)" : "";
   if (++unreachable_plans_ >= options_.planner_unreachable_plans) {
     const std::size_t blocked = blocked_ways_.zones().size();
     AbortWith(abort_reason::kGoalUnreachable,
               "goal unreachable on " + std::to_string(unreachable_plans_) + " plans in a row: " +
-                  (*plan)->why_unreachable() +
+                  (*plan)->why_unreachable() + squeeze_too +
                   (blocked == 0 ? ""
                                 : " (" + std::to_string(blocked) +
                                       " ways blocked where the rover made no progress along the plan)"));
     return PlanVerdict::kAborted;
   }
-  avoid_note_ += "plan " + std::to_string(unreachable_plans_) + " finds no way (" + (*plan)->why_unreachable() + "); ";
+  avoid_note_ += "plan " + std::to_string(unreachable_plans_) + " finds no way (" + (*plan)->why_unreachable() + ")" +
+                 squeeze_too + "; ";
   return PlanVerdict::kFollow;
+}
+
+std::pair<planner::PlannerOptions, planner::PlanRequest> SequenceExecutor::PlanSetUp(
+    const PlanePose& p, const ArrivalDisc& disc, const avoidance::Footprint& footprint, double zone_grow) const {
+  planner::PlannerOptions po;
+  // The vote counts a cell under the body when its centre is within half a cell of it, and
+  // marks a zone's cells out to a cell past its grown edge (AvoidStep): the plan keeps the
+  // rover's centre as far off both, or it leads into gaps no step will cross.
+  const double cell = site_map_.cell_m();
+  const bool vote_clearance = options_.planner_vote_clearance && cell > 0.0;
+  po.SetRadiiFrom(footprint, vote_clearance ? 0.5 * cell : 0.0);
+  po.unknown_cost = options_.planner_unknown_cost;
+  po.caution_cost = options_.planner_caution_cost;
+  po.near_cost = options_.planner_near_cost;
+  po.margin_m = options_.planner_margin_m;
+  planner::PlanRequest r;
+  r.start_x = p.x, r.start_y = p.y;
+  r.goal_x = goto_.target.x(), r.goal_y = goto_.target.y();
+  r.goal_radius_m = disc.radius_m;
+  r.zone_grow_m = zone_grow + (vote_clearance ? cell : 0.0);
+  r.prior = prior_ ? &*prior_ : nullptr;
+  r.zones = HazardZones(zones_);
+  r.zones.insert(r.zones.end(), blocked_ways_.zones().begin(), blocked_ways_.zones().end());
+  r.costly = refused_ways_.discs();
+  return {po, r};
+}
+
+// Squeezing through: the margin to narrow the vote's `margin_m` to, or -1 for none. Not
+// after the monitor refused a step (the margin is then tripled on purpose, VoteOnMap).
+double SequenceExecutor::SqueezeMargin(double margin_m) const {
+  const double squeeze = options_.avoid_squeeze_margin_m;
+  return squeeze >= 0.0 && squeeze < margin_m && !avoid_refused_ ? squeeze : -1.0;
+}
+
+// The body's margin narrowed to the squeeze's, planned once more over the same map, zones
+// and refused ways.
+std::optional<planner::GlobalPlan> SequenceExecutor::SqueezeThrough(const PlanePose& p, const ArrivalDisc& disc,
+                                                                    const avoidance::Footprint& footprint,
+                                                                    double margin_m, double zone_grow,
+                                                                    avoidance::Footprint* narrower) const {
+  const double squeeze = SqueezeMargin(margin_m);
+  if (squeeze < 0.0) return std::nullopt;
+  *narrower = footprint;
+  narrower->length_m -= 2.0 * (margin_m - squeeze);
+  narrower->width_m -= 2.0 * (margin_m - squeeze);
+  const auto [po, r] = PlanSetUp(p, disc, *narrower, zone_grow);
+  try {
+    planner::GlobalPlan plan = planner::PlanOnSiteMap(site_map_, r, po);
+    if (plan.reachable()) return plan;
+  } catch (const std::invalid_argument&) {
+    // The same request planned with the wider footprint; the caller reports that plan.
+  }
+  return std::nullopt;
 }
 
 void SequenceExecutor::RefuseWay(const planner::GlobalPlan& plan, const std::string& why) {

@@ -30,6 +30,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -125,6 +126,13 @@ struct ExecutorOptions {
   // the drift the monitor's check allows for (the step's path shifted by the drift VO
   // measured) does not make it refuse the step the vote chose.
   double avoid_margin_m = 0.1;
+  // Squeezing through (common/avoidance/README.md, "Squeezing through"): when the plan finds
+  // no way that keeps the vote's margin, the plan and that step's vote take this margin
+  // instead, if a way keeps it (0: the body as the hazard monitor judges it); when the vote
+  // finds no step with the margin (boxed in, after looking aside), it votes again with this
+  // one. Tried only then: a goto that finds its way with the margin never narrows it, nor a
+  // vote after the monitor refused a step. Negative: off.
+  double avoid_squeeze_margin_m = -1.0;
   // Keep-out zones are obstacles for arc voting and the planner, grown by this many sigma
   // of the pose's horizontal position (as the hazard monitor's hazards.sigma_multiplier).
   double avoid_zone_sigma_multiplier = 3.0;
@@ -572,8 +580,20 @@ class SequenceExecutor {
   ArrivalDisc GotoArrival() const;
   // The global plan for the avoid goto's next step (kAborted: no way, plans running).
   enum class PlanVerdict { kFollow, kAborted, kDeclined };
-  PlanVerdict PlanAhead(const PlanePose& pose, const ArrivalDisc& disc, const avoidance::Footprint& footprint,
-                        double zone_grow_m, bool going_round, std::optional<planner::GlobalPlan>* plan);
+  // `footprint` and `margin_m` (the vote's, margins included): narrowed when squeezing through.
+  PlanVerdict PlanAhead(const PlanePose& pose, const ArrivalDisc& disc, avoidance::Footprint* footprint,
+                        double* margin_m, double zone_grow_m, bool going_round,
+                        std::optional<planner::GlobalPlan>* plan);
+  // The planner's options and request for a plan from `pose` with this footprint.
+  std::pair<planner::PlannerOptions, planner::PlanRequest> PlanSetUp(const PlanePose& pose, const ArrivalDisc& disc,
+                                                                     const avoidance::Footprint& footprint,
+                                                                     double zone_grow_m) const;
+  // Squeezing through: the margin to narrow the vote's `margin_m` to, or -1 for none.
+  double SqueezeMargin(double margin_m) const;
+  // No way keeps the vote's margin: a plan with avoid_squeeze_margin_m, if it finds one.
+  std::optional<planner::GlobalPlan> SqueezeThrough(const PlanePose& pose, const ArrivalDisc& disc,
+                                                    const avoidance::Footprint& footprint, double margin_m,
+                                                    double zone_grow_m, avoidance::Footprint* narrower) const;
   // The local check refused the way `plan` leads (refused_ways_): remembered, and said.
   void RefuseWay(const planner::GlobalPlan& plan, const std::string& why);
   void MarkDriven();  // the ground under the rover now carried it (site map)

@@ -51,6 +51,8 @@ void ValidateExecutorOptions(const ExecutorOptions& o) {
   if (o.avoid_num_arcs < 1 || !(o.avoid_backup_m >= 0.0) || !(o.avoid_margin_m >= 0.0)) {
     throw std::invalid_argument("executor options avoid_num_arcs must be >= 1, avoid_backup_m and avoid_margin_m >= 0");
   }
+  if (!std::isfinite(o.avoid_squeeze_margin_m))
+    throw std::invalid_argument("executor options avoid_squeeze_margin_m must be finite (negative: off)");
   if (!(o.avoid_zone_sigma_multiplier >= 0.0) || !(o.planner_unknown_cost >= 1.0) || !(o.planner_caution_cost >= 1.0) || !(o.planner_near_cost >= 1.0) ||
       !(o.planner_margin_m >= 0.0) || o.planner_unreachable_plans < 1 || !(o.goto_arrival_sigmas >= 0.0) ||
       !(o.goto_min_arrival_fraction > 0.0) || !(o.goto_min_arrival_fraction <= 1.0)) {
@@ -105,7 +107,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "path_sample_turn_deg", "slip_min_step_m", "status_period_s", "blind_slope_deg",
                "blind_slip_pct", "recent_steps", "lost_min_step_m", "vo_retry_after_m", "step_sigma_growth_pct",
                "margin_sigma_multiplier", "state_file", "map_wait_s", "think_while_driving", "avoid_lookahead_m",
-               "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m",
+               "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m", "avoid_squeeze_margin_m",
                "avoid_zone_sigma_multiplier", "avoid_unseen_ground_strict", "avoid_start_ring_known", "avoid_hidden_flank_step_m", "avoid_hidden_reach_m", "avoid_look_pan_deg", "avoid_look_tilt_deg", "avoid_look_min_cells", "avoid_look_curvature_per_m", "avoid_keep_unsafe", "avoid_good_enough", "planner_enabled", "planner_unknown_cost", "planner_caution_cost", "planner_near_cost", "planner_vote_clearance",
                "planner_margin_m", "planner_unreachable_plans", "planner_block_after_steps", "planner_block_min_gain_m",
                "planner_block_ahead_m", "planner_block_radius_m", "planner_refusal_cost", "planner_refusal_ahead_m",
@@ -164,6 +166,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("avoid_num_arcs", o.avoid_num_arcs, 1, 101);
   n.Get("avoid_backup_m", o.avoid_backup_m, 0.0, 0.75);
   n.Get("avoid_margin_m", o.avoid_margin_m, 0.0, 1.0);
+  n.Get("avoid_squeeze_margin_m", o.avoid_squeeze_margin_m, -1.0, 1.0);
   n.Get("avoid_zone_sigma_multiplier", o.avoid_zone_sigma_multiplier, 0.0, 10.0);
   n.Get("avoid_unseen_ground_strict", o.avoid_unseen_ground_strict);
   n.Get("avoid_start_ring_known", o.avoid_start_ring_known);

@@ -355,6 +355,124 @@ TEST(AvoidStep, GoalInsideARingOfRocksIsReportedUnreachable) {
   EXPECT_LE(w.motions.size(), 2u);
 }
 
+// Squeezing through (avoid_squeeze_margin_m): the goal inside a ring of rocks whose one
+// gap, 2.2 m between its rock cells' centres, passes the rover's body (1.4 m wide; the plan
+// keeps its centre 0.8 m off rock cells, half a cell included) but not the body with the
+// vote's margins (0.35 m here: 1.15 m). Without squeezing the goto aborts goal_unreachable;
+// with it the plan and the vote narrow the margin while no way keeps it, and the rover
+// drives through the gap, no rock cell ever under its body.
+namespace {
+// Rock cells (0.5 m steps) wherever `rock(x, y)` holds of a cell's centre.
+void RocksWhere(Grid* g, const std::function<bool(double, double)>& rock) {
+  for (int i = 0; i < g->rows; ++i)
+    for (int j = 0; j < g->cols; ++j) {
+      if (!rock(g->CellCentreX(i), g->CellCentreY(j))) continue;
+      const std::size_t k = static_cast<std::size_t>(i) * g->cols + j;
+      g->state[k] = CellClass::kUnsafe, g->goodness[k] = 0.0f, g->step_m[k] = 0.5f;
+    }
+}
+
+// Rocks round the goal (4, 0), 2.0 to 2.6 m from it, but for a gap toward the start: no
+// rock cell whose centre lies within `gap_half_width_m` of the x axis on the start's side.
+void RingWithAGap(Grid* g, double gap_half_width_m) {
+  RocksWhere(g, [gap_half_width_m](double x, double y) {
+    const double r = std::hypot(x - 4.0, y);
+    return r >= 2.0 && r <= 2.6 && !(x < 4.0 && std::abs(y) < gap_half_width_m);
+  });
+}
+
+struct SqueezeRun {
+  SequenceStatus final;
+  std::vector<PlanePose> trail;
+  bool said = false;
+  Grid grid;
+};
+
+// One goto with the vote's margin at 0.35 m and the squeeze's at `squeeze_margin_m`.
+SqueezeRun Squeeze(double squeeze_margin_m, bool planner, const std::function<void(Grid*)>& rocks,
+                   const std::string& goto_line, int iterations) {
+  ExecutorOptions o = Fast();
+  o.planner_enabled = planner;
+  o.avoid_margin_m = 0.35;
+  o.avoid_squeeze_margin_m = squeeze_margin_m;
+  SequenceExecutor ex(o);
+  MapWorld w(ex);
+  rocks(&w.grid);
+  ex.SubmitText(goto_line + "\n", 1, "t.seq");
+  w.Run(iterations);
+  SqueezeRun run{w.Final(), w.trail, false, w.grid};
+  for (const SequenceStatus& st : w.statuses) run.said = run.said || st.detail.find("squeezing through") != std::string::npos;
+  return run;
+}
+
+SqueezeRun DriveIntoTheRing(double squeeze_margin_m) {
+  return Squeeze(squeeze_margin_m, true, [](Grid* g) { RingWithAGap(g, 1.0); },
+                 "goto 4 m 0 m within 0.3 m distance 20 m avoid on", 60000);
+}
+
+// The rock cells whose centres lie under the body (1.6 m by 1.4 m, centred) at any pose.
+int RockCellsUnderTheBody(const SqueezeRun& run) {
+  int under = 0;
+  for (const PlanePose& p : run.trail)
+    for (int i = 0; i < run.grid.rows; ++i)
+      for (int j = 0; j < run.grid.cols; ++j) {
+        if (run.grid.state[static_cast<std::size_t>(i) * run.grid.cols + j] != CellClass::kUnsafe) continue;
+        const double dx = run.grid.CellCentreX(i) - p.x, dy = run.grid.CellCentreY(j) - p.y;
+        const double along = std::cos(p.yaw) * dx + std::sin(p.yaw) * dy;
+        const double across = -std::sin(p.yaw) * dx + std::cos(p.yaw) * dy;
+        if (std::abs(along) <= 0.8 && std::abs(across) <= 0.7) ++under;
+      }
+  return under;
+}
+}  // namespace
+
+TEST(AvoidStep, NoWayKeepsTheVotesMarginSoItSqueezesThroughWithTheBodyAlone) {
+  const SqueezeRun off = DriveIntoTheRing(-1.0);
+  EXPECT_EQ(off.final.abort_reason, "goal_unreachable") << off.final.detail;
+  EXPECT_FALSE(off.said);
+  const SqueezeRun on = DriveIntoTheRing(0.0);
+  ASSERT_EQ(on.final.state, SequenceState::kCompleted) << on.final.abort_reason << ": " << on.final.detail;
+  EXPECT_TRUE(on.said);
+  ASSERT_FALSE(on.trail.empty());
+  EXPECT_LT(std::hypot(on.trail.back().x - 4.0, on.trail.back().y), 0.3);
+  EXPECT_EQ(RockCellsUnderTheBody(on), 0);
+}
+
+// Boxed in with the margin, free with the body alone: the rover starts in a corridor of
+// rocks 0.9 m either side of its centre line, 6 m long (a rock cell under the body with the
+// vote's 0.35 m margins, none without; the cells under it where it stands are excused). The
+// plan is off, so the vote alone decides: every step with the margin is refused, and the
+// goto aborts boxed in; squeezing, the vote takes steps with the body alone, and the rover
+// drives out along the corridor to its goal, no rock cell ever under its body.
+TEST(AvoidStep, BoxedInByTheVotesMarginItSqueezesOutWithTheBodyAlone) {
+  const auto corridor = [](Grid* g) {
+    RocksWhere(g, [](double x, double y) { return x >= -3.0 && x <= 3.0 && std::abs(std::abs(y) - 0.9) < 0.05; });
+  };
+  const std::string line = "goto 5 m 0 m within 0.4 m distance 12 m avoid on";
+  const SqueezeRun off = Squeeze(-1.0, false, corridor, line, 20000);
+  EXPECT_EQ(off.final.abort_reason, "hazard_map") << off.final.detail;
+  EXPECT_FALSE(off.said);
+  const SqueezeRun on = Squeeze(0.0, false, corridor, line, 20000);
+  ASSERT_EQ(on.final.state, SequenceState::kCompleted) << on.final.abort_reason << ": " << on.final.detail;
+  EXPECT_TRUE(on.said);
+  EXPECT_EQ(RockCellsUnderTheBody(on), 0);
+}
+
+// A gap narrower than the body itself stays shut when squeezing: the abort says the
+// narrower margin was tried too.
+TEST(AvoidStep, SqueezingNeverOpensAGapNarrowerThanTheBody) {
+  ExecutorOptions o = Fast();
+  o.avoid_squeeze_margin_m = 0.0;
+  SequenceExecutor ex(o);
+  MapWorld w(ex);
+  RingWithAGap(&w.grid, 0.6);
+  ex.SubmitText("goto 4 m 0 m within 0.3 m distance 20 m avoid on\n", 1, "t.seq");
+  w.Run(60000);
+  EXPECT_EQ(w.Final().abort_reason, "goal_unreachable") << w.Final().detail;
+  EXPECT_NE(w.Final().detail.find("nor with the vote's margin narrowed to 0.00 m"), std::string::npos)
+      << w.Final().detail;
+}
+
 // A corridor of rocks whose far end the map never sees (unknown ground, as beside a rock no
 // camera looks past), the goal beyond it. The plan leads through the unknown end (unknown
 // ground is a way, at 1.25 per metre); the strict vote refuses to drive onto it. Without
