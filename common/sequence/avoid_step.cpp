@@ -177,6 +177,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, d
   // (After a look aside the rover stands where it voted before: that vote said so already.)
   const bool going_round = looked_here_ == 0 && avoidance::BackWhereItWas(avoid_history_, here);
   std::optional<planner::GlobalPlan> plan;
+  const double vote_margin_m = o.footprint_margin_m;
   if (options_.planner_enabled) {
     switch (PlanAhead(p, disc, &o.footprint, &o.footprint_margin_m, zone_grow, going_round, &plan)) {
       case PlanVerdict::kFollow: break;
@@ -234,6 +235,10 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, d
   //    it (behind, with no step at all), then vote again on the map with it.
   if (LookAside(grid, o.footprint, o.backup_m, here, choice)) return AvoidOutcome::kWait;
   // Boxed in with the vote's margin (and looked round): the vote again with the squeeze's.
+  // The abort says when the margin was narrowed, by the plan or here.
+  std::string squeezed_too = o.footprint_margin_m < vote_margin_m
+                                 ? " (with the vote's margin narrowed to " + Fixed(o.footprint_margin_m) + " m)"
+                                 : "";
   if (!choice.found && SqueezeMargin(o.footprint_margin_m) >= 0.0) {
     const avoidance::VoteOptions narrow = Narrowed(o, SqueezeMargin(o.footprint_margin_m));
     try {
@@ -243,6 +248,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, d
                        Fixed(narrow.footprint_margin_m) + " m; ";
         choice = std::move(squeezed);
         o = narrow;
+      } else {
+        squeezed_too = " (nor with the vote's margin narrowed to " + Fixed(narrow.footprint_margin_m) + " m)";
       }
     } catch (const std::invalid_argument& e) {
       AbortWith(abort_reason::kHazardUnknown, std::string("arc voting cannot decide: ") + e.what());
@@ -251,7 +258,7 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, d
   }
   if (!choice.found) {
     AbortWith(abort_reason::kHazardMap,
-              "hazard_map: " + choice.detail +
+              "hazard_map: " + choice.detail + squeezed_too +
                   (zones_.empty() ? "" : " (keep-out zones, grown by " + Fixed(zone_grow) + " m, count as unsafe cells)"));
     return AvoidOutcome::kAborted;
   }

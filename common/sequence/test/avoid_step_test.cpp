@@ -458,6 +458,21 @@ TEST(AvoidStep, BoxedInByTheVotesMarginItSqueezesOutWithTheBodyAlone) {
   EXPECT_EQ(RockCellsUnderTheBody(on), 0);
 }
 
+// A corridor narrower than the body (rock cells 0.7 m either side of its centre line) keeps
+// the rover boxed in when squeezing: the abort says the narrower margin was tried too.
+TEST(AvoidStep, BoxedInByTheBodyItselfTheAbortSaysTheSqueezeWasTried) {
+  const SqueezeRun run = Squeeze(
+      0.0, false,
+      [](Grid* g) {
+        RocksWhere(g, [](double x, double y) { return x >= -3.0 && x <= 3.0 && std::abs(std::abs(y) - 0.7) < 0.05; });
+      },
+      "goto 5 m 0 m within 0.4 m distance 12 m avoid on", 20000);
+  EXPECT_EQ(run.final.abort_reason, "hazard_map") << run.final.detail;
+  EXPECT_NE(run.final.detail.find("nor with the vote's margin narrowed to 0.00 m"), std::string::npos)
+      << run.final.detail;
+  EXPECT_FALSE(run.said);
+}
+
 // A gap narrower than the body itself stays shut when squeezing: the abort says the
 // narrower margin was tried too.
 TEST(AvoidStep, SqueezingNeverOpensAGapNarrowerThanTheBody) {
