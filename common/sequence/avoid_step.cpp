@@ -36,11 +36,17 @@ std::vector<hazards::KeepOutZone> HazardZones(const std::vector<KeepOutZone>& zo
   return out;
 }
 
+// A footprint grown by `from_margin_m` all round, grown by `to_margin_m` instead.
+avoidance::Footprint Narrowed(avoidance::Footprint f, double from_margin_m, double to_margin_m) {
+  f.length_m -= 2.0 * (from_margin_m - to_margin_m);
+  f.width_m -= 2.0 * (from_margin_m - to_margin_m);
+  return f;
+}
+
 // The vote's options with the footprint's margin narrowed from o's to `margin_m`.
 avoidance::VoteOptions Narrowed(const avoidance::VoteOptions& o, double margin_m) {
   avoidance::VoteOptions n = o;
-  n.footprint.length_m -= 2.0 * (o.footprint_margin_m - margin_m);
-  n.footprint.width_m -= 2.0 * (o.footprint_margin_m - margin_m);
+  n.footprint = Narrowed(o.footprint, o.footprint_margin_m, margin_m);
   n.footprint_margin_m = margin_m;
   return n;
 }
@@ -239,8 +245,8 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, d
   std::string squeezed_too = o.footprint_margin_m < vote_margin_m
                                  ? " (with the vote's margin narrowed to " + Fixed(o.footprint_margin_m) + " m)"
                                  : "";
-  if (!choice.found && SqueezeMargin(o.footprint_margin_m) >= 0.0) {
-    const avoidance::VoteOptions narrow = Narrowed(o, SqueezeMargin(o.footprint_margin_m));
+  if (const double squeeze = SqueezeMargin(o.footprint_margin_m); !choice.found && squeeze >= 0.0) {
+    const avoidance::VoteOptions narrow = Narrowed(o, squeeze);
     try {
       avoidance::Choice squeezed = avoidance::VoteArcs(grid, {p.x, p.y, p.yaw}, goto_.target.x(), goto_.target.y(), narrow);
       if (squeezed.found) {
@@ -427,9 +433,7 @@ std::optional<planner::GlobalPlan> SequenceExecutor::SqueezeThrough(const PlaneP
                                                                     avoidance::Footprint* narrower) const {
   const double squeeze = SqueezeMargin(margin_m);
   if (squeeze < 0.0) return std::nullopt;
-  *narrower = footprint;
-  narrower->length_m -= 2.0 * (margin_m - squeeze);
-  narrower->width_m -= 2.0 * (margin_m - squeeze);
+  *narrower = Narrowed(footprint, margin_m, squeeze);
   const auto [po, r] = PlanSetUp(p, disc, *narrower, zone_grow);
   try {
     planner::GlobalPlan plan = planner::PlanOnSiteMap(site_map_, r, po);

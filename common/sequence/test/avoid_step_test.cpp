@@ -476,16 +476,12 @@ TEST(AvoidStep, BoxedInByTheBodyItselfTheAbortSaysTheSqueezeWasTried) {
 // A gap narrower than the body itself stays shut when squeezing: the abort says the
 // narrower margin was tried too.
 TEST(AvoidStep, SqueezingNeverOpensAGapNarrowerThanTheBody) {
-  ExecutorOptions o = Fast();
-  o.avoid_squeeze_margin_m = 0.0;
-  SequenceExecutor ex(o);
-  MapWorld w(ex);
-  RingWithAGap(&w.grid, 0.6);
-  ex.SubmitText("goto 4 m 0 m within 0.3 m distance 20 m avoid on\n", 1, "t.seq");
-  w.Run(60000);
-  EXPECT_EQ(w.Final().abort_reason, "goal_unreachable") << w.Final().detail;
-  EXPECT_NE(w.Final().detail.find("nor with the vote's margin narrowed to 0.00 m"), std::string::npos)
-      << w.Final().detail;
+  const SqueezeRun run = Squeeze(0.0, true, [](Grid* g) { RingWithAGap(g, 0.6); },
+                                 "goto 4 m 0 m within 0.3 m distance 20 m avoid on", 60000);
+  EXPECT_EQ(run.final.abort_reason, "goal_unreachable") << run.final.detail;
+  EXPECT_NE(run.final.detail.find("nor with the vote's margin narrowed to 0.00 m"), std::string::npos)
+      << run.final.detail;
+  EXPECT_EQ(RockCellsUnderTheBody(run), 0);
 }
 
 // A corridor of rocks whose far end the map never sees (unknown ground, as beside a rock no
