@@ -387,8 +387,9 @@ void RoverSimulator::CheckRocks(const Eigen::Vector3d& p_prev) {
     if (under <= clearance) continue;
     const double before = (r->position - p_prev.head<2>()).norm();
     if (d.norm() < before) {
-      Fault("rock " + r->name + Format(" (%.2f m tall) %.2f m high under the footprint, over the %.2f m clearance, at (%.2f, %.2f)",
-                                       r->height_m, under, clearance, x_, y_));
+      Fault("rock " + r->name + Format(" (%.2f m tall, centred at (%.2f, %.2f)) %.2f m high under the footprint, over the "
+                                       "%.2f m clearance, the rover at (%.2f, %.2f)",
+                                       r->height_m, r->position.x(), r->position.y(), under, clearance, x_, y_));
       return;
     }
   }

@@ -465,7 +465,10 @@ TEST(RoverSimulator, ARockCollidesWhereItRisesOverTheBellyNotWhereItsRimIsGrazed
   // Centre 0.75 m off: 0.05 m beyond the side, 0.31 sqrt(1 - (0.05 / 0.39)^2) = 0.307 m.
   const auto [hit, hit_truth] = drive_past(-0.75);
   EXPECT_EQ(hit.state, MobilityState::kFault);
-  EXPECT_NE(hit.detail.find("rock Rim (0.31 m tall) 0.30 m high under the footprint"), std::string::npos) << hit.detail;
+  EXPECT_NE(hit.detail.find("rock Rim (0.31 m tall, centred at (3.00, -0.75)) 0.30 m high under the footprint"),
+            std::string::npos) << hit.detail;
+  // Where the rover stood is named apart from where the rock stands.
+  EXPECT_NE(hit.detail.find("the rover at (2.1"), std::string::npos) << hit.detail;
   // Stopped as the front edge (0.8 m ahead) came within 0.085 m of the centre's x, where
   // the surface under the corner first rose over 0.3 m: 0.098 m from the centre
   // (0.39 sqrt(1 - (0.3 / 0.31)^2)), hypot(0.085, 0.05).
