@@ -6,6 +6,7 @@
 #include "avoidance/arc_voting.hpp"
 #include "avoidance/look_aside.hpp"
 #include "avoidance/loop_breaker.hpp"
+#include "avoidance/tops_over_ground.hpp"
 #include "hazards/hazard_assessor.hpp"
 #include "planner/global_planner.hpp"
 #include "sequence/executor.hpp"
@@ -173,6 +174,13 @@ SequenceExecutor::AvoidOutcome SequenceExecutor::VoteOnMap(const PlanePose& p, d
   // A rock's flank round its unseen top reads far low: unsafe until that ground is seen.
   if (options_.avoid_hidden_flank_step_m > 0.0)
     grid.MarkFlanksOfHiddenGround(map_->unknown.hidden_patch_m, options_.avoid_hidden_flank_step_m);
+  // A rock whose cells read a step under the limit while their tops stand over it.
+  if (options_.avoid_top_rise_m > 0.0) {
+    if (const int tops = avoidance::MarkTopsOverGround(&grid, options_.avoid_top_ground_radius_m,
+                                                       options_.avoid_top_rise_m); tops > 0)
+      avoid_note_ += std::to_string(tops) + " cells whose tops stand " + Fixed(options_.avoid_top_rise_m) +
+                     " m or more over the ground round them unsafe; ";
+  }
   if (!zones_.empty()) {
     const auto cells = planner::ZoneCells(grid, HazardZones(zones_), zone_grow + grid.cell_m);
     for (std::size_t k = 0; k < cells.size(); ++k)

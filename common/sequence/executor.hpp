@@ -155,6 +155,14 @@ struct ExecutorOptions {
   // MarkFlanksOfHiddenGround): the flank of a rock whose top no pair saw reads far under the
   // rock (navbench k0.20_r18: 0.11 to 0.20 m round a 0.43 m rock's unseen top). 0: off.
   double avoid_hidden_flank_step_m = 0.0;
+  // The vote rates unsafe every safe or caution cell whose top (the map's elevation_m) stands
+  // this high or more over the ground round it, a plane fitted within
+  // avoid_top_ground_radius_m (avoidance::MarkTopsOverGround): the map's step reads a rock
+  // from its cells' mean heights over a plane the rock raises (navbench seed 41 k0.25_r16: a
+  // 0.31 m rock read 0.20 to 0.25 m, caution, its tops 0.27 m over the ground, and the body
+  // swept it). The planner's site map keeps the map's rating. 0: off.
+  double avoid_top_rise_m = 0.0;
+  double avoid_top_ground_radius_m = 1.0;
   // With avoid_unseen_ground_strict: ground that could hide a rock (UnknownLimits) is not
   // swept within this much beyond the vote's footprint either, wherever the step brings the
   // body nearer to it (avoidance::SweepFootprint's hidden_reach_m): a known cell beside

@@ -876,6 +876,15 @@ TEST(ExecutorOptions, LoadsTheExampleAndRejectsBadValues) {
                    0.125);
   EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_hidden_flank_step_m: -0.1\n", "x.yaml")),
                ConfigError);
+  EXPECT_DOUBLE_EQ(o.avoid_top_rise_m, 0.0);  // off in the example
+  EXPECT_DOUBLE_EQ(o.avoid_top_ground_radius_m, 1.0);
+  EXPECT_DOUBLE_EQ(
+      LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_top_rise_m: 0.25\n", "x.yaml")).avoid_top_rise_m,
+      0.25);
+  EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_top_rise_m: -0.1\n", "x.yaml")),
+               ConfigError);
+  EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_top_ground_radius_m: 0.1\n", "x.yaml")),
+               ConfigError);
   EXPECT_FALSE(o.avoid_keep_unsafe);
   EXPECT_TRUE(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_keep_unsafe: true\n", "x.yaml")).avoid_keep_unsafe);
   EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_keep_unsafe: 3\n", "x.yaml")), ConfigError);
