@@ -12,6 +12,7 @@
 
 #include "avoidance/grid.hpp"
 #include "bus/channels.hpp"
+#include "traversability/as_grid.hpp"
 #include "traversability/traversability_map.hpp"
 
 #include <condition_variable>
@@ -40,7 +41,7 @@ class MapWorker {
   };
 
   MapWorker(const traversability::MapOptions& options, const traversability::MapOptions& hazcam_options)
-      : map_(options), hazcam_options_(hazcam_options), initial_(ToGrid(map_)), grid_(initial_) {
+      : map_(options), hazcam_options_(hazcam_options), initial_(traversability::AsGrid(map_)), grid_(initial_) {
     traversability::CheckMapOptions(hazcam_options_);
     thread_ = std::thread([this] { Loop(); });
   }
@@ -118,33 +119,6 @@ class MapWorker {
     fresh_ = true;
   }
 
-  // The map as the checks see it (edge cells of the seen region distrusted: grid.hpp).
-  static avoidance::Grid ToGrid(const traversability::TraversabilityMap& map) {
-    avoidance::Grid g;
-    g.origin_x = map.origin_x();
-    g.origin_y = map.origin_y();
-    g.cell_m = map.cell_size();
-    g.rows = map.rows();
-    g.cols = map.cols();
-    const auto& cells = map.cells();
-    g.state.resize(cells.size());
-    g.goodness.resize(cells.size());
-    g.step_m.resize(cells.size());
-    g.tilt_deg.resize(cells.size());
-    g.elevation_m.resize(cells.size());
-    g.sigma_m.resize(cells.size());
-    for (std::size_t k = 0; k < cells.size(); ++k) {
-      g.state[k] = static_cast<avoidance::CellClass>(cells[k].state);
-      g.goodness[k] = cells[k].goodness;
-      g.step_m[k] = cells[k].step_m;
-      g.tilt_deg[k] = static_cast<float>(cells[k].tilt_rad * 180.0 / M_PI);
-      g.elevation_m[k] = cells[k].elevation_m;
-      g.sigma_m[k] = cells[k].height_sigma_m;
-    }
-    g.DistrustEdges();
-    return g;
-  }
-
  private:
   void Loop() {
     for (;;) {
@@ -179,7 +153,7 @@ class MapWorker {
         note = std::string("hazard_monitor: ") + job.Channel() + " " + std::to_string(job.frame_id) + ": " + e.what() +
                " (not mapped)\n";
       }
-      avoidance::Grid grid = ok ? ToGrid(map_) : avoidance::Grid{};
+      avoidance::Grid grid = ok ? traversability::AsGrid(map_) : avoidance::Grid{};
       std::lock_guard<std::mutex> lock(mutex_);
       ++done_;
       notes_ += note;

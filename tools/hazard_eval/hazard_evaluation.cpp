@@ -1,7 +1,9 @@
 #include "hazard_evaluation.hpp"
 
 #include "geometry/pose.hpp"
+#include "avoidance/tops_over_ground.hpp"
 #include "render/stereo_renderer.hpp"
+#include "traversability/as_grid.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -27,6 +29,9 @@ void BandCounts::Add(const BandCounts& o) {
   crest_truly_unsafe += o.crest_truly_unsafe;
   tall_cells += o.tall_cells;
   tall_read_low += o.tall_read_low;
+  top_rocks_detected += o.top_rocks_detected;
+  top_false_unsafe_cells += o.top_false_unsafe_cells;
+  top_unsafe_found_cells += o.top_unsafe_found_cells;
   tall_step_error_sum += o.tall_step_error_sum;
 }
 
@@ -108,6 +113,25 @@ void FillTruth(const terrain::World& world, bool at_mean, tv::TraversabilityMap*
 
 }  // namespace
 
+namespace {
+
+// The cells the top rule (EvalOptions::top_rise_m) makes unsafe on the map as the vote sees
+// it (traversability::AsGrid): 1 where it marked a cell; empty when off.
+std::vector<char> TopMarked(const tv::TraversabilityMap& map, const EvalOptions& options) {
+  if (options.top_rise_m <= 0) return {};
+  const avoidance::Grid plain = tv::AsGrid(map);
+  avoidance::Grid g = plain;
+  avoidance::MarkTopsOverGround(&g, options.top_ground_radius_m, options.top_rise_m);
+  std::vector<char> marked(g.state.size(), 0);
+  for (std::size_t k = 0; k < marked.size(); ++k)
+    marked[k] = g.state[k] == avoidance::CellClass::kUnsafe && plain.state[k] != avoidance::CellClass::kUnsafe;
+  return marked;
+}
+
+bool Marked(const std::vector<char>& marked, std::size_t idx) { return !marked.empty() && marked[idx]; }
+
+}  // namespace
+
 EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_full,
                     const EvalOptions& options) {
   if (options.poses.empty()) throw std::invalid_argument("hazard-eval: no poses to evaluate");
@@ -170,6 +194,7 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
     const Eigen::Isometry3d T_rover_site = T.inverse();
     const auto& mc = map.cells();
     const auto& tc = truth.cells();
+    const std::vector<char> top_marked = TopMarked(map, options);
     for (int i = 0; i < map.rows(); ++i) {
       for (int j = 0; j < map.cols(); ++j) {
         const double x = map.origin_x() + (i + 0.5) * map.cell_size();
@@ -201,9 +226,11 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
         if (tc[idx].state == tv::CellState::kUnsafe) {
           ++b.unsafe_cells;
           if (mc[idx].state == tv::CellState::kUnsafe) ++b.unsafe_found_cells;
+          b.top_unsafe_found_cells += Marked(top_marked, idx);
         }
         if (tc[idx].state != tv::CellState::kUnknown && tc[idx].state != tv::CellState::kUnsafe) {
           ++b.traversable_cells;
+          b.top_false_unsafe_cells += Marked(top_marked, idx);
           if (mc[idx].state == tv::CellState::kUnsafe) {
             ++b.false_unsafe_cells;
             result.false_unsafe.push_back({static_cast<int>(k) + 1, x, y,
@@ -229,11 +256,16 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
       s.range_m = range;
       s.height_m = rock.height_m;
       s.detected = c.state == tv::CellState::kUnsafe;
+      const int ri = static_cast<int>(std::floor((rock.position.x() - map.origin_x()) / map.cell_size()));
+      const int rj = static_cast<int>(std::floor((rock.position.y() - map.origin_y()) / map.cell_size()));
+      s.detected_by_top = !s.detected && ri >= 0 && rj >= 0 && ri < map.rows() && rj < map.cols() &&
+                          Marked(top_marked, static_cast<std::size_t>(ri) * map.cols() + rj);
       s.step_m = c.step_m;
       s.state = tv::CellStateName(c.state);
       result.sightings.push_back(s);
       ++result.bands[band].rocks;
       if (s.detected) ++result.bands[band].rocks_detected;
+      if (s.detected_by_top) ++result.bands[band].top_rocks_detected;
     }
   }
   std::vector<double> t = result.update_seconds;
@@ -242,7 +274,7 @@ EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_
   return result;
 }
 
-std::string FormatTable(const EvalResult& r, double rock_limit_m) {
+std::string FormatTable(const EvalResult& r, double rock_limit_m, double top_rise_m) {
   auto pct = [](int num, int den) {
     char buf[32];
     if (den == 0) std::snprintf(buf, sizeof buf, "%6s", "-");
@@ -285,6 +317,14 @@ std::string FormatTable(const EvalResult& r, double rock_limit_m) {
                   "average, %d %s read %.2f m or more low\n",
                   kTallStepM, near.tall_cells, near.tall_step_error_sum / near.tall_cells, near.tall_read_low,
                   pct(near.tall_read_low, near.tall_cells).c_str(), kReadLowM);
+    out << line;
+  }
+  if (top_rise_m > 0) {
+    std::snprintf(line, sizeof line,
+                  "the vote's top rule at %.2f m (0-4 m): rocks the map missed found %d of %d; cells it makes "
+                  "unsafe: %d unsafe in truth, %d traversable %s\n",
+                  top_rise_m, near.top_rocks_detected, near.rocks - near.rocks_detected, near.top_unsafe_found_cells,
+                  near.top_false_unsafe_cells, pct(near.top_false_unsafe_cells, near.traversable_cells).c_str());
     out << line;
   }
   if (near.crest_cells > 0) {

@@ -63,6 +63,12 @@ struct EvalOptions {
   // default), or its mean (what the map's cells measure: the mean of their points), which
   // tells the map's reading of the surface apart from a cell's size.
   bool truth_at_cell_mean = false;
+  // > 0: also count what the vote sees with executor.avoid_top_rise_m at this value
+  // (avoidance::MarkTopsOverGround on the map as the monitor publishes it, traversability::
+  // AsGrid): a cell whose top stands this high over the ground round it (a plane within
+  // top_ground_radius_m) is unsafe to the vote.
+  double top_rise_m = 0;
+  double top_ground_radius_m = 1.0;
 };
 
 struct BandCounts {
@@ -77,6 +83,10 @@ struct BandCounts {
   // the map's step less the truth's, and how many read 0.08 m or more under it.
   int tall_cells = 0, tall_read_low = 0;
   double tall_step_error_sum = 0;
+  // With EvalOptions::top_rise_m: what the top rule adds on the grid as the vote sees it
+  // (edge cells distrusted, as the monitor publishes it): rocks the map missed that it finds,
+  // and the cells it makes unsafe that are unsafe in truth and that are traversable.
+  int top_rocks_detected = 0, top_false_unsafe_cells = 0, top_unsafe_found_cells = 0;
   void Add(const BandCounts& o);
 };
 
@@ -85,6 +95,7 @@ struct RockSighting {
   int pose = 0;
   double range_m = 0, height_m = 0;
   bool detected = false;
+  bool detected_by_top = false;  // missed by the map, unsafe to the vote by EvalOptions::top_rise_m
   float step_m = 0;  // the map's step at the rock's centre
   std::string state;
 };
@@ -114,6 +125,7 @@ struct EvalResult {
 EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_full_size,
                     const EvalOptions& options);
 
-std::string FormatTable(const EvalResult& result, double rock_limit_m);
+// top_rise_m > 0: adds the vote's view with the top rule (EvalOptions::top_rise_m).
+std::string FormatTable(const EvalResult& result, double rock_limit_m, double top_rise_m = 0);
 
 }  // namespace rover::hazard_eval

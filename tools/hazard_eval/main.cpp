@@ -5,11 +5,14 @@
 //               [--poses "x,y,yaw_deg;x,y,yaw_deg;..."] [--steps 5] [--step-m 0.5]
 //               [--min-detection 0.95] [--max-false-unsafe 0.05] [--verbose]
 //               [--hazcam configs/cameras/hazcam_front.yaml] [--dump-cells R]
-//               [--truth-height max|mean]
+//               [--truth-height max|mean] [--top-rise M]
 // --hazcam: the front HAZCAM pair as well, rendered at 256 px at each pose and mapped with the
 // rover config's hazards.map.hazcam options before the main pair (as hazard_monitor gets it).
 // --dump-cells R: every rated in-view cell within R m, the map's and the truth's ratings
 // and tops (the map's: its points' mean height plus one standard deviation).
+// --top-rise M: also the vote's view with executor.avoid_top_rise_m at M (a cell whose top
+// stands M over the ground round it is unsafe to the vote): rocks and cells it finds, and the
+// traversable cells it marks.
 // --truth-height max|mean: a cell's true height is its highest point (max, the default:
 // what the body meets) or its mean (what the map's cells measure).
 // --poses items may add that pair's own pose error: x,y,yaw,ex,ey,ez,eroll,epitch,eyaw.
@@ -57,7 +60,7 @@ int main(int argc, char** argv) {
   using namespace rover;
   std::string world_path, rig_path = "configs/cameras/navcam_pinhole.yaml";
   std::string rover_path = "configs/rover.yaml", map_path, poses_text, hazcam_path;
-  double size = 512, steps = 5, step_m = 0.5, min_detection = -1, max_false_unsafe = -1, dump_m = 0,
+  double size = 512, steps = 5, step_m = 0.5, min_detection = -1, max_false_unsafe = -1, dump_m = 0, top_rise_m = 0,
          frame_seed = 1;
   bool verbose = false, truth_at_mean = false;
   std::array<double, 6> pose_error = {0, 0, 0, 0, 0, 0};
@@ -71,7 +74,7 @@ int main(int argc, char** argv) {
                    "       [--min-detection F] [--max-false-unsafe F] [--verbose]\n"
                    "       [--hazcam HAZCAM_RIG.yaml] [--dump-cells R] [--frame-seed S]\n"
                    "       [--pose-error x,y,z,roll,pitch,yaw] [--attitude roll,pitch]\n"
-                   "       [--pose-sigma m,deg] [--truth-height max|mean]\n";
+                   "       [--pose-sigma m,deg] [--truth-height max|mean] [--top-rise M]\n";
       return 0;
     } else if (a == "--rig") {
       if (!has) return Usage("--rig: expected a stereo rig YAML file");
@@ -126,6 +129,9 @@ int main(int argc, char** argv) {
       const std::string v = has ? argv[++i] : "";
       if (v != "max" && v != "mean") return Usage("--truth-height: expected max or mean");
       truth_at_mean = v == "mean";
+    } else if (a == "--top-rise") {
+      if (!has || !config::ParseNumberInRange(argv[++i], 0.05, 1, &top_rise_m))
+        return Usage("--top-rise: expected a height in metres, in [0.05, 1]");
     } else if (a == "--dump-cells") {
       if (!has || !config::ParseNumberInRange(argv[++i], 0.1, 10, &dump_m))
         return Usage("--dump-cells: expected a range in metres, in [0.1, 10]");
@@ -199,6 +205,7 @@ int main(int argc, char** argv) {
     }
     options.dump_range_m = dump_m;
     options.truth_at_cell_mean = truth_at_mean;
+    options.top_rise_m = top_rise_m;
     options.first_frame_seed = static_cast<std::int64_t>(frame_seed);
     options.pose_error = pose_error;
     if (attitude) {
@@ -220,7 +227,7 @@ int main(int argc, char** argv) {
                 world_options.name.c_str(), options.poses.size(), options.image_size,
                 options.image_size * rig.left->height() / rig.left->width(), options.map.max_step_m,
                 options.rock_limit_m);
-    std::printf("%s", hazard_eval::FormatTable(r, options.rock_limit_m).c_str());
+    std::printf("%s", hazard_eval::FormatTable(r, options.rock_limit_m, options.top_rise_m).c_str());
     std::printf("map update (AddStereoPair + rating): median %.0f ms over %zu pairs\n",
                 1000 * r.median_update_seconds, r.update_seconds.size());
     for (const auto& s : r.sightings) {
