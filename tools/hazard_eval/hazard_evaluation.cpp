@@ -1,7 +1,7 @@
 #include "hazard_evaluation.hpp"
 
-#include "geometry/pose.hpp"
 #include "avoidance/tops_over_ground.hpp"
+#include "geometry/pose.hpp"
 #include "render/stereo_renderer.hpp"
 #include "traversability/as_grid.hpp"
 
@@ -110,10 +110,6 @@ void FillTruth(const terrain::World& world, bool at_mean, tv::TraversabilityMap*
     }
   truth->AddPoints(pts, std::vector<double>(pts.size(), 0.005));
 }
-
-}  // namespace
-
-namespace {
 
 // The cells the top rule (EvalOptions::top_rise_m) makes unsafe on the map as the vote sees
 // it (traversability::AsGrid): 1 where it marked a cell; empty when off.
