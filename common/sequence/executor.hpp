@@ -160,9 +160,13 @@ struct ExecutorOptions {
   // avoid_top_ground_radius_m (avoidance::MarkTopsOverGround): the map's step reads a rock
   // from its cells' mean heights over a plane the rock raises (navbench seed 41 k0.25_r16: a
   // 0.31 m rock read 0.20 to 0.25 m, caution, its tops 0.27 m over the ground, and the body
-  // swept it). The planner's site map keeps the map's rating. 0: off.
+  // swept it). The planner's site map keeps the map's rating unless avoid_top_rise_in_plan.
+  // 0: off.
   double avoid_top_rise_m = 0.0;
   double avoid_top_ground_radius_m = 1.0;
+  // With avoid_top_rise_m: each map's cells the rule finds are unsafe in the planner's site
+  // map too, so that the plan does not lead over ground the vote then refuses.
+  bool avoid_top_rise_in_plan = false;
   // With avoid_unseen_ground_strict: ground that could hide a rock (UnknownLimits) is not
   // swept within this much beyond the vote's footprint either, wherever the step brings the
   // body nearer to it (avoidance::SweepFootprint's hidden_reach_m): a known cell beside
@@ -605,6 +609,7 @@ class SequenceExecutor {
   // The local check refused the way `plan` leads (refused_ways_): remembered, and said.
   void RefuseWay(const planner::GlobalPlan& plan, const std::string& why);
   void MarkDriven();  // the ground under the rover now carried it (site map)
+  avoidance::Grid PlannedGrid(const avoidance::Grid& grid) const;  // the map as the plan counts it
   // An UNKNOWN map verdict on a step with no pair taken where the rover stands: take one
   // (MER: image, map, then drive) and ask again. False: the reply stands.
   bool ImagesForMap(const HazardReply& reply);

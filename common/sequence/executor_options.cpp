@@ -108,7 +108,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
                "blind_slip_pct", "recent_steps", "lost_min_step_m", "vo_retry_after_m", "step_sigma_growth_pct",
                "margin_sigma_multiplier", "state_file", "map_wait_s", "think_while_driving", "avoid_lookahead_m",
                "avoid_max_curvature_per_m", "avoid_num_arcs", "avoid_backup_m", "avoid_margin_m", "avoid_squeeze_margin_m",
-               "avoid_zone_sigma_multiplier", "avoid_unseen_ground_strict", "avoid_start_ring_known", "avoid_hidden_flank_step_m", "avoid_top_rise_m", "avoid_top_ground_radius_m", "avoid_hidden_reach_m", "avoid_look_pan_deg", "avoid_look_tilt_deg", "avoid_look_min_cells", "avoid_look_curvature_per_m", "avoid_keep_unsafe", "avoid_good_enough", "planner_enabled", "planner_unknown_cost", "planner_caution_cost", "planner_near_cost", "planner_vote_clearance",
+               "avoid_zone_sigma_multiplier", "avoid_unseen_ground_strict", "avoid_start_ring_known", "avoid_hidden_flank_step_m", "avoid_top_rise_m", "avoid_top_ground_radius_m", "avoid_top_rise_in_plan", "avoid_hidden_reach_m", "avoid_look_pan_deg", "avoid_look_tilt_deg", "avoid_look_min_cells", "avoid_look_curvature_per_m", "avoid_keep_unsafe", "avoid_good_enough", "planner_enabled", "planner_unknown_cost", "planner_caution_cost", "planner_near_cost", "planner_vote_clearance",
                "planner_margin_m", "planner_unreachable_plans", "planner_block_after_steps", "planner_block_min_gain_m",
                "planner_block_ahead_m", "planner_block_radius_m", "planner_refusal_cost", "planner_refusal_ahead_m",
                "planner_refusal_radius_m", "planner_prior_map", "goto_arrival_sigmas",
@@ -173,6 +173,7 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root) {
   n.Get("avoid_hidden_flank_step_m", o.avoid_hidden_flank_step_m, 0.0, 1.0);
   n.Get("avoid_top_rise_m", o.avoid_top_rise_m, 0.0, 1.0);
   n.Get("avoid_top_ground_radius_m", o.avoid_top_ground_radius_m, 0.4, 3.0);
+  n.Get("avoid_top_rise_in_plan", o.avoid_top_rise_in_plan);
   n.Get("avoid_hidden_reach_m", o.avoid_hidden_reach_m, 0.0, 1.0);
   n.Get("avoid_look_pan_deg", o.avoid_look_pan_deg, 0.0, 150.0);
   n.Get("avoid_look_tilt_deg", o.avoid_look_tilt_deg, -30.0, 60.0);

@@ -602,6 +602,59 @@ TEST(AvoidStep, ThePlanLeavesTheVotesClearanceAndNeverLeadsIntoAGapTooNarrow) {
   EXPECT_LT(nearest_to_the_gap(without.trail), nearest_to_the_gap(with.trail) - 0.2);
 }
 
+// The top rule in the plan (avoid_top_rise_in_plan): the same wall, its gap 2.6 m wide, and
+// in the gap's middle a rock the map reads low (caution, steps 0.20 m) while its tops stand
+// 0.32 m over the ground. The vote's top rule (avoid_top_rise_m 0.25) makes it unsafe, and
+// the body cannot pass beside it. Counted in the site map as well, the plan goes round the
+// wall's end at once; counted by the vote alone, the plan leads into the gap, where the
+// vote refuses it.
+namespace {
+GapRun DriveAtTheLowReadRock(bool in_plan) {
+  ExecutorOptions o = Fast();
+  o.avoid_top_rise_m = 0.25;
+  o.avoid_top_rise_in_plan = in_plan;
+  SequenceExecutor ex(o);
+  MapWorld w(ex);
+  w.grid = Grid::Filled(-4, -8, 0.2, 60, 80, CellClass::kSafe, 0.9f);
+  w.grid.SetHeights(0.0f, 0.01f);
+  for (int i = 0; i < w.grid.rows; ++i)
+    for (int j = 0; j < w.grid.cols; ++j) {
+      const double x = w.grid.CellCentreX(i), y = w.grid.CellCentreY(j);
+      const std::size_t k = static_cast<std::size_t>(i) * w.grid.cols + j;
+      if (std::hypot(x - 2.6, y - 0.1) < 0.35) {
+        w.grid.state[k] = CellClass::kCaution, w.grid.goodness[k] = 0.2f, w.grid.step_m[k] = 0.2f;
+        w.grid.elevation_m[k] = 0.32f;
+      } else if (x >= 2.4 && x <= 2.8 && std::abs(y - 0.1) >= 1.3 && std::abs(y) <= 4.5) {
+        w.grid.state[k] = CellClass::kUnsafe, w.grid.goodness[k] = 0.0f, w.grid.step_m[k] = 0.5f;
+        w.grid.elevation_m[k] = 0.5f;
+      }
+    }
+  ex.SubmitText("goto 5 m 0 m within 0.4 m distance 40 m avoid on\n", 1, "t.seq");
+  w.Run(60000);
+  GapRun r{w.Final(), w.trail, 0};
+  for (const auto& m : w.motions)
+    if (m.type == MobilityCommand::Type::kArc && m.distance_m < 0.0) ++r.backups;
+  return r;
+}
+
+double NearestTo(const std::vector<PlanePose>& trail, double x, double y) {
+  double d = 1e9;
+  for (const PlanePose& p : trail) d = std::min(d, std::hypot(p.x - x, p.y - y));
+  return d;
+}
+}  // namespace
+
+TEST(AvoidStep, WithTheTopRuleInThePlanItGoesRoundARockTheMapReadsLow) {
+  const GapRun with = DriveAtTheLowReadRock(true);
+  ASSERT_EQ(with.final.state, SequenceState::kCompleted) << with.final.abort_reason << ": " << with.final.detail;
+  EXPECT_EQ(with.backups, 0u);
+  double widest = 0.0;
+  for (const PlanePose& p : with.trail) widest = std::max(widest, std::abs(p.y));
+  EXPECT_GT(widest, 4.5);  // round the wall's end
+  const GapRun without = DriveAtTheLowReadRock(false);
+  EXPECT_LT(NearestTo(without.trail, 2.4, 0.1), NearestTo(with.trail, 2.4, 0.1) - 0.2) << without.final.detail;
+}
+
 // Looking aside (avoidance/look_aside.hpp): a wall across the way ahead, the goal to the
 // right, and the ground beside the rover never framed, since the mast looks ahead (the way
 // it came, behind, is known). Every ground that could hide a rock is refused (strict), so

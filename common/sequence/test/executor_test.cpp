@@ -885,6 +885,11 @@ TEST(ExecutorOptions, LoadsTheExampleAndRejectsBadValues) {
                ConfigError);
   EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_top_ground_radius_m: 0.1\n", "x.yaml")),
                ConfigError);
+  EXPECT_FALSE(o.avoid_top_rise_in_plan);
+  EXPECT_TRUE(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_top_rise_in_plan: true\n", "x.yaml"))
+                  .avoid_top_rise_in_plan);
+  EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_top_rise_in_plan: 2\n", "x.yaml")),
+               ConfigError);
   EXPECT_FALSE(o.avoid_keep_unsafe);
   EXPECT_TRUE(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_keep_unsafe: true\n", "x.yaml")).avoid_keep_unsafe);
   EXPECT_THROW(LoadExecutorOptions(ConfigNode::FromString("executor:\n  avoid_keep_unsafe: 3\n", "x.yaml")), ConfigError);
