@@ -561,6 +561,16 @@ struct GapRun {
   std::size_t backups = 0;
 };
 
+// The goto of the wall tests, 5 m ahead beyond the wall, on `w`'s grid.
+GapRun GotoPastTheWall(SequenceExecutor& ex, MapWorld& w) {
+  ex.SubmitText("goto 5 m 0 m within 0.4 m distance 40 m avoid on\n", 1, "t.seq");
+  w.Run(60000);
+  GapRun r{w.Final(), w.trail, 0};
+  for (const auto& m : w.motions)
+    if (m.type == MobilityCommand::Type::kArc && m.distance_m < 0.0) ++r.backups;
+  return r;
+}
+
 GapRun DriveAtTheGap(bool vote_clearance) {
   ExecutorOptions o = Fast();
   o.planner_vote_clearance = vote_clearance;
@@ -575,12 +585,21 @@ GapRun DriveAtTheGap(bool vote_clearance) {
       const std::size_t k = static_cast<std::size_t>(i) * w.grid.cols + j;
       w.grid.state[k] = CellClass::kUnsafe, w.grid.goodness[k] = 0.0f, w.grid.step_m[k] = 0.5f;
     }
-  ex.SubmitText("goto 5 m 0 m within 0.4 m distance 40 m avoid on\n", 1, "t.seq");
-  w.Run(60000);
-  GapRun r{w.Final(), w.trail, 0};
-  for (const auto& m : w.motions)
-    if (m.type == MobilityCommand::Type::kArc && m.distance_m < 0.0) ++r.backups;
-  return r;
+  return GotoPastTheWall(ex, w);
+}
+
+// The trail's farthest reach to either side of the line to the goal (y = 0).
+double Widest(const std::vector<PlanePose>& trail) {
+  double widest = 0.0;
+  for (const PlanePose& p : trail) widest = std::max(widest, std::abs(p.y));
+  return widest;
+}
+
+// The trail's nearest approach to (x, y).
+double NearestTo(const std::vector<PlanePose>& trail, double x, double y) {
+  double d = 1e9;
+  for (const PlanePose& p : trail) d = std::min(d, std::hypot(p.x - x, p.y - y));
+  return d;
 }
 }  // namespace
 
@@ -588,18 +607,11 @@ TEST(AvoidStep, ThePlanLeavesTheVotesClearanceAndNeverLeadsIntoAGapTooNarrow) {
   const GapRun with = DriveAtTheGap(true);
   ASSERT_EQ(with.final.state, SequenceState::kCompleted) << with.final.abort_reason << ": " << with.final.detail;
   EXPECT_EQ(with.backups, 0u);
-  double widest = 0.0;
-  for (const PlanePose& p : with.trail) widest = std::max(widest, std::abs(p.y));
-  EXPECT_GT(widest, 4.5);  // round the wall's end
+  EXPECT_GT(Widest(with.trail), 4.5);  // round the wall's end
   // Without it the plan leads the rover to the gap's mouth, where it can only back up.
   const GapRun without = DriveAtTheGap(false);
   EXPECT_GT(without.backups, 0u) << without.final.detail;
-  const auto nearest_to_the_gap = [](const std::vector<PlanePose>& trail) {
-    double d = 1e9;
-    for (const PlanePose& p : trail) d = std::min(d, std::hypot(p.x - 2.4, p.y - 0.1));
-    return d;
-  };
-  EXPECT_LT(nearest_to_the_gap(without.trail), nearest_to_the_gap(with.trail) - 0.2);
+  EXPECT_LT(NearestTo(without.trail, 2.4, 0.1), NearestTo(with.trail, 2.4, 0.1) - 0.2);
 }
 
 // The top rule in the plan (avoid_top_rise_in_plan): the same wall, its gap 2.6 m wide, and
@@ -629,18 +641,7 @@ GapRun DriveAtTheLowReadRock(bool in_plan) {
         w.grid.elevation_m[k] = 0.5f;
       }
     }
-  ex.SubmitText("goto 5 m 0 m within 0.4 m distance 40 m avoid on\n", 1, "t.seq");
-  w.Run(60000);
-  GapRun r{w.Final(), w.trail, 0};
-  for (const auto& m : w.motions)
-    if (m.type == MobilityCommand::Type::kArc && m.distance_m < 0.0) ++r.backups;
-  return r;
-}
-
-double NearestTo(const std::vector<PlanePose>& trail, double x, double y) {
-  double d = 1e9;
-  for (const PlanePose& p : trail) d = std::min(d, std::hypot(p.x - x, p.y - y));
-  return d;
+  return GotoPastTheWall(ex, w);
 }
 }  // namespace
 
@@ -648,9 +649,7 @@ TEST(AvoidStep, WithTheTopRuleInThePlanItGoesRoundARockTheMapReadsLow) {
   const GapRun with = DriveAtTheLowReadRock(true);
   ASSERT_EQ(with.final.state, SequenceState::kCompleted) << with.final.abort_reason << ": " << with.final.detail;
   EXPECT_EQ(with.backups, 0u);
-  double widest = 0.0;
-  for (const PlanePose& p : with.trail) widest = std::max(widest, std::abs(p.y));
-  EXPECT_GT(widest, 4.5);  // round the wall's end
+  EXPECT_GT(Widest(with.trail), 4.5);  // round the wall's end
   const GapRun without = DriveAtTheLowReadRock(false);
   EXPECT_LT(NearestTo(without.trail, 2.4, 0.1), NearestTo(with.trail, 2.4, 0.1) - 0.2) << without.final.detail;
 }
