@@ -64,7 +64,10 @@ void SequenceExecutor::OnTraversabilityMap(const TraversabilityMap& map) {
     map_site_ = site;
   }
   try {
-    site_map_.Merge(PlannedGrid(map.grid));
+    if (options_.avoid_top_rise_m > 0.0 && options_.avoid_top_rise_in_plan)
+      site_map_.Merge(PlannedGrid(map.grid));
+    else
+      site_map_.Merge(map.grid);  // no copy of each map when the plan keeps the map's rating
   } catch (const std::invalid_argument& e) {
     step_note_ += std::string("map not merged (") + e.what() + "); ";
   }
@@ -72,13 +75,11 @@ void SequenceExecutor::OnTraversabilityMap(const TraversabilityMap& map) {
   Advance();
 }
 
-// The monitor's map as the plan counts it: with avoid_top_rise_in_plan, the cells whose
+// The monitor's map as the plan counts it with avoid_top_rise_in_plan: the cells whose
 // tops stand over their ground (avoid_top_rise_m) are unsafe there as they are to the vote.
-avoidance::Grid SequenceExecutor::PlannedGrid(const avoidance::Grid& grid) const {
-  avoidance::Grid planned = grid;
-  if (options_.avoid_top_rise_m > 0.0 && options_.avoid_top_rise_in_plan)
-    avoidance::MarkTopsOverGround(&planned, options_.avoid_top_ground_radius_m, options_.avoid_top_rise_m);
-  return planned;
+avoidance::Grid SequenceExecutor::PlannedGrid(avoidance::Grid grid) const {
+  avoidance::MarkTopsOverGround(&grid, options_.avoid_top_ground_radius_m, options_.avoid_top_rise_m);
+  return grid;
 }
 
 // Where the rover has been: the ground under its body carried it (site_map.hpp).

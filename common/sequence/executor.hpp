@@ -609,7 +609,7 @@ class SequenceExecutor {
   // The local check refused the way `plan` leads (refused_ways_): remembered, and said.
   void RefuseWay(const planner::GlobalPlan& plan, const std::string& why);
   void MarkDriven();  // the ground under the rover now carried it (site map)
-  avoidance::Grid PlannedGrid(const avoidance::Grid& grid) const;  // the map as the plan counts it
+  avoidance::Grid PlannedGrid(avoidance::Grid grid) const;  // the map as the plan counts it (top rule)
   // An UNKNOWN map verdict on a step with no pair taken where the rover stands: take one
   // (MER: image, map, then drive) and ask again. False: the reply stands.
   bool ImagesForMap(const HazardReply& reply);
