@@ -1,4 +1,6 @@
 #include "bus/bus.hpp"
+
+#include "bus/kernel_filter.hpp"
 #include "bus/lcm_url_check.hpp"
 #include "bus/channels.hpp"
 
@@ -114,6 +116,29 @@ Bus::Bus(const std::string& url) : url_(url), lcm_(CheckedUrl(url)) { RequireBus
 void Bus::set_publisher(const std::string& name) {
   publisher_ = name;
   publisher_bits_ = static_cast<std::uint64_t>(PublisherId(name)) << 32;
+}
+
+void Bus::FilterInKernel(bool on) {
+  filter_in_kernel_ = on;
+  if (!on && filter_fd_ >= 0) {
+    AttachFilter(filter_fd_, {});
+    filter_fd_ = -1;
+  }
+  ApplyKernelFilter();
+}
+
+void Bus::ApplyKernelFilter() {
+  if (!filter_in_kernel_ || subscribed_.empty()) return;
+  const bool plain = std::all_of(subscribed_.begin(), subscribed_.end(), PlainChannel);
+  const int port = UdpmPort(url_);
+  const int fd = filter_fd_ >= 0 ? filter_fd_ : port > 0 ? FindUdpSocket(port) : -1;
+  if (fd < 0) return;
+  // A pattern, or a kernel that refuses the program: every datagram is delivered, as LCM
+  // does without a filter.
+  const bool attached =
+      plain && AttachFilter(fd, ChannelFilterProgram(std::vector<std::string>(subscribed_.begin(), subscribed_.end())));
+  if (!attached) AttachFilter(fd, {});
+  filter_fd_ = attached ? fd : -1;
 }
 
 bool Bus::Handle(int timeout_ms) {

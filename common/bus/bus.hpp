@@ -84,6 +84,16 @@ class Bus {
   // The channels subscribed so far (`--channels`, bus/process.hpp).
   const std::set<std::string>& subscribed() const { return subscribed_; }
 
+  // On: datagrams on channels this bus does not subscribe to are dropped by the kernel,
+  // before they wake the process (bus/kernel_filter.hpp); the filter follows every later
+  // Subscribe. bus::Process turns it on (`bus.filter_in_kernel`). Nothing is filtered while
+  // a subscription is a pattern, on a provider other than udpm, or where this process has
+  // more than one socket on the bus's port; nor for channels subscribed on lcm() directly,
+  // so a program that does so leaves it off.
+  void FilterInKernel(bool on);
+  // Whether a filter is on the bus's socket now.
+  bool filtered_in_kernel() const { return filter_fd_ >= 0; }
+
   // Subscribes `callback(msg)` to `channel`. `queue_capacity` bounds LCM's queue.
   template <class Msg>
   void Subscribe(const std::string& channel, std::function<void(const Msg&)> callback,
@@ -212,6 +222,11 @@ class Bus {
   std::string Authenticate(const Msg& msg);
   template <class Msg>
   void Sign(Msg* msg);
+
+  // FilterInKernel: the filter for subscribed_, attached to the bus's socket or taken off.
+  void ApplyKernelFilter();
+  bool filter_in_kernel_ = false;
+  int filter_fd_ = -1;  // the socket a filter is on, or -1
 
   std::string url_;
   lcm::LCM lcm_;
@@ -427,6 +442,7 @@ void Bus::SubscribeHandler(const std::string& channel, std::function<void(const 
   handlers_.push_back(std::move(handler));
   subscribed_.insert(channel);
   subscribed_ids_[simtime::ChannelIdOf(channel)] = channel;
+  ApplyKernelFilter();
 }
 
 }  // namespace rover::bus

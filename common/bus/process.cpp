@@ -115,7 +115,8 @@ TimeWindow LoadTimeWindow(const config::ConfigNode& section) {
   TimeWindow w;
   section.CheckKeys({"max_ahead_wall_s", "max_ahead_rover_s", "max_behind_wall_s",
                      "max_behind_rover_s", "resync_wall_s", "resync_count", "max_clock_step_s",
-                     "time", "time_source", "time_source_silent_s", "time_source_wait_s", "heartbeat_period_s"});
+                     "time", "time_source", "time_source_silent_s", "time_source_wait_s", "heartbeat_period_s",
+                     "filter_in_kernel"});
   section.Get("max_clock_step_s", w.max_clock_step_s, 0.001, 3600.0);
   section.Get("max_ahead_wall_s", w.max_ahead_wall_s, 0.0, 3600.0);
   section.Get("max_ahead_rover_s", w.max_ahead_rover_s, 0.0, 86400.0);
@@ -191,6 +192,11 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
   bus_section.Get("time_source_silent_s", source_silent_after_s_, 0.05, 3600.0);
   bus_section.Get("time_source_wait_s", source_wait_s_, 0.0, 3600.0);
   bus_section.Get("heartbeat_period_s", heartbeat_period_s_, 0.01, 60.0);
+  // Datagrams on channels this process does not subscribe to, dropped by the kernel
+  // (bus/kernel_filter.hpp): what is delivered is the same, without the wake-ups.
+  bool filter_in_kernel = true;
+  bus_section.Get("filter_in_kernel", filter_in_kernel);
+  bus_.FilterInKernel(filter_in_kernel);
   compute_ = LoadComputeProfile(config_["compute"]);
   virtual_ = time_mode == "virtual";
   if (virtual_ && time_source_ == "system") {
@@ -388,13 +394,11 @@ void Process::RunVirtual(const std::function<void()>& on_tick, int tick_ms) {
       was_busy = busy;
       changed = false;
     }
-    // One message at a time, so that a clock message is acted on before those behind it.
-    // A burst is bounded (20 ms), so that a flood cannot hold back the sync report.
-    if (bus_.Handle(busy ? 2 : 50)) {
-      const auto burst_end = Clock::now() + std::chrono::milliseconds(20);
-      while (!clock_moved_ && Clock::now() < burst_end && bus_.Handle(0)) {
-      }
-    }
+    // One message a pass, so that a clock message is acted on before those behind it and
+    // a flood cannot hold back the sync report. No probe for more after it: the next
+    // pass's wait returns at once when more has come, and a probe that finds nothing is a
+    // system call a message (docs/SIMTIME_LOG.md, "System calls an instant").
+    bus_.Handle(busy ? 2 : 50);
   }
 }
 

@@ -101,12 +101,14 @@ rover_msgs::mobility_status_t ToMsg(const mobility::MobilityStatus& s) {
 // Waits up to `ms` for a message on either bus and handles what has arrived: on the sync
 // bus every report already there (up to a bound, so that a flood cannot hold the loop),
 // so that the barrier is judged once per burst of reports rather than once per report.
+// What poll found is handled without asking again (handle(), not handleTimeout(0), which
+// would select on the descriptor once more: a system call a message).
 void HandleEither(lcm::LCM& a, lcm::LCM* b, int ms) {
   pollfd fds[2] = {{a.getFileno(), POLLIN, 0}, {b ? b->getFileno() : -1, POLLIN, 0}};
   if (::poll(fds, b ? 2 : 1, ms) <= 0) return;
-  if (fds[0].revents & POLLIN) a.handleTimeout(0);
-  if (b && (fds[1].revents & POLLIN)) {
-    for (int i = 0; i < 256 && b->handleTimeout(0) > 0; ++i) {
+  if (fds[0].revents & POLLIN) a.handle();
+  if (b && (fds[1].revents & POLLIN) && b->handle() == 0) {
+    for (int i = 1; i < 256 && b->handleTimeout(0) > 0; ++i) {
     }
   }
 }

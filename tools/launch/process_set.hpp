@@ -5,6 +5,7 @@
 #include <sys/resource.h>
 #include <sys/types.h>
 
+#include <chrono>
 #include <cstdio>
 #include <map>
 #include <optional>
@@ -97,6 +98,7 @@ class ProcessSet {
   std::string log_dir_;
   bool echo_;
   std::vector<Child> children_;
+  std::chrono::steady_clock::time_point next_sweep_{};  // Poll: when every child is asked again
 };
 
 // "exited with code 3", "killed by signal 9".

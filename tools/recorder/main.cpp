@@ -222,10 +222,13 @@ class Receiver {
     // heartbeat's detail would then differ from run to run.
     received_total_ += static_cast<std::int64_t>(batch.size());
     std::sort(batch.begin(), batch.end(), [](const Held& a, const Held& b) { return a.key < b.key; });
+    std::vector<Event> events;
+    events.reserve(batch.size());
     for (auto& h : batch) {
       h.event.timestamp = instant_ > 0 ? instant_ : next;
-      if (!queue_.Push(std::move(h.event))) ++dropped_;
+      events.push_back(std::move(h.event));
     }
+    dropped_ += static_cast<std::int64_t>(queue_.PushAll(std::move(events)));
     held_ = std::move(after);
     held_bytes_.clear();
     for (const auto& h : held_) held_bytes_[h.event.channel] += h.event.data.size();
@@ -491,11 +494,9 @@ int main(int argc, char** argv) {
           if (!reported) std::cerr << "rover_recorder: LCM handle failed on " << args->url << "\n";
           reported = true;
           std::this_thread::sleep_for(std::chrono::milliseconds(100));
-        } else if (status > 0) {  // a burst, bounded so that a flood cannot hold back the sync report
-          const auto burst_end = std::chrono::steady_clock::now() + std::chrono::milliseconds(20);
-          while (std::chrono::steady_clock::now() < burst_end && lcm.handleTimeout(0) > 0) {
-          }
         }
+        // After each message: a flood cannot hold back the sync report, and no probe for
+        // more (a system call a message) is made; the next wait returns at once if more came.
         receiver.AfterBurst();
       }
       // Stopping: dispatch what LCM already holds (bounded, as a live bus never goes quiet),

@@ -51,5 +51,29 @@ TEST(EventQueue, EventsComeOutInOrderAndCloseEndsTheWriter) {
   EXPECT_FALSE(q.Pop().has_value());
 }
 
+
+TEST(EventQueue, ABatchIsTakenAsItsEventsOneByOneWouldBe) {
+  EventQueue q(/*max_bytes=*/1000, /*max_channel_bytes=*/300);
+  std::vector<Event> batch;
+  for (int i = 0; i < 4; ++i) batch.push_back(Message("STEREO_FRAME", 100));
+  batch.push_back(Message("POSE", 50));
+  EXPECT_EQ(q.PushAll(std::move(batch)), 1u);  // the fourth frame is over its channel's share
+  EXPECT_EQ(q.dropped().at("STEREO_FRAME"), 1);
+  EXPECT_EQ(q.max_bytes(), 350u);
+  // A writer waiting on an empty queue is woken by the batch and takes it in order.
+  EventQueue w(1000, 1000);
+  std::vector<std::string> taken;
+  std::thread writer([&] {
+    while (auto e = w.Pop()) taken.push_back(e->channel);
+  });
+  std::vector<Event> two;
+  two.push_back(Message("A", 1));
+  two.push_back(Message("B", 1));
+  EXPECT_EQ(w.PushAll(std::move(two)), 0u);
+  w.Close();
+  writer.join();
+  EXPECT_EQ(taken, (std::vector<std::string>{"A", "B"}));
+}
+
 }  // namespace
 }  // namespace rover::recorder
