@@ -163,6 +163,12 @@ void ProcessSet::Start(const ProcessSpec& spec, const std::vector<std::string>& 
     if (prctl(PR_SET_PDEATHSIG, SIGTERM) != 0 || getppid() != parent) _exit(1);
     dup2(fds[1], STDOUT_FILENO);
     dup2(fds[1], STDERR_FILENO);
+    // Nothing else of the parent's: LCM opens its sockets without close-on-exec, and a
+    // child holding the launcher's bus socket has two on the bus's port (which of them is
+    // its own cannot be told, so its channel filter stays off: bus/kernel_filter.hpp).
+    if (close_range(3, ~0U, 0) != 0) {
+      for (int fd = 3; fd < 1024; ++fd) close(fd);
+    }
     setpgid(0, 0);
     for (const auto& e : env) putenv(const_cast<char*>(e.c_str()));
     std::vector<char*> argv;

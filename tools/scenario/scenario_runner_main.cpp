@@ -337,6 +337,9 @@ class Run {
         recorder_(rover::launch::BinDir(), args.out_dir, false), set_(rover::launch::BinDir(), args.out_dir, false) {
     bus_.set_publisher("scenario_runner");
     if (const auto key = ExecutorKey(plan.deployment)) bus_.set_auth(rover::bus::MakeBusAuth(*key, "scenario_runner"));
+    // What it does not follow (IMU, maps, images) is dropped by the kernel, as in every
+    // process of the set (bus/kernel_filter.hpp).
+    bus_.FilterInKernel(true);
     Subscribe();
   }
 
