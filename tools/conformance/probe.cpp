@@ -101,6 +101,9 @@ void Probe::Listen(const std::string& channel, std::function<void(const Msg&, co
     if constexpr (requires { m.utime; }) at.utime = m.utime;
     on_message(m, at);
   };
+  // Subscribed on LCM directly, which the Bus's kernel filter does not know of: off, so
+  // that the kernel drops nothing this probe listens to (bus/kernel_filter.hpp).
+  bus_.FilterInKernel(false);
   lcm::Subscription* sub = bus_.lcm().subscribe(channel, &RawHandler::OnMessage, handler.get());
   if (sub == nullptr) throw std::runtime_error("LCM subscribe failed on channel " + channel);
   sub->setQueueCapacity(1000);
