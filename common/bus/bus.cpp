@@ -9,6 +9,7 @@
 #include <optional>
 
 #include <arpa/inet.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 #include <netinet/in.h>
@@ -131,7 +132,7 @@ void Bus::ApplyKernelFilter() {
   if (!filter_in_kernel_ || subscribed_.empty()) return;
   const bool plain = std::all_of(subscribed_.begin(), subscribed_.end(), PlainChannel);
   const int port = UdpmPort(url_);
-  const int fd = filter_fd_ >= 0 ? filter_fd_ : port > 0 ? FindUdpSocket(port) : -1;
+  const int fd = receiver_ ? receiver_->fd() : filter_fd_ >= 0 ? filter_fd_ : port > 0 ? FindUdpSocket(port) : -1;
   if (fd < 0) return;
   // A pattern, or a kernel that refuses the program: every datagram is delivered, as LCM
   // does without a filter.
@@ -141,7 +142,53 @@ void Bus::ApplyKernelFilter() {
   filter_fd_ = attached ? fd : -1;
 }
 
+void Bus::ReadOwnSocket() {
+  if (receiver_) return;
+  if (!subscribed_.empty()) throw std::logic_error("Bus::ReadOwnSocket after a Subscribe");
+  const int port = UdpmPort(url_);
+  if (port < 0) throw std::invalid_argument("Bus::ReadOwnSocket on " + url_ + " (expected a udpm:// bus)");
+  // LCM's socket (opened by RequireBus), found before this bus opens its own beside it.
+  const int lcm_fd = filter_fd_ >= 0 ? filter_fd_ : FindUdpSocket(port);
+  receiver_ = std::make_unique<UdpmReceiver>(url_, "LCM bus");
+  dispatch_ = [this](const std::string& channel, const std::uint8_t* data, std::size_t size, std::int64_t utime) {
+    Dispatch(channel, data, size, utime);
+  };
+  if (lcm_fd >= 0) AttachFilter(lcm_fd, {BPF_STMT(BPF_RET | BPF_K, 0)});  // LCM's thread sleeps
+  filter_fd_ = -1;
+}
+
+int Bus::fileno() { return receiver_ ? receiver_->fd() : lcm_.getFileno(); }
+
+void Bus::HandleReady() {
+  if (receiver_) {
+    TakeOne();
+  } else {
+    ++handle_round_;
+    lcm_.handle();
+  }
+}
+
+bool Bus::TakeOne() { return receiver_->Drain(dispatch_, 64, 1) > 0; }
+
+void Bus::Dispatch(const std::string& channel, const std::uint8_t* data, std::size_t size, std::int64_t recv_utime) {
+  ++handle_round_;  // one datagram a round, as in LCM's Handle (Admit's replay check)
+  lcm::ReceiveBuffer rbuf{const_cast<std::uint8_t*>(data), static_cast<std::uint32_t>(size), recv_utime};
+  if (const auto it = own_handlers_.find(channel); it != own_handlers_.end()) {
+    for (const auto& h : it->second) h(&rbuf, channel);
+  }
+  for (const auto& [pattern, h] : own_pattern_handlers_) {
+    if (std::regex_match(channel, pattern)) h(&rbuf, channel);
+  }
+}
+
 bool Bus::Handle(int timeout_ms) {
+  if (receiver_) {
+    if (TakeOne()) return true;
+    if (timeout_ms <= 0) return false;
+    pollfd p{receiver_->fd(), POLLIN, 0};
+    if (::poll(&p, 1, timeout_ms) <= 0) return false;
+    return TakeOne();
+  }
   ++handle_round_;  // one datagram a call (Admit: the replay check runs once per datagram)
   const int status = lcm_.handleTimeout(timeout_ms);
   // A signal (SIGTERM from systemd or the launcher) interrupts the wait: not an error.

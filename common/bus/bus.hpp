@@ -18,6 +18,8 @@
 
 #include "bus/channels.hpp"
 #include "bus/guard.hpp"
+#include "bus/kernel_filter.hpp"
+#include "bus/udpm_receiver.hpp"
 #include "bus/validate.hpp"
 #include "simtime/barrier.hpp"
 
@@ -28,6 +30,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <regex>
 #include <set>
 #include <stdexcept>
 #include <tuple>
@@ -93,6 +96,18 @@ class Bus {
   void FilterInKernel(bool on);
   // Whether a filter is on the bus's socket now.
   bool filtered_in_kernel() const { return filter_fd_ >= 0; }
+
+  // From now on this bus reads its udpm socket on the caller's thread (bus/udpm_receiver.hpp)
+  // instead of through LCM's receive thread, whose socket then takes nothing (a filter that
+  // drops every datagram): each message wakes one thread, not two. Handle still hands on
+  // one message a call. Called before any Subscribe, on a udpm:// bus only (bus::Process
+  // does so in virtual time); channels subscribed on lcm() directly get nothing after it.
+  void ReadOwnSocket();
+  bool reads_own_socket() const { return receiver_ != nullptr; }
+  // The descriptor that is readable when a message may be waiting (for poll beside others),
+  // and the handling of one such message without waiting (what poll found).
+  int fileno();
+  void HandleReady();
 
   // Subscribes `callback(msg)` to `channel`. `queue_capacity` bounds LCM's queue.
   template <class Msg>
@@ -225,6 +240,14 @@ class Bus {
 
   // FilterInKernel: the filter for subscribed_, attached to the bus's socket or taken off.
   void ApplyKernelFilter();
+  // ReadOwnSocket: one message from the own socket to its handlers, if one is waiting.
+  bool TakeOne();
+  void Dispatch(const std::string& channel, const std::uint8_t* data, std::size_t size, std::int64_t recv_utime);
+  using RawHandler = std::function<void(const lcm::ReceiveBuffer*, const std::string&)>;
+  std::unique_ptr<UdpmReceiver> receiver_;
+  UdpmReceiver::Handler dispatch_;
+  std::map<std::string, std::vector<RawHandler>> own_handlers_;                // by channel
+  std::vector<std::pair<std::regex, RawHandler>> own_pattern_handlers_;  // LCM's whole-name patterns
   bool filter_in_kernel_ = false;
   int filter_fd_ = -1;  // the socket a filter is on, or -1
 
@@ -435,10 +458,20 @@ void Bus::SubscribeHandler(const std::string& channel, std::function<void(const 
   handler->callback = std::move(callback);
   handler->queue_capacity = queue_capacity;
   handler->unverified = unverified;
-  lcm::Subscription* sub =
-      lcm_.subscribe(channel, &TypedHandler<Msg>::OnMessage, handler.get());
-  if (sub == nullptr) throw std::runtime_error("LCM subscribe failed on channel " + channel);
-  sub->setQueueCapacity(queue_capacity);
+  if (receiver_) {
+    // Bounded by the kernel's socket buffer and, in virtual time, by Hold per instant.
+    TypedHandler<Msg>* h = handler.get();
+    RawHandler raw = [h](const lcm::ReceiveBuffer* rbuf, const std::string& c) { h->OnMessage(rbuf, c); };
+    if (PlainChannel(channel)) {
+      own_handlers_[channel].push_back(std::move(raw));
+    } else {
+      own_pattern_handlers_.emplace_back(std::regex(channel), std::move(raw));
+    }
+  } else {
+    lcm::Subscription* sub = lcm_.subscribe(channel, &TypedHandler<Msg>::OnMessage, handler.get());
+    if (sub == nullptr) throw std::runtime_error("LCM subscribe failed on channel " + channel);
+    sub->setQueueCapacity(queue_capacity);
+  }
   handlers_.push_back(std::move(handler));
   subscribed_.insert(channel);
   subscribed_ids_[simtime::ChannelIdOf(channel)] = channel;

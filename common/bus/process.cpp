@@ -116,7 +116,7 @@ TimeWindow LoadTimeWindow(const config::ConfigNode& section) {
   section.CheckKeys({"max_ahead_wall_s", "max_ahead_rover_s", "max_behind_wall_s",
                      "max_behind_rover_s", "resync_wall_s", "resync_count", "max_clock_step_s",
                      "time", "time_source", "time_source_silent_s", "time_source_wait_s", "heartbeat_period_s",
-                     "filter_in_kernel"});
+                     "filter_in_kernel", "read_own_socket"});
   section.Get("max_clock_step_s", w.max_clock_step_s, 0.001, 3600.0);
   section.Get("max_ahead_wall_s", w.max_ahead_wall_s, 0.0, 3600.0);
   section.Get("max_ahead_rover_s", w.max_ahead_rover_s, 0.0, 86400.0);
@@ -206,6 +206,10 @@ Process::Process(std::string name, std::string summary, int argc, char** argv,
   // The system clock from the start when asked for (the time source itself keeps its own).
   if (!virtual_ && time_source_ == "system") bus_.clock().set_system(true);
   if (virtual_) {
+    // Each message wakes this process's thread once, not LCM's receive thread and then it.
+    bool read_own_socket = true;
+    bus_section.Get("read_own_socket", read_own_socket);
+    if (read_own_socket && UdpmPort(bus_.url()) > 0) bus_.ReadOwnSocket();
     bus_.clock().set_virtual(true);
     // Every message waits for the tick it belongs to; the clock itself is acted on at once.
     bus_.set_deferred(true, {channels::kClock});

@@ -15,6 +15,7 @@
 #include "bus/channels.hpp"
 #include "bus/convert.hpp"
 #include "bus/process.hpp"
+#include "bus/udpm_receiver.hpp"
 #include "bus/virtual_time.hpp"
 #include "mobility/deadman.hpp"
 #include "mobility/rover_simulator.hpp"
@@ -98,30 +99,30 @@ rover_msgs::mobility_status_t ToMsg(const mobility::MobilityStatus& s) {
   return m;
 }
 
-// Waits up to `ms` for a message on either bus and handles what has arrived: on the sync
-// bus every report already there (up to a bound, so that a flood cannot hold the loop),
-// so that the barrier is judged once per burst of reports rather than once per report.
-// What poll found is handled without asking again (handle(), not handleTimeout(0), which
-// would select on the descriptor once more: a system call a message).
-void HandleEither(lcm::LCM& a, lcm::LCM* b, int ms) {
-  pollfd fds[2] = {{a.getFileno(), POLLIN, 0}, {b ? b->getFileno() : -1, POLLIN, 0}};
-  if (::poll(fds, b ? 2 : 1, ms) <= 0) return;
-  if (fds[0].revents & POLLIN) a.handle();
-  if (b && (fds[1].revents & POLLIN) && b->handle() == 0) {
-    for (int i = 1; i < 256 && b->handleTimeout(0) > 0; ++i) {
-    }
-  }
+// Waits up to `ms` for a message on the bus or a sync report and handles what has arrived:
+// every sync report already there (Drain has a bound, so that a flood cannot hold the
+// loop), so that the barrier is judged once per burst of reports rather than once per
+// report. What poll found is handled without asking again (handle(), not
+// handleTimeout(0), which would select on the descriptor once more: a system call a
+// message).
+template <class OnReport>
+void HandleEither(bus::Bus& bus, bus::UdpmReceiver& sync, const OnReport& on_report, int ms) {
+  pollfd fds[2] = {{bus.fileno(), POLLIN, 0}, {sync.fd(), POLLIN, 0}};
+  if (::poll(fds, 2, ms) <= 0) return;
+  if (fds[0].revents & POLLIN) bus.HandleReady();
+  if (fds[1].revents & POLLIN) sync.Drain(on_report);
 }
 
 // The sync reports of the set, into the barrier (on the sync bus: bus/virtual_time.hpp).
 struct SyncListener {
   simtime::Barrier* barrier;
   const bus::Process* proc;
-  void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  void operator()(const std::string& channel, const std::uint8_t* data, std::size_t size, std::int64_t) const {
+    if (channel != bus::kSimSyncChannel) return;
     rover_msgs::sim_sync_t m;
     try {
-      bus::DecodeAllocationCap cap(16 * static_cast<std::size_t>(rbuf->data_size) + 65536);
-      if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) return;
+      bus::DecodeAllocationCap cap(16 * size + 65536);
+      if (m.decode(data, 0, static_cast<int>(size)) < 0) return;
     } catch (const std::exception&) {
       return;  // a hostile packet on the sync port: not a member's report
     }
@@ -332,10 +333,8 @@ class VirtualClock {
   VirtualClock(SimOnBus& rover, std::vector<std::string> members)
       : rover_(rover), proc_(rover.proc()), options_(rover.options()),
         barrier_(WithSelf(std::move(members)), options_.barrier_timeout_s, "rover_sim"),
-        sync_bus_(bus::SyncUrl(proc_.bus().url())), listener_{&barrier_, &proc_},
+        sync_bus_(bus::SyncUrl(proc_.bus().url()), "sync bus"), listener_{&barrier_, &proc_},
         tick_us_(static_cast<std::int64_t>(std::llround(options_.tick_s * 1e6))) {
-    bus::RequireBus(sync_bus_, bus::SyncUrl(proc_.bus().url()), "sync bus");
-    sync_bus_.subscribe(bus::kSimSyncChannel, &SyncListener::OnMessage, &listener_)->setQueueCapacity(10000);
   }
 
   int Run() {
@@ -366,7 +365,7 @@ class VirtualClock {
     const double hold_start = proc_.wall_seconds();
     barrier_.Report(proc_.bus().SyncState("rover_sim", -1, false), proc_.wall_seconds());
     while (!barrier_.AllHeard() && !proc_.stopping()) {
-      HandleEither(proc_.bus().lcm(), &sync_bus_, 50);
+      HandleEither(proc_.bus(), sync_bus_, listener_, 50);
       if (proc_.wall_seconds() - hold_start > 30) {
         throw std::runtime_error("--hold-for: no sync report within 30 s from: " + barrier_.Holding(-1));
       }
@@ -416,7 +415,7 @@ class VirtualClock {
       }
       // Woken by any report or message; the timeout serves only the wall-time rules
       // above (0.5 s and more), so it need not spin.
-      HandleEither(proc_.bus().lcm(), &sync_bus_, 20);
+      HandleEither(proc_.bus(), sync_bus_, listener_, 20);
     }
     return false;
   }
@@ -457,7 +456,7 @@ class VirtualClock {
     if (options_.rate <= 0) return true;
     const double due = wall_start_ + (t_ + NextStep() - rover_start_) * 1e-6 / options_.rate;
     while (!proc_.stopping() && proc_.wall_seconds() < due) {
-      HandleEither(proc_.bus().lcm(), &sync_bus_, std::max(1, static_cast<int>((due - proc_.wall_seconds()) * 1000)));
+      HandleEither(proc_.bus(), sync_bus_, listener_, std::max(1, static_cast<int>((due - proc_.wall_seconds()) * 1000)));
     }
     return !proc_.stopping();
   }
@@ -494,7 +493,7 @@ class VirtualClock {
   bus::Process& proc_;
   const SimOptions& options_;
   simtime::Barrier barrier_;
-  lcm::LCM sync_bus_;
+  bus::UdpmReceiver sync_bus_;
   SyncListener listener_;
   const std::int64_t tick_us_;
   std::int64_t t_ = 0, rover_start_ = 0, next_heartbeat_ = 0;

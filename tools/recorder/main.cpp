@@ -5,8 +5,9 @@
 // that capacity from its command line. At the default 50x sim rate the bus carries a few
 // thousand messages a second, so a logger whose dispatch thread loses the CPU for ~10 ms on
 // a busy 2-core machine loses messages, with the kernel's receive errors at 0.
-// This recorder asks for a deep queue (100,000 messages), does nothing on LCM's dispatch
-// thread but copy each message into its own queue, writes from a second thread with
+// This recorder reads the bus's socket itself (bus/udpm_receiver.hpp: LCM's own receiver
+// would wake two threads for each datagram), does nothing on that thread but copy each
+// message into its own deep queue, writes from a second thread with
 // lcm::LogFile (the standard format: lcm-logplayer and every LCM tool read it), and checks
 // every message's publisher count as it goes, so it reports any loss it could not prevent.
 //
@@ -24,6 +25,7 @@
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
 #include "bus/lcm_url_check.hpp"
+#include "bus/udpm_receiver.hpp"
 #include "bus/virtual_time.hpp"
 #include "simtime/cut.hpp"
 #include "logcheck/log_check.hpp"
@@ -46,6 +48,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <poll.h>
 #include <sys/stat.h>
 #include <thread>
 #include <tuple>
@@ -61,27 +64,22 @@ using rover::recorder::EventQueue;
 using rover::recorder::kMaxChannelBytes;
 using rover::recorder::kMaxQueuedBytes;
 
-constexpr int kLcmQueueCapacity = 100000;          // messages LCM may hold for us
 constexpr int kReportsPerSecond = 20;              // loss lines on stderr, then a count
 
 std::atomic<bool> g_stop{false};
 const std::uint32_t kClockSource = rover::bus::PublisherId("rover_sim");
 void OnSignal(int) { g_stop = true; }
 
-// LCM's dispatch thread: copies each message into the queue and nothing else (in virtual
+// The receive thread: copies each message into the queue and nothing else (in virtual
 // time: into the instant's batch, written sorted when the clock moves on).
 class Receiver {
  public:
   Receiver(lcm::LCM& lcm, EventQueue& queue, bool virtual_time, const std::string& url)
       : lcm_(lcm), queue_(queue), virtual_(virtual_time) {
-    lcm::Subscription* sub = lcm.subscribe(".*", &Receiver::OnMessage, this);
-    if (sub == nullptr) throw std::runtime_error("LCM subscribe to \".*\" failed");
-    sub->setQueueCapacity(kLcmQueueCapacity);
     if (virtual_) sync_ = std::make_unique<rover::bus::SyncSender>(url);
   }
-  void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    const auto* p = static_cast<const std::uint8_t*>(rbuf->data);
-    Event e{rbuf->recv_utime, channel, std::vector<std::uint8_t>(p, p + rbuf->data_size)};
+  void OnMessage(const std::string& channel, const std::uint8_t* p, std::size_t size, std::int64_t recv_utime) {
+    Event e{recv_utime, channel, std::vector<std::uint8_t>(p, p + size)};
     if (!virtual_) {
       if (!queue_.Push(std::move(e))) ++dropped_;
       return;
@@ -471,8 +469,11 @@ int main(int argc, char** argv) {
                 << rover::bus::kLcmUrlExpected << ")\n";
       return 2;
     }
+    // LCM publishes the heartbeats and sync reports; the bus is read by this process's own
+    // receiver (bus/udpm_receiver.hpp), which LCM's receive thread would double.
     lcm::LCM lcm(args->url);
-    rover::bus::RequireBus(lcm, args->url, "LCM bus");
+    if (!lcm.good()) throw std::runtime_error("cannot open the LCM bus at " + args->url);
+    rover::bus::UdpmReceiver socket(args->url, "LCM bus");
     if (const std::string w = rover::bus::SmallReceiveBufferWarning("rover_recorder", args->url, {}, true); !w.empty()) {
       std::cerr << w << "\n";
     }
@@ -486,25 +487,28 @@ int main(int argc, char** argv) {
 
     const auto start = std::chrono::steady_clock::now();
     std::atomic<bool> receiving{true};
+    const rover::bus::UdpmReceiver::Handler take = [&receiver](const std::string& channel, const std::uint8_t* data,
+                                                               std::size_t size, std::int64_t recv_utime) {
+      receiver.OnMessage(channel, data, size, recv_utime);
+    };
+    // Waits up to `ms` for the bus and takes every message waiting (a bounded burst).
+    const auto take_burst = [&](int ms) {
+      pollfd p{socket.fd(), POLLIN, 0};
+      if (::poll(&p, 1, ms) <= 0) return 0;
+      return socket.Drain(take);
+    };
     std::thread receive_thread([&] {
-      bool reported = false;
       while (receiving) {
-        const int status = lcm.handleTimeout(receiver.virtual_time() ? 50 : 100);
-        if (status < 0 && errno != EINTR) {
-          if (!reported) std::cerr << "rover_recorder: LCM handle failed on " << args->url << "\n";
-          reported = true;
-          std::this_thread::sleep_for(std::chrono::milliseconds(100));
-        }
-        // After each message: a flood cannot hold back the sync report, and no probe for
-        // more (a system call a message) is made; the next wait returns at once if more came.
+        take_burst(receiver.virtual_time() ? 50 : 100);
+        // After each burst: a flood cannot hold back the sync report.
         receiver.AfterBurst();
       }
-      // Stopping: dispatch what LCM already holds (bounded, as a live bus never goes quiet),
-      // and in virtual time what the last clock's cut says was sent before it: the barrier
-      // did not wait for this recorder to count it (simtime/barrier.hpp).
+      // Stopping: take what the socket already holds (bounded, as a live bus never goes
+      // quiet), and in virtual time what the last clock's cut says was sent before it: the
+      // barrier did not wait for this recorder to count it (simtime/barrier.hpp).
       const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
       while (std::chrono::steady_clock::now() < until) {
-        if (lcm.handleTimeout(receiver.awaiting_cut() ? 20 : 0) <= 0 && !receiver.awaiting_cut()) break;
+        if (take_burst(receiver.awaiting_cut() ? 20 : 0) <= 0 && !receiver.awaiting_cut()) break;
       }
       receiver.Finish();
     });
