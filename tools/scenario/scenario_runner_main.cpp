@@ -340,8 +340,8 @@ class Run {
     // What it does not follow (IMU, maps, images) is dropped by the kernel, as in every
     // process of the set (bus/kernel_filter.hpp).
     bus_.FilterInKernel(true);
-    // And read on this thread, not through LCM's receive thread (bus/udpm_receiver.hpp).
-    if (rover::bus::UdpmPort(args.url) > 0) bus_.ReadOwnSocket();
+    // In virtual time, read on this thread, not through LCM's receive thread (bus/udpm_receiver.hpp).
+    if (virtual_time_ && rover::bus::UdpmPort(args.url) > 0) bus_.ReadOwnSocket();
     Subscribe();
   }
 
