@@ -2,6 +2,7 @@
 
 #include "bus/bus.hpp"
 #include "bus/channels.hpp"
+#include "logcheck/log_reader.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/capture_request_t.hpp>
@@ -419,7 +420,7 @@ LogReport CheckLog(const std::string& path, TrackerOptions options) {
   if (!S_ISREG(st.st_mode)) {
     throw std::runtime_error(path + ": not a regular file (expected an LCM log)");
   }
-  lcm::LogFile log(path, "r");
+  rover::logcheck::LogReader log(path);
   if (!log.good()) throw std::runtime_error(path + ": cannot open the LCM log");
 
   LossTracker tracker(options);

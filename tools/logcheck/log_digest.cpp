@@ -1,6 +1,7 @@
 #include "logcheck/log_digest.hpp"
 
 #include "bus/channels.hpp"
+#include "logcheck/log_reader.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/vo_update_t.hpp>
@@ -28,7 +29,7 @@ LogDigest DigestLog(const std::string& path) {
     out.error = "libsodium did not initialise";
     return out;
   }
-  lcm::LogFile log(path, "r");
+  rover::logcheck::LogReader log(path);
   if (!log.good()) {
     out.error = path + ": cannot open the log";
     return out;

@@ -1,6 +1,7 @@
 #include "navbench/navbench_run.hpp"
 
 #include "bus/channels.hpp"
+#include "logcheck/log_reader.hpp"
 #include "bus/keepout_convert.hpp"
 #include "config/yaml_config.hpp"
 #include "hazards/hazard_assessor.hpp"
@@ -244,7 +245,7 @@ namespace {
 // SIM_TRUTH as plane poses, and every keep-out zone ever in force (by name, the last
 // definition), from a run's log.
 void ReadLog(const std::string& log_path, std::vector<hazards::Pose2>* truth, std::vector<hazards::KeepOutZone>* zones) {
-  lcm::LogFile log(log_path, "r");
+  rover::logcheck::LogReader log(log_path);
   if (!log.good()) throw std::runtime_error(log_path + ": cannot read the LCM log");
   std::vector<std::pair<std::int64_t, hazards::Pose2>> samples;
   std::map<std::string, hazards::KeepOutZone> by_name;

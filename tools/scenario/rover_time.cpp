@@ -1,6 +1,7 @@
 #include "scenario/rover_time.hpp"
 
 #include "bus/channels.hpp"
+#include "logcheck/log_reader.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <rover_msgs/capture_request_t.hpp>
@@ -51,7 +52,7 @@ double UnionSeconds(std::vector<Interval> v, std::int64_t from, std::int64_t to)
 
 RoverTimeBreakdown BreakdownFromLog(const std::string& log_path) {
   RoverTimeBreakdown r;
-  lcm::LogFile log(log_path, "r");
+  rover::logcheck::LogReader log(log_path);
   if (!log.good()) return r;
   std::map<std::int64_t, std::int64_t> requests, frames;  // frame id -> instant
   std::map<std::int64_t, std::int64_t> commands;          // command id -> instant

@@ -1,6 +1,7 @@
 #include "scenario/scenario.hpp"
 
 #include "bus/channels.hpp"
+#include "logcheck/log_reader.hpp"
 #include "bus/convert.hpp"
 #include "bus/keepout_convert.hpp"
 #include "config/yaml_config.hpp"
@@ -236,7 +237,7 @@ void ExplainMissing(ScenarioSummary& s, bool zones_defined) {
 }  // namespace
 
 ScenarioSummary SummarizeLog(const std::string& log_path, const hazards::Footprint& footprint) {
-  lcm::LogFile log(log_path, "r");
+  rover::logcheck::LogReader log(log_path);
   if (!log.good()) throw std::runtime_error(log_path + ": cannot read the LCM log");
 
   std::vector<rover_msgs::sim_truth_t> truth;

@@ -1,6 +1,7 @@
 // The completeness checker on logs built here with lcm::LogFile, with known gaps, restarts
 // and inconsistencies, and each message encoded by the generated types.
 #include "logcheck/log_check.hpp"
+#include "logcheck/log_reader.hpp"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -19,6 +20,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -373,6 +375,47 @@ TEST(CheckLog, RefusesWhatIsNotAFile) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
   }
+}
+
+TEST(LogReader, ReadsWhatLcmsOwnReaderReadsWithTheSameEnds) {
+  TestLog log("reader");
+  log.AddRaw("A", {1, 2, 3});
+  log.AddRaw("LONGER_CHANNEL", std::vector<std::uint8_t>(70000, 7));
+  log.AddRaw("A", {});
+  log.AddRaw("B", {9});
+  log.AddGarbage("half");  // a truncated tail
+  const std::string path = log.Close();
+  lcm::LogFile lcm_reader(path, "r");
+  LogReader ours(path);
+  ASSERT_TRUE(lcm_reader.good());
+  ASSERT_TRUE(ours.good());
+  int events = 0;
+  for (;;) {
+    const lcm::LogEvent* a = lcm_reader.readNextEvent();
+    const lcm::LogEvent* b = ours.readNextEvent();
+    ASSERT_EQ(a == nullptr, b == nullptr) << "after " << events << " events";
+    if (a == nullptr) break;
+    ++events;
+    EXPECT_EQ(a->timestamp, b->timestamp);
+    EXPECT_EQ(a->eventnum, b->eventnum);
+    EXPECT_EQ(a->channel, b->channel);
+    ASSERT_EQ(a->datalen, b->datalen);
+    EXPECT_EQ(0, std::memcmp(a->data, b->data, static_cast<std::size_t>(a->datalen)));
+    EXPECT_EQ(ftello(lcm_reader.getFilePtr()), ftello(ours.getFilePtr()));
+  }
+  // LCM checks that an event is followed by the next one's magic number or the end, so it
+  // gives up the last event, before the tail that is not one; both readers do.
+  EXPECT_EQ(events, 3);
+}
+
+TEST(LogReader, AnEmptyLogHasNoEventsAndAMissingOneIsNotGood) {
+  TestLog log("reader_empty");
+  const std::string path = log.Close();
+  LogReader empty(path);
+  EXPECT_TRUE(empty.good());
+  EXPECT_EQ(empty.readNextEvent(), nullptr);
+  EXPECT_FALSE(LogReader("/nonexistent/log.lcm").good());
+  EXPECT_FALSE(LogReader(fs::temp_directory_path().string()).good());
 }
 
 TEST(Consistency, NamesTheCaptureFrameAndStepThatDoNotAddUp) {
