@@ -140,6 +140,18 @@ CostGrid BuildCosts(const avoidance::Grid& g, const PlanRequest& r, const Planne
   return c;
 }
 
+// Whether a frozen cell has a neighbour that is not: only such a cell can lower another
+// cell's value, so only they need be sources (a frozen cell is never lowered itself). The
+// field comes out the same, since Dijkstra's result does not depend on its sources' order.
+bool BesideUnfrozen(const avoidance::Grid& g, const std::vector<unsigned char>& frozen, std::size_t k) {
+  const int i = static_cast<int>(k / static_cast<std::size_t>(g.cols));
+  const int j = static_cast<int>(k % static_cast<std::size_t>(g.cols));
+  for (int ni = std::max(0, i - 1); ni <= std::min(g.rows - 1, i + 1); ++ni)
+    for (int nj = std::max(0, j - 1); nj <= std::min(g.cols - 1, j + 1); ++nj)
+      if (!frozen[static_cast<std::size_t>(ni) * g.cols + nj]) return true;
+  return false;
+}
+
 // Dijkstra over the 8-connected grid from the cells already finite in *field, through cells
 // that are not obstacles (nor squeezes, unless allow_squeeze). A metre of a step costs half
 // its length at each end cell's factor (squeeze cells: squeeze_cost). A diagonal step needs
@@ -148,9 +160,11 @@ CostGrid BuildCosts(const avoidance::Grid& g, const PlanRequest& r, const Planne
 void Spread(const avoidance::Grid& g, const CostGrid& c, const PlannerOptions& o, bool allow_squeeze,
             std::vector<double>* field, const std::vector<unsigned char>* frozen = nullptr) {
   using Item = std::pair<double, std::size_t>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  std::vector<Item> sources;
   for (std::size_t k = 0; k < field->size(); ++k)
-    if (std::isfinite((*field)[k])) open.push({(*field)[k], k});
+    if (std::isfinite((*field)[k]) && (!frozen || !(*frozen)[k] || BesideUnfrozen(g, *frozen, k)))
+      sources.push_back({(*field)[k], k});
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open(std::greater<Item>(), std::move(sources));
   // Whether each cell is passable, with a ring of impassable cells round the grid so that a
   // neighbour needs no bounds check, and each cell's factor: looked up once, not per visit
   // (the same values in the same order as asking each time, so the same field).

@@ -624,6 +624,7 @@ class Run {
   // Follows the sequence to its final status, or the run's limit.
   void Follow() {
     auto last_sync = wall();
+    double children_polled = 0;
     bool report_due = false;
     std::optional<double> done_at;
     if (virtual_time_ && !spec_.kill_process.empty()) sync_watch_.emplace(args_.url);
@@ -633,9 +634,15 @@ class Run {
       } else {
         bus_.Handle(20);
       }
-      for (const auto& [name, how] : set_.Poll(0)) {
-        if (killed_ && name == spec_.kill_process) continue;
-        Note(name + " " + how + " unexpectedly");
+      // The children's output and exits: on a real clock every pass; in virtual time once an
+      // instant (not after each of its messages: a poll of every pipe a message), or every
+      // 50 ms of wall time while the clock waits.
+      if (!virtual_time_ || report_due || wall() - children_polled > 0.05) {
+        children_polled = wall();
+        for (const auto& [name, how] : set_.Poll(0)) {
+          if (killed_ && name == spec_.kill_process) continue;
+          Note(name + " " + how + " unexpectedly");
+        }
       }
       InjectKillWhenDue();
       if (!virtual_time_ || report_due) ActWhenDue();
