@@ -1,10 +1,10 @@
 #include "navbench/navbench_run.hpp"
 
 #include "bus/channels.hpp"
-#include "logcheck/log_reader.hpp"
 #include "bus/keepout_convert.hpp"
 #include "config/yaml_config.hpp"
 #include "hazards/hazard_assessor.hpp"
+#include "logcheck/log_reader.hpp"
 #include "scenario/scenario.hpp"
 #include "terrain/world.hpp"
 

@@ -1,12 +1,12 @@
 #include "scenario/scenario.hpp"
 
 #include "bus/channels.hpp"
-#include "logcheck/log_reader.hpp"
 #include "bus/convert.hpp"
 #include "bus/keepout_convert.hpp"
 #include "config/yaml_config.hpp"
 #include "geometry/pose.hpp"
 #include "hazards/keepout.hpp"
+#include "logcheck/log_reader.hpp"
 #include "report/json_writer.hpp"
 #include "sequence/executor.hpp"
 

@@ -3,6 +3,7 @@
 #include "bus/kernel_filter.hpp"
 
 #include "bus/bus.hpp"
+#include "lcm_datagram.hpp"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -21,41 +22,15 @@
 namespace rover::bus {
 namespace {
 
-void Put32(std::vector<std::uint8_t>* d, std::uint32_t v) {
-  for (int s = 24; s >= 0; s -= 8) d->push_back(static_cast<std::uint8_t>(v >> s));
-}
-void Put16(std::vector<std::uint8_t>* d, std::uint16_t v) {
-  d->push_back(static_cast<std::uint8_t>(v >> 8));
-  d->push_back(static_cast<std::uint8_t>(v));
-}
-void PutText(std::vector<std::uint8_t>* d, const std::string& s, bool nul) {
-  d->insert(d->end(), s.begin(), s.end());
-  if (nul) d->push_back(0);
-}
-
-// LCM's short message: magic LC02, sequence number, channel and NUL, then the payload (the
-// datagram's marker, so the receiver can tell which came).
+// LCM's short message: the payload is the datagram's marker, so the receiver can tell which
+// came.
 std::vector<std::uint8_t> Short(const std::string& channel, std::uint8_t marker) {
-  std::vector<std::uint8_t> d;
-  Put32(&d, 0x4c433032);
-  Put32(&d, 7);
-  PutText(&d, channel, true);
-  d.push_back(marker);
-  return d;
+  return test::ShortDatagram(channel, {marker});
 }
 
 // A fragment of a long message (LC03); only fragment 0 names the channel.
 std::vector<std::uint8_t> Fragment(const std::string& channel, std::uint16_t number, std::uint8_t marker) {
-  std::vector<std::uint8_t> d;
-  Put32(&d, 0x4c433033);
-  Put32(&d, 9);
-  Put32(&d, 100000);      // message size
-  Put32(&d, number * 1000u);  // offset
-  Put16(&d, number);
-  Put16(&d, 3);  // fragments in the message
-  if (number == 0) PutText(&d, channel, true);
-  d.push_back(marker);
-  return d;
+  return test::FragmentDatagram(channel, 9, 100000, number * 1000u, number, 3, {marker});
 }
 
 class Socket {

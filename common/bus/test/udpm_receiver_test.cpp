@@ -2,6 +2,8 @@
 // a real LCM publishes on a real udpm bus (ctest runs in a private network namespace).
 #include "bus/udpm_receiver.hpp"
 
+#include "lcm_datagram.hpp"
+
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -20,42 +22,20 @@
 namespace rover::bus {
 namespace {
 
-void Put32(std::vector<std::uint8_t>* d, std::uint32_t v) {
-  for (int s = 24; s >= 0; s -= 8) d->push_back(static_cast<std::uint8_t>(v >> s));
-}
-void Put16(std::vector<std::uint8_t>* d, std::uint16_t v) {
-  d->push_back(static_cast<std::uint8_t>(v >> 8));
-  d->push_back(static_cast<std::uint8_t>(v));
-}
-
 std::vector<std::uint8_t> Short(const std::string& channel, const std::vector<std::uint8_t>& payload) {
-  std::vector<std::uint8_t> d;
-  Put32(&d, 0x4c433032);
-  Put32(&d, 7);
-  d.insert(d.end(), channel.begin(), channel.end());
-  d.push_back(0);
-  d.insert(d.end(), payload.begin(), payload.end());
-  return d;
+  return test::ShortDatagram(channel, payload);
 }
 
 // Fragment `number` of `count` of a long message `whole` cut into `piece`-byte pieces.
 std::vector<std::uint8_t> Fragment(const std::string& channel, std::uint32_t seqno, const std::vector<std::uint8_t>& whole,
                                    int number, int count, std::size_t piece) {
-  std::vector<std::uint8_t> d;
-  Put32(&d, 0x4c433033);
-  Put32(&d, seqno);
-  Put32(&d, static_cast<std::uint32_t>(whole.size()));
   const std::size_t offset = static_cast<std::size_t>(number) * piece;
-  Put32(&d, static_cast<std::uint32_t>(offset));
-  Put16(&d, static_cast<std::uint16_t>(number));
-  Put16(&d, static_cast<std::uint16_t>(count));
-  if (number == 0) {
-    d.insert(d.end(), channel.begin(), channel.end());
-    d.push_back(0);
-  }
   const std::size_t end = std::min(whole.size(), offset + piece);
-  d.insert(d.end(), whole.begin() + static_cast<std::ptrdiff_t>(offset), whole.begin() + static_cast<std::ptrdiff_t>(end));
-  return d;
+  return test::FragmentDatagram(channel, seqno, static_cast<std::uint32_t>(whole.size()),
+                                static_cast<std::uint32_t>(offset), static_cast<std::uint16_t>(number),
+                                static_cast<std::uint16_t>(count),
+                                {whole.begin() + static_cast<std::ptrdiff_t>(offset),
+                                 whole.begin() + static_cast<std::ptrdiff_t>(end)});
 }
 
 struct Got {
