@@ -1,6 +1,6 @@
 #include "imaging/image_check.hpp"
 
-#include <opencv2/imgcodecs.hpp>
+#include "imaging/png_codec.hpp"
 
 #include <zlib.h>
 
@@ -190,17 +190,10 @@ std::string DecodeCheckedImage(const ImageView& image, std::int64_t model_width,
     if (image.data_size > static_cast<std::size_t>(INT_MAX)) {
       return "PNG holds " + std::to_string(image.data_size) + " bytes (expected less than 2 GiB)";
     }
-    const cv::Mat encoded(1, static_cast<int>(image.data_size), CV_8UC1, bytes);
-    out = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
+    if (std::string bad = DecodeGrayPng(image.data, image.data_size, out); !bad.empty()) return bad;
   } catch (const std::exception& e) {
     out.release();
     return EncodingName(image.encoding) + " image does not decode: " + FirstLine(e.what());
-  }
-  if (out.empty()) return "PNG does not decode past its header (expected complete, valid image data)";
-  if (out.type() != CV_8UC1 && out.type() != CV_16UC1) {
-    const int channels = out.channels();
-    out.release();
-    return "PNG decodes to " + std::to_string(channels) + " channels (expected 1, gray)";
   }
   if (out.cols != w || out.rows != h) {
     const std::string got = Size(out.cols, out.rows);

@@ -2,7 +2,6 @@
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/ximgproc/disparity_filter.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -126,16 +125,33 @@ double ImageNoiseSigma(const cv::Mat& f, const cv::Mat& grey) {
   return std::max(quantisation, median / (0.6745 * 6.0));
 }
 
+}  // namespace
+
+cv::Ptr<cv::StereoSGBM> RightViewMatcher(const cv::StereoSGBM& left) {
+  const int min_disparity = left.getMinDisparity(), disparities = left.getNumDisparities();
+  cv::Ptr<cv::StereoSGBM> right = cv::StereoSGBM::create(-(min_disparity + disparities) + 1, disparities,
+                                                         left.getBlockSize());
+  right->setUniquenessRatio(0);
+  right->setP1(left.getP1());
+  right->setP2(left.getP2());
+  right->setMode(left.getMode());
+  right->setPreFilterCap(left.getPreFilterCap());
+  right->setDisp12MaxDiff(1000000);
+  right->setSpeckleWindowSize(0);
+  return right;
+}
+
+namespace {
+
 // The left-right consistency check: the right image matched against the left by the same
-// matcher (cv::ximgproc::createRightMatcher, whose disparities are the negated right-view
-// ones), and every left pixel u with disparity d whose match u - d in the right view
-// carries a disparity more than max_diff_px from d is unmatched (set to -16). The check
-// itself is a loop over the pixels: OpenCV's only one (ximgproc's DisparityWLSFilter)
-// comes with its edge-aware smoothing of the disparities, which would move the depths the
-// map rates.
+// matcher (RightViewMatcher, whose disparities are the negated right-view ones), and
+// every left pixel u with disparity d whose match u - d in the right view carries a
+// disparity more than max_diff_px from d is unmatched (set to -16). The check itself is a
+// loop over the pixels: OpenCV's only one (ximgproc's DisparityWLSFilter) comes with its
+// edge-aware smoothing of the disparities, which would move the depths the map rates.
 void CheckLeftRight(const cv::Ptr<cv::StereoSGBM>& left_matcher, const cv::Mat& padL, const cv::Mat& padR,
                     double max_diff_px, cv::Mat* disp16) {
-  cv::Ptr<cv::StereoMatcher> right_matcher = cv::ximgproc::createRightMatcher(left_matcher);
+  cv::Ptr<cv::StereoMatcher> right_matcher = RightViewMatcher(*left_matcher);
   cv::Mat right16;
   right_matcher->compute(padR, padL, right16);
   const int unmatched_right = (right_matcher->getMinDisparity() - 1) * 16;

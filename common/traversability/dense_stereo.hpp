@@ -15,6 +15,7 @@
 #include "traversability/traversability_map.hpp"
 
 #include <Eigen/Core>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
 #include <memory>
@@ -66,9 +67,17 @@ double SourceStretch(const RectifiedRig& r, int u, int v);
 // Matches a rectified pair (8-bit grey, the same size): the left image's disparities in
 // 1/16 px (CV_16S), <= 0 where unmatched. Uses StereoSGBM (MODE_SGBM_3WAY) on the pair
 // padded on the left so that the whole left image is matched; with options.lr_max_diff_px
-// > 0, also the right image against the left (cv::ximgproc's right matcher), and a left
-// pixel whose match's right-view disparity differs by more than that is unmatched.
+// > 0, also the right image against the left (RightViewMatcher), and a left pixel whose
+// match's right-view disparity differs by more than that is unmatched.
 cv::Mat MatchDisparity(const cv::Mat& rectL, const cv::Mat& rectR, const MapOptions& options);
+
+// The matcher of the right view against the left for a left-right check: the settings
+// cv::ximgproc::createRightMatcher gives an SGBM matcher (the disparity range mirrored,
+// no uniqueness, disp12 or speckle filtering; the same block, penalties, mode and
+// pre-filter cap). Written here so that hazard_monitor need not link ximgproc, which
+// loads imgcodecs and its ~120 libraries (~0.12 s of CPU at every start);
+// traversability_test checks it against ximgproc's.
+cv::Ptr<cv::StereoSGBM> RightViewMatcher(const cv::StereoSGBM& left);
 
 // Texture along the rows against the image's noise, per pixel of a rectified left image
 // (8-bit grey): the mean squared horizontal Sobel gradient over the block_size block around

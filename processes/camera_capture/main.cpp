@@ -28,7 +28,7 @@
 #include <rover_msgs/sim_truth_t.hpp>
 #include <rover_msgs/stereo_frame_t.hpp>
 
-#include <opencv2/imgcodecs.hpp>
+#include "imaging/png_codec.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -202,13 +202,12 @@ class DatasetCameras : public ImageSource {
     const std::string& name = names_[next_ % names_.size()];
     ++next_;
     CapturedPair pair;
-    for (const char* side : {"/image_0/", "/image_1/"}) {
+    for (const auto& [side, image] : {std::pair{"/image_0/", &pair.left}, std::pair{"/image_1/", &pair.right}}) {
       config::CheckRegularFile(dir_ + side + name, config::kMaxImageFileBytes, "PNG image");
-    }
-    pair.left = cv::imread(dir_ + "/image_0/" + name, cv::IMREAD_UNCHANGED);
-    pair.right = cv::imread(dir_ + "/image_1/" + name, cv::IMREAD_UNCHANGED);
-    if (pair.left.empty() || pair.right.empty()) {
-      throw std::runtime_error(dir_ + ": cannot read pair " + name);
+      if (std::string bad = imaging::ReadGrayPngFile(dir_ + side + name, config::kMaxImageFileBytes, *image);
+          !bad.empty()) {
+        throw std::runtime_error(dir_ + ": cannot read pair " + name + ": " + bad);
+      }
     }
     // The files were checked at start; one replaced since is caught here.
     for (const cv::Mat* m : {&pair.left, &pair.right}) {

@@ -230,7 +230,7 @@ TEST(ImageCheck, TruncatedPngsAreRejected) {
   EXPECT_EQ(CheckImage(View(kPng, 32, 32, half), 32, 32, {}), "");
   cv::Mat out;
   EXPECT_EQ(DecodeCheckedImage(View(kPng, 32, 32, half), 32, 32, {}, out),
-            "PNG does not decode past its header (expected complete, valid image data)");
+            "PNG does not decode: the data ends inside the image (expected complete, valid image data)");
   EXPECT_TRUE(out.empty());
   const Bytes empty;
   EXPECT_EQ(CheckImage(View(kPng, 32, 32, empty), 32, 32, {}),

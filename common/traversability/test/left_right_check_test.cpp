@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/ximgproc/disparity_filter.hpp>
 
 namespace rover::traversability {
 namespace {
@@ -94,6 +95,35 @@ TEST(LeftRightCheck, DropsTheOccludedBandAndKeepsTheRest) {
   EXPECT_GT(checked.visible_right, 0.99 * plain.visible_right) << checked.visible_right << " vs " << plain.visible_right;
   EXPECT_GT(checked.visible_right, 0.95 * checked.visible);
   EXPECT_LE(checked.visible_wrong, plain.visible_wrong);
+}
+
+// RightViewMatcher stands in for cv::ximgproc::createRightMatcher (so that the process
+// need not link ximgproc): the same settings, and the same right-view disparities.
+TEST(LeftRightCheck, TheRightViewMatcherIsXimgprocsRightMatcher) {
+  const Pair p = OccludingSquare();
+  cv::Ptr<cv::StereoSGBM> left = cv::StereoSGBM::create(-3, 48, 7, 8 * 49, 32 * 49, 2, 31, 10, 100, 2,
+                                                        cv::StereoSGBM::MODE_SGBM_3WAY);
+  const cv::Ptr<cv::StereoSGBM> ours = RightViewMatcher(*left);
+  const cv::Ptr<cv::StereoSGBM> theirs = cv::ximgproc::createRightMatcher(left).dynamicCast<cv::StereoSGBM>();
+  ASSERT_FALSE(theirs.empty());
+  EXPECT_EQ(ours->getMinDisparity(), theirs->getMinDisparity());
+  EXPECT_EQ(ours->getMinDisparity(), -(-3 + 48) + 1);
+  EXPECT_EQ(ours->getNumDisparities(), theirs->getNumDisparities());
+  EXPECT_EQ(ours->getBlockSize(), theirs->getBlockSize());
+  EXPECT_EQ(ours->getP1(), theirs->getP1());
+  EXPECT_EQ(ours->getP2(), theirs->getP2());
+  EXPECT_EQ(ours->getMode(), theirs->getMode());
+  EXPECT_EQ(ours->getPreFilterCap(), theirs->getPreFilterCap());
+  EXPECT_EQ(ours->getUniquenessRatio(), theirs->getUniquenessRatio());
+  EXPECT_EQ(ours->getDisp12MaxDiff(), theirs->getDisp12MaxDiff());
+  EXPECT_EQ(ours->getSpeckleWindowSize(), theirs->getSpeckleWindowSize());
+  EXPECT_EQ(ours->getSpeckleRange(), theirs->getSpeckleRange());
+  cv::Mat ours16, theirs16;
+  ours->compute(p.right, p.left, ours16);
+  theirs->compute(p.right, p.left, theirs16);
+  ASSERT_EQ(ours16.type(), CV_16S);
+  EXPECT_GT(cv::countNonZero(ours16 < 0), kWidth * kHeight / 2);  // the mirrored range: negative disparities
+  EXPECT_EQ(cv::norm(ours16, theirs16, cv::NORM_INF), 0.0);
 }
 
 TEST(LeftRightCheck, RejectsBadInput) {
