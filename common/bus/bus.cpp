@@ -2,6 +2,7 @@
 
 #include "bus/kernel_filter.hpp"
 #include "bus/lcm_url_check.hpp"
+#include "bus/udpm_receiver.hpp"
 #include "bus/channels.hpp"
 
 #include <algorithm>
@@ -142,6 +143,27 @@ void Bus::ApplyKernelFilter() {
   filter_fd_ = attached ? fd : -1;
 }
 
+namespace {
+
+// Takes LCM's receive socket off the bus's multicast group, so that the kernel no longer
+// copies every datagram to it only for its filter to drop (Linux delivers a multicast
+// datagram to each socket bound to the port that takes the group: a copy, a filter run
+// and a free each). IP_MULTICAST_ALL off first: with it on (the default) a socket takes
+// every group any socket of the host has joined, member or not. Best effort: where either
+// option fails, the drop-all filter still keeps the datagrams from LCM's thread.
+void LeaveGroup(int fd, const std::string& url) {
+  const auto [group, port] = UdpmGroupAndPort(url);
+  if (port < 0) return;
+  const int off = 0;
+  if (::setsockopt(fd, IPPROTO_IP, IP_MULTICAST_ALL, &off, sizeof off) != 0) return;
+  ip_mreq membership{};
+  if (inet_pton(AF_INET, group.c_str(), &membership.imr_multiaddr) != 1) return;
+  membership.imr_interface.s_addr = htonl(INADDR_ANY);
+  ::setsockopt(fd, IPPROTO_IP, IP_DROP_MEMBERSHIP, &membership, sizeof membership);
+}
+
+}  // namespace
+
 void Bus::ReadOwnSocket() {
   if (receiver_) return;
   if (!subscribed_.empty()) throw std::logic_error("Bus::ReadOwnSocket after a Subscribe");
@@ -153,7 +175,10 @@ void Bus::ReadOwnSocket() {
   dispatch_ = [this](const std::string& channel, const std::uint8_t* data, std::size_t size, std::int64_t utime) {
     Dispatch(channel, data, size, utime);
   };
-  if (lcm_fd >= 0) AttachFilter(lcm_fd, {BPF_STMT(BPF_RET | BPF_K, 0)});  // LCM's thread sleeps
+  if (lcm_fd >= 0) {
+    AttachFilter(lcm_fd, {BPF_STMT(BPF_RET | BPF_K, 0)});  // LCM's thread sleeps
+    LeaveGroup(lcm_fd, url_);
+  }
   filter_fd_ = -1;
 }
 

@@ -14,7 +14,9 @@
 #include <rover_msgs/heartbeat_t.hpp>
 
 #include <cstdint>
+#include <fstream>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -143,6 +145,53 @@ TEST(KernelFilter, ABusFiltersItsSubscriptionsUntilOneIsAPattern) {
   Bus off("udpm://239.255.76.67:" + std::to_string(port + 1) + "?ttl=0");
   off.Subscribe<rover_msgs::heartbeat_t>("HEARTBEAT", [](const rover_msgs::heartbeat_t&) {});
   EXPECT_FALSE(off.filtered_in_kernel());  // not asked for
+}
+
+// The drop counts of the sockets bound to `port` (from /proc/net/udp; one entry a socket).
+std::vector<long> DropsOnPort(int port) {
+  std::ifstream in("/proc/net/udp");
+  std::string line;
+  std::getline(in, line);  // the header
+  std::vector<long> drops;
+  char want[8];
+  std::snprintf(want, sizeof want, ":%04X", port);
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string slot, local, word;
+    fields >> slot >> local;
+    if (local.size() < 5 || local.substr(local.size() - 5) != want) continue;
+    while (fields >> word) {}
+    drops.push_back(std::stol(word));  // the last column
+  }
+  return drops;
+}
+
+// A bus that reads its own socket takes LCM's receive socket off the group: the kernel no
+// longer copies every datagram to it for its drop-all filter (which counted each as a drop).
+TEST(KernelFilter, ABusReadingItsOwnSocketLeavesLcmsSocketOutOfTheGroup) {
+  int port = 0;
+  {
+    Socket probe;
+    port = probe.BindLoopback();
+  }
+  const std::string url = "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0";
+  Bus bus(url);
+  bus.ReadOwnSocket();
+  int heard = 0;
+  bus.Subscribe<rover_msgs::heartbeat_t>("HEARTBEAT", [&heard](const rover_msgs::heartbeat_t&) { ++heard; });
+  Bus publisher(url);
+  for (int i = 0; i < 5; ++i) {
+    rover_msgs::heartbeat_t hb{};
+    hb.process = "test";
+    hb.seq = i;
+    publisher.Publish("HEARTBEAT", hb);
+  }
+  for (int i = 0; i < 100 && heard < 5; ++i) bus.Handle(50);
+  EXPECT_EQ(heard, 5);
+  // The bus's own socket, LCM's beside it, and the publisher's LCM receive socket.
+  const std::vector<long> drops = DropsOnPort(port);
+  ASSERT_GE(drops.size(), 2u);
+  for (const long d : drops) EXPECT_EQ(d, 0) << "a socket on port " << port << " dropped datagrams";
 }
 
 }  // namespace
