@@ -393,10 +393,14 @@ class Run {
                                               [this](const rover_msgs::step_report_t&) { ++steps_seen_; });
     bus_.Subscribe<rover_msgs::sequence_status_t>(
         rover::channels::kSequenceStatus, [this](const rover_msgs::sequence_status_t& st) { OnStatus(st); });
-    // The estimate and the truth, for the checks after a pause or an idle (RestCheck).
-    bus_.Subscribe<rover_msgs::pose_t>(rover::channels::kPose, [this](const rover_msgs::pose_t& p) { pose_ = p; }, 100);
-    bus_.Subscribe<rover_msgs::sim_truth_t>(rover::channels::kSimTruth,
-                                            [this](const rover_msgs::sim_truth_t& t) { truth_ = t; }, 100);
+    // The estimate and the truth, for the checks after a pause or an idle (RestCheck): only
+    // in a scenario that has either, as each is a message an instant to take (the summary's
+    // other figures come from the log).
+    if (spec_.pause_after_steps > 0 || spec_.then_idle_s > 0) {
+      bus_.Subscribe<rover_msgs::pose_t>(rover::channels::kPose, [this](const rover_msgs::pose_t& p) { pose_ = p; }, 100);
+      bus_.Subscribe<rover_msgs::sim_truth_t>(rover::channels::kSimTruth,
+                                              [this](const rover_msgs::sim_truth_t& t) { truth_ = t; }, 100);
+    }
     // Virtual time (README, "Simulated time"): the runner and the recorder are members of
     // the set too, so that the sequence goes in at the first instant and the log holds
     // every message of every instant, whatever the machine's load.
