@@ -7,8 +7,8 @@
 // digest (virtual time: every rate must give the same one).
 // --against DIR runs the same in another checkout of the project, built (its
 // build/bin/scenario_runner and the processes beside it, its own scenarios and configs),
-// in the same sitting, so that a change's CPU figure and the code before it are measured
-// under one load.
+// in the same sitting, run for run in turn, so that a change's CPU figure and the code
+// before it are measured under one load.
 // Targets: at least 20x faster than real time at MER speed (~4 cm/s); the unlimited rate at
 // most half of 50x's wall time.
 #include "bus/process.hpp"
@@ -83,15 +83,16 @@ Run RunOnce(const std::string& root, const std::string& bin, const std::string& 
   return run;
 }
 
-RateFigures BenchRate(const Options& options, const std::string& root, const std::string& bin,
-                      const std::string& label, const std::string& scenario, const std::string& rate) {
+// One build's side of a comparison: which checkout, which programs, which scenario file.
+struct Build {
+  std::string label, root, bin, scenario;
+};
+
+// The medians of one build's runs.
+RateFigures Medians(const std::vector<Run>& runs) {
   std::vector<double> wall, rover, distance, cpu, cpu_per_hour, times_real;
   RateFigures f;
-  const std::string stem = std::filesystem::path(scenario).stem().string();
-  for (int r = 0; r < options.runs; ++r) {
-    const std::string out = std::filesystem::absolute("out/bench_scenario_" + stem + "_" + label + "_" + rate + "_" +
-                                                      std::to_string(r)).string();
-    const Run run = RunOnce(root, bin, scenario, rate, out);
+  for (const Run& run : runs) {
     wall.push_back(run.wall_s);
     rover.push_back(run.rover_s);
     distance.push_back(run.distance_m);
@@ -109,6 +110,25 @@ RateFigures BenchRate(const Options& options, const std::string& root, const std
   return f;
 }
 
+// Each build's figures at `rate`. The builds take turns, run by run (this, against, this,
+// ...), so that a load that comes and goes during the sitting (a shared machine) weighs on
+// both alike rather than on whichever ran while it lasted.
+std::vector<RateFigures> BenchRate(const Options& options, const std::vector<Build>& builds, const std::string& rate) {
+  std::vector<std::vector<Run>> runs(builds.size());
+  for (int r = 0; r < options.runs; ++r) {
+    for (std::size_t b = 0; b < builds.size(); ++b) {
+      const Build& build = builds[b];
+      const std::string stem = std::filesystem::path(build.scenario).stem().string();
+      const std::string out = std::filesystem::absolute("out/bench_scenario_" + stem + "_" + build.label + "_" + rate +
+                                                        "_" + std::to_string(r)).string();
+      runs[b].push_back(RunOnce(build.root, build.bin, build.scenario, rate, out));
+    }
+  }
+  std::vector<RateFigures> figures;
+  for (const auto& one : runs) figures.push_back(Medians(one));
+  return figures;
+}
+
 void PrintRow(const std::string& label, const std::string& rate, const RateFigures& f) {
   std::printf("  %-7s %-6s %10.2f %9.1f %8.1f %10.1f %8.1f %12.1f  %s\n", label.c_str(), rate.c_str(), f.distance_m,
               f.rover_s, f.wall_s, f.times_real, f.cpu_s, f.cpu_per_rover_hour,
@@ -119,20 +139,20 @@ void BenchScenario(const Options& options, const std::string& scenario) {
   std::printf("scenario %s, %d runs per rate (medians)\n", scenario.c_str(), options.runs);
   std::printf("  %-7s %-6s %10s %9s %8s %10s %8s %12s  %s\n", "build", "rate", "distance m", "rover s", "wall s",
               "x realtime", "CPU s", "CPU s/rov-h", "log digest");
-  std::vector<double> walls;
-  for (const auto& rate : options.rates) {
-    const RateFigures now =
-        BenchRate(options, std::filesystem::current_path().string(), rover::launch::BinDir(), "this", scenario, rate);
-    PrintRow("this", rate, now);
-    walls.push_back(now.wall_s);
-    if (options.against.empty()) continue;
+  std::vector<Build> builds = {{"this", std::filesystem::current_path().string(), rover::launch::BinDir(), scenario}};
+  if (!options.against.empty()) {
     // The other checkout's own copy of the scenario: the same path inside it.
     const std::string there = std::filesystem::path(scenario).lexically_proximate(std::filesystem::current_path()).string();
-    const RateFigures before =
-        BenchRate(options, options.against, options.against + "/build/bin", "against", there, rate);
-    PrintRow("against", rate, before);
+    builds.push_back({"against", options.against, options.against + "/build/bin", there});
+  }
+  std::vector<double> walls;
+  for (const auto& rate : options.rates) {
+    const std::vector<RateFigures> figures = BenchRate(options, builds, rate);
+    for (std::size_t b = 0; b < builds.size(); ++b) PrintRow(builds[b].label, rate, figures[b]);
+    walls.push_back(figures[0].wall_s);
+    if (figures.size() < 2) continue;
     std::printf("  %-7s %-6s CPU per rover-hour: against / this = %.2f\n", "", rate.c_str(),
-                before.cpu_per_rover_hour / now.cpu_per_rover_hour);
+                figures[1].cpu_per_rover_hour / figures[0].cpu_per_rover_hour);
   }
   if (walls.size() >= 2) {
     std::printf("  wall time %s / %s: %.2f   (target <= 0.5 for max / 50)\n", options.rates.back().c_str(),
