@@ -20,6 +20,7 @@
 #include "geometry/camera_io.hpp"
 #include "geometry/kitti_calib.hpp"
 #include "imaging/image_check.hpp"
+#include "imaging/png_codec.hpp"
 #include "terrain/world.hpp"
 
 #include <rover_msgs/capture_request_t.hpp>
@@ -27,8 +28,6 @@
 #include <rover_msgs/pose_t.hpp>
 #include <rover_msgs/sim_truth_t.hpp>
 #include <rover_msgs/stereo_frame_t.hpp>
-
-#include "imaging/png_codec.hpp"
 
 #include <chrono>
 #include <cmath>

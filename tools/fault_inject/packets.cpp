@@ -592,7 +592,7 @@ std::vector<Packet> Images(const std::string& channel, const PacketOptions& o) {
   add("left colour PNG", f, "expected 0, gray");
   f = base;
   SetData(f.left, Bytes(good_png.begin(), good_png.begin() + static_cast<long>(good_png.size() / 2)));
-  add("left PNG truncated to half", f, "does not decode past its header");
+  add("left PNG truncated to half", f, "PNG does not decode: the data ends inside the image");
   f = base;
   SetData(f.left, Bytes(good_png.begin(), good_png.begin() + 20));
   add("left PNG truncated to 20 bytes", f, "PNG is truncated");
