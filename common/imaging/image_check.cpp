@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <array>
-#include <climits>
 #include <cstdio>
 #include <exception>
 
@@ -186,9 +185,6 @@ std::string DecodeCheckedImage(const ImageView& image, std::int64_t model_width,
     if (encoding == Encoding::kGray16) {
       out = cv::Mat(h, w, CV_16UC1, bytes).clone();
       return "";
-    }
-    if (image.data_size > static_cast<std::size_t>(INT_MAX)) {
-      return "PNG holds " + std::to_string(image.data_size) + " bytes (expected less than 2 GiB)";
     }
     if (std::string bad = DecodeGrayPng(image.data, image.data_size, out); !bad.empty()) return bad;
   } catch (const std::exception& e) {

@@ -4,7 +4,6 @@
 
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 
 namespace rover::imaging {
 
@@ -156,22 +155,6 @@ std::string DecodeGrayPng(const std::uint8_t* data, std::size_t size, cv::Mat& o
     return std::string("PNG does not decode: ") + context.error + " (expected complete, valid image data)";
   }
   if (channels != 1) return "PNG decodes to " + std::to_string(channels) + " channels (expected 1, gray)";
-  return "";
-}
-
-std::string ReadGrayPngFile(const std::string& path, std::size_t max_bytes, cv::Mat& out) {
-  out.release();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return path + ": cannot open (expected a readable PNG file)";
-  std::vector<std::uint8_t> bytes;
-  char buffer[65536];
-  while (in.read(buffer, sizeof(buffer)) || in.gcount() > 0) {
-    bytes.insert(bytes.end(), buffer, buffer + in.gcount());
-    if (bytes.size() > max_bytes) {
-      return path + ": over " + std::to_string(max_bytes) + " bytes (expected a camera image)";
-    }
-  }
-  if (std::string bad = DecodeGrayPng(bytes.data(), bytes.size(), out); !bad.empty()) return path + ": " + bad;
   return "";
 }
 

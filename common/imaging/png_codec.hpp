@@ -6,7 +6,7 @@
 // process about 0.12 s of CPU at start (`/usr/bin/time` on a program that only links
 // it). Three processes of every run paid it for PNG alone. libpng is what imgcodecs
 // itself calls for PNG, so these two functions make the same bytes and the same pixels
-// (image_check_test compares them with OpenCV's, byte for byte and pixel for pixel).
+// (png_codec_test compares them with OpenCV's, byte for byte and pixel for pixel).
 //
 // Only gray images: 8-bit, or 16-bit (as OpenCV does, 16-bit samples are swapped to the
 // machine's order). Every failure is one line naming what was wrong.
@@ -33,8 +33,5 @@ std::string EncodeGrayPng(const cv::Mat& img, int level, PngStrategy strategy, s
 // gives CV_16UC1) into `out`. Returns "" or one line: not a PNG, truncated or corrupt
 // data, or a colour image ("PNG decodes to N channels (expected 1, gray)").
 std::string DecodeGrayPng(const std::uint8_t* data, std::size_t size, cv::Mat& out);
-
-// Reads a gray PNG file (at most max_bytes) with DecodeGrayPng. Errors name the file.
-std::string ReadGrayPngFile(const std::string& path, std::size_t max_bytes, cv::Mat& out);
 
 }  // namespace rover::imaging

@@ -202,10 +202,10 @@ class DatasetCameras : public ImageSource {
     ++next_;
     CapturedPair pair;
     for (const auto& [side, image] : {std::pair{"/image_0/", &pair.left}, std::pair{"/image_1/", &pair.right}}) {
-      config::CheckRegularFile(dir_ + side + name, config::kMaxImageFileBytes, "PNG image");
-      if (std::string bad = imaging::ReadGrayPngFile(dir_ + side + name, config::kMaxImageFileBytes, *image);
+      const std::string png = config::ReadBoundedRegularFile(dir_ + side + name, config::kMaxImageFileBytes, "PNG image");
+      if (std::string bad = imaging::DecodeGrayPng(reinterpret_cast<const std::uint8_t*>(png.data()), png.size(), *image);
           !bad.empty()) {
-        throw std::runtime_error(dir_ + ": cannot read pair " + name + ": " + bad);
+        throw std::runtime_error(dir_ + side + name + ": " + bad);
       }
     }
     // The files were checked at start; one replaced since is caught here.
