@@ -82,11 +82,24 @@ bool InHazcamView(const geometry::StereoRig& rig, const tv::MapOptions& stereo, 
 // reads steps near the limit (the table's "steps of cells ..." line).
 constexpr float kTallStepM = 0.15f, kReadLowM = 0.08f;
 
-// The true terrain on the map's grid: each cell holds the highest of 5x5 samples of the
-// exact surface in it (a rock reaching into a cell counts at its top there, as a wheel
-// would meet it; the map's own cells hold the mean of the points the cameras see, which
-// lie on rocks' visible faces and tops). at_mean: each cell at the mean of the surface in
-// it instead (EvalOptions::truth_at_cell_mean).
+// The cells the top rule (EvalOptions::top_rise_m) makes unsafe on the map as the vote sees
+// it (traversability::AsGrid): 1 where it marked a cell; empty when off.
+std::vector<char> TopMarked(const tv::TraversabilityMap& map, const EvalOptions& options) {
+  if (options.top_rise_m <= 0) return {};
+  const avoidance::Grid plain = tv::AsGrid(map);
+  avoidance::Grid g = plain;
+  avoidance::MarkTopsOverGround(&g, options.top_ground_radius_m, options.top_rise_m);
+  std::vector<char> marked(g.state.size(), 0);
+  for (std::size_t k = 0; k < marked.size(); ++k)
+    marked[k] = g.state[k] == avoidance::CellClass::kUnsafe && plain.state[k] != avoidance::CellClass::kUnsafe;
+  return marked;
+}
+
+bool Marked(const std::vector<char>& marked, std::size_t idx) { return !marked.empty() && marked[idx]; }
+
+}  // namespace
+
+// 5x5 samples a cell (FillTruth in hazard_evaluation.hpp).
 void FillTruth(const terrain::World& world, bool at_mean, tv::TraversabilityMap* truth) {
   truth->Clear();
   const int k = 5;
@@ -110,23 +123,6 @@ void FillTruth(const terrain::World& world, bool at_mean, tv::TraversabilityMap*
     }
   truth->AddPoints(pts, std::vector<double>(pts.size(), 0.005));
 }
-
-// The cells the top rule (EvalOptions::top_rise_m) makes unsafe on the map as the vote sees
-// it (traversability::AsGrid): 1 where it marked a cell; empty when off.
-std::vector<char> TopMarked(const tv::TraversabilityMap& map, const EvalOptions& options) {
-  if (options.top_rise_m <= 0) return {};
-  const avoidance::Grid plain = tv::AsGrid(map);
-  avoidance::Grid g = plain;
-  avoidance::MarkTopsOverGround(&g, options.top_ground_radius_m, options.top_rise_m);
-  std::vector<char> marked(g.state.size(), 0);
-  for (std::size_t k = 0; k < marked.size(); ++k)
-    marked[k] = g.state[k] == avoidance::CellClass::kUnsafe && plain.state[k] != avoidance::CellClass::kUnsafe;
-  return marked;
-}
-
-bool Marked(const std::vector<char>& marked, std::size_t idx) { return !marked.empty() && marked[idx]; }
-
-}  // namespace
 
 EvalResult Evaluate(const terrain::World& world, const geometry::StereoRig& rig_full,
                     const EvalOptions& options) {

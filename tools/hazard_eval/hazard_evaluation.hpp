@@ -28,6 +28,14 @@
 
 namespace rover::hazard_eval {
 
+// The true terrain on the map's grid, as points the map rates with its own rules: each
+// cell holds the highest of 5x5 samples of the exact surface in it (a rock reaching into a
+// cell counts at its top there, as a wheel would meet it; the map's own cells hold the mean
+// of the points the cameras see, which lie on rocks' visible faces and tops). at_mean: each
+// cell at the mean of the surface in it instead (EvalOptions::truth_at_cell_mean). Every
+// cell of the grid takes points; the map's points before are forgotten.
+void FillTruth(const terrain::World& world, bool at_mean, traversability::TraversabilityMap* truth);
+
 struct EvalPose {
   double x = 0, y = 0, yaw_deg = 0;
   // This pair's pose error at capture (x, y, z m; roll, pitch, yaw deg), over

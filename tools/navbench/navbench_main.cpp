@@ -22,7 +22,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
+#include <map>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -34,7 +36,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: navbench [--runs N] [--jobs J] [--densities K,...|none] [--worlds NAME,...|none] [--seed S]\n"
     "                [--out DIR] [--quick] [--min-goal M] [--max-goal M] [--no-plot] [--prepare | --report]\n"
-    "                [--resume] [--set KEY=VALUE]...\n\n"
+    "                [--resume] [--ways] [--set KEY=VALUE]...\n\n"
     "The navigation benchmark: N runs (default 20) per Golombek rock field k (default\n"
     "0.05,0.10,0.15,0.20; rocks 0.1 to 1.5 m) and per fixed world (default gap_wall,cul_de_sac),\n"
     "each one `goto ... avoid on` with VO and the map on: 20 to 50 m (--min-goal, --max-goal) in\n"
@@ -51,6 +53,9 @@ constexpr const char* kUsage =
     "--quick: 1 run at k = 0.10, 8 to 10 m, no fixed world (a smoke run). --prepare writes the\n"
     "runs and runs none; --report tables runs already in DIR; --resume runs only those without\n"
     "a summary.json (an interrupted benchmark, or more --runs on the same seed).\n"
+    "--ways drives nothing: for each run it writes, whether the stack's own global planner\n"
+    "(its clearance and costs, with any --set) finds a way to the goal on a perfect map of the\n"
+    "world (its exact surface, rated by the map's rules); the table after driving gives it too.\n"
     "--set KEY=VALUE (repeatable): a rover-config setting tried on every run, by its dotted key\n"
     "(hazards.map.traversability.unframed_unknown=true, executor.avoid_margin_m=0.2), written\n"
     "to each run's scenario overrides; a misspelt key ends every run at once with the\n"
@@ -112,6 +117,7 @@ struct Args {
   nb::BenchOptions options;
   int jobs = 1;
   bool plot = true, prepare_only = false, report_only = false, resume = false, help = false;
+  bool ways_only = false;  // --ways: the plan on each world's perfect map, no drive
   std::string command = "navbench";
   // Slurm: submit the runs as an array (scenario_campaign --slurm), or merge or resubmit one.
   bool slurm = false;
@@ -259,6 +265,8 @@ Args ParseArgs(int argc, char** argv) {
       options.overrides.push_back(setting);
     } else if (arg == "--report") {
       a.report_only = true;
+    } else if (arg == "--ways") {
+      a.ways_only = true;
     } else if (arg == "--resume") {
       a.resume = true;
     } else {
@@ -275,6 +283,8 @@ Args ParseArgs(int argc, char** argv) {
   }
   if (options.min_goal_m > options.max_goal_m) throw ConfigError("navbench: --min-goal is over --max-goal");
   if (a.prepare_only && a.report_only) throw ConfigError("navbench: --prepare and --report exclude each other");
+  if (a.ways_only && (a.prepare_only || a.report_only || a.resume || a.slurm))
+    throw ConfigError("navbench: --ways drives nothing: it excludes --prepare, --report, --resume and --slurm");
   if (options.densities.empty() && options.worlds.empty()) throw ConfigError("navbench: no density and no world to run");
   CheckSlurmArgs(a);
   return a;
@@ -326,6 +336,28 @@ void Report(const std::vector<nb::RunPlan>& plans, const Args& args) {
   std::cout << "wrote " << out_dir << "/results.txt, results.json" << (args.plot ? " and plots/ID.png" : "") << "\n";
 }
 
+// --ways: each run's world written, and the plan on its perfect map; one line a run, then
+// per world kind how many have a way.
+void Ways(const std::vector<nb::RunPlan>& plans, const nb::BenchOptions& options) {
+  std::map<std::string, std::pair<int, int>> counts;  // group: (with a way, worlds)
+  std::vector<std::string> groups;
+  for (const auto& p : plans) {
+    nb::WriteRun(p, options.overrides);
+    const nb::PerfectWay way = nb::RunPerfectWay(p);
+    if (counts.find(p.group) == counts.end()) groups.push_back(p.group);
+    auto& [with, worlds] = counts[p.group];
+    ++worlds;
+    with += way.reachable;
+    std::cout << std::left << std::setw(14) << p.id << std::setw(10) << (std::to_string(p.straight_m()).substr(0, 5) + " m")
+              << (way.reachable ? "a way of " + std::to_string(way.length_m).substr(0, 5) + " m" : "no way: " + way.why)
+              << "\n";
+  }
+  std::cout << "\nthe plan on a perfect map (seed " << options.seed << "):\n";
+  for (const auto& g : groups)
+    std::cout << std::left << std::setw(11) << g << counts[g].first << " of " << counts[g].second
+              << " worlds with a way\n";
+}
+
 // The file in DIR with the arguments a Slurm benchmark was asked with (what --merge plans).
 std::string PlanArgsPath(const std::string& out_dir) { return out_dir + "/slurm/navbench_args.txt"; }
 
@@ -365,6 +397,10 @@ int main(int argc, char** argv) {
     }
     const std::vector<nb::RunPlan> plans = nb::PlanRuns(args.options);
     fs::create_directories(args.options.out_dir);
+    if (args.ways_only) {
+      Ways(plans, args.options);
+      return 0;
+    }
     if (!args.report_only) {
       const std::string list = PrepareRuns(plans, args.options, args.resume);
       if ((args.prepare_only || args.slurm) && !list.empty()) {

@@ -309,6 +309,14 @@ GroupFigures Aggregate(const std::string& group, const std::vector<RunFigures>& 
     g.runs_with_graze += r.rock_grazes > 0;
     g.runs_off_map += r.off_map_samples > 0;
     g.runs_left_map += r.left_map();
+    if (r.perfect_way) {
+      ++g.runs_way_checked;
+      if (*r.perfect_way) {
+        ++g.runs_with_way;
+        g.successes_with_way += r.success();
+        g.navigation_runs_with_way += !r.left_map();
+      }
+    }
     if (!r.collided() && r.off_map_samples == 0) {
       if (r.outcome == "aborted") ++g.safe_aborts[r.abort_reason.empty() ? "unknown" : r.abort_reason];
       if (r.outcome == "incomplete") ++g.safe_aborts["incomplete"];
@@ -389,6 +397,21 @@ std::string TableText(const std::vector<GroupFigures>& groups) {
          << (g.median_over_shortest ? Fixed(*g.median_over_shortest, 2) : "-") << "\n";
     }
   }
+  bool any_way = false;
+  for (const auto& g : groups) any_way |= g.runs_way_checked > 0;
+  if (any_way) {
+    os << "\nthe plan on a perfect map (the stack's planner, its clearance and costs, on the world's exact\n"
+          "surface rated by the map's rules; a world without a way cannot be crossed with this clearance):\n";
+    os << std::left << std::setw(11) << "world" << std::setw(22) << "worlds with a way" << "success where there is one\n";
+    for (const auto& g : groups) {
+      if (g.runs_way_checked == 0) continue;
+      os << std::left << std::setw(11) << g.group << std::setw(22)
+         << (std::to_string(g.runs_with_way) + " of " + std::to_string(g.runs_way_checked))
+         << (std::to_string(g.successes_with_way) + " of " + std::to_string(g.navigation_runs_with_way) + " (" +
+             Pct(g.successes_with_way, g.navigation_runs_with_way) + ")")
+         << "\n";
+    }
+  }
   os << "\nrover time (share of the sequences' span; VO and mapping overlap):\n";
   os << std::left << std::setw(11) << "world" << std::setw(10) << "hours" << std::setw(10) << "driving"
      << std::setw(10) << "imaging" << std::setw(10) << "VO" << std::setw(10) << "mapping" << std::setw(10)
@@ -447,6 +470,8 @@ std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vect
     j.EndObject();
     j.Field("steps", g.steps).Field("steps_thought_ahead", g.steps_thought_ahead);
     j.Field("vo_updates_accepted", g.vo_accepted).Field("false_updates", g.vo_false);
+    j.Field("runs_way_checked", g.runs_way_checked).Field("runs_with_way", g.runs_with_way);
+    j.Field("successes_with_way", g.successes_with_way).Field("navigation_runs_with_way", g.navigation_runs_with_way);
     j.Field("horizontal_poses", g.horizontal_poses);
     optional("horizontal_nees_mean", g.horizontal_nees_mean);
     optional("horizontal_beyond_bound_pct", g.horizontal_beyond_pct);
@@ -472,6 +497,13 @@ std::string ResultsJson(const std::vector<GroupFigures>& groups, const std::vect
     optional("path_ratio", r.path_ratio);
     optional("shortest_m", r.shortest_m);
     optional("shortest_ratio", r.shortest_ratio());
+    j.Key("perfect_way");
+    if (r.perfect_way) {
+      j.Value(*r.perfect_way);
+    } else {
+      j.Null();
+    }
+    optional("perfect_way_m", r.perfect_way && *r.perfect_way ? std::optional<double>(r.perfect_way_m) : std::nullopt);
     j.Field("rover_time_s", r.rover_time_s).Field("vo_updates_accepted", r.vo_accepted).Field("false_updates", r.vo_false);
     j.EndObject();
   }

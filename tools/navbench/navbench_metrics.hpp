@@ -117,6 +117,11 @@ struct RunFigures {
   std::optional<double> shortest_ratio() const {
     return shortest_m && straight_m > 0 ? std::optional<double>(*shortest_m / straight_m) : std::nullopt;
   }
+  // The stack's own plan on a perfect map of the world (perfect_map_way.hpp), when it was
+  // looked for: whether one exists, and its length. A world without one cannot be crossed
+  // by this rover with its clearance, however well it sees.
+  std::optional<bool> perfect_way;
+  double perfect_way_m = 0;
   double rover_time_s = 0;           // span of the sequence (rover_time_breakdown.span_s)
   // Planning counts only where the stack charges it (summary.json's planning_s; 0 when null).
   double driving_s = 0, imaging_s = 0, vo_s = 0, mapping_s = 0, planning_s = 0, waiting_s = 0;
@@ -147,6 +152,9 @@ struct GroupFigures {
   int runs_with_graze = 0;  // a tall rock's rim under the footprint (RunFigures::rock_grazes), collision or not
   int runs_off_map = 0;   // a wheel off the map, collision or not
   int runs_left_map = 0;  // RunFigures::left_map(): off the map, no collision (not navigation's)
+  // Runs whose world was checked for the plan's way on a perfect map (RunFigures::
+  // perfect_way), those with one, and the successes among the navigation runs with one.
+  int runs_way_checked = 0, runs_with_way = 0, successes_with_way = 0, navigation_runs_with_way = 0;
   // Aborts without a contact or a wheel off the map, by abort reason; runs that did not end
   // (no summary, or the wall-clock limit) under "incomplete".
   std::map<std::string, int> safe_aborts;

@@ -268,6 +268,14 @@ void ReadLog(const std::string& log_path, std::vector<hazards::Pose2>* truth, st
   for (auto& [name, z] : by_name) zones->push_back(z);
 }
 
+// The plan on a perfect map of `world` for the run's goto, with `rover_config`'s settings.
+PerfectWay PerfectWayIn(const terrain::World& world, const config::ConfigNode& rover_config,
+                        const tools::ScenarioSpec& spec, const RunPlan& p) {
+  const PerfectWayOptions o = LoadPerfectWayOptions(rover_config);
+  return PlanPerfectWay(PerfectMap(world, o.map), o.planner, Eigen::Vector2d(spec.start_x, spec.start_y),
+                        Eigen::Vector2d(p.goal_x, p.goal_y), p.goal_radius_m);
+}
+
 double Number(const YAML::Node& node, double fallback = 0) {
   return node && !node.IsNull() ? node.as<double>() : fallback;
 }
@@ -366,12 +374,26 @@ RunFigures ReadRun(const RunPlan& p, RunTrack* track) {
     r.shortest_m = best.length_m;
     t.shortest = best.path;
   }
+  {
+    const PerfectWay way = PerfectWayIn(world, rover_config, spec, p);
+    r.perfect_way = way.reachable;
+    r.perfect_way_m = way.length_m;
+  }
   if (!t.truth.empty()) {
     r.final_truth = Eigen::Vector2d(t.truth.back().x, t.truth.back().y);
     r.in_goal_disc = (*r.final_truth - Eigen::Vector2d(p.goal_x, p.goal_y)).norm() <= p.goal_radius_m;
   }
   if (track != nullptr) *track = std::move(t);
   return r;
+}
+
+PerfectWay RunPerfectWay(const RunPlan& p) {
+  const tools::ScenarioSpec spec = tools::LoadScenario(p.scenario_path());
+  fs::create_directories(p.dir + "/perfect_way");
+  const tools::RunConfigs files =
+      tools::PrepareRunConfigs(spec.rover_config, spec.overrides, spec.world, spec.world_overrides, p.dir + "/perfect_way");
+  const terrain::World world(terrain::WorldOptions::LoadFile(files.world));
+  return PerfectWayIn(world, config::ConfigNode::LoadFile(files.rover_config), spec, p);
 }
 
 }  // namespace rover::navbench

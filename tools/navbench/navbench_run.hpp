@@ -5,6 +5,7 @@
 #pragma once
 
 #include "navbench/navbench_metrics.hpp"
+#include "navbench/perfect_map_way.hpp"
 #include "scenario/scenario_overrides.hpp"
 
 #include <cstdint>
@@ -80,5 +81,10 @@ struct RunTrack {
 // and the world and rover config it ran with (the runner's copies in its folder when the
 // scenario overrode them). A run with no summary.json gives ran = false.
 RunFigures ReadRun(const RunPlan& plan, RunTrack* track);
+
+// The stack's plan on a perfect map of a written run's world (perfect_map_way.hpp), with the
+// rover config and world its scenario runs with (its overrides applied to copies in
+// DIR/perfect_way). The run need not have been driven (navbench --ways).
+PerfectWay RunPerfectWay(const RunPlan& plan);
 
 }  // namespace rover::navbench
