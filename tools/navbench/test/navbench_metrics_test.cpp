@@ -295,6 +295,43 @@ TEST(NavbenchTable, RowsCountWhatTheRunsSay) {
   EXPECT_NE(text.find("2.29"), std::string::npos) << text;    // the pooled NEES, 16 / 7
 }
 
+// The plan on a perfect map (RunFigures::perfect_way): worlds with a way counted among those
+// checked, and success counted among the navigation runs in worlds with one; no line when no
+// run was checked.
+TEST(NavbenchTable, WorldsWithAWayOnAPerfectMapAreCountedApart) {
+  auto run = [](bool success, std::optional<bool> way, int off_map) {
+    nb::RunFigures r;
+    r.group = "k=0.30";
+    r.ran = true;
+    r.outcome = success ? "completed" : "aborted";
+    r.abort_reason = success ? "" : "goal_unreachable";
+    r.in_goal_disc = success;
+    r.off_map_samples = off_map;
+    r.perfect_way = way;
+    r.perfect_way_m = way && *way ? 30.0 : 0.0;
+    return r;
+  };
+  const std::vector<nb::RunFigures> runs = {
+      run(true, true, 0),  run(false, true, 0), run(false, true, 3),  // one left the map
+      run(false, false, 0), run(false, false, 0), run(true, std::nullopt, 0),
+  };
+  const nb::GroupFigures g = nb::Aggregate("k=0.30", runs);
+  EXPECT_EQ(g.runs_way_checked, 5);
+  EXPECT_EQ(g.runs_with_way, 3);
+  EXPECT_EQ(g.successes_with_way, 1);
+  EXPECT_EQ(g.navigation_runs_with_way, 2);
+  const std::string text = nb::TableText({g});
+  EXPECT_NE(text.find("the plan on a perfect map"), std::string::npos) << text;
+  EXPECT_NE(text.find("3 of 5"), std::string::npos) << text;
+  EXPECT_NE(text.find("1 of 2 (50.0 %)"), std::string::npos) << text;
+  const std::string json = nb::ResultsJson({g}, runs, "navbench");
+  EXPECT_NE(json.find("\"runs_with_way\": 3"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"perfect_way\": false"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"perfect_way_m\": 30"), std::string::npos) << json;
+  nb::GroupFigures unchecked = nb::Aggregate("k=0.30", {run(true, std::nullopt, 0)});
+  EXPECT_EQ(nb::TableText({unchecked}).find("the plan on a perfect map"), std::string::npos);
+}
+
 // The verdict of a run judged from synthetic truth tracks on a 20 x 10 m map (x -2 to 18,
 // y -5 to 5) from (0, 0) to (15, 0): a detour that swings its wheels past the map's east
 // edge and comes back to the goal left the map (not a navigation failure, and not in the
