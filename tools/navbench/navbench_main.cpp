@@ -36,7 +36,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: navbench [--runs N] [--jobs J] [--densities K,...|none] [--worlds NAME,...|none] [--seed S]\n"
     "                [--out DIR] [--quick] [--min-goal M] [--max-goal M] [--no-plot] [--prepare | --report]\n"
-    "                [--resume] [--ways] [--set KEY=VALUE]...\n\n"
+    "                [--resume] [--ways [--ways-height top|mean]] [--set KEY=VALUE]...\n\n"
     "The navigation benchmark: N runs (default 20) per Golombek rock field k (default\n"
     "0.05,0.10,0.15,0.20; rocks 0.1 to 1.5 m) and per fixed world (default gap_wall,cul_de_sac),\n"
     "each one `goto ... avoid on` with VO and the map on: 20 to 50 m (--min-goal, --max-goal) in\n"
@@ -56,6 +56,8 @@ constexpr const char* kUsage =
     "--ways drives nothing: for each run it writes, whether the stack's own global planner\n"
     "(its clearance and costs, with any --set) finds a way to the goal on a perfect map of the\n"
     "world (its exact surface, rated by the map's rules); the table after driving gives it too.\n"
+    "--ways-height mean takes each cell at its surface's mean (what the map's cells measure)\n"
+    "instead of its highest point (what the body meets; top, the default).\n"
     "--set KEY=VALUE (repeatable): a rover-config setting tried on every run, by its dotted key\n"
     "(hazards.map.traversability.unframed_unknown=true, executor.avoid_margin_m=0.2), written\n"
     "to each run's scenario overrides; a misspelt key ends every run at once with the\n"
@@ -118,6 +120,7 @@ struct Args {
   int jobs = 1;
   bool plot = true, prepare_only = false, report_only = false, resume = false, help = false;
   bool ways_only = false;  // --ways: the plan on each world's perfect map, no drive
+  bool ways_at_mean = false;  // --ways-height mean: each cell at its surface's mean
   std::string command = "navbench";
   // Slurm: submit the runs as an array (scenario_campaign --slurm), or merge or resubmit one.
   bool slurm = false;
@@ -267,6 +270,10 @@ Args ParseArgs(int argc, char** argv) {
       a.report_only = true;
     } else if (arg == "--ways") {
       a.ways_only = true;
+    } else if (arg == "--ways-height") {
+      const std::string h = value(i, arg);
+      if (h != "top" && h != "mean") throw ConfigError("navbench: --ways-height: expected top or mean, got '" + h + "'");
+      a.ways_at_mean = h == "mean";
     } else if (arg == "--resume") {
       a.resume = true;
     } else {
@@ -285,6 +292,7 @@ Args ParseArgs(int argc, char** argv) {
   if (a.prepare_only && a.report_only) throw ConfigError("navbench: --prepare and --report exclude each other");
   if (a.ways_only && (a.prepare_only || a.report_only || a.resume || a.slurm))
     throw ConfigError("navbench: --ways drives nothing: it excludes --prepare, --report, --resume and --slurm");
+  if (a.ways_at_mean && !a.ways_only) throw ConfigError("navbench: --ways-height: only with --ways");
   if (options.densities.empty() && options.worlds.empty()) throw ConfigError("navbench: no density and no world to run");
   CheckSlurmArgs(a);
   return a;
@@ -338,12 +346,12 @@ void Report(const std::vector<nb::RunPlan>& plans, const Args& args) {
 
 // --ways: each run's world written, and the plan on its perfect map; one line a run, then
 // per world kind how many have a way.
-void Ways(const std::vector<nb::RunPlan>& plans, const nb::BenchOptions& options) {
+void Ways(const std::vector<nb::RunPlan>& plans, const nb::BenchOptions& options, bool at_mean) {
   std::map<std::string, std::pair<int, int>> counts;  // group: (with a way, worlds)
   std::vector<std::string> groups;
   for (const auto& p : plans) {
     nb::WriteRun(p, options.overrides);
-    const nb::PerfectWay way = nb::RunPerfectWay(p);
+    const nb::PerfectWay way = nb::RunPerfectWay(p, at_mean);
     if (counts.find(p.group) == counts.end()) groups.push_back(p.group);
     auto& [with, worlds] = counts[p.group];
     ++worlds;
@@ -352,7 +360,8 @@ void Ways(const std::vector<nb::RunPlan>& plans, const nb::BenchOptions& options
               << (way.reachable ? "a way of " + std::to_string(way.length_m).substr(0, 5) + " m" : "no way: " + way.why)
               << "\n";
   }
-  std::cout << "\nthe plan on a perfect map (seed " << options.seed << "):\n";
+  std::cout << "\nthe plan on a perfect map (seed " << options.seed << ", each cell at its "
+            << (at_mean ? "surface's mean" : "highest point") << "):\n";
   for (const auto& g : groups)
     std::cout << std::left << std::setw(11) << g << counts[g].first << " of " << counts[g].second
               << " worlds with a way\n";
@@ -398,7 +407,7 @@ int main(int argc, char** argv) {
     const std::vector<nb::RunPlan> plans = nb::PlanRuns(args.options);
     fs::create_directories(args.options.out_dir);
     if (args.ways_only) {
-      Ways(plans, args.options);
+      Ways(plans, args.options, args.ways_at_mean);
       return 0;
     }
     if (!args.report_only) {

@@ -270,9 +270,9 @@ void ReadLog(const std::string& log_path, std::vector<hazards::Pose2>* truth, st
 
 // The plan on a perfect map of `world` for the run's goto, with `rover_config`'s settings.
 PerfectWay PerfectWayIn(const terrain::World& world, const config::ConfigNode& rover_config,
-                        const tools::ScenarioSpec& spec, const RunPlan& p) {
+                        const tools::ScenarioSpec& spec, const RunPlan& p, bool at_mean = false) {
   const PerfectWayOptions o = LoadPerfectWayOptions(rover_config);
-  return PlanPerfectWay(PerfectMap(world, o.map), o.planner, Eigen::Vector2d(spec.start_x, spec.start_y),
+  return PlanPerfectWay(PerfectMap(world, o.map, at_mean), o.planner, Eigen::Vector2d(spec.start_x, spec.start_y),
                         Eigen::Vector2d(p.goal_x, p.goal_y), p.goal_radius_m);
 }
 
@@ -387,13 +387,13 @@ RunFigures ReadRun(const RunPlan& p, RunTrack* track) {
   return r;
 }
 
-PerfectWay RunPerfectWay(const RunPlan& p) {
+PerfectWay RunPerfectWay(const RunPlan& p, bool at_mean) {
   const tools::ScenarioSpec spec = tools::LoadScenario(p.scenario_path());
   fs::create_directories(p.dir + "/perfect_way");
   const tools::RunConfigs files =
       tools::PrepareRunConfigs(spec.rover_config, spec.overrides, spec.world, spec.world_overrides, p.dir + "/perfect_way");
   const terrain::World world(terrain::WorldOptions::LoadFile(files.world));
-  return PerfectWayIn(world, config::ConfigNode::LoadFile(files.rover_config), spec, p);
+  return PerfectWayIn(world, config::ConfigNode::LoadFile(files.rover_config), spec, p, at_mean);
 }
 
 }  // namespace rover::navbench

@@ -84,7 +84,8 @@ RunFigures ReadRun(const RunPlan& plan, RunTrack* track);
 
 // The stack's plan on a perfect map of a written run's world (perfect_map_way.hpp), with the
 // rover config and world its scenario runs with (its overrides applied to copies in
-// DIR/perfect_way). The run need not have been driven (navbench --ways).
-PerfectWay RunPerfectWay(const RunPlan& plan);
+// DIR/perfect_way). The run need not have been driven (navbench --ways). at_mean: each cell
+// at the mean of the surface in it (PerfectMap).
+PerfectWay RunPerfectWay(const RunPlan& plan, bool at_mean = false);
 
 }  // namespace rover::navbench

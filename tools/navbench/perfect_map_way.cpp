@@ -28,7 +28,7 @@ PerfectWayOptions LoadPerfectWayOptions(const config::ConfigNode& rover_config) 
   return o;
 }
 
-avoidance::Grid PerfectMap(const terrain::World& world, const traversability::MapOptions& map) {
+avoidance::Grid PerfectMap(const terrain::World& world, const traversability::MapOptions& map, bool at_mean) {
   const auto& w = world.options();
   traversability::MapOptions options = map;
   // The exact surface has every crest in it: no view to judge (as hazard-eval's truth).
@@ -37,7 +37,7 @@ avoidance::Grid PerfectMap(const terrain::World& world, const traversability::Ma
   options.extent_m = std::max(w.map_size_m.x(), w.map_size_m.y()) + 4.0 * options.cell_size_m;
   traversability::TraversabilityMap truth(options);
   truth.Recentre(w.map_center.x(), w.map_center.y());
-  hazard_eval::FillTruth(world, false, &truth);
+  hazard_eval::FillTruth(world, at_mean, &truth);
   avoidance::Grid grid = traversability::AsGrid(truth);
   for (int i = 0; i < grid.rows; ++i)
     for (int j = 0; j < grid.cols; ++j) {

@@ -31,10 +31,13 @@ struct PerfectWayOptions {
 PerfectWayOptions LoadPerfectWayOptions(const config::ConfigNode& rover_config);
 
 // The world's exact surface on a grid of the map's cells covering its whole map, each cell
-// rated by the map's rules (hazard_eval::FillTruth): every cell is known. Cells off the
+// rated by the map's rules (hazard_eval::FillTruth): every cell is known. Each cell at its
+// highest point (what the body meets), or with at_mean at the mean of the surface in it
+// (what the map's cells measure from their points, every point exact). Cells off the
 // world's map are unsafe, so no way leaves it (the rover's centre keeps the plan's
 // clearance off the map's edge).
-avoidance::Grid PerfectMap(const terrain::World& world, const traversability::MapOptions& map);
+avoidance::Grid PerfectMap(const terrain::World& world, const traversability::MapOptions& map,
+                           bool at_mean = false);
 
 struct PerfectWay {
   bool reachable = false;

@@ -35,14 +35,13 @@ rover::config::ConfigNode WithExecutorSetting(const std::string& key, const std:
 }
 
 // Flat ground 20 m along x (-4..16) and 12 m across (-6..6), and a wall of rocks `height_m`
-// tall and 0.6 m across at x = 6 from edge to edge but for a gap `gap_m` wide between the
+// tall and `d` across at x = 6 from edge to edge but for a gap `gap_m` wide between the
 // rocks' rims, centred on y = 0 (no gap: 0).
-World Wall(double gap_m, double height_m) {
+World Wall(double gap_m, double height_m, double d = 0.6) {
   WorldOptions o;
   o.map_center = {6.0, 0.0};
   o.map_size_m = {20.0, 12.0};
   o.roughness.amplitude_m = 0.0;
-  const double d = 0.6;
   int n = 0;
   auto place = [&](double y) {
     Rock r;
@@ -104,4 +103,20 @@ TEST(PerfectMapWay, RocksUnderTheStepLimitAreNoObstacle) {
   const nb::PerfectWay low = WayAcross(Wall(0.0, 0.12), nb::LoadPerfectWayOptions(ShippedRoverConfig()));
   ASSERT_TRUE(low.reachable) << low.why;
   EXPECT_LT(low.length_m, 12.5);
+}
+
+TEST(PerfectMapWay, ReadAtTheCellsMeanAWallOfRocksOverTheBellyIsCrossed) {
+  // Rocks 0.32 m tall and 0.4 m across, rims touching, from edge to edge: over the belly's
+  // 0.30 m clearance. At each cell's highest point the map's 0.25 m step limit shuts them;
+  // at each cell's mean (what the map's cells measure, even from exact points) a 0.2 m
+  // cell on a narrow rock averages its rise away, every cell reads under the limit, and
+  // the plan drives the body over them: the map's mean is the collisions' cause, and the
+  // limit was set against it.
+  const nb::PerfectWayOptions o = nb::LoadPerfectWayOptions(ShippedRoverConfig());
+  const World wall = Wall(0.0, 0.32, 0.4);
+  EXPECT_FALSE(nb::PlanPerfectWay(nb::PerfectMap(wall, o.map), o.planner, {0.0, 0.0}, {12.0, 0.0}, 0.5).reachable);
+  const nb::PerfectWay at_mean =
+      nb::PlanPerfectWay(nb::PerfectMap(wall, o.map, true), o.planner, {0.0, 0.0}, {12.0, 0.0}, 0.5);
+  ASSERT_TRUE(at_mean.reachable) << at_mean.why;
+  EXPECT_LT(at_mean.length_m, 12.5);
 }
