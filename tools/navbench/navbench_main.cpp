@@ -356,9 +356,14 @@ void Ways(const std::vector<nb::RunPlan>& plans, const nb::BenchOptions& options
     auto& [with, worlds] = counts[p.group];
     ++worlds;
     with += way.reachable;
-    std::cout << std::left << std::setw(14) << p.id << std::setw(10) << (std::to_string(p.straight_m()).substr(0, 5) + " m")
-              << (way.reachable ? "a way of " + std::to_string(way.length_m).substr(0, 5) + " m" : "no way: " + way.why)
-              << "\n";
+    std::ostringstream line;
+    line << std::fixed << std::setprecision(2) << std::left << std::setw(16) << p.id << p.straight_m() << " m straight, ";
+    if (way.reachable) {
+      line << "a way of " << way.length_m << " m";
+    } else {
+      line << "no way: " << way.why;
+    }
+    std::cout << line.str() << "\n";
   }
   std::cout << "\nthe plan on a perfect map (seed " << options.seed << ", each cell at its "
             << (at_mean ? "surface's mean" : "highest point") << "):\n";
