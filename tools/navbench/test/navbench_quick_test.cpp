@@ -78,6 +78,15 @@ TEST(NavbenchQuick, TheTableIsTheLogs) {
     EXPECT_NEAR(group["median_shortest_ratio"].as<double>(), run["shortest_m"].as<double>() / straight, 1e-5);  // JSON: 6 digits
   }
 
+  // The plan on a perfect map of the run's world: checked, and at k = 0.10 over 5 to 6 m
+  // there is a way, no shorter than the straight line to the goal disc; counted in the table.
+  ASSERT_TRUE(run["perfect_way"].IsScalar()) << result.output;
+  EXPECT_TRUE(run["perfect_way"].as<bool>());
+  EXPECT_GE(run["perfect_way_m"].as<double>(), straight - run["goal_radius_m"].as<double>() - 0.2);
+  EXPECT_EQ(group["runs_way_checked"].as<int>(), 1);
+  EXPECT_EQ(group["runs_with_way"].as<int>(), 1);
+  EXPECT_NE(result.output.find("the plan on a perfect map"), std::string::npos) << result.output;
+
   // VO and rover time: the same counts as the summary's.
   EXPECT_EQ(run["vo_updates_accepted"].as<int>(), summary["vo_updates_accepted"].as<int>());
   EXPECT_EQ(run["false_updates"].as<int>(), summary["false_updates"].as<int>());
