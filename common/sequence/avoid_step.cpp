@@ -411,19 +411,28 @@ SequenceExecutor::PlanVerdict SequenceExecutor::PlanAhead(const PlanePose& p, co
   return PlanVerdict::kFollow;
 }
 
+planner::PlannerOptions PlanOptions(const ExecutorOptions& options, const avoidance::Footprint& vote_footprint,
+                                    double cell_m) {
+  planner::PlannerOptions po;
+  // The vote counts a cell under the body when its centre is within half a cell of it
+  // (AvoidStep): the plan keeps the rover's centre as far off, or it leads into gaps no
+  // step will cross.
+  const bool vote_clearance = options.planner_vote_clearance && cell_m > 0.0;
+  po.SetRadiiFrom(vote_footprint, vote_clearance ? 0.5 * cell_m : 0.0);
+  po.unknown_cost = options.planner_unknown_cost;
+  po.caution_cost = options.planner_caution_cost;
+  po.near_cost = options.planner_near_cost;
+  po.margin_m = options.planner_margin_m;
+  return po;
+}
+
 std::pair<planner::PlannerOptions, planner::PlanRequest> SequenceExecutor::PlanSetUp(
     const PlanePose& p, const ArrivalDisc& disc, const avoidance::Footprint& footprint, double zone_grow) const {
-  planner::PlannerOptions po;
-  // The vote counts a cell under the body when its centre is within half a cell of it, and
-  // marks a zone's cells out to a cell past its grown edge (AvoidStep): the plan keeps the
-  // rover's centre as far off both, or it leads into gaps no step will cross.
   const double cell = site_map_.cell_m();
+  const planner::PlannerOptions po = PlanOptions(options_, footprint, cell);
+  // The vote also marks a zone's cells out to a cell past its grown edge: the plan's zones
+  // are a cell larger with the vote's clearance.
   const bool vote_clearance = options_.planner_vote_clearance && cell > 0.0;
-  po.SetRadiiFrom(footprint, vote_clearance ? 0.5 * cell : 0.0);
-  po.unknown_cost = options_.planner_unknown_cost;
-  po.caution_cost = options_.planner_caution_cost;
-  po.near_cost = options_.planner_near_cost;
-  po.margin_m = options_.planner_margin_m;
   planner::PlanRequest r;
   r.start_x = p.x, r.start_y = p.y;
   r.goal_x = goto_.target.x(), r.goal_y = goto_.target.y();

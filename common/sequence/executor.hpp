@@ -249,6 +249,12 @@ ExecutorOptions LoadExecutorOptions(const config::ConfigNode& root);  // reads r
 ExecutorOptions LoadExecutorOptionsFile(const std::string& path);
 // Throws std::invalid_argument naming the bad value.
 void ValidateExecutorOptions(const ExecutorOptions& options);
+// The global planner's options as the executor plans a goto: the radii from the vote's
+// footprint (the body grown by avoid_margin_m), half a cell of cell_m more with
+// planner_vote_clearance, and the plan's costs and window. navbench's perfect map
+// (tools/navbench/perfect_map_way.hpp) plans with the same.
+planner::PlannerOptions PlanOptions(const ExecutorOptions& options, const avoidance::Footprint& vote_footprint,
+                                    double cell_m);
 // The planner_refusal_* options as the refused ways take them.
 planner::RefusalOptions RefusalOptionsOf(const ExecutorOptions& options);
 

@@ -16,15 +16,12 @@ PerfectWayOptions LoadPerfectWayOptions(const config::ConfigNode& rover_config) 
   o.map = traversability::LoadMapOptions(rover_config["hazards"]["map"]["traversability"]);
   const hazards::HazardOptions hazards = hazards::LoadHazardOptions(rover_config["hazards"], {"publish_hz"});
   const sequence::ExecutorOptions executor = sequence::LoadExecutorOptions(rover_config);
-  // The vote's body (SequenceExecutor::VoteOnMap) and the plan's radii from it
-  // (SequenceExecutor::PlanSetUp): half a cell more with the vote's clearance.
+  // The vote's body (SequenceExecutor::VoteOnMap: the footprint grown by its margin) and
+  // the executor's plan over it.
   avoidance::Footprint body = hazards::GridFootprint(hazards.footprint);
   body.length_m += 2.0 * executor.avoid_margin_m;
   body.width_m += 2.0 * executor.avoid_margin_m;
-  o.planner.SetRadiiFrom(body, executor.planner_vote_clearance ? 0.5 * o.map.cell_size_m : 0.0);
-  o.planner.unknown_cost = executor.planner_unknown_cost;
-  o.planner.caution_cost = executor.planner_caution_cost;
-  o.planner.near_cost = executor.planner_near_cost;
+  o.planner = sequence::PlanOptions(executor, body, o.map.cell_size_m);
   return o;
 }
 
